@@ -1,0 +1,1 @@
+"""Analytic planners and reference policies for bounce_gym worlds."""

@@ -1,0 +1,8 @@
+"""bounce_gym: Gymnasium and PettingZoo environments for minimal bouncing robots.
+
+A bouncing robot senses only contact and time. It drives straight until it bumps, rotates by a
+bounce angle and drives on. `bounce_gym.worlds` holds the geometry, `bounce_gym.dynamics` the
+motion of one or many robots.
+"""
+
+__version__ = "0.1.0"

@@ -1,0 +1,354 @@
+"""The immutable `World`: a polygon with holes, validated on construction.
+
+Conventions (see ARCHITECTURE.md): the outer ring is stored counter-clockwise and every hole
+clockwise, so each directed edge ``(v_k, v_{k+1})`` has free space on its **left** and its inward
+normal is the tangent rotated by +90 degrees (Nilles et al., IJRR 2021, section 2 frames).
+Edges of all rings are flattened into one array; edge ``k`` starts at vertex ``k``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import cached_property
+
+import numpy as np
+import shapely
+from shapely.geometry import LinearRing, Polygon
+
+from bounce_gym.errors import InvalidWorldError
+from bounce_gym.worlds import raycast
+
+#: Relative tolerance (times the world's diameter) for geometric predicates.
+REL_TOL = 1e-9
+
+
+def _as_ring(points: object, label: str) -> np.ndarray:
+    try:
+        ring = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidWorldError(f"{label}: vertices must be a sequence of (x, y) numbers") from exc
+    if ring.ndim != 2 or ring.shape[1] != 2:
+        raise InvalidWorldError(
+            f"{label}: vertices must have shape (n, 2), got shape {ring.shape}"
+        )
+    if len(ring) > 1 and np.array_equal(ring[0], ring[-1]):
+        ring = ring[:-1]  # a closing vertex equal to the first is the usual GeoJSON habit
+    if len(ring) < 3:
+        raise InvalidWorldError(f"{label}: a ring needs at least 3 vertices, got {len(ring)}")
+    if not np.all(np.isfinite(ring)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(ring), axis=1))[0])
+        raise InvalidWorldError(f"{label}: vertex {bad} is not finite: {ring[bad].tolist()}")
+    return ring
+
+
+def _signed_area(ring: np.ndarray) -> float:
+    x, y = ring[:, 0], ring[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _check_ring_shape(ring: np.ndarray, label: str, tol: float) -> None:
+    """Reject zero-length edges, repeated vertices, spikes and self-intersections."""
+    nxt = np.roll(ring, -1, axis=0)
+    lengths = np.hypot(*(nxt - ring).T)
+    if np.any(lengths <= tol):
+        k = int(np.argmax(lengths <= tol))
+        raise InvalidWorldError(
+            f"{label}: zero-length edge between vertices {k} and {(k + 1) % len(ring)} "
+            f"at {ring[k].tolist()} (repeated vertex)"
+        )
+    _, first, counts = np.unique(ring, axis=0, return_index=True, return_counts=True)
+    if np.any(counts > 1):
+        k = int(first[np.argmax(counts > 1)])
+        raise InvalidWorldError(f"{label}: vertex {ring[k].tolist()} is repeated")
+    t_out = (nxt - ring) / lengths[:, None]
+    t_in = np.roll(t_out, 1, axis=0)
+    cross = t_in[:, 0] * t_out[:, 1] - t_in[:, 1] * t_out[:, 0]
+    dot = np.sum(t_in * t_out, axis=1)
+    spikes = (np.abs(cross) <= 1e-12) & (dot < 0)
+    if np.any(spikes):
+        k = int(np.argmax(spikes))
+        raise InvalidWorldError(
+            f"{label}: collinear-degenerate vertex {k} at {ring[k].tolist()}: "
+            "the boundary folds back on itself"
+        )
+    if abs(_signed_area(ring)) <= tol * tol:
+        raise InvalidWorldError(f"{label}: ring has zero area (all vertices collinear)")
+    if not LinearRing(ring).is_simple:
+        raise InvalidWorldError(f"{label}: ring self-intersects ({shapely.is_valid_reason(Polygon(ring))})")
+
+
+class World:
+    """A bounded polygonal workspace with polygonal holes (obstacles).
+
+    Args:
+        outer: vertices of the outer boundary, any orientation (stored counter-clockwise).
+        holes: vertices of each obstacle, any orientation (stored clockwise).
+        name: a label used in reprs, renders and result tables.
+
+    Raises:
+        InvalidWorldError: non-finite coordinates, fewer than 3 vertices, zero-length edges,
+            repeated or collinear-degenerate vertices, self-intersecting rings, a hole that is
+            not strictly inside the outer ring, or holes that overlap or touch.
+
+    The world is immutable: arrays are read-only and attributes cannot be rebound. It pickles
+    by value and compares equal to any world with the same rings.
+    """
+
+    __slots__ = (
+        "name",
+        "outer",
+        "holes",
+        "edge_start",
+        "edge_end",
+        "edge_ring",
+        "tangents",
+        "normals",
+        "lengths",
+        "reflex",
+        "tol",
+        "__dict__",  # cached_property storage (derived, never part of identity)
+    )
+
+    def __init__(
+        self,
+        outer: Sequence[Sequence[float]] | np.ndarray,
+        holes: Sequence[Sequence[Sequence[float]] | np.ndarray] = (),
+        name: str | None = None,
+    ) -> None:
+        outer_ring = _as_ring(outer, "outer ring")
+        span = np.ptp(outer_ring, axis=0)
+        tol = REL_TOL * max(float(np.hypot(*span)), 1e-300)
+        _check_ring_shape(outer_ring, "outer ring", tol)
+        if _signed_area(outer_ring) < 0:
+            outer_ring = outer_ring[::-1].copy()
+        hole_rings = []
+        if isinstance(holes, np.ndarray) and holes.ndim == 2:
+            raise InvalidWorldError("holes: expected a list of rings, got a single (n, 2) array")
+        for k, hole in enumerate(holes):
+            ring = _as_ring(hole, f"hole {k}")
+            _check_ring_shape(ring, f"hole {k}", tol)
+            if _signed_area(ring) > 0:
+                ring = ring[::-1].copy()
+            hole_rings.append(ring)
+        _check_holes(outer_ring, hole_rings)
+
+        rings = [outer_ring, *hole_rings]
+        starts, ends, ring_ids, reflex = [], [], [], []
+        for r, ring in enumerate(rings):
+            nxt = np.roll(ring, -1, axis=0)
+            starts.append(ring)
+            ends.append(nxt)
+            ring_ids.append(np.full(len(ring), r, dtype=np.int64))
+            t_out = nxt - ring
+            t_in = ring - np.roll(ring, 1, axis=0)
+            cross = t_in[:, 0] * t_out[:, 1] - t_in[:, 1] * t_out[:, 0]
+            scale = np.hypot(*t_in.T) * np.hypot(*t_out.T)
+            reflex.append(cross < -1e-12 * scale)  # free space on the left: a right turn is reflex
+        edge_start = np.concatenate(starts)
+        edge_end = np.concatenate(ends)
+        vec = edge_end - edge_start
+        lengths = np.hypot(vec[:, 0], vec[:, 1])
+        tangents = vec / lengths[:, None]
+        normals = np.column_stack((-tangents[:, 1], tangents[:, 0]))
+
+        set_ = object.__setattr__
+        set_(self, "name", str(name) if name is not None else "world")
+        set_(self, "outer", _frozen(outer_ring))
+        set_(self, "holes", tuple(_frozen(h) for h in hole_rings))
+        set_(self, "edge_start", _frozen(edge_start))
+        set_(self, "edge_end", _frozen(edge_end))
+        set_(self, "edge_ring", _frozen(np.concatenate(ring_ids)))
+        set_(self, "tangents", _frozen(tangents))
+        set_(self, "normals", _frozen(normals))
+        set_(self, "lengths", _frozen(lengths))
+        set_(self, "reflex", _frozen(np.concatenate(reflex)))
+        set_(self, "tol", tol)
+
+    # -- identity ---------------------------------------------------------------------------
+    def __setattr__(self, key: str, value: object) -> None:
+        raise AttributeError(f"World is immutable; cannot set {key!r}")
+
+    def __delattr__(self, key: str) -> None:
+        raise AttributeError(f"World is immutable; cannot delete {key!r}")
+
+    def __reduce__(self):
+        return (World, (self.outer.copy(), [h.copy() for h in self.holes], self.name))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, World):
+            return NotImplemented
+        return (
+            len(self.holes) == len(other.holes)
+            and np.array_equal(self.outer, other.outer)
+            and all(np.array_equal(a, b) for a, b in zip(self.holes, other.holes, strict=True))
+        )
+
+    def __hash__(self) -> int:
+        return hash((self.outer.tobytes(), tuple(h.tobytes() for h in self.holes)))
+
+    def __repr__(self) -> str:
+        return (
+            f"World(name={self.name!r}, vertices={len(self.outer)}, holes={len(self.holes)}, "
+            f"bounds={tuple(round(b, 6) for b in self.bounds)})"
+        )
+
+    # -- derived geometry -------------------------------------------------------------------
+    @property
+    def rings(self) -> tuple[np.ndarray, ...]:
+        """Outer ring first, then the holes."""
+        return (self.outer, *self.holes)
+
+    @property
+    def n_edges(self) -> int:
+        return len(self.lengths)
+
+    @cached_property
+    def polygon(self) -> Polygon:
+        """The free space as a shapely polygon."""
+        return Polygon(self.outer, [h for h in self.holes])
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(xmin, ymin, xmax, ymax) of the outer ring."""
+        lo, hi = self.outer.min(axis=0), self.outer.max(axis=0)
+        return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+
+    @property
+    def area(self) -> float:
+        return float(self.polygon.area)
+
+    @property
+    def diameter(self) -> float:
+        """Length of the bounding-box diagonal; the scale for tolerances."""
+        xmin, ymin, xmax, ymax = self.bounds
+        return float(np.hypot(xmax - xmin, ymax - ymin))
+
+    @property
+    def perimeter(self) -> float:
+        return float(self.lengths.sum())
+
+    # -- queries ----------------------------------------------------------------------------
+    def first_hit(
+        self, origins: np.ndarray, directions: np.ndarray, radius: float = 0.0
+    ) -> raycast.Hits:
+        """First boundary contact of many rays (or swept disks) at once.
+
+        Args:
+            origins: (n, 2) ray origins, inside the free space (for ``radius > 0``: at least
+                ``radius`` away from the boundary).
+            directions: (n, 2) unit directions.
+            radius: radius of the swept disk; 0 for a point.
+
+        Returns:
+            `raycast.Hits` with ``distance`` (n,), ``edge`` (n,), ``vertex`` (n,) and inward
+            unit ``normal`` (n, 2) at the contact. See `bounce_gym.worlds.raycast.first_hit`.
+        """
+        return raycast.first_hit(self, origins, directions, radius)
+
+    def contains(self, points: np.ndarray, radius: float = 0.0) -> np.ndarray:
+        """Whether each point (n, 2) lies in the free space at least ``radius`` from the boundary.
+
+        Points on the boundary (within the world's tolerance) count as inside.
+        """
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        dist = self.boundary_distance(pts)
+        inside = shapely.contains_xy(self.polygon, pts[:, 0], pts[:, 1])
+        return (inside | (dist <= self.tol)) & (dist >= radius - self.tol)
+
+    def boundary_distance(self, points: np.ndarray) -> np.ndarray:
+        """Euclidean distance from each point (n, 2) to the nearest boundary edge."""
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        rel = pts[:, None, :] - self.edge_start[None, :, :]
+        vec = self.edge_end - self.edge_start
+        s = np.clip(np.einsum("nek,ek->ne", rel, vec) / (self.lengths**2), 0.0, 1.0)
+        closest = rel - s[..., None] * vec[None]
+        return np.sqrt(np.min(np.einsum("nek,nek->ne", closest, closest), axis=1))
+
+    def eroded(self, radius: float, quad_segs: int = 16):
+        """Configuration space of a disk robot of ``radius``: the free space shrunk by it.
+
+        Returns a shapely geometry (Polygon, MultiPolygon if a passage closes, or empty). Arcs
+        around reflex vertices are approximated with ``quad_segs`` segments per quarter circle;
+        the kinematic backend does not use this approximation (it sweeps the disk exactly).
+        """
+        if not np.isfinite(radius) or radius < 0:
+            raise InvalidWorldError(f"radius must be a finite number >= 0, got {radius!r}")
+        if radius == 0:
+            return self.polygon
+        return self.polygon.buffer(-radius, quad_segs=quad_segs)
+
+    def occupancy(self, cell_size: float = 1.0, radius: float = 0.0) -> np.ndarray:
+        """Free/blocked grid over the bounding box for the cell model.
+
+        Cell ``(row, col)`` spans ``[xmin + col*s, xmin + (col+1)*s) x [ymin + row*s, ...)``;
+        row 0 is the **bottom** row (y points up). A cell is free iff its centre lies in the free
+        space at least ``radius`` from the boundary (the papers' C-space for a disk robot).
+
+        Returns:
+            bool array of shape (rows, cols), True = free.
+        """
+        if not np.isfinite(cell_size) or cell_size <= 0:
+            raise InvalidWorldError(f"cell_size must be a finite number > 0, got {cell_size!r}")
+        xmin, ymin, xmax, ymax = self.bounds
+        cols = int(np.ceil((xmax - xmin) / cell_size - 1e-9))
+        rows = int(np.ceil((ymax - ymin) / cell_size - 1e-9))
+        cx = xmin + (np.arange(cols) + 0.5) * cell_size
+        cy = ymin + (np.arange(rows) + 0.5) * cell_size
+        gx, gy = np.meshgrid(cx, cy)
+        centres = np.column_stack((gx.ravel(), gy.ravel()))
+        inside = shapely.contains_xy(self.polygon, centres[:, 0], centres[:, 1])
+        if radius > 0:
+            inside &= self.boundary_distance(centres) >= radius
+        return inside.reshape(rows, cols)
+
+    def sample_free(self, rng: np.random.Generator, n: int, radius: float = 0.0) -> np.ndarray:
+        """Draw ``n`` points uniformly from the free space at least ``radius`` from the boundary.
+
+        Rejection sampling in the bounding box; raises if the C-space is (nearly) empty.
+        """
+        xmin, ymin, xmax, ymax = self.bounds
+        out = np.empty((0, 2))
+        for _ in range(1000):
+            need = n - len(out)
+            if need <= 0:
+                break
+            batch = max(64, 4 * need)
+            pts = rng.uniform((xmin, ymin), (xmax, ymax), size=(batch, 2))
+            ok = self.contains(pts) & (self.boundary_distance(pts) > radius + self.tol)
+            out = np.concatenate((out, pts[ok][:need]))
+        if len(out) < n:
+            raise InvalidWorldError(
+                f"world {self.name!r}: no free space for a robot of radius {radius}"
+            )
+        return out
+
+    # -- serialisation ----------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """The polygon form of the map schema (see `bounce_gym.worlds.io`)."""
+        return {
+            "name": self.name,
+            "outer": self.outer.tolist(),
+            "holes": [h.tolist() for h in self.holes],
+        }
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = np.ascontiguousarray(array)
+    array.setflags(write=False)
+    return array
+
+
+def _check_holes(outer: np.ndarray, holes: list[np.ndarray]) -> None:
+    shell = Polygon(outer)
+    shell_ring = LinearRing(outer)
+    polys = [Polygon(h) for h in holes]
+    for k, (hole, poly) in enumerate(zip(holes, polys, strict=True)):
+        if not shell.contains(poly):
+            raise InvalidWorldError(f"hole {k}: not inside the outer ring")
+        if shell_ring.intersects(LinearRing(hole)):
+            raise InvalidWorldError(f"hole {k}: touches the outer ring")
+    for i in range(len(polys)):
+        for j in range(i + 1, len(polys)):
+            if polys[i].intersects(polys[j]):
+                what = "overlap" if polys[i].intersection(polys[j]).area > 0 else "touch"
+                raise InvalidWorldError(f"holes {i} and {j} {what}; holes must be disjoint")
