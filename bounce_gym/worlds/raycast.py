@@ -54,19 +54,12 @@ def first_hit(world: World, origins: np.ndarray, directions: np.ndarray, radius:
     n = len(o)
     radius = float(radius)
     geometry = _features(world, radius)
-    n_features = 5 * geometry.n_edges + len(geometry.vx)
-    step = max(1, _MAX_PAIRS // max(n_features, 1))
-    distance = np.empty(n)
-    edge = np.empty(n, dtype=np.int64)
-    vertex = np.empty(n, dtype=np.int64)
-    normal = np.empty((n, 2))
-    for lo in range(0, n, step):
-        hi = min(n, lo + step)
-        _first_hit_chunk(
-            geometry, radius, o[lo:hi], d[lo:hi],
-            distance[lo:hi], edge[lo:hi], vertex[lo:hi], normal[lo:hi],
-        )
-    return Hits(distance, edge, vertex, normal)
+    step = max(1, _MAX_PAIRS // max(5 * geometry.n_edges + len(geometry.vx), 1))
+    if n <= step:
+        return _first_hit_chunk(geometry, radius, o, d)
+    parts = [_first_hit_chunk(geometry, radius, o[lo:lo + step], d[lo:lo + step])
+             for lo in range(0, n, step)]
+    return Hits(*(np.concatenate([getattr(p, k) for p in parts]) for k in Hits.__annotations__))
 
 
 @dataclass(frozen=True)
@@ -75,7 +68,7 @@ class _Features:
 
     ``mat`` turns the per-ray row ``[dx, dy, ox, oy, cross(o, d), 1]`` into, per edge, the four
     quantities that must all be >= 0 for a hit (approach, the two ends of the edge parameter,
-    non-negative time) and the time numerator, so one matrix product does the arithmetic.
+    origin not behind the edge line) and the time numerator: one matrix product does the maths.
     """
 
     mat: np.ndarray  # (6, 5 * E)
@@ -102,9 +95,12 @@ def _features(world: World, radius: float) -> _Features:
         num_t = np.stack([zero, zero, -ey, ex, zero, ax * ey - ay * ex])  # cross(a - o, e)
         num_u = np.stack([-ay, ax, zero, zero, -one, zero])         # cross(a - o, d)
         approach = den - 1e-12 * np.stack([zero, zero, zero, zero, zero, world.lengths])
+        # num_t / length is the signed distance of the origin from the (shifted) edge line:
+        # accept origins up to ``tol`` behind it, so grazing rays from a robot resting on a wall
+        # (rounded a hair outside) still register the wall at distance 0.
+        behind = num_t + ttol * np.stack([zero, zero, zero, zero, zero, world.lengths])
         mat = np.concatenate(
-            [approach, num_u + utol * den, (1 + utol) * den - num_u, num_t + ttol * den, num_t],
-            axis=1,
+            [approach, num_u + utol * den, (1 + utol) * den - num_u, behind, num_t], axis=1
         )
         vid = np.flatnonzero(world.reflex) if radius > 0 else np.empty(0, dtype=np.int64)
         verts = world.edge_start[vid]
@@ -116,42 +112,43 @@ def _features(world: World, radius: float) -> _Features:
     return feats
 
 
-def _first_hit_chunk(f: _Features, radius, o, d, distance, edge, vertex, normal) -> None:
-    ox, oy = o[:, 0:1], o[:, 1:2]
-    dx, dy = d[:, 0:1], d[:, 1:2]
+def _first_hit_chunk(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) -> Hits:
     n, m = len(o), f.n_edges
-    ray = np.concatenate([d, o, ox * dy - oy * dx, np.ones((n, 1))], axis=1)
+    ray = np.empty((n, 6))
+    ray[:, 0:2] = d
+    ray[:, 2:4] = o
+    ray[:, 4] = o[:, 0] * d[:, 1] - o[:, 1] * d[:, 0]
+    ray[:, 5] = 1.0
     q = (ray @ f.mat).reshape(n, 5, m)
     ok = q[:, :4].min(axis=1) >= 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(ok, q[:, 4] / q[:, 0], np.inf)
-    k = np.argmin(t, axis=1)
+    edge = np.argmin(t, axis=1)
     rows = np.arange(n)
-    best = t[rows, k]
-    distance[:] = best
-    edge[:] = np.where(np.isfinite(best), k, -1)
-    vertex[:] = -1
-    normal[:] = f.normals[k]
+    distance = t[rows, edge]
+    normal = f.normals[edge]
+    vertex = np.full(n, -1, dtype=np.int64)
     if len(f.vx):
-        cx = ox - f.vx
-        cy = oy - f.vy
-        b = cx * dx + cy * dy
-        disc = b * b - (cx * cx + cy * cy - radius * radius)
+        cx = o[:, 0:1] - f.vx
+        cy = o[:, 1:2] - f.vy
+        b = cx * d[:, 0:1] + cy * d[:, 1:2]
+        c = cx * cx + cy * cy - radius * radius
+        disc = b * b - c
         with np.errstate(invalid="ignore"):
             tv = -b - np.sqrt(disc)
-        okv = (disc >= 0) & (b < 0) & (tv >= -f.ttol)
-        tv = np.where(okv, tv, np.inf)
+        # moving towards the vertex, and outside its circle or inside by at most tol
+        okv = (disc >= 0) & (b < 0) & (c >= -2.0 * radius * f.ttol)
+        tv = np.where(okv, np.maximum(tv, 0.0), np.inf)
         kv = np.argmin(tv, axis=1)
         bestv = tv[rows, kv]
-        use = bestv < best
+        use = bestv < distance
         if np.any(use):
             distance[use] = bestv[use]
             vid = f.vid[kv[use]]
             edge[use] = vid
             vertex[use] = vid
-            px = o[use, 0] + bestv[use] * d[use, 0] - f.vx[kv[use]]
-            py = o[use, 1] + bestv[use] * d[use, 1] - f.vy[kv[use]]
-            norm = np.hypot(px, py)
-            normal[use, 0] = px / norm
-            normal[use, 1] = py / norm
+            rel = o[use] + bestv[use, None] * d[use] - np.column_stack((f.vx, f.vy))[kv[use]]
+            normal[use] = rel / np.hypot(rel[:, 0], rel[:, 1])[:, None]
+    edge[~np.isfinite(distance)] = -1
     np.maximum(distance, 0.0, out=distance)
+    return Hits(distance, edge, vertex, normal)

@@ -1,0 +1,142 @@
+"""The interface every motion backend implements, and the registry of backends by name.
+
+A backend moves robots straight ahead and detects contacts; it knows nothing of bounce rules or
+noise (those live in `bounce_gym.dynamics.BounceDynamics`, written once for all backends).
+
+Time is measured in ticks. One tick drives a robot ``step_length`` (or less, if it touches
+something first and stops). Robots that touch a wall or another robot while facing into it become
+``blocked`` and stand still until the controller rotates them.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from bounce_gym.dynamics.state import NO_CONTACT, RobotState
+from bounce_gym.errors import ConfigError
+from bounce_gym.worlds import World
+
+ROBOT_COLLISIONS = ("bounce", "ignore")
+
+
+class MotionBackend(ABC):
+    """Drives m robots in a world.
+
+    Args:
+        world: the workspace.
+        n_robots: number of robots m.
+        radius: robot disk radius (0 = point robot).
+        step_length: distance driven per tick (the cell size of the cell model).
+        robot_collisions: ``"bounce"`` (robots touching head-on are blocked, like walls) or
+            ``"ignore"`` (robots pass through each other).
+    """
+
+    name: str = ""
+
+    def __init__(
+        self,
+        world: World,
+        n_robots: int,
+        radius: float,
+        step_length: float,
+        robot_collisions: str,
+    ) -> None:
+        if not isinstance(world, World):
+            raise ConfigError(f"world: expected a World, got {type(world).__name__}")
+        if isinstance(n_robots, bool) or not isinstance(n_robots, int | np.integer) or n_robots < 1:
+            raise ConfigError(f"n_robots: expected an integer >= 1, got {n_robots!r}")
+        if not (np.isfinite(radius) and radius >= 0):
+            raise ConfigError(f"robot_radius: expected a finite number >= 0, got {radius!r}")
+        if not (np.isfinite(step_length) and step_length > 0):
+            raise ConfigError(f"step_length: expected a finite number > 0, got {step_length!r}")
+        if robot_collisions not in ROBOT_COLLISIONS:
+            raise ConfigError(
+                f"robot_collisions: expected one of {ROBOT_COLLISIONS}, got {robot_collisions!r}"
+            )
+        if robot_collisions == "bounce" and n_robots > 1 and radius <= 0:
+            raise ConfigError(
+                "robot_collisions='bounce' needs robot_radius > 0 (point robots never touch); "
+                "use robot_collisions='ignore' for point robots"
+            )
+        self.world = world
+        self.n_robots = int(n_robots)
+        self.radius = float(radius)
+        self.step_length = float(step_length)
+        self.robot_collisions = robot_collisions
+        #: time tolerance in ticks, from the world's length tolerance
+        self.time_tol = world.tol / self.step_length
+
+    @property
+    def collide(self) -> bool:
+        return self.robot_collisions == "bounce" and self.n_robots > 1
+
+    @abstractmethod
+    def reset(self, state: RobotState) -> None:
+        """Take over a freshly placed state (rebuild any engine objects) and set its contacts."""
+
+    @abstractmethod
+    def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
+        """Recompute ``blocked`` and the contact fields of ``robots`` (e.g. after a rotation)."""
+
+    @abstractmethod
+    def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        """Drive every unblocked robot forward; robots stop where they become blocked.
+
+        Stops after ``max_ticks`` ticks, or — with ``until_first_block`` — at the end of the tick
+        in which the first robot becomes blocked (immediately, if one already is). Updates
+        positions, contacts, odometers, clocks (+1 per tick each robot drove in) and
+        ``state.ticks``. Returns the number of ticks elapsed.
+        """
+
+    # -- helpers shared by backends ---------------------------------------------------------
+    def robot_blockers(self, state: RobotState, robots: np.ndarray):
+        """For each of ``robots``: the touching robot it faces (or -1) and the contact normal.
+
+        Robot i is blocked by robot j when the disks touch (within tolerance) and i's heading
+        points towards j's centre.
+        """
+        robots = np.asarray(robots, dtype=np.int64)
+        blocker = np.full(len(robots), NO_CONTACT, dtype=np.int64)
+        normal = np.zeros((len(robots), 2))
+        if not self.collide or len(robots) == 0:
+            return blocker, normal
+        rel = state.position[None, :, :] - state.position[robots, None, :]  # i -> j
+        dist = np.hypot(rel[..., 0], rel[..., 1])
+        d = state.direction[robots]
+        facing = np.einsum("ik,ijk->ij", d, rel) > 1e-12 * np.maximum(dist, 1e-300)
+        touching = dist <= 2 * self.radius + 10 * self.world.tol
+        touching[np.arange(len(robots)), robots] = False
+        cand = touching & facing
+        has = cand.any(axis=1)
+        if np.any(has):
+            # among several, the one most directly ahead
+            score = np.where(cand, np.einsum("ik,ijk->ij", d, rel) / np.maximum(dist, 1e-300), -2)
+            j = np.argmax(score, axis=1)
+            blocker[has] = j[has]
+            vec = -rel[np.flatnonzero(has), j[has]]
+            normal[has] = vec / np.hypot(vec[:, 0], vec[:, 1])[:, None]
+        return blocker, normal
+
+
+def pair_contact_times(position: np.ndarray, velocity: np.ndarray, radius: float,
+                       rows: np.ndarray) -> np.ndarray:
+    """Earliest future time at which robot ``rows[k]`` starts to overlap robot j, per pair.
+
+    Closed form for disks of equal radius moving with constant velocities: the smallest t >= 0
+    with |Δp + Δv t| = 2R while approaching. Returns (len(rows), m) with ``inf`` where the pair
+    never touches (or is the same robot, or is separating).
+    """
+    dp = position[rows, None, :] - position[None, :, :]
+    dv = velocity[rows, None, :] - velocity[None, :, :]
+    a = np.einsum("ijk,ijk->ij", dv, dv)
+    b = np.einsum("ijk,ijk->ij", dp, dv)
+    c = np.einsum("ijk,ijk->ij", dp, dp) - (2 * radius) ** 2
+    disc = b * b - a * c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (-b - np.sqrt(np.maximum(disc, 0.0))) / a
+    ok = (b < 0) & (disc >= 0) & (a > 0)
+    t = np.where(ok, np.maximum(t, 0.0), np.inf)
+    t[np.arange(len(rows)), rows] = np.inf
+    return t

@@ -1,0 +1,108 @@
+"""Actuation noise on the bounce parameter: the angle actually executed at a bump.
+
+* `Exact` — the nominal angle (the papers' noise-free SCM model).
+* `Reliable(r, eps)` — the nominal angle with probability r, otherwise nominal + U(−ε, ε): the
+  generalized cell mapping model of Alam et al. (navigation/coverage paper §2, thesis §3.4.3).
+* `Interval(lo, hi)` — nominal + U(lo, hi): Nilles' nondeterministic rule, where any action in an
+  interval may be executed (IJRR 2021, Defs. 2–3); ``Interval(-eps, eps)`` is "u ± ε".
+
+Noise models are small immutable objects drawing only from the generator they are given.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bounce_gym.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Exact:
+    """No noise."""
+
+    def perturb(self, nominal: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        del rng
+        return np.asarray(nominal, dtype=np.float64).copy()
+
+
+@dataclass(frozen=True)
+class Reliable:
+    """Nominal with probability ``r``, else nominal + U(−eps, eps) (radians)."""
+
+    r: float
+    eps: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.r) and 0.0 <= self.r <= 1.0):
+            raise ConfigError(f"noise: reliability r must be in [0, 1], got {self.r!r}")
+        if not (np.isfinite(self.eps) and 0.0 <= self.eps < np.pi):
+            raise ConfigError(f"noise: eps must be in [0, π) radians, got {self.eps!r}")
+
+    def perturb(self, nominal: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        nominal = np.asarray(nominal, dtype=np.float64)
+        slip = rng.random(nominal.shape) >= self.r
+        offset = rng.uniform(-self.eps, self.eps, nominal.shape)
+        return nominal + np.where(slip, offset, 0.0)
+
+
+@dataclass(frozen=True)
+class Interval:
+    """Nominal + U(lo, hi) (radians): any action in the interval may happen."""
+
+    lo: float
+    hi: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.lo) and np.isfinite(self.hi) and self.lo <= self.hi):
+            raise ConfigError(
+                f"noise: interval needs finite lo <= hi, got lo={self.lo!r}, hi={self.hi!r}"
+            )
+
+    def perturb(self, nominal: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        nominal = np.asarray(nominal, dtype=np.float64)
+        return nominal + rng.uniform(self.lo, self.hi, nominal.shape)
+
+
+NoiseModel = Exact | Reliable | Interval
+
+
+def make_noise(spec: object) -> NoiseModel:
+    """Build a noise model from an instance, ``None``/``"exact"``, or a config dict.
+
+    Dicts: ``{"type": "reliable", "r": 0.8, "eps_deg": 5}`` (or ``"eps"`` in radians),
+    ``{"type": "interval", "lo_deg": -5, "hi_deg": 5}`` (or ``"lo"``/``"hi"`` in radians).
+    """
+    if isinstance(spec, Exact | Reliable | Interval):
+        return spec
+    if spec is None or spec == "exact":
+        return Exact()
+    if isinstance(spec, dict):
+        spec = dict(spec)
+        kind = spec.pop("type", None)
+        fields = {"reliable": ("r", "eps"), "interval": ("lo", "hi")}
+        if kind == "exact" and not spec:
+            return Exact()
+        if kind not in fields:
+            raise ConfigError(
+                f"noise.type: unknown noise model {kind!r}; allowed are exact, reliable, interval"
+            )
+        values = {}
+        for key in fields[kind]:
+            if key in spec and f"{key}_deg" in spec:
+                raise ConfigError(f"noise: give {key!r} or {key + '_deg'!r}, not both")
+            if f"{key}_deg" in spec:
+                values[key] = float(np.radians(spec.pop(f"{key}_deg")))
+            elif key in spec:
+                values[key] = float(spec.pop(key))
+            elif key != "r":
+                raise ConfigError(f"noise: {kind} needs {key!r} (radians) or {key + '_deg'!r}")
+        if kind == "reliable" and "r" not in values:
+            raise ConfigError("noise: reliable needs 'r' (probability of the nominal angle)")
+        if spec:
+            raise ConfigError(f"noise: unknown keys {sorted(spec)} for type {kind!r}")
+        return Reliable(**values) if kind == "reliable" else Interval(**values)
+    raise ConfigError(
+        f"noise: expected None, 'exact', a dict with 'type', or a noise model, got {spec!r}"
+    )

@@ -1,0 +1,195 @@
+"""`BounceDynamics`: m bouncing robots in a world — bounce rule, noise and a motion backend.
+
+The tick (the papers' clock unit, thesis Eq. 2.4 with the bump-in-place resolution of spec 001 G1):
+every robot does one of two things per tick,
+
+* a robot that is **blocked** (touching a wall or robot it faces) spends the tick rotating by its
+  bounce rule with the angle it was given — a *bump tick*: its bump count rises and its clock
+  resets to 0;
+* every other robot **drives** ``step_length`` (less if it touches something first and stops) —
+  its clock rises by 1.
+
+A rotation that still faces the boundary leaves the robot blocked, so the next tick is another
+bump: corners give several bumps in a row, as in the papers' observation strings. Bounce-mode
+stepping (`bounce`) is tick stepping that only stops where some robot needs a new angle.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bounce_gym.dynamics.backend import MotionBackend
+from bounce_gym.dynamics.noise import NoiseModel, make_noise
+from bounce_gym.dynamics.rules import get_rule
+from bounce_gym.dynamics.state import RobotState
+from bounce_gym.errors import ConfigError
+from bounce_gym.worlds import World
+
+
+def _backends() -> dict[str, type[MotionBackend]]:
+    from bounce_gym.dynamics.kinematic import KinematicBackend
+    from bounce_gym.dynamics.pymunk_backend import PymunkBackend
+
+    return {"kinematic": KinematicBackend, "pymunk": PymunkBackend}
+
+
+BACKEND_NAMES = ("kinematic", "pymunk")
+
+
+def make_backend(name: str, world: World, n_robots: int = 1, radius: float = 0.0,
+                 step_length: float = 1.0, robot_collisions: str = "ignore") -> MotionBackend:
+    """Build a motion backend by name (``kinematic`` or ``pymunk``)."""
+    if name not in BACKEND_NAMES:
+        raise ConfigError(f"backend: unknown backend {name!r}; allowed are {list(BACKEND_NAMES)}")
+    return _backends()[name](world, n_robots, radius, step_length, robot_collisions)
+
+
+class BounceDynamics:
+    """m robots with contact sensors and clocks, moving by a bounce rule.
+
+    Args:
+        world: the workspace.
+        n_robots: number of robots.
+        backend: ``"kinematic"`` (exact, event-driven) or ``"pymunk"`` (physics engine).
+        rule: bounce rule name, see `bounce_gym.dynamics.rules.RULES`.
+        noise: actuation noise (`bounce_gym.dynamics.noise.make_noise` accepts the forms).
+        radius: robot disk radius (0 = point robot).
+        step_length: distance per tick.
+        robot_collisions: ``"bounce"`` or ``"ignore"``.
+
+    Randomness comes only from the generator passed to `reset`.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        n_robots: int = 1,
+        *,
+        backend: str = "kinematic",
+        rule: str = "relative",
+        noise: object = None,
+        radius: float = 0.0,
+        step_length: float = 1.0,
+        robot_collisions: str = "ignore",
+    ) -> None:
+        self.rule_name = rule
+        self.rule = get_rule(rule)
+        self.noise: NoiseModel = make_noise(noise)
+        self.backend = make_backend(backend, world, n_robots, radius, step_length, robot_collisions)
+        #: scalar fast path for a lone robot on a backend that can drive robots independently
+        self._drive_one = getattr(self.backend, "drive_each", None) if n_robots == 1 else None
+        self.rng: np.random.Generator | None = None
+        self.state: RobotState | None = None
+
+    @property
+    def world(self) -> World:
+        return self.backend.world
+
+    @property
+    def n_robots(self) -> int:
+        return self.backend.n_robots
+
+    def reset(
+        self,
+        rng: np.random.Generator,
+        position: np.ndarray | None = None,
+        heading: np.ndarray | None = None,
+    ) -> RobotState:
+        """Place the robots (uniformly at random where not given) and return the state."""
+        if not isinstance(rng, np.random.Generator):
+            raise ConfigError(f"rng: expected a numpy Generator, got {type(rng).__name__}")
+        self.rng = rng
+        m = self.n_robots
+        if position is None:
+            position = self._random_positions(rng)
+        position = np.asarray(position, dtype=np.float64)
+        if position.shape != (m, 2) or not np.all(np.isfinite(position)):
+            raise ConfigError(
+                f"start position: expected {m} finite (x, y) pairs, got shape {position.shape}"
+            )
+        if heading is None:
+            heading = rng.uniform(0.0, 2 * np.pi, m)
+        heading = np.asarray(heading, dtype=np.float64).reshape(-1)
+        if heading.shape != (m,) or not np.all(np.isfinite(heading)):
+            raise ConfigError(f"start heading: expected {m} finite angles, got {heading.tolist()}")
+        self.state = RobotState.at(position, heading)
+        self.backend.reset(self.state)
+        return self.state
+
+    def _random_positions(self, rng: np.random.Generator) -> np.ndarray:
+        backend = self.backend
+        if not backend.collide:
+            return self.world.sample_free(rng, self.n_robots, backend.radius)
+        chosen: list[np.ndarray] = []
+        for _ in range(100 * self.n_robots + 100):
+            p = self.world.sample_free(rng, 1, backend.radius)[0]
+            if all(np.hypot(*(p - q)) > 2 * backend.radius for q in chosen):
+                chosen.append(p)
+                if len(chosen) == self.n_robots:
+                    return np.array(chosen)
+        raise ConfigError(
+            f"could not place {self.n_robots} robots of radius {backend.radius} without overlap "
+            f"in world {self.world.name!r}"
+        )
+
+    # -- stepping ---------------------------------------------------------------------------
+    def tick(self, params: np.ndarray) -> np.ndarray:
+        """Advance one tick. ``params`` (m,) are the bounce angles used by robots that bump.
+
+        Returns the (m,) mask of robots whose tick was a bump.
+        """
+        state = self._require_state()
+        bumping = state.blocked.copy()
+        self.backend.drive(state, 1, until_first_block=False)
+        self._rotate(bumping, params)
+        return bumping
+
+    def bounce(self, params: np.ndarray) -> int:
+        """Bounce-mode step: one tick (blocked robots rotate), then drive until a robot is blocked.
+
+        Stops at the end of the first tick in which some robot becomes blocked; immediately after
+        the first tick if a rotated robot still faces the boundary. Returns the ticks elapsed.
+        """
+        state = self._require_state()
+        if self._drive_one is not None and state.blocked[0]:
+            # one robot: the rotation tick, then the scalar drive to the next contact
+            state.ticks += 1
+            self._rotate(state.blocked.copy(), params)
+            return 1 + int(self._drive_one(state)[0])
+        self.tick(params)
+        return 1 + self.backend.drive(state, np.inf, until_first_block=True)
+
+    def drive_to_contact(self) -> int:
+        """Drive until some robot is blocked (used after reset in bounce mode)."""
+        return self.backend.drive(self._require_state(), np.inf, until_first_block=True)
+
+    def bounce_each(self, params: np.ndarray) -> np.ndarray:
+        """Every blocked robot rotates, then every robot drives to its *own* next contact.
+
+        For independent robots (``robot_collisions='ignore'``, kinematic backend): m parallel
+        single-robot episodes in one vectorised call. Per-robot clocks stay exact; the shared
+        ``state.ticks`` is not advanced because the robots are no longer in step.
+        Returns the ticks each robot drove.
+        """
+        drive_each = getattr(self.backend, "drive_each", None)
+        if drive_each is None:
+            raise ConfigError(f"backend {self.backend.name!r} does not drive robots independently")
+        self._rotate(self._require_state().blocked.copy(), params)
+        return drive_each(self.state)
+
+    def _rotate(self, robots: np.ndarray, params: np.ndarray) -> None:
+        state = self._require_state()
+        idx = np.flatnonzero(robots)
+        if len(idx) == 0:
+            return
+        params = np.broadcast_to(np.asarray(params, dtype=np.float64), (self.n_robots,))
+        executed = self.noise.perturb(params[idx], self.rng)
+        state.heading[idx] = self.rule(state.heading[idx], state.contact_normal[idx], executed)
+        state.bumps[idx] += 1
+        state.clock[idx] = 0
+        self.backend.update_contacts(state, idx)
+
+    def _require_state(self) -> RobotState:
+        if self.state is None:
+            raise RuntimeError("call reset() before stepping the dynamics")
+        return self.state
