@@ -65,16 +65,16 @@ class KinematicBackend(MotionBackend):
         self._ahead_edge[robots] = hits.edge
         self._ahead_normal[robots] = hits.normal
         wall = hits.distance <= self.contact_tol
-        if self.collide:
-            blocker, robot_normal = self.robot_blockers(state, robots)
-            by_robot = ~wall & (blocker >= 0)
-        else:
-            blocker, robot_normal = np.full(len(robots), NO_CONTACT), np.zeros((len(robots), 2))
-            by_robot = np.zeros(len(robots), dtype=bool)
-        state.blocked[robots] = wall | by_robot
         state.contact_edge[robots] = np.where(wall, hits.edge, NO_CONTACT)
+        state.contact_normal[robots] = hits.normal
+        if not self.collide:
+            state.blocked[robots] = wall
+            return
+        blocker, robot_normal = self.robot_blockers(state, robots)
+        by_robot = ~wall & (blocker >= 0)
+        state.blocked[robots] = wall | by_robot
         state.contact_robot[robots] = np.where(by_robot, blocker, NO_CONTACT)
-        state.contact_normal[robots] = np.where(wall[:, None], hits.normal, robot_normal)
+        state.contact_normal[robots[by_robot]] = robot_normal[by_robot]
 
     def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
         # Internally time is measured as distance driven (one tick = step_length), so a robot

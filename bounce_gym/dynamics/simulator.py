@@ -182,12 +182,23 @@ class BounceDynamics:
         idx = np.flatnonzero(robots)
         if len(idx) == 0:
             return
-        params = np.broadcast_to(np.asarray(params, dtype=np.float64), (self.n_robots,))
-        executed = self.noise.perturb(params[idx], self.rng)
+        executed = self.noise.perturb(self._parameters(params)[idx], self.rng)
         state.heading[idx] = self.rule(state.heading[idx], state.contact_normal[idx], executed)
         state.bumps[idx] += 1
         state.clock[idx] = 0
         self.backend.update_contacts(state, idx)
+
+    def _parameters(self, params: object) -> np.ndarray:
+        """Bounce parameters as an (m,) float array; a scalar applies to every robot."""
+        values = np.asarray(params, dtype=np.float64).reshape(-1)
+        if len(values) == 1 and self.n_robots > 1:
+            return np.full(self.n_robots, values[0])
+        if len(values) != self.n_robots:
+            raise ConfigError(
+                f"bounce parameters: expected {self.n_robots} angles (one per robot), "
+                f"got {len(values)}"
+            )
+        return values
 
     def _require_state(self) -> RobotState:
         if self.state is None:

@@ -63,7 +63,10 @@ class RobotState:
     @property
     def direction(self) -> np.ndarray:
         """(m, 2) unit heading vectors."""
-        return np.column_stack((np.cos(self.heading), np.sin(self.heading)))
+        out = np.empty((len(self.heading), 2))
+        np.cos(self.heading, out=out[:, 0])
+        np.sin(self.heading, out=out[:, 1])
+        return out
 
     def copy(self) -> RobotState:
         return RobotState(

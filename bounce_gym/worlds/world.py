@@ -71,10 +71,11 @@ def _check_ring_shape(ring: np.ndarray, label: str, tol: float) -> None:
             f"{label}: collinear-degenerate vertex {k} at {ring[k].tolist()}: "
             "the boundary folds back on itself"
         )
+    if not LinearRing(ring).is_simple:
+        reason = shapely.is_valid_reason(Polygon(ring))
+        raise InvalidWorldError(f"{label}: ring self-intersects ({reason})")
     if abs(_signed_area(ring)) <= tol * tol:
         raise InvalidWorldError(f"{label}: ring has zero area (all vertices collinear)")
-    if not LinearRing(ring).is_simple:
-        raise InvalidWorldError(f"{label}: ring self-intersects ({shapely.is_valid_reason(Polygon(ring))})")
 
 
 class World:
