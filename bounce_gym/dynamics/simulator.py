@@ -26,22 +26,19 @@ from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
 
 
-def _backends() -> dict[str, type[MotionBackend]]:
-    from bounce_gym.dynamics.kinematic import KinematicBackend
-    from bounce_gym.dynamics.pymunk_backend import PymunkBackend
-
-    return {"kinematic": KinematicBackend, "pymunk": PymunkBackend}
-
-
 BACKEND_NAMES = ("kinematic", "pymunk")
 
 
 def make_backend(name: str, world: World, n_robots: int = 1, radius: float = 0.0,
                  step_length: float = 1.0, robot_collisions: str = "ignore") -> MotionBackend:
-    """Build a motion backend by name (``kinematic`` or ``pymunk``)."""
-    if name not in BACKEND_NAMES:
+    """Build a motion backend by name (``kinematic`` or ``pymunk``); imports it on first use."""
+    if name == "kinematic":
+        from bounce_gym.dynamics.kinematic import KinematicBackend as backend_class
+    elif name == "pymunk":
+        from bounce_gym.dynamics.pymunk_backend import PymunkBackend as backend_class
+    else:
         raise ConfigError(f"backend: unknown backend {name!r}; allowed are {list(BACKEND_NAMES)}")
-    return _backends()[name](world, n_robots, radius, step_length, robot_collisions)
+    return backend_class(world, n_robots, radius, step_length, robot_collisions)
 
 
 class BounceDynamics:
@@ -139,6 +136,7 @@ class BounceDynamics:
         Returns the (m,) mask of robots whose tick was a bump.
         """
         state = self._require_state()
+        params = self._parameters(params)
         bumping = state.blocked.copy()
         self.backend.drive(state, 1, until_first_block=False)
         self._rotate(bumping, params)
@@ -151,6 +149,7 @@ class BounceDynamics:
         the first tick if a rotated robot still faces the boundary. Returns the ticks elapsed.
         """
         state = self._require_state()
+        params = self._parameters(params)
         if self._drive_one is not None and state.blocked[0]:
             # one robot: the rotation tick, then the scalar drive to the next contact
             state.ticks += 1
@@ -174,15 +173,16 @@ class BounceDynamics:
         drive_each = getattr(self.backend, "drive_each", None)
         if drive_each is None:
             raise ConfigError(f"backend {self.backend.name!r} does not drive robots independently")
-        self._rotate(self._require_state().blocked.copy(), params)
-        return drive_each(self.state)
+        state = self._require_state()
+        self._rotate(state.blocked.copy(), self._parameters(params))
+        return drive_each(state)
 
     def _rotate(self, robots: np.ndarray, params: np.ndarray) -> None:
-        state = self._require_state()
+        state = self.state
         idx = np.flatnonzero(robots)
         if len(idx) == 0:
             return
-        executed = self.noise.perturb(self._parameters(params)[idx], self.rng)
+        executed = self.noise.perturb(params[idx], self.rng)
         state.heading[idx] = self.rule(state.heading[idx], state.contact_normal[idx], executed)
         state.bumps[idx] += 1
         state.clock[idx] = 0
@@ -190,7 +190,12 @@ class BounceDynamics:
 
     def _parameters(self, params: object) -> np.ndarray:
         """Bounce parameters as an (m,) float array; a scalar applies to every robot."""
-        values = np.asarray(params, dtype=np.float64).reshape(-1)
+        try:
+            values = np.asarray(params, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            raise ConfigError(f"bounce parameters: expected numbers, got {params!r}") from None
+        if not np.all(np.isfinite(values)):
+            raise ConfigError(f"bounce parameters: angles must be finite, got {values.tolist()}")
         if len(values) == 1 and self.n_robots > 1:
             return np.full(self.n_robots, values[0])
         if len(values) != self.n_robots:

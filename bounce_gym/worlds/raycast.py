@@ -73,6 +73,10 @@ class _Features:
 
     mat: np.ndarray  # (6, 5 * E)
     n_edges: int
+    ax: np.ndarray  # shifted edge starts and edge vectors, for the exact distance of the winner
+    ay: np.ndarray
+    ex: np.ndarray
+    ey: np.ndarray
     normals: np.ndarray
     vx: np.ndarray  # reflex vertices (disk radius > 0 only)
     vy: np.ndarray
@@ -105,7 +109,8 @@ def _features(world: World, radius: float) -> _Features:
         vid = np.flatnonzero(world.reflex) if radius > 0 else np.empty(0, dtype=np.int64)
         verts = world.edge_start[vid]
         feats = _Features(
-            mat=np.ascontiguousarray(mat), n_edges=len(ax), normals=world.normals,
+            mat=np.ascontiguousarray(mat), n_edges=len(ax), ax=ax.copy(), ay=ay.copy(),
+            ex=ex.copy(), ey=ey.copy(), normals=world.normals,
             vx=verts[:, 0].copy(), vy=verts[:, 1].copy(), vid=vid, ttol=ttol,
         )
         cache[radius] = feats
@@ -126,6 +131,13 @@ def _first_hit_chunk(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) 
     edge = np.argmin(t, axis=1)
     rows = np.arange(n)
     distance = t[rows, edge]
+    # the product form can lose a few ulps to cancellation: recompute the winner directly
+    found = np.isfinite(distance)
+    if found.any():
+        k = edge[found]
+        wx, wy = f.ax[k] - o[found, 0], f.ay[k] - o[found, 1]
+        ex, ey = f.ex[k], f.ey[k]
+        distance[found] = (wx * ey - wy * ex) / (d[found, 0] * ey - d[found, 1] * ex)
     normal = f.normals[edge]
     vertex = np.full(n, -1, dtype=np.int64)
     if len(f.vx):

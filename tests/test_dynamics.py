@@ -1,0 +1,200 @@
+"""Tick/bounce semantics of `BounceDynamics` on the exact kinematic backend."""
+
+import pickle
+
+import numpy as np
+import pytest
+
+from bounce_gym.dynamics import BounceDynamics
+from bounce_gym.errors import ConfigError
+from bounce_gym.worlds import World
+
+BOX = World([(0, 0), (10, 0), (10, 8), (0, 8)], name="box")
+ROOM = World(
+    [(0, 0), (20, 0), (20, 12), (11, 12), (11, 16), (0, 16)],
+    [[(3, 3), (6, 3), (5, 7)], [(12, 2), (16, 2), (16, 5), (12, 5)]],
+    name="room",
+)
+deg = np.radians
+
+
+def test_rectangle_loop_with_relative_90():
+    """Point robot from (1.5, 0.5) heading East, φ = 90°: the CCW wall loop, ticks = ceil(distance)."""
+    dyn = BounceDynamics(BOX)
+    state = dyn.reset(np.random.default_rng(0), position=[[1.5, 0.5]], heading=[0.0])
+    assert dyn.drive_to_contact() == 9  # 8.5 units
+    np.testing.assert_allclose(state.position, [[10.0, 0.5]], atol=1e-12)
+    assert state.blocked[0] and state.clock[0] == 9
+    expected = [((10, 8), 90, 8, 2), ((0, 8), 180, 10, 3), ((0, 0), 270, 8, 0), ((10, 0), 0, 10, 1)]
+    for corner, heading, clock, edge in expected:
+        ticks = dyn.bounce(deg(90))
+        assert ticks == 1 + clock
+        np.testing.assert_allclose(state.position[0], corner, atol=1e-12)
+        assert np.degrees(state.heading[0]) == pytest.approx(heading)
+        assert state.clock[0] == clock and state.contact_edge[0] == edge
+    assert state.bumps[0] == 4 and state.ticks == 9 + 9 + 11 + 9 + 11
+
+
+def test_corner_gives_consecutive_bumps_in_tick_mode():
+    """Heading into a corner at 45° with φ = 90°: the first turn still faces a wall (thesis §1.1)."""
+    dyn = BounceDynamics(BOX)
+    dyn.reset(np.random.default_rng(0), position=[[9.5, 7.5]], heading=[deg(45)])
+    bumps = "".join(str(int(dyn.tick(deg(90))[0])) for _ in range(12))
+    assert bumps == "011000000000"
+    assert np.degrees(dyn.state.heading[0]) == pytest.approx(225)
+    assert dyn.state.clock[0] == 9
+
+
+def test_bounce_mode_is_tick_mode_that_stops_when_a_robot_needs_an_angle():
+    rng = np.random.default_rng(5)
+    angles = rng.uniform(deg(10), deg(350), size=(300, 3))
+    a = BounceDynamics(ROOM, 3, radius=0.4, robot_collisions="bounce")
+    b = BounceDynamics(ROOM, 3, radius=0.4, robot_collisions="bounce")
+    sa = a.reset(np.random.default_rng(1))
+    sb = b.reset(np.random.default_rng(1))
+    a.drive_to_contact()
+    while not sb.blocked.any():
+        b.tick(0.0)
+    for row in angles:
+        a.bounce(row)
+        b.tick(row)
+        while not sb.blocked.any():
+            b.tick(0.0)  # nobody is blocked, so the angles are unused
+        # unit steps and one long drive round differently; the discrete history is identical
+        assert sa.ticks == sb.ticks
+        np.testing.assert_allclose(sa.position, sb.position, atol=1e-9)
+        np.testing.assert_array_equal(sa.clock, sb.clock)
+        np.testing.assert_array_equal(sa.bumps, sb.bumps)
+
+
+def test_single_robot_fast_path_equals_the_general_integrator():
+    rng = np.random.default_rng(6)
+    angles = rng.uniform(0.1, 6.2, 500)
+    fast = BounceDynamics(ROOM, radius=0.3)
+    slow = BounceDynamics(ROOM, radius=0.3)
+    slow._drive_one = None  # force the vectorised event loop
+    for dyn in (fast, slow):
+        dyn.reset(np.random.default_rng(2))
+        dyn.drive_to_contact()
+    for a in angles:
+        assert fast.bounce(a) == slow.bounce(a)
+    for field in ("position", "heading", "clock", "bumps", "contact_edge", "odometer"):
+        np.testing.assert_array_equal(getattr(fast.state, field), getattr(slow.state, field))
+    assert fast.state.ticks == slow.state.ticks
+
+
+@pytest.mark.parametrize("rule", ["relative", "fixed", "specular", "monotonic", "nilles_relative"])
+@pytest.mark.parametrize("radius", [0.0, 0.35])
+def test_no_escape_and_exact_contacts(rule, radius):
+    rng = np.random.default_rng(7)
+    dyn = BounceDynamics(ROOM, rule=rule, radius=radius, noise={"type": "interval", "lo": -0.2, "hi": 0.2})
+    state = dyn.reset(np.random.default_rng(3))
+    dyn.drive_to_contact()
+    low, high = (0.3, 2.8) if rule != "relative" else (0.1, 6.2)
+    for _ in range(3000):
+        dyn.bounce(rng.uniform(low, high))
+        assert ROOM.contains(state.position, radius)[0]
+        if state.contact_robot[0] < 0 and not state.blocked[0]:
+            continue
+        # the robot touches the wall it reports
+        assert ROOM.boundary_distance(state.position)[0] == pytest.approx(radius, abs=1e-7)
+
+
+def test_determinism_same_seed_and_after_pickling():
+    def run(dyn, rng, n):
+        return [(dyn.bounce(rng.uniform(0.1, 6.2, 4)), dyn.state.position.copy()) for _ in range(n)]
+
+    kwargs = dict(radius=0.5, robot_collisions="bounce", noise={"type": "reliable", "r": 0.7, "eps": 0.3})
+    a = BounceDynamics(ROOM, 4, **kwargs)
+    b = BounceDynamics(ROOM, 4, **kwargs)
+    a.reset(np.random.default_rng(11)), b.reset(np.random.default_rng(11))
+    ra, rb = np.random.default_rng(0), np.random.default_rng(0)
+    for (ta, pa), (tb, pb) in zip(run(a, ra, 200), run(b, rb, 200), strict=True):
+        assert ta == tb and np.array_equal(pa, pb)
+    c = pickle.loads(pickle.dumps(a))
+    rc = pickle.loads(pickle.dumps(ra))
+    for (ta, pa), (tc, pc) in zip(run(a, ra, 200), run(c, rc, 200), strict=True):
+        assert ta == tc and np.array_equal(pa, pc)
+
+
+def test_robots_never_overlap_and_head_on_robots_both_turn():
+    dyn = BounceDynamics(BOX, 2, radius=0.5, robot_collisions="bounce")
+    state = dyn.reset(np.random.default_rng(0), position=[[2, 4], [8, 4]], heading=[0, np.pi])
+    dyn.drive_to_contact()
+    assert state.blocked.all() and state.contact_robot.tolist() == [1, 0]
+    np.testing.assert_allclose(state.position, [[4.5, 4], [5.5, 4]])
+    np.testing.assert_allclose(state.contact_normal, [[-1, 0], [1, 0]])
+    dyn.bounce(deg(90))
+    assert state.bumps.tolist() == [1, 1]
+
+    crowd = BounceDynamics(ROOM, 8, radius=0.6, robot_collisions="bounce")
+    s = crowd.reset(np.random.default_rng(4))
+    rng = np.random.default_rng(5)
+    robot_contacts = 0
+    for _ in range(1500):
+        crowd.bounce(rng.uniform(0.1, 6.2, 8))
+        diff = s.position[:, None] - s.position[None]
+        dist = np.hypot(diff[..., 0], diff[..., 1]) + np.eye(8) * 99
+        assert dist.min() >= 1.2 - 1e-7
+        robot_contacts += int((s.contact_robot >= 0).sum())
+        assert ROOM.contains(s.position, 0.6).all()
+    assert robot_contacts > 0
+
+
+def test_ignored_collisions_let_robots_pass_and_bounce_each_matches_single_runs():
+    many = BounceDynamics(ROOM, 16, robot_collisions="ignore")
+    s = many.reset(np.random.default_rng(8))
+    start_pos, start_head = s.position.copy(), s.heading.copy()
+    many.bounce_each(0.0)  # nobody is blocked yet: just drive to the first contact
+    angles = np.random.default_rng(9).uniform(0.1, 6.2, (50, 16))
+    for row in angles:
+        many.bounce_each(row)
+    for i in (0, 7, 15):
+        one = BounceDynamics(ROOM)
+        one.reset(np.random.default_rng(0), position=start_pos[i : i + 1], heading=start_head[i : i + 1])
+        one.drive_to_contact()
+        for row in angles:
+            one.bounce(row[i])
+        np.testing.assert_array_equal(one.state.position[0], s.position[i])
+        assert one.state.clock[0] == s.clock[i] and one.state.bumps[0] == s.bumps[i]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        (dict(n_robots=0), "n_robots"),
+        (dict(radius=-1.0), "robot_radius"),
+        (dict(radius=np.nan), "robot_radius"),
+        (dict(step_length=0.0), "step_length"),
+        (dict(backend="box2d"), "backend: unknown backend 'box2d'"),
+        (dict(rule="mirror"), "bounce_rule"),
+        (dict(robot_collisions="push"), "robot_collisions"),
+        (dict(n_robots=3, robot_collisions="bounce"), "needs robot_radius > 0"),
+        (dict(noise={"type": "reliable", "r": 2, "eps": 0.1}), "reliability"),
+    ],
+)
+def test_bad_configuration_raises(kwargs, message):
+    n = kwargs.pop("n_robots", 1)
+    with pytest.raises(ConfigError, match=message):
+        BounceDynamics(BOX, n, **kwargs)
+
+
+def test_bad_reset_and_step_input_raise():
+    dyn = BounceDynamics(BOX, 2, radius=1.0, robot_collisions="bounce")
+    with pytest.raises(RuntimeError, match="reset"):
+        dyn.bounce([0.5, 0.5])
+    with pytest.raises(ConfigError, match="rng"):
+        dyn.reset(42)
+    with pytest.raises(ConfigError, match="not in the free space"):
+        dyn.reset(np.random.default_rng(0), position=[[0.5, 4], [5, 4]])
+    with pytest.raises(ConfigError, match="overlap"):
+        dyn.reset(np.random.default_rng(0), position=[[4, 4], [5, 4]])
+    with pytest.raises(ConfigError, match="start position"):
+        dyn.reset(np.random.default_rng(0), position=[[4, 4]])
+    dyn.reset(np.random.default_rng(0))
+    with pytest.raises(ConfigError, match="expected 2 angles"):
+        dyn.bounce([0.1, 0.2, 0.3])
+    with pytest.raises(ConfigError, match="finite"):
+        dyn.tick([np.nan, 0.1])
+    with pytest.raises(ConfigError, match="independent driving"):
+        dyn.bounce_each([1.0, 1.0])
