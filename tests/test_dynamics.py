@@ -198,3 +198,29 @@ def test_bad_reset_and_step_input_raise():
         dyn.tick([np.nan, 0.1])
     with pytest.raises(ConfigError, match="independent driving"):
         dyn.bounce_each([1.0, 1.0])
+
+
+@pytest.mark.parametrize(("rule", "bad"), [("relative", 0.0), ("relative", 4 * np.pi),
+                                           ("fixed", 0.0), ("monotonic", np.pi),
+                                           ("nilles_relative", -0.2), ("specular", np.nan)])
+def test_rule_parameters_are_validated_per_step(rule, bad):
+    dyn = BounceDynamics(BOX, rule=rule)
+    dyn.reset(np.random.default_rng(0))
+    with pytest.raises(ConfigError, match="bounce parameters"):
+        dyn.bounce(bad)
+
+
+def test_noise_is_an_error_on_the_executed_heading():
+    """With Interval noise the turn lands in [φ + lo, φ + hi] (relative rule)."""
+    dyn = BounceDynamics(BOX, noise={"type": "interval", "lo_deg": -10, "hi_deg": 10})
+    state = dyn.reset(np.random.default_rng(0), position=[[5, 4]], heading=[0.0])
+    dyn.drive_to_contact()
+    turns = []
+    for _ in range(200):
+        before = state.heading[0]
+        if state.blocked[0]:
+            dyn.tick(deg(90))
+            turns.append(np.degrees((state.heading[0] - before) % (2 * np.pi)))
+        else:
+            dyn.tick(deg(90))
+    assert min(turns) >= 80 - 1e-9 and max(turns) <= 100 + 1e-9 and np.std(turns) > 3

@@ -85,20 +85,19 @@ def test_unknown_rule_and_bad_parameters_raise():
 
 def test_reliable_noise_statistics():
     rng = np.random.default_rng(1)
-    nominal = np.full(20000, 1.0)
-    out = Reliable(r=0.8, eps=deg(5)).perturb(nominal, rng)
-    exact = out == 1.0
+    out = Reliable(r=0.8, eps=deg(5)).sample(20000, rng)
+    exact = out == 0.0
     assert exact.mean() == pytest.approx(0.8, abs=0.01)
-    assert np.abs(out - 1.0).max() <= deg(5)
-    assert np.abs(out[~exact] - 1.0).mean() == pytest.approx(deg(2.5), rel=0.05)
-    np.testing.assert_array_equal(Reliable(1.0, deg(5)).perturb(nominal, rng), nominal)
+    assert np.abs(out).max() <= deg(5)
+    assert np.abs(out[~exact]).mean() == pytest.approx(deg(2.5), rel=0.05)
+    np.testing.assert_array_equal(Reliable(1.0, deg(5)).sample(100, rng), 0.0)
 
 
 def test_interval_and_exact_noise():
     rng = np.random.default_rng(2)
-    out = Interval(-0.1, 0.3).perturb(np.zeros(5000), rng)
+    out = Interval(-0.1, 0.3).sample(5000, rng)
     assert out.min() >= -0.1 and out.max() <= 0.3 and out.mean() == pytest.approx(0.1, abs=0.01)
-    np.testing.assert_array_equal(Exact().perturb(np.array([1.0, 2.0]), rng), [1.0, 2.0])
+    np.testing.assert_array_equal(Exact().sample(2, rng), [0.0, 0.0])
 
 
 def test_make_noise_forms_and_errors():

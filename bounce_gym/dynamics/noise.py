@@ -1,11 +1,16 @@
-"""Actuation noise on the bounce parameter: the angle actually executed at a bump.
+"""Actuation noise: the error added to the heading a bounce rule commands.
 
-* `Exact` — the nominal angle (the papers' noise-free SCM model).
-* `Reliable(r, eps)` — the nominal angle with probability r, otherwise nominal + U(−ε, ε): the
-  generalized cell mapping model of Alam et al. (navigation/coverage paper §2, thesis §3.4.3).
-* `Interval(lo, hi)` — nominal + U(lo, hi): Nilles' nondeterministic rule, where any action in an
-  interval may be executed (IJRR 2021, Defs. 2–3); ``Interval(-eps, eps)`` is "u ± ε".
+Each model draws an angle offset per bump; the executed heading is the rule's heading plus the
+offset. For Alam's relative rule that is "rotate φ ± error"; for Nilles' boundary rules it is an
+error on the outgoing action u — the quantity both papers put the noise on.
 
+* `Exact` — no error (the papers' noise-free simple cell mapping).
+* `Reliable(r, eps)` — no error with probability r, otherwise U(−ε, ε): the generalized cell
+  mapping model of Alam et al. (navigation/coverage paper §2, thesis §3.4.3).
+* `Interval(lo, hi)` — U(lo, hi): Nilles' nondeterministic rule, where any action in an interval
+  may be executed (IJRR 2021, Defs. 2–3); ``Interval(-eps, eps)`` is "u ± ε".
+
+An offset can turn the robot back into the wall; it then simply bumps again on the next tick.
 Noise models are small immutable objects drawing only from the generator they are given.
 """
 
@@ -22,14 +27,14 @@ from bounce_gym.errors import ConfigError
 class Exact:
     """No noise."""
 
-    def perturb(self, nominal: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
         del rng
-        return np.asarray(nominal, dtype=np.float64).copy()
+        return np.zeros(n)
 
 
 @dataclass(frozen=True)
 class Reliable:
-    """Nominal with probability ``r``, else nominal + U(−eps, eps) (radians)."""
+    """No error with probability ``r``, else an error U(−eps, eps) (radians)."""
 
     r: float
     eps: float
@@ -40,16 +45,14 @@ class Reliable:
         if not (np.isfinite(self.eps) and 0.0 <= self.eps < np.pi):
             raise ConfigError(f"noise: eps must be in [0, π) radians, got {self.eps!r}")
 
-    def perturb(self, nominal: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        nominal = np.asarray(nominal, dtype=np.float64)
-        slip = rng.random(nominal.shape) >= self.r
-        offset = rng.uniform(-self.eps, self.eps, nominal.shape)
-        return nominal + np.where(slip, offset, 0.0)
+    def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        slip = rng.random(n) >= self.r
+        return np.where(slip, rng.uniform(-self.eps, self.eps, n), 0.0)
 
 
 @dataclass(frozen=True)
 class Interval:
-    """Nominal + U(lo, hi) (radians): any action in the interval may happen."""
+    """An error U(lo, hi) (radians): any action in the interval may happen."""
 
     lo: float
     hi: float
@@ -60,9 +63,8 @@ class Interval:
                 f"noise: interval needs finite lo <= hi, got lo={self.lo!r}, hi={self.hi!r}"
             )
 
-    def perturb(self, nominal: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        nominal = np.asarray(nominal, dtype=np.float64)
-        return nominal + rng.uniform(self.lo, self.hi, nominal.shape)
+    def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        return rng.uniform(self.lo, self.hi, n)
 
 
 NoiseModel = Exact | Reliable | Interval

@@ -20,7 +20,7 @@ import numpy as np
 
 from bounce_gym.dynamics.backend import MotionBackend
 from bounce_gym.dynamics.noise import NoiseModel, make_noise
-from bounce_gym.dynamics.rules import get_rule
+from bounce_gym.dynamics.rules import check_parameters, get_rule, wrap
 from bounce_gym.dynamics.state import RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
@@ -182,8 +182,8 @@ class BounceDynamics:
         idx = np.flatnonzero(robots)
         if len(idx) == 0:
             return
-        executed = self.noise.perturb(params[idx], self.rng)
-        state.heading[idx] = self.rule(state.heading[idx], state.contact_normal[idx], executed)
+        commanded = self.rule(state.heading[idx], state.contact_normal[idx], params[idx])
+        state.heading[idx] = wrap(commanded + self.noise.sample(len(idx), self.rng))
         state.bumps[idx] += 1
         state.clock[idx] = 0
         self.backend.update_contacts(state, idx)
@@ -194,8 +194,6 @@ class BounceDynamics:
             values = np.asarray(params, dtype=np.float64).reshape(-1)
         except (TypeError, ValueError):
             raise ConfigError(f"bounce parameters: expected numbers, got {params!r}") from None
-        if not np.all(np.isfinite(values)):
-            raise ConfigError(f"bounce parameters: angles must be finite, got {values.tolist()}")
         if len(values) == 1 and self.n_robots > 1:
             return np.full(self.n_robots, values[0])
         if len(values) != self.n_robots:
@@ -203,6 +201,15 @@ class BounceDynamics:
                 f"bounce parameters: expected {self.n_robots} angles (one per robot), "
                 f"got {len(values)}"
             )
+        if self.rule_name == "relative":
+            turn = np.mod(values, 2 * np.pi)
+            valid = turn.min() > 1e-9 and turn.max() < 2 * np.pi - 1e-9
+        elif self.rule_name == "specular":
+            valid = bool(np.isfinite(values).all())  # θ is unused but must be a number
+        else:
+            valid = values.min() > 0 and values.max() < np.pi
+        if not valid:
+            check_parameters(self.rule_name, values, field="bounce parameters")  # raises
         return values
 
     def _require_state(self) -> RobotState:
