@@ -25,7 +25,6 @@ from bounce_gym.dynamics.state import RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
 
-
 BACKEND_NAMES = ("kinematic", "pymunk")
 
 
@@ -33,12 +32,12 @@ def make_backend(name: str, world: World, n_robots: int = 1, radius: float = 0.0
                  step_length: float = 1.0, robot_collisions: str = "ignore") -> MotionBackend:
     """Build a motion backend by name (``kinematic`` or ``pymunk``); imports it on first use."""
     if name == "kinematic":
-        from bounce_gym.dynamics.kinematic import KinematicBackend as backend_class
+        from bounce_gym.dynamics.kinematic import KinematicBackend as Backend
     elif name == "pymunk":
-        from bounce_gym.dynamics.pymunk_backend import PymunkBackend as backend_class
+        from bounce_gym.dynamics.pymunk_backend import PymunkBackend as Backend
     else:
         raise ConfigError(f"backend: unknown backend {name!r}; allowed are {list(BACKEND_NAMES)}")
-    return backend_class(world, n_robots, radius, step_length, robot_collisions)
+    return Backend(world, n_robots, radius, step_length, robot_collisions)
 
 
 class BounceDynamics:

@@ -44,7 +44,16 @@ def world_from_grid(free: np.ndarray, cell_size: float = 1.0, name: str | None =
             f"grid: free cells form {len(union.geoms)} separate regions; a world must be connected"
         )
     union = union.simplify(0)  # drop the collinear vertices between cells
-    return World(union.exterior.coords, [h.coords for h in union.interiors], name=name)
+    rings = [_canonical(union.exterior.coords), *(_canonical(h.coords) for h in union.interiors)]
+    return World(rings[0], rings[1:], name=name)
+
+
+def _canonical(coords) -> np.ndarray:
+    """A ring started at its bottom-most, then left-most vertex, so equality does not depend on
+    the vertex order the polygon union happened to return."""
+    ring = np.asarray(coords)[:-1]
+    start = np.lexsort((ring[:, 0], ring[:, 1]))[0]
+    return np.roll(ring, -start, axis=0)
 
 
 def _check_pinches(grid: np.ndarray) -> None:
@@ -54,13 +63,16 @@ def _check_pinches(grid: np.ndarray) -> None:
     if np.any(pinch):
         r, col = (int(v) for v in np.argwhere(pinch)[0])
         raise InvalidWorldError(
-            f"grid: free cells meet only at the corner between rows {r}-{r + 1} and columns "
-            f"{col}-{col + 1} (diagonal pinch); block or free one more cell there"
+            f"grid: free cells meet only at the corner between rows {r}-{r + 1} (counted from "
+            f"the bottom) and columns {col}-{col + 1} (diagonal pinch); block or free one more "
+            "cell there"
         )
 
 
 def parse_ascii(rows_top_first: list[str]) -> np.ndarray:
     """Parse a picture of the map (top row first; ``.`` free, ``#`` blocked) to ``free[row, col]``."""
+    if isinstance(rows_top_first, str) or not all(isinstance(r, str) for r in rows_top_first):
+        raise InvalidWorldError("grid: expected a list of row strings (top row first)")
     if not rows_top_first:
         raise InvalidWorldError("grid: no rows")
     widths = {len(r) for r in rows_top_first}

@@ -13,7 +13,8 @@ here is an error, and so is a missing required key or a value of the wrong type.
     holes:                                   # optional (default: no holes): a list of rings,
       - [[2, 2], [3, 2], [3, 3]]             #   each >= 3 vertices [x, y], any orientation
 
-Coordinates are numbers (integers or floats; booleans are not numbers here). A closing vertex
+Coordinates are numbers (integers or floats; booleans are not numbers here; in YAML write
+exponents with a dot, ``1.0e3``, since YAML 1.1 reads ``1e3`` as a string). A closing vertex
 equal to the first one is allowed and dropped. The outer ring is stored counter-clockwise and the
 holes clockwise, whatever the file's orientation (see `bounce_gym.worlds.world.World`).
 
@@ -153,7 +154,10 @@ def from_dict(d: Mapping, *, source: str = "map") -> World:
         free = parse_ascii(list(rows))
         return world_from_grid(free, float(cell_size), name=name)
     except InvalidWorldError as exc:
-        raise MapFormatError(f"{source}: invalid {exc}") from exc
+        note = ""
+        if "between rows" in str(exc):
+            note = " (rows counted from the bottom: row 0 is the last line of 'grid')"
+        raise MapFormatError(f"{source}: invalid {exc}{note}") from exc
 
 
 def to_dict(

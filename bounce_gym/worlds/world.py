@@ -206,7 +206,7 @@ class World:
     @cached_property
     def polygon(self) -> Polygon:
         """The free space as a shapely polygon."""
-        return Polygon(self.outer, [h for h in self.holes])
+        return Polygon(self.outer, list(self.holes))
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:

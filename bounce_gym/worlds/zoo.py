@@ -14,7 +14,7 @@ Worlds are immutable, so `get` caches them and returns the same object on every 
 from __future__ import annotations
 
 import re
-from functools import lru_cache
+from functools import cache, lru_cache
 from importlib import resources
 
 import numpy as np
@@ -85,7 +85,7 @@ def _stored_names() -> tuple[str, ...]:
     )
 
 
-@lru_cache(maxsize=None)
+@cache
 def _stored(name: str) -> World:
     with resources.as_file(_map_file(name)) as path:
         world = io.load(path)
