@@ -71,13 +71,14 @@ def main(argv: list[str] | None = None) -> None:
     print("bounce_gym demo: robots that sense only contact and time\n")
     print(f"zoo: {len(worlds.names())} named worlds, e.g. {', '.join(worlds.names()[:6])}, ...")
 
-    text = observation_string("lab_navigation", 90.0, 72, seed)
-    print("\n1) What one robot senses (lab_navigation, relative rule, φ = 90°, tick mode):")
-    print(f"   {text}   (1 = bump tick, 0 = a step of driving)")
+    text = observation_string("lab_fig1", 90.0, 72, seed)
+    print("\n1) What one robot senses (lab_fig1, relative rule, φ = 90°, tick mode):")
+    print(f"   {text}")
+    print("   (1 = bump tick, 0 = a step of driving; the repeating tail is a limit cycle)")
 
-    print("\n2) Coverage of the free cells after 3000 ticks, by bounce angle (lab_navigation):")
+    print("\n2) Coverage of the free cells after 3000 ticks, by bounce angle (lab_fig1):")
     for phi in (45.0, 90.0, 135.0):
-        print(f"   φ = {phi:5.1f}°: {coverage('lab_navigation', phi, 3000, seed):6.1%} of cells")
+        print(f"   φ = {phi:5.1f}°: {coverage('lab_fig1', phi, 3000, seed):6.1%} of cells")
 
     kin = walls_hit("two_rooms", "kinematic", 50, seed)
     phy = walls_hit("two_rooms", "pymunk", 50, seed)
