@@ -72,7 +72,7 @@ def test_single_robot_fast_path_equals_the_general_integrator():
     angles = rng.uniform(0.1, 6.2, 500)
     fast = BounceDynamics(ROOM, radius=0.3)
     slow = BounceDynamics(ROOM, radius=0.3)
-    slow._drive_one = None  # force the vectorised event loop
+    slow._scalar_path = False  # force the vectorised event loop
     for dyn in (fast, slow):
         dyn.reset(np.random.default_rng(2))
         dyn.drive_to_contact()

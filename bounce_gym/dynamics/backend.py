@@ -34,6 +34,9 @@ class MotionBackend(ABC):
     """
 
     name: str = ""
+    #: whether `drive_each` can move robots independently (no shared clock), which also gives
+    #: `BounceDynamics` its scalar single-robot path
+    drives_independently: bool = False
 
     def __init__(
         self,
@@ -72,6 +75,11 @@ class MotionBackend(ABC):
     def collide(self) -> bool:
         return self.robot_collisions == "bounce" and self.n_robots > 1
 
+    @property
+    def contact_tol(self) -> float:
+        """Distance at or below which a robot counts as touching what is ahead of it."""
+        return 10.0 * self.world.tol
+
     @abstractmethod
     def reset(self, state: RobotState) -> None:
         """Take over a freshly placed state (rebuild any engine objects) and set its contacts."""
@@ -90,6 +98,10 @@ class MotionBackend(ABC):
         ``state.ticks``. Returns the number of ticks elapsed.
         """
 
+    def drive_each(self, state: RobotState) -> np.ndarray:
+        """Drive every unblocked robot to its own next contact (see `drives_independently`)."""
+        raise ConfigError(f"backend {self.name!r} does not drive robots independently")
+
     # -- helpers shared by backends ---------------------------------------------------------
     def robot_blockers(self, state: RobotState, robots: np.ndarray):
         """For each of ``robots``: the touching robot it faces (or -1) and the contact normal.
@@ -106,7 +118,7 @@ class MotionBackend(ABC):
         dist = np.hypot(rel[..., 0], rel[..., 1])
         d = state.direction[robots]
         facing = np.einsum("ik,ijk->ij", d, rel) > 1e-12 * np.maximum(dist, 1e-300)
-        touching = dist <= 2 * self.radius + 10 * self.world.tol
+        touching = dist <= 2 * self.radius + self.contact_tol
         touching[np.arange(len(robots)), robots] = False
         cand = touching & facing
         has = cand.any(axis=1)

@@ -29,11 +29,7 @@ class KinematicBackend(MotionBackend):
     """Analytic ray-cast backend: the ground truth the other backends are checked against."""
 
     name = "kinematic"
-
-    @property
-    def contact_tol(self) -> float:
-        """Distance at or below which a robot counts as touching what is ahead of it."""
-        return 10.0 * self.world.tol
+    drives_independently = True
 
     def reset(self, state: RobotState) -> None:
         inside = self.world.contains(state.position, self.radius)
@@ -98,10 +94,10 @@ class KinematicBackend(MotionBackend):
                 velocity = np.zeros_like(state.position)
                 velocity[moving] = dirs
                 s_robot = pair_contact_times(state.position, velocity, self.radius, moving).min(axis=1)
-            s_next = float(min(s_wall.min(), s_robot.min()))
-            if not math.isfinite(s_next):
-                lost = int(moving[0])
+            if not np.isfinite(s_wall).all():
+                lost = int(moving[~np.isfinite(s_wall)][0])
                 raise RuntimeError(f"robot {lost} left the free space at {state.position[lost]}")
+            s_next = float(min(s_wall.min(), s_robot.min()))
             ds = min(s_next, limit - elapsed)
             travel = np.minimum(s_wall, ds)  # the robot meeting its wall travels exactly s_wall
             state.position[moving] += dirs * travel[:, None]

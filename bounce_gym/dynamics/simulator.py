@@ -73,7 +73,7 @@ class BounceDynamics:
         self.noise: NoiseModel = make_noise(noise)
         self.backend = make_backend(backend, world, n_robots, radius, step_length, robot_collisions)
         #: scalar fast path for a lone robot on a backend that can drive robots independently
-        self._drive_one = getattr(self.backend, "drive_each", None) if n_robots == 1 else None
+        self._scalar_path = n_robots == 1 and self.backend.drives_independently
         self.rng: np.random.Generator | None = None
         self.state: RobotState | None = None
 
@@ -149,11 +149,11 @@ class BounceDynamics:
         """
         state = self._require_state()
         params = self._parameters(params)
-        if self._drive_one is not None and state.blocked[0]:
+        if self._scalar_path and state.blocked[0]:
             # one robot: the rotation tick, then the scalar drive to the next contact
             state.ticks += 1
             self._rotate(state.blocked.copy(), params)
-            return 1 + int(self._drive_one(state)[0])
+            return 1 + int(self.backend.drive_each(state)[0])
         self.tick(params)
         return 1 + self.backend.drive(state, np.inf, until_first_block=True)
 
@@ -169,12 +169,11 @@ class BounceDynamics:
         ``state.ticks`` is not advanced because the robots are no longer in step.
         Returns the ticks each robot drove.
         """
-        drive_each = getattr(self.backend, "drive_each", None)
-        if drive_each is None:
+        if not self.backend.drives_independently:
             raise ConfigError(f"backend {self.backend.name!r} does not drive robots independently")
         state = self._require_state()
         self._rotate(state.blocked.copy(), self._parameters(params))
-        return drive_each(state)
+        return self.backend.drive_each(state)
 
     def _rotate(self, robots: np.ndarray, params: np.ndarray) -> None:
         state = self.state

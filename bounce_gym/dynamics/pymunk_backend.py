@@ -1,0 +1,495 @@
+"""Physics-engine motion: robots are pymunk bodies, walls are static segments.
+
+Every `reset` builds a fresh `pymunk.Space` holding
+
+* the **walls**: one static `pymunk.Segment` (radius 0) per world edge, all rings;
+* the **robots**: dynamic bodies (mass 1, infinite moment, no gravity, no damping) carrying a
+  `pymunk.Circle` of radius ``radius + skin``;
+* the **configuration-space boundary**, used only by queries: every edge shifted by ``radius``
+  along its inward normal and a circle of radius ``radius`` about every reflex vertex (disk robots
+  only), all padded by ``pad`` (see below). Their category collides with nothing.
+
+Driving is **conservative advancement**. For every robot that moves, a pymunk segment query along
+its heading finds the first boundary feature it can reach; for robot pairs the closed form of
+`pair_contact_times` gives the first disk–disk contact. The space is then stepped with ``dt`` equal
+to the earliest of these events (capped by the drive window) — one physics step per event, so a
+single-robot bounce costs one step however long the drive — and pymunk itself moves the bodies.
+Engine time is distance: robots move at unit speed, one tick lasts ``step_length`` time units of
+the space, and a step moves a body to exactly ``p + heading * dt`` (Chipmunk's integrator with no
+forces, damping 1 and unprocessed collisions). No robot can tunnel: a step never goes past the
+first reachable feature of any robot.
+
+The **bump sensor is the engine's contact callback**. A ``pre_solve`` handler on the robot–wall
+(and, with ``robot_collisions='bounce'``, robot–robot) collision types records which shapes touch
+in the step that ends at an event, and sets ``arbiter.process_collision = False`` so the solver
+never pushes robots: they stop exactly where they touch. ``pre_solve`` runs in every step in which
+two shapes overlap (level-triggered); ``begin`` fires only on the first overlap and would miss a
+contact whose shapes already overlapped within the skin. A robot is blocked when the engine
+reports the contact and the robot faces what it touches (the query's approach test for walls,
+`MotionBackend.robot_blockers` for robots). A predicted contact that the engine does not report
+raises `RuntimeError` instead of being trusted. Robots standing still stop sensing walls (their
+shape filter drops the wall category) so that resting robots cost no callbacks; they keep sensing
+robots that run into them.
+
+Model details (the tests pin the agreement with the kinematic backend):
+
+* **Skin.** Robot shapes are ``skin = 1e-6 x world diameter`` larger than the robot, so the engine
+  reports a contact when the robot is *exactly* touching: no overshoot and no putting back are
+  needed, and a robot never overlaps a wall by more than rounding. Point robots (``radius = 0``)
+  carry a circle of radius ``skin`` in the engine, but their contacts, positions and normals are
+  those of the point model.
+* **Why padded C-space shapes and not ``segment_query(…, radius, …)`` against the walls.**
+  (1) pymunk culls shapes by the *centre line* of a query in its bounding-box tree, so a disk
+  whose centre passes beside a hole's corner is not reported and would tunnel through it;
+  (2) a query reports every shape within its radius of the start (alpha 0) whatever the
+  direction, so ``segment_query_first`` would return the wall the robot is leaving; (3) Chipmunk's
+  ray–circle test loses about sqrt(machine epsilon) x query length, so hair-thin shapes are missed
+  by rays that graze a vertex. Hence rays (radius 0) against the configuration-space boundary,
+  padded by ``pad = 1e-6 x diameter``: pymunk returns every candidate feature the ray comes near
+  (all hits, not just the first), and the exact contact distance, the approach test and the
+  tie-breaking are then computed from the feature's geometry exactly as
+  `bounce_gym.worlds.raycast.first_hit` does, which removes the padding again.
+* The first reachable wall of a robot does not change while it drives straight, so the query
+  result is cached per robot (keyed by exact position and heading) and only redone after a
+  rotation, or when the state was changed from outside.
+
+Pickling drops the `Space`; the engine objects are rebuilt on demand from the world and the robot
+state. This is exact: the space holds nothing the state and the cache do not — positions and
+velocities are written from the state before stepping, collisions are never processed (so the
+engine's cached impulses and arbiter history cannot move anything), and every decision taken from
+callbacks and query results is independent of the order in which pymunk reports them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pymunk
+
+from bounce_gym.dynamics.backend import MotionBackend, pair_contact_times
+from bounce_gym.dynamics.state import NO_CONTACT, RobotState
+from bounce_gym.errors import ConfigError
+
+#: Robot shapes are this much (times the world diameter) larger than the robot: the contact skin.
+SKIN_REL = 1e-6
+#: Query shapes are padded by this much (times the world diameter). Chipmunk's ray–circle test
+#: loses about sqrt(machine epsilon) x query length, so much thinner shapes (``world.tol``) are
+#: missed by rays that graze a vertex: the pad must be well above 1e-8 x diameter.
+PAD_REL = 1e-6
+#: Consecutive zero-length events after which the integrator declares itself stuck (a bug).
+_MAX_ZENO = 10_000
+#: Step length used when an event is due immediately (pymunk ignores ``step(0)``): moves nothing.
+_SENSE_DT = 1e-300
+#: Smallest approach speed (unit heading against unit normal) counted as facing a wall, as in
+#: `bounce_gym.worlds.raycast`.
+_APPROACH = 1e-12
+
+_ROBOT_TYPE, _WALL_TYPE = 1, 2
+_CAT_WALL, _CAT_ROBOT, _CAT_CSPACE, _CAT_QUERY = 0x1, 0x2, 0x4, 0x8
+_EDGE, _VERTEX = 0, 1
+
+
+class PymunkBackend(MotionBackend):
+    """pymunk 7 backend: static segment walls, disk robots, contact callbacks as bump sensor."""
+
+    name = "pymunk"
+
+    def __init__(self, world, n_robots, radius, step_length, robot_collisions) -> None:
+        super().__init__(world, n_robots, radius, step_length, robot_collisions)
+        self.skin = SKIN_REL * world.diameter
+        #: thickness of the configuration-space query shapes (candidates only, see module doc)
+        self.pad = PAD_REL * world.diameter
+        #: distance at or below which a robot counts as touching what is ahead of it
+        #: longest straight drive inside the world (bounding-box diagonal, with margin)
+        self._horizon = 1.01 * world.diameter + 100.0 * world.tol
+        r = self.radius
+        normals = world.normals
+        shifted = world.edge_start + r * normals
+        vec = world.edge_end - world.edge_start
+        # per edge: shifted start, edge vector, length and the parameter tolerance (plain floats:
+        # the per-hit arithmetic runs in Python)
+        self._edge_geom = [
+            (float(a[0]), float(a[1]), float(e[0]), float(e[1]), float(length),
+             float(world.tol / length))
+            for a, e, length in zip(shifted, vec, world.lengths, strict=True)
+        ]
+        self._normal_xy = [(float(n[0]), float(n[1])) for n in normals]
+        self._vertex_xy = [(float(p[0]), float(p[1])) for p in world.edge_start]
+        self._reflex = np.flatnonzero(world.reflex) if r > 0 else np.empty(0, dtype=np.int64)
+        # previous edge in the same ring: a vertex contact touches edge v and edge prev[v]
+        prev = np.arange(world.n_edges) - 1
+        for ring in np.unique(world.edge_ring):
+            idx = np.flatnonzero(world.edge_ring == ring)
+            prev[idx[0]] = idx[-1]
+        self._prev_edge = prev
+        m = self.n_robots
+        # cached first wall hit of each robot along its heading, measured from ``_hit_origin``
+        self._hit_origin = np.full((m, 2), np.nan)
+        self._hit_heading = np.full(m, np.nan)
+        self._hit_dist = np.full(m, np.inf)
+        self._hit_edge = np.full(m, NO_CONTACT, dtype=np.int64)
+        self._hit_vertex = np.full(m, NO_CONTACT, dtype=np.int64)
+        self._hit_normal = np.zeros((m, 2))
+        self._drop_engine()
+
+    # -- engine objects ---------------------------------------------------------------------
+    def _drop_engine(self) -> None:
+        self._space: pymunk.Space | None = None
+        self._bodies: list[pymunk.Body] = []
+        self._disks: list[pymunk.Circle] = []
+        self._robot_of: dict[pymunk.Shape, int] = {}
+        self._edge_of: dict[pymunk.Shape, int] = {}
+        self._feature_of: dict[pymunk.Shape, tuple[int, int]] = {}
+        self._touching: list[tuple[pymunk.Shape, pymunk.Shape]] = []
+        self._armed = False
+        #: what the engine bodies currently hold (NaN = unknown, write before the next step)
+        self._body_pos = np.full((self.n_robots, 2), np.nan)
+        self._body_vel = np.full((self.n_robots, 2), np.nan)
+        self._body_senses_walls = np.ones(self.n_robots, dtype=bool)
+
+    def _build_space(self) -> None:
+        """A fresh space: walls, configuration-space query shapes, robot bodies, handlers."""
+        self._drop_engine()
+        world, r = self.world, self.radius
+        space = pymunk.Space()
+        space.gravity = (0.0, 0.0)
+        space.damping = 1.0
+        static = space.static_body
+        wall_filter = pymunk.ShapeFilter(categories=_CAT_WALL, mask=_CAT_ROBOT)
+        cspace_filter = pymunk.ShapeFilter(categories=_CAT_CSPACE, mask=_CAT_QUERY)
+        shapes: list[pymunk.Shape] = []
+        for k, (a, b) in enumerate(zip(world.edge_start, world.edge_end, strict=True)):
+            wall = pymunk.Segment(
+                static, (float(a[0]), float(a[1])), (float(b[0]), float(b[1])), 0.0
+            )
+            wall.collision_type = _WALL_TYPE
+            wall.filter = wall_filter
+            self._edge_of[wall] = k
+            n = world.normals[k]
+            sa, sb = a + r * n, b + r * n
+            line = pymunk.Segment(
+                static, (float(sa[0]), float(sa[1])), (float(sb[0]), float(sb[1])), self.pad
+            )
+            line.filter = cspace_filter
+            self._feature_of[line] = (_EDGE, k)
+            shapes += [wall, line]
+        for v in self._reflex.tolist():
+            p = world.edge_start[v]
+            circle = pymunk.Circle(static, r + self.pad, (float(p[0]), float(p[1])))
+            circle.filter = cspace_filter
+            self._feature_of[circle] = (_VERTEX, v)
+            shapes.append(circle)
+        # a robot standing still need not feel the wall it rests on (that would only cost a
+        # callback per step); it keeps feeling robots that run into it
+        others = _CAT_ROBOT if self.collide else 0
+        self._filters = (
+            pymunk.ShapeFilter(categories=_CAT_ROBOT, mask=others),
+            pymunk.ShapeFilter(categories=_CAT_ROBOT, mask=_CAT_WALL | others),
+        )
+        for i in range(self.n_robots):
+            body = pymunk.Body(1.0, math.inf)
+            disk = pymunk.Circle(body, r + self.skin)
+            disk.collision_type = _ROBOT_TYPE
+            disk.filter = self._filters[True]
+            self._bodies.append(body)
+            self._disks.append(disk)
+            self._robot_of[disk] = i
+            shapes += [body, disk]
+        space.add(*shapes)
+        space.on_collision(_ROBOT_TYPE, _WALL_TYPE, pre_solve=self._on_touch)
+        if self.collide:
+            space.on_collision(_ROBOT_TYPE, _ROBOT_TYPE, pre_solve=self._on_touch)
+        self._space = space
+        self._query_filter = pymunk.ShapeFilter(categories=_CAT_QUERY, mask=_CAT_CSPACE)
+
+    def _on_touch(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        """The bump sensor: record touching shapes; never let the solver respond."""
+        arbiter.process_collision = False
+        if self._armed:
+            self._touching.append(arbiter.shapes)
+
+    def _engine(self) -> pymunk.Space:
+        if self._space is None:
+            self._build_space()
+        return self._space
+
+    def _write_bodies(self, state: RobotState, velocity: np.ndarray, positions: bool) -> None:
+        """Make the engine bodies hold the state's velocities (and positions, if asked)."""
+        bodies = self._bodies
+        moving = ~state.blocked
+        for i in np.flatnonzero(moving != self._body_senses_walls).tolist():
+            self._disks[i].filter = self._filters[bool(moving[i])]
+        self._body_senses_walls[:] = moving
+        if positions:
+            stale = np.flatnonzero(np.any(state.position != self._body_pos, axis=1))
+            for i in stale.tolist():
+                bodies[i].position = (float(state.position[i, 0]), float(state.position[i, 1]))
+            self._body_pos[stale] = state.position[stale]
+        stale = np.flatnonzero(np.any(velocity != self._body_vel, axis=1))
+        for i in stale.tolist():
+            bodies[i].velocity = (float(velocity[i, 0]), float(velocity[i, 1]))
+        self._body_vel[stale] = velocity[stale]
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        for key in ("_space", "_bodies", "_disks", "_filters", "_robot_of", "_edge_of",
+                    "_feature_of", "_touching", "_query_filter", "_body_pos", "_body_vel",
+                    "_body_senses_walls", "_armed"):
+            state.pop(key, None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._drop_engine()
+
+    # -- queries ----------------------------------------------------------------------------
+    def _cast(self, px: float, py: float, dx: float, dy: float):
+        """First configuration-space feature the robot at (px, py) reaches along (dx, dy).
+
+        Returns ``(distance, edge, vertex, nx, ny)``; distance ``inf`` if nothing is reached.
+        pymunk finds the candidate features (every query shape the ray meets, including those it
+        starts in); their exact distance, the approach test and the tie-breaking are those of
+        `bounce_gym.worlds.raycast.first_hit`: only approaching contacts count, and an origin up
+        to ``world.tol`` behind a shifted edge (or inside a vertex circle) touches it at once.
+        pymunk may report extra candidates (the query shapes are padded); they fail these tests.
+        """
+        h = self._horizon
+        hits = self._space.segment_query(
+            (px, py), (px + dx * h, py + dy * h), 0.0, self._query_filter
+        )
+        tol = self.world.tol
+        best_e, edge = math.inf, NO_CONTACT
+        best_v, vertex = math.inf, NO_CONTACT
+        geom = self._edge_geom
+        feature_of = self._feature_of
+        for hit in hits:
+            kind, k = feature_of[hit.shape]
+            if kind == _EDGE:
+                ax, ay, ex, ey, length, utol = geom[k]
+                den = dx * ey - dy * ex  # cross(d, e) = |e| x approach speed
+                if den < _APPROACH * length:
+                    continue  # moving along or away from this edge
+                wx, wy = ax - px, ay - py
+                num_t = wx * ey - wy * ex
+                if num_t < -tol * length:
+                    continue  # more than tol behind the shifted edge
+                num_u = wx * dy - wy * dx
+                if num_u < -utol * den or num_u > (1.0 + utol) * den:
+                    continue  # the line is met beyond the ends of the edge
+                t = num_t / den
+                if t < best_e or (t == best_e and k < edge):
+                    best_e, edge = t, k
+            else:
+                vx, vy = self._vertex_xy[k]
+                cx, cy = px - vx, py - vy
+                b = cx * dx + cy * dy
+                c = cx * cx + cy * cy - self.radius * self.radius
+                disc = b * b - c
+                if b >= 0.0 or disc < 0.0 or c < -2.0 * self.radius * tol:
+                    continue  # moving away, missing, or already inside the circle
+                t = max(-b - math.sqrt(disc), 0.0)
+                if t < best_v or (t == best_v and k < vertex):
+                    best_v, vertex = t, k
+        if best_v < best_e:
+            vx, vy = self._vertex_xy[vertex]
+            qx, qy = px + best_v * dx - vx, py + best_v * dy - vy
+            norm = math.hypot(qx, qy)
+            return best_v, vertex, vertex, qx / norm, qy / norm
+        if edge == NO_CONTACT:
+            return math.inf, NO_CONTACT, NO_CONTACT, 0.0, 0.0
+        nx, ny = self._normal_xy[edge]
+        return max(best_e, 0.0), edge, NO_CONTACT, nx, ny
+
+    def _refresh_hits(self, state: RobotState, robots: np.ndarray) -> None:
+        """Query the first wall hit of ``robots`` from their current pose into the cache."""
+        self._engine()
+        pos = state.position
+        dirs = state.direction[robots]
+        for j, i in enumerate(robots.tolist()):
+            dist, edge, vertex, nx, ny = self._cast(
+                float(pos[i, 0]), float(pos[i, 1]), float(dirs[j, 0]), float(dirs[j, 1])
+            )
+            self._hit_dist[i] = dist
+            self._hit_edge[i] = edge
+            self._hit_vertex[i] = vertex
+            self._hit_normal[i] = (nx, ny)
+        self._hit_origin[robots] = pos[robots]
+        self._hit_heading[robots] = state.heading[robots]
+
+    def _wall_distances(self, state: RobotState, robots: np.ndarray) -> np.ndarray:
+        """Distance of each robot to the first wall ahead, from the cache where still valid."""
+        stale = (state.heading[robots] != self._hit_heading[robots]) | np.any(
+            state.position[robots] != self._hit_origin[robots], axis=1
+        )
+        if np.any(stale):
+            self._refresh_hits(state, robots[stale])
+        return self._hit_dist[robots]
+
+    # -- MotionBackend ----------------------------------------------------------------------
+    def reset(self, state: RobotState) -> None:
+        if state.n_robots != self.n_robots:
+            raise ConfigError(
+                f"state: expected {self.n_robots} robots, got {state.n_robots}"
+            )
+        inside = self.world.contains(state.position, self.radius)
+        if not inside.all():
+            bad = int(np.flatnonzero(~inside)[0])
+            raise ConfigError(
+                f"start position of robot {bad} {state.position[bad].tolist()} is not in the free "
+                f"space at distance >= robot_radius={self.radius} from the walls"
+            )
+        if self.collide:
+            diff = state.position[:, None, :] - state.position[None, :, :]
+            dist = np.hypot(diff[..., 0], diff[..., 1])
+            np.fill_diagonal(dist, np.inf)
+            if np.any(dist < 2 * self.radius - self.world.tol):
+                i, j = np.unravel_index(np.argmin(dist), dist.shape)
+                raise ConfigError(f"start positions of robots {i} and {j} overlap")
+        self._build_space()  # a new Space on every reset: no handlers or arbiters carried over
+        self._hit_heading[:] = np.nan
+        self.update_contacts(state, np.arange(state.n_robots))
+
+    def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
+        robots = np.asarray(robots, dtype=np.int64)
+        if len(robots) == 0:
+            return
+        self._refresh_hits(state, robots)  # a pymunk query along the new heading
+        wall = self._hit_dist[robots] <= self.contact_tol
+        state.contact_edge[robots] = np.where(wall, self._hit_edge[robots], NO_CONTACT)
+        state.contact_normal[robots] = self._hit_normal[robots]
+        if not self.collide:
+            state.blocked[robots] = wall
+            return
+        blocker, robot_normal = self.robot_blockers(state, robots)
+        by_robot = ~wall & (blocker >= 0)
+        state.blocked[robots] = wall | by_robot
+        state.contact_robot[robots] = np.where(by_robot, blocker, NO_CONTACT)
+        state.contact_normal[robots[by_robot]] = robot_normal[by_robot]
+
+    def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        # Engine time is distance driven: robots move at unit speed and one tick lasts
+        # ``step_length`` time units of the space, so a step of dt moves a robot by exactly
+        # ``position + direction * dt``.
+        if until_first_block and state.blocked.any():
+            return 0
+        if not (until_first_block or math.isfinite(max_ticks)):
+            raise ValueError("drive needs a finite max_ticks unless until_first_block is set")
+        step, tol = self.step_length, self.contact_tol
+        limit = float(max_ticks) * step
+        driven = np.zeros(state.n_robots)
+        elapsed, zeno = 0.0, 0
+        synced = False  # positions may have been changed from outside since the last call
+        while elapsed < limit - tol:
+            moving = np.flatnonzero(~state.blocked)
+            if len(moving) == 0:
+                break
+            space = self._engine()
+            s_wall = self._wall_distances(state, moving)
+            velocity = np.zeros_like(state.position)
+            velocity[moving] = state.direction[moving]
+            if not np.all(np.isfinite(s_wall)):
+                lost = int(moving[~np.isfinite(s_wall)][0])
+                raise RuntimeError(f"robot {lost} left the free space at {state.position[lost]}")
+            s_robot = np.full(len(moving), np.inf)
+            if self.collide:
+                s_pairs = pair_contact_times(state.position, velocity, self.radius, moving)
+                s_robot = s_pairs.min(axis=1)
+            s_next = float(min(s_wall.min(), s_robot.min()))
+            ds = min(s_next, limit - elapsed)
+            event = s_next <= ds + tol
+            # conservative advancement: one physics step, to the event or to the window's end
+            self._write_bodies(state, velocity, positions=not synced)
+            synced = True
+            self._touching.clear()
+            self._armed = event
+            try:
+                space.step(ds if ds > 0.0 else _SENSE_DT)
+            finally:
+                self._armed = False
+            bodies = self._bodies
+            for i in moving.tolist():
+                state.position[i] = bodies[i].position
+            self._body_pos[moving] = state.position[moving]
+            self._hit_origin[moving] = state.position[moving]
+            self._hit_dist[moving] = s_wall - ds
+            driven[moving] += ds
+            elapsed += ds
+            if not event:
+                break  # the window closed before the next contact
+            zeno = zeno + 1 if ds <= tol else 0
+            if zeno > _MAX_ZENO:
+                raise RuntimeError("pymunk integrator made no progress (contact bookkeeping bug)")
+            walls = moving[s_wall <= s_next + tol]
+            at_robot = s_robot <= s_next + tol
+            walls_touched, pairs_touched = self._sensed()
+            if len(walls):
+                self._confirm_walls(state, walls, walls_touched)
+                state.blocked[walls] = True
+                state.contact_edge[walls] = self._hit_edge[walls]
+                state.contact_robot[walls] = NO_CONTACT
+                state.contact_normal[walls] = self._hit_normal[walls]
+            if np.any(at_robot):
+                robots = moving[at_robot]
+                self._confirm_pairs(state, robots, s_pairs[at_robot] <= s_next + tol, pairs_touched)
+                self._stop_touching(state, robots)
+            if until_first_block:
+                limit = min(limit, max(math.ceil(elapsed / step - self.time_tol), 0) * step)
+        if math.isfinite(limit):
+            ticks = math.ceil(limit / step - self.time_tol)
+        else:
+            ticks = math.ceil(elapsed / step - self.time_tol)
+        drove = np.ceil(driven / step - self.time_tol).astype(np.int64)
+        state.clock += np.minimum(drove, ticks)
+        state.odometer += driven
+        state.ticks += ticks
+        return ticks
+
+    # -- helpers ----------------------------------------------------------------------------
+    def _sensed(self) -> tuple[dict[int, set[int]], set[tuple[int, int]]]:
+        """Contacts the engine reported in the last step: robot -> walls, and robot pairs."""
+        walls: dict[int, set[int]] = {}
+        pairs: set[tuple[int, int]] = set()
+        robot_of, edge_of = self._robot_of, self._edge_of
+        for a, b in self._touching:
+            i = robot_of[a]
+            k = edge_of.get(b)
+            if k is None:
+                j = robot_of[b]
+                pairs.update(((i, j), (j, i)))
+            else:
+                walls.setdefault(i, set()).add(k)
+        return walls, pairs
+
+    def _confirm_pairs(self, state: RobotState, robots: np.ndarray, partners: np.ndarray,
+                       touched: set[tuple[int, int]]) -> None:
+        """Every predicted disk–disk contact must have been reported by the engine's callback."""
+        for i, row in zip(robots.tolist(), partners, strict=True):
+            if not any((i, j) in touched for j in np.flatnonzero(row).tolist()):
+                raise RuntimeError(
+                    f"pymunk reported no contact for robot {i} at {state.position[i].tolist()} "
+                    "although it reached another robot"
+                )
+
+    def _confirm_walls(
+        self, state: RobotState, robots: np.ndarray, touched: dict[int, set[int]]
+    ) -> None:
+        """Every predicted wall contact must have been reported by the engine's callback."""
+        for i in robots.tolist():
+            edge, vertex = int(self._hit_edge[i]), int(self._hit_vertex[i])
+            felt = touched.get(i, set())
+            if edge in felt or (vertex >= 0 and int(self._prev_edge[vertex]) in felt):
+                continue
+            raise RuntimeError(
+                f"pymunk reported no contact between robot {i} and edge {edge} at "
+                f"{state.position[i].tolist()} although the robot reached it"
+            )
+
+    def _stop_touching(self, state: RobotState, robots: np.ndarray) -> None:
+        """Block the robots of a disk–disk contact that face the robot they touch."""
+        blocker, normal = self.robot_blockers(state, robots)
+        hit = blocker >= 0
+        state.blocked[robots[hit]] = True
+        state.contact_robot[robots[hit]] = blocker[hit]
+        state.contact_edge[robots[hit]] = NO_CONTACT
+        state.contact_normal[robots[hit]] = normal[hit]
