@@ -47,7 +47,7 @@ def single_robot(world, backend: str, n_bounces: int) -> Callable[[], int]:
 def independent_robots(world, n_robots: int, n_rounds: int) -> Callable[[], int]:
     dyn = BounceDynamics(world, n_robots, backend="kinematic", robot_collisions="ignore")
     dyn.reset(np.random.default_rng(0))
-    dyn.bounce_each(0.0)
+    dyn.bounce_each(1.0)  # nobody is blocked yet: drive to the first contact
     angles = np.random.default_rng(1).uniform(0.2, 2 * np.pi - 0.2, (n_rounds, n_robots))
 
     def run() -> int:

@@ -54,12 +54,12 @@ def test_bounce_mode_is_tick_mode_that_stops_when_a_robot_needs_an_angle():
     sb = b.reset(np.random.default_rng(1))
     a.drive_to_contact()
     while not sb.blocked.any():
-        b.tick(0.0)
+        b.tick(deg(90))
     for row in angles:
         a.bounce(row)
         b.tick(row)
         while not sb.blocked.any():
-            b.tick(0.0)  # nobody is blocked, so the angles are unused
+            b.tick(deg(90))  # nobody is blocked, so the angle is unused
         # unit steps and one long drive round differently; the discrete history is identical
         assert sa.ticks == sb.ticks
         np.testing.assert_allclose(sa.position, sb.position, atol=1e-9)
@@ -145,7 +145,7 @@ def test_ignored_collisions_let_robots_pass_and_bounce_each_matches_single_runs(
     many = BounceDynamics(ROOM, 16, robot_collisions="ignore")
     s = many.reset(np.random.default_rng(8))
     start_pos, start_head = s.position.copy(), s.heading.copy()
-    many.bounce_each(0.0)  # nobody is blocked yet: just drive to the first contact
+    many.bounce_each(1.0)  # nobody is blocked yet: just drive to the first contact
     angles = np.random.default_rng(9).uniform(0.1, 6.2, (50, 16))
     for row in angles:
         many.bounce_each(row)
@@ -224,3 +224,10 @@ def test_noise_is_an_error_on_the_executed_heading():
         else:
             dyn.tick(deg(90))
     assert min(turns) >= 80 - 1e-9 and max(turns) <= 100 + 1e-9 and np.std(turns) > 3
+
+
+def test_scalar_parameter_for_many_robots_is_validated():
+    dyn = BounceDynamics(BOX, 3)
+    dyn.reset(np.random.default_rng(0))
+    with pytest.raises(ConfigError, match="multiple of 360"):
+        dyn.tick(0.0)

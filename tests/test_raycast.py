@@ -92,3 +92,18 @@ def test_large_batches_are_chunked_consistently():
     one_by_one = [world.first_hit(origins[i : i + 1], dirs[i : i + 1], 0.2) for i in range(0, 5000, 97)]
     np.testing.assert_array_equal(full.distance[::97], [h.distance[0] for h in one_by_one])
     np.testing.assert_array_equal(full.edge[::97], [h.edge[0] for h in one_by_one])
+
+
+@pytest.mark.parametrize("radius", [0.0, 0.4])
+def test_single_ray_path_matches_the_batched_path(radius):
+    rng = np.random.default_rng(4)
+    world = ROOM_WITH_HOLES
+    origins = world.sample_free(rng, 400, radius=radius)
+    angles = rng.uniform(0, 2 * np.pi, 400)
+    dirs = np.column_stack((np.cos(angles), np.sin(angles)))
+    batch = world.first_hit(origins, dirs, radius)
+    for i in range(400):
+        one = world.first_hit(origins[i], dirs[i], radius)
+        assert one.edge[0] == batch.edge[i] and one.vertex[0] == batch.vertex[i]
+        assert one.distance[0] == pytest.approx(batch.distance[i], rel=1e-12, abs=1e-12)
+        np.testing.assert_allclose(one.normal[0], batch.normal[i], atol=1e-12)

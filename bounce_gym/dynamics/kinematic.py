@@ -56,15 +56,17 @@ class KinematicBackend(MotionBackend):
         robots = np.asarray(robots, dtype=np.int64)
         if len(robots) == 0:
             return
-        hits = self.world.first_hit(state.position[robots], state.direction[robots], self.radius)
-        self._ahead_distance[robots] = hits.distance
-        self._ahead_edge[robots] = hits.edge
-        self._ahead_normal[robots] = hits.normal
+        # all robots (e.g. a lone robot): a basic slice is cheaper than fancy indexing
+        sel = slice(None) if len(robots) == state.n_robots else robots
+        hits = self.world.first_hit(state.position[sel], state.direction[sel], self.radius)
+        self._ahead_distance[sel] = hits.distance
+        self._ahead_edge[sel] = hits.edge
+        self._ahead_normal[sel] = hits.normal
         wall = hits.distance <= self.contact_tol
-        state.contact_edge[robots] = np.where(wall, hits.edge, NO_CONTACT)
-        state.contact_normal[robots] = hits.normal
+        state.contact_edge[sel] = np.where(wall, hits.edge, NO_CONTACT)
+        state.contact_normal[sel] = hits.normal
         if not self.collide:
-            state.blocked[robots] = wall
+            state.blocked[sel] = wall
             return
         blocker, robot_normal = self.robot_blockers(state, robots)
         by_robot = ~wall & (blocker >= 0)

@@ -16,11 +16,13 @@ stepping (`bounce`) is tick stepping that only stops where some robot needs a ne
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from bounce_gym.dynamics.backend import MotionBackend
-from bounce_gym.dynamics.noise import NoiseModel, make_noise
-from bounce_gym.dynamics.rules import check_parameters, get_rule, wrap
+from bounce_gym.dynamics.noise import Exact, NoiseModel, make_noise
+from bounce_gym.dynamics.rules import TWO_PI, check_parameters, get_rule, wrap
 from bounce_gym.dynamics.state import RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
@@ -180,8 +182,10 @@ class BounceDynamics:
         idx = np.flatnonzero(robots)
         if len(idx) == 0:
             return
-        commanded = self.rule(state.heading[idx], state.contact_normal[idx], params[idx])
-        state.heading[idx] = wrap(commanded + self.noise.sample(len(idx), self.rng))
+        heading = self.rule(state.heading[idx], state.contact_normal[idx], params[idx])
+        if not isinstance(self.noise, Exact):
+            heading = wrap(heading + self.noise.sample(len(idx), self.rng))
+        state.heading[idx] = heading
         state.bumps[idx] += 1
         state.clock[idx] = 0
         self.backend.update_contacts(state, idx)
@@ -192,20 +196,27 @@ class BounceDynamics:
             values = np.asarray(params, dtype=np.float64).reshape(-1)
         except (TypeError, ValueError):
             raise ConfigError(f"bounce parameters: expected numbers, got {params!r}") from None
-        if len(values) == 1 and self.n_robots > 1:
-            return np.full(self.n_robots, values[0])
-        if len(values) != self.n_robots:
+        if len(values) == 1:
+            lo = hi = float(values[0])
+            if self.n_robots > 1:
+                values = np.full(self.n_robots, lo)
+        elif len(values) == self.n_robots:
+            lo, hi = float(values.min()), float(values.max())
+        else:
             raise ConfigError(
                 f"bounce parameters: expected {self.n_robots} angles (one per robot), "
                 f"got {len(values)}"
             )
-        if self.rule_name == "relative":
-            turn = np.mod(values, 2 * np.pi)
-            valid = turn.min() > 1e-9 and turn.max() < 2 * np.pi - 1e-9
+        # NaN fails every comparison below, so it is rejected too
+        if self.rule_name == "relative" and lo == hi:
+            valid = 1e-9 < lo % TWO_PI < TWO_PI - 1e-9
+        elif self.rule_name == "relative":
+            turn = np.mod(values, TWO_PI)
+            valid = bool(((turn > 1e-9) & (turn < TWO_PI - 1e-9)).all())
         elif self.rule_name == "specular":
-            valid = bool(np.isfinite(values).all())  # θ is unused but must be a number
+            valid = math.isfinite(lo) and math.isfinite(hi)  # θ is unused but must be a number
         else:
-            valid = values.min() > 0 and values.max() < np.pi
+            valid = 0.0 < lo and hi < math.pi
         if not valid:
             check_parameters(self.rule_name, values, field="bounce parameters")  # raises
         return values

@@ -13,6 +13,7 @@ at distance 0 — which is how the dynamics detects "still facing the wall" afte
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -54,6 +55,8 @@ def first_hit(world: World, origins: np.ndarray, directions: np.ndarray, radius:
     n = len(o)
     radius = float(radius)
     geometry = _features(world, radius)
+    if n == 1:
+        return _first_hit_one(geometry, radius, o[0], d[0])
     step = max(1, _MAX_PAIRS // max(5 * geometry.n_edges + len(geometry.vx), 1))
     if n <= step:
         return _first_hit_chunk(geometry, radius, o, d)
@@ -164,3 +167,40 @@ def _first_hit_chunk(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) 
     edge[~np.isfinite(distance)] = -1
     np.maximum(distance, 0.0, out=distance)
     return Hits(distance, edge, vertex, normal)
+
+
+def _first_hit_one(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) -> Hits:
+    """`_first_hit_chunk` for a single ray with 1-D arrays and scalars (the single-robot hot path)."""
+    ox, oy = float(o[0]), float(o[1])
+    dx, dy = float(d[0]), float(d[1])
+    q = (np.array([dx, dy, ox, oy, ox * dy - oy * dx, 1.0]) @ f.mat).reshape(5, f.n_edges)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(q[:4].min(axis=0) >= 0.0, q[4] / q[0], np.inf)
+    edge = int(np.argmin(t))
+    distance = float(t[edge])
+    normal = f.normals[edge]
+    vertex = -1
+    if math.isfinite(distance):
+        wx, wy = float(f.ax[edge]) - ox, float(f.ay[edge]) - oy
+        ex, ey = float(f.ex[edge]), float(f.ey[edge])
+        distance = (wx * ey - wy * ex) / (dx * ey - dy * ex)
+    else:
+        edge = -1
+    if len(f.vx):
+        cx, cy = ox - f.vx, oy - f.vy
+        b = cx * dx + cy * dy
+        c = cx * cx + cy * cy - radius * radius
+        disc = b * b - c
+        with np.errstate(invalid="ignore"):
+            tv = np.where((disc >= 0) & (b < 0) & (c >= -2.0 * radius * f.ttol),
+                          np.maximum(-b - np.sqrt(disc), 0.0), np.inf)
+        kv = int(np.argmin(tv))
+        if tv[kv] < distance:
+            distance = float(tv[kv])
+            edge = vertex = int(f.vid[kv])
+            px, py = ox + distance * dx - f.vx[kv], oy + distance * dy - f.vy[kv]
+            norm = math.hypot(px, py)
+            normal = np.array([px / norm, py / norm])
+    return Hits(
+        np.array([max(distance, 0.0)]), np.array([edge]), np.array([vertex]), normal[None, :].copy()
+    )
