@@ -216,7 +216,7 @@ class BounceDynamics:
         elif self.rule_name == "specular":
             valid = math.isfinite(lo) and math.isfinite(hi)  # θ is unused but must be a number
         else:
-            valid = 0.0 < lo and hi < math.pi
+            valid = lo > 0.0 and hi < math.pi
         if not valid:
             check_parameters(self.rule_name, values, field="bounce parameters")  # raises
         return values
