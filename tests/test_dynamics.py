@@ -1,6 +1,10 @@
 """Tick/bounce semantics of `BounceDynamics` on the exact kinematic backend."""
 
+import contextlib
+import io
 import pickle
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -231,3 +235,28 @@ def test_scalar_parameter_for_many_robots_is_validated():
     dyn.reset(np.random.default_rng(0))
     with pytest.raises(ConfigError, match="multiple of 360"):
         dyn.tick(0.0)
+
+
+_ROLLOUT = """
+import hashlib, numpy as np
+from bounce_gym import worlds
+from bounce_gym.dynamics import BounceDynamics
+dyn = BounceDynamics(worlds.get("two_rooms"), 3, backend="{backend}", radius=0.2,
+                     robot_collisions="bounce", noise={{"type": "reliable", "r": 0.8, "eps": 0.1}})
+dyn.reset(np.random.default_rng(123))
+angles = np.random.default_rng(7).uniform(0.2, 6.0, (300, 3))
+for row in angles:
+    dyn.bounce(row)
+print(hashlib.sha256(dyn.state.position.tobytes() + dyn.state.clock.tobytes()).hexdigest())
+"""
+
+
+@pytest.mark.parametrize("backend", ["kinematic", "pymunk"])
+def test_same_seed_same_trajectory_across_processes(backend):
+    code = _ROLLOUT.format(backend=backend)
+    runs = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                           check=True).stdout for _ in range(2)}
+    here = io.StringIO()
+    with contextlib.redirect_stdout(here):
+        exec(code, {})
+    assert runs == {here.getvalue()}
