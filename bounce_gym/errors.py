@@ -21,3 +21,7 @@ class MapFormatError(InvalidWorldError):
 
 class ConfigError(BounceGymError):
     """A constructor argument, rule, noise model or backend option is not allowed."""
+
+
+class ActionError(BounceGymError):
+    """An action passed to ``step`` has the wrong type, shape or value."""

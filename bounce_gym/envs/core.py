@@ -1,0 +1,148 @@
+"""The simulation core shared by `BounceEnv` and `MultiBounceEnv`: m robots, a task, sensing.
+
+Per robot the observation is what the robot senses (all values in [0, 1] unless noted):
+
+* ``contact`` — 1 if the bump sensor is pressed now (the robot touches what it faces, so its next
+  tick is a bump and the angle it is given will be used), else 0;
+* ``clock`` — ticks since its last bump, divided by `EnvOptions.max_clock`;
+* with ``history = k``: the k most recent (segment ticks / max_clock, angle / 360°) pairs, newest
+  first, zero-padded — one pair per bump: the clock reading just before it and the angle used;
+* with ``privileged=True``: the true pose (x, y scaled to [0, 1], cos θ, sin θ in [-1, 1]);
+* the task's features, in [-1, 1] (e.g. navigation's start and goal poses).
+
+The true state goes to ``info`` only.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Mapping
+
+import numpy as np
+
+from bounce_gym.dynamics import BounceDynamics
+from bounce_gym.envs.options import EnvOptions
+from bounce_gym.envs.tasks import StepEvents, Task, _pose_option
+from bounce_gym.errors import ConfigError
+
+TRAIL_LENGTH = 64
+
+
+class BounceCore:
+    """Robots, their sensing history and the task, stepped in bounce or tick mode."""
+
+    def __init__(self, options: EnvOptions, task: Task) -> None:
+        self.options = options
+        self.task = task
+        task.configure(options)
+        self.dynamics = BounceDynamics(
+            options.world, options.n_robots, backend=options.backend, rule=options.bounce_rule,
+            noise=options.noise, radius=options.robot_radius, step_length=options.step_length,
+            robot_collisions=options.robot_collisions,
+        )
+        k = options.history
+        low = [0.0, 0.0] + [0.0] * (2 * k)
+        high = [1.0, 1.0] + [1.0] * (2 * k)
+        if options.privileged:
+            low += [0.0, 0.0, -1.0, -1.0]
+            high += [1.0, 1.0, 1.0, 1.0]
+        low += [-1.0] * task.observation_size
+        high += [1.0] * task.observation_size
+        self.obs_low = np.array(low, dtype=np.float32)
+        self.obs_high = np.array(high, dtype=np.float32)
+        self.option_keys = frozenset({"start"}) | task.option_keys
+
+    @property
+    def state(self):
+        return self.dynamics.state
+
+    # -- episode ----------------------------------------------------------------------------
+    def reset(self, rng: np.random.Generator, options: Mapping | None) -> tuple[np.ndarray, dict]:
+        options = {} if options is None else options
+        if not isinstance(options, Mapping):
+            raise ConfigError(f"reset options: expected a dict, got {type(options).__name__}")
+        unknown = sorted(set(options) - self.option_keys)
+        if unknown:
+            raise ConfigError(f"reset options: unknown keys {unknown}; allowed are "
+                              f"{sorted(self.option_keys)}")
+        m = self.options.n_robots
+        poses = self.task.start_poses(rng, options) or _pose_option(options, "start", m)
+        position, heading = poses if poses is not None else (None, None)
+        state = self.dynamics.reset(rng, position, heading)
+        if self.options.step_mode == "bounce":
+            self.dynamics.drive_to_contact()
+        self.history = np.zeros((m, self.options.history, 2), dtype=np.float32)
+        self.last_angle = np.full(m, math.nan)
+        self.trails = [deque([p.copy()], maxlen=TRAIL_LENGTH) for p in state.position]
+        info = self.task.reset(state, rng, options)
+        return self.observation(), self._info(info)
+
+    def step(self, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+        """Advance one env step with bounce angles (m,) in radians."""
+        state = self.dynamics.state
+        start = state.position.copy()
+        bumping = state.blocked.copy()
+        clock_before = state.clock.copy()
+        bumps_before = state.bumps.copy()
+        if self.options.step_mode == "bounce":
+            ticks = self.dynamics.bounce(angles)
+        else:
+            self.dynamics.tick(angles)
+            ticks = 1
+        used = np.where(bumping, angles, math.nan)
+        changed = bumping & ~np.isnan(self.last_angle) & (angles != self.last_angle)
+        self.last_angle[bumping] = angles[bumping]
+        if self.options.history and bumping.any():
+            rows = np.flatnonzero(bumping)
+            self.history[rows, 1:] = self.history[rows, :-1]
+            self.history[rows, 0, 0] = clock_before[rows] / self.options.max_clock
+            self.history[rows, 0, 1] = np.mod(angles[rows], 2 * np.pi) / (2 * np.pi)
+        for trail, p in zip(self.trails, state.position, strict=True):
+            trail.append(p.copy())
+        events = StepEvents(
+            ticks=int(ticks), start=start, end=state.position.copy(), heading=state.heading.copy(),
+            bumps=state.bumps - bumps_before, angles=used, angle_changed=changed,
+            robot_contact=state.blocked & (state.contact_robot >= 0),
+        )
+        rewards, terminated, info = self.task.step(state, events)
+        info = self._info(info)
+        info["step_ticks"] = int(ticks)
+        return self.observation(), rewards.astype(np.float64), terminated, info
+
+    # -- sensing ----------------------------------------------------------------------------
+    def observation(self) -> np.ndarray:
+        """(m, d) float32 observations, a fresh array every call."""
+        state = self.dynamics.state
+        opts = self.options
+        parts = [state.blocked[:, None].astype(np.float32),
+                 (state.clock / opts.max_clock)[:, None]]
+        if opts.history:
+            parts.append(self.history.reshape(opts.n_robots, -1))
+        if opts.privileged:
+            xmin, ymin, xmax, ymax = opts.world.bounds
+            parts.append((state.position - (xmin, ymin)) / (xmax - xmin, ymax - ymin))
+            parts.append(state.direction)
+        if self.task.observation_size:
+            parts.append(self.task.observation(state))
+        obs = np.concatenate(parts, axis=1, dtype=np.float32)
+        # clock and pose are bounded by construction; keep rounding from leaving the box
+        return np.clip(obs, self.obs_low, self.obs_high)
+
+    def _info(self, task_info: dict) -> dict:
+        """The true state for evaluation (never part of the observation)."""
+        state = self.dynamics.state
+        xmin, ymin = self.options.world.bounds[:2]
+        cells = np.floor((state.position - (xmin, ymin)) / self.options.step_length).astype(int)
+        info = {
+            "ticks": int(state.ticks),
+            "position": state.position.copy(),
+            "heading": state.heading.copy(),
+            "cell": cells[:, ::-1].copy(),  # (row, col) at cell size = step length
+            "clock": state.clock.copy(),
+            "bumps": state.bumps.copy(),
+            "contact_edge": state.contact_edge.copy(),
+            "contact_robot": state.contact_robot.copy(),
+        }
+        info.update(task_info)
+        return info

@@ -1,0 +1,195 @@
+"""Constructor arguments shared by the single- and multi-robot environments, validated once.
+
+Angles enter in **degrees** here (this is the configuration edge of the package) and are stored in
+radians. Every bad value raises `ConfigError` naming the argument and what is allowed.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bounce_gym import worlds
+from bounce_gym.dynamics.backend import ROBOT_COLLISIONS
+from bounce_gym.dynamics.noise import NoiseModel, make_noise
+from bounce_gym.dynamics.rules import RULES, check_parameters
+from bounce_gym.errors import ConfigError
+from bounce_gym.worlds import World
+
+BACKENDS = ("kinematic", "pymunk", "cell")
+STEP_MODES = ("bounce", "tick")
+ACTION_TYPES = ("discrete", "continuous")
+
+
+@dataclass(frozen=True)
+class EnvOptions:
+    """Validated, normalised environment arguments (angles in radians)."""
+
+    world: World
+    n_robots: int
+    backend: str
+    bounce_rule: str
+    angles: tuple[np.ndarray, ...]  # Φ per robot
+    angle_range: tuple[tuple[float, float], ...]  # continuous-action range per robot
+    noise: NoiseModel
+    robot_radius: float
+    step_length: float
+    step_mode: str
+    action_type: str
+    history: int
+    privileged: bool
+    robot_collisions: str
+
+    @property
+    def max_clock(self) -> int:
+        """An upper bound on the clock: the longest straight drive, in ticks, plus one."""
+        return math.ceil(self.world.diameter / self.step_length) + 1
+
+
+def resolve_world(world: object) -> World:
+    """A `World`, a zoo name (see `bounce_gym.worlds.names`) or a path to a map file."""
+    if isinstance(world, World):
+        return world
+    if isinstance(world, os.PathLike) or (isinstance(world, str) and Path(world).suffix):
+        path = Path(world)
+        if not path.is_file():
+            raise ConfigError(f"world: map file {str(path)!r} does not exist")
+        return worlds.load(path)
+    if isinstance(world, str):
+        try:
+            return worlds.get(world)
+        except Exception as exc:  # the zoo lists the available names
+            raise ConfigError(f"world: {exc}") from None
+    raise ConfigError(
+        f"world: expected a zoo name, a map file path or a World, got {type(world).__name__}"
+    )
+
+
+def _choice(field: str, value: object, allowed: Sequence[str]) -> str:
+    if value not in allowed:
+        raise ConfigError(f"{field}: expected one of {list(allowed)}, got {value!r}")
+    return value  # type: ignore[return-value]
+
+
+def _number(field: str, value: object, *, minimum: float | None = None,
+            strict: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise ConfigError(f"{field}: expected a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ConfigError(f"{field}: expected a finite number, got {value!r}")
+    if minimum is not None and (value <= minimum if strict else value < minimum):
+        raise ConfigError(f"{field}: expected a number {'>' if strict else '>='} {minimum}, "
+                          f"got {value!r}")
+    return value
+
+
+def _angle_set(field: str, values: object, rule: str) -> np.ndarray:
+    if isinstance(values, str | bytes) or not isinstance(values, Sequence | np.ndarray):
+        raise ConfigError(f"{field}: expected a list of angles in degrees, got {values!r}")
+    degrees = [_number(f"{field}[{k}]", v) for k, v in enumerate(values)]
+    radians = np.radians(np.array(degrees, dtype=np.float64))
+    check_parameters(rule, radians, field=field)
+    if len(set(degrees)) != len(degrees):
+        raise ConfigError(f"{field}: angles must be distinct, got {degrees}")
+    return radians
+
+
+def _per_robot(field: str, value: object, n_robots: int) -> list[object]:
+    """A shared value, a list with one entry per robot, or a dict robot_<i> -> value."""
+    if isinstance(value, Mapping):
+        names = [f"robot_{i}" for i in range(n_robots)]
+        unknown = sorted(set(value) - set(names))
+        missing = [n for n in names if n not in value]
+        if unknown or missing:
+            raise ConfigError(f"{field}: dict keys must be exactly {names} "
+                              f"(unknown {unknown}, missing {missing})")
+        return [value[n] for n in names]
+    if (isinstance(value, Sequence) and not isinstance(value, str) and value
+            and all(isinstance(v, Sequence) and not isinstance(v, str) for v in value)):
+        if len(value) != n_robots:
+            raise ConfigError(f"{field}: got {len(value)} angle sets for {n_robots} robots")
+        return list(value)
+    return [value] * n_robots
+
+
+def _default_range(rule: str, angles: np.ndarray) -> tuple[float, float]:
+    if len(angles) > 1:
+        return float(angles.min()), float(angles.max())
+    return (math.radians(10), math.radians(350)) if rule == "relative" else (
+        math.radians(5), math.radians(175))
+
+
+def _angle_range(field: str, value: object, rule: str, angles: np.ndarray) -> tuple[float, float]:
+    if value is None:
+        return _default_range(rule, angles)
+    if isinstance(value, str) or not isinstance(value, Sequence) or len(value) != 2:
+        raise ConfigError(f"{field}: expected (low, high) in degrees, got {value!r}")
+    lo, hi = (_number(f"{field}[{k}]", v) for k, v in enumerate(value))
+    top = 360.0 if rule == "relative" else 180.0
+    if not 0.0 < lo < hi < top:
+        raise ConfigError(f"{field}: expected 0 < low < high < {top:g} degrees for rule {rule!r}, "
+                          f"got ({lo:g}, {hi:g})")
+    return math.radians(lo), math.radians(hi)
+
+
+def parse_options(
+    *,
+    world: object,
+    n_robots: int,
+    backend: str,
+    bounce_rule: str,
+    angles: object,
+    angle_range: object,
+    noise: object,
+    robot_radius: float,
+    step_length: float,
+    step_mode: str,
+    action_type: str,
+    history: int,
+    privileged: bool,
+    robot_collisions: str,
+) -> EnvOptions:
+    """Validate the constructor arguments of `BounceEnv` / `MultiBounceEnv`."""
+    backend = _choice("backend", backend, BACKENDS)
+    if backend == "cell":
+        raise ConfigError(
+            "backend: 'cell' (the discrete cell-to-cell model) is not available yet; "
+            "use 'kinematic' or 'pymunk'"
+        )
+    bounce_rule = _choice("bounce_rule", bounce_rule, sorted(RULES))
+    if isinstance(n_robots, bool) or not isinstance(n_robots, int | np.integer) or n_robots < 1:
+        raise ConfigError(f"n_robots: expected an integer >= 1, got {n_robots!r}")
+    if isinstance(history, bool) or not isinstance(history, int | np.integer) or history < 0:
+        raise ConfigError(f"history: expected an integer >= 0, got {history!r}")
+    if not isinstance(privileged, bool):
+        raise ConfigError(f"privileged: expected True or False, got {privileged!r}")
+    sets = _per_robot("angles", angles, int(n_robots))
+    angle_sets = tuple(_angle_set("angles", s, bounce_rule) for s in sets)
+    ranges = tuple(
+        _angle_range("angle_range", r, bounce_rule, a)
+        for r, a in zip(_per_robot("angle_range", angle_range, int(n_robots)) if
+                        angle_range is not None else [None] * int(n_robots), angle_sets,
+                        strict=True)
+    )
+    return EnvOptions(
+        world=resolve_world(world),
+        n_robots=int(n_robots),
+        backend=backend,
+        bounce_rule=bounce_rule,
+        angles=angle_sets,
+        angle_range=ranges,
+        noise=make_noise(noise),
+        robot_radius=_number("robot_radius", robot_radius, minimum=0.0),
+        step_length=_number("step_length", step_length, minimum=0.0, strict=True),
+        step_mode=_choice("step_mode", step_mode, STEP_MODES),
+        action_type=_choice("action_type", action_type, ACTION_TYPES),
+        history=int(history),
+        privileged=privileged,
+        robot_collisions=_choice("robot_collisions", robot_collisions, ROBOT_COLLISIONS),
+    )

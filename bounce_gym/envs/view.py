@@ -1,0 +1,21 @@
+"""What the environments draw: robots, their recent trails, and the task's layers."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bounce_gym.envs.core import BounceCore
+
+
+def draw_core(renderer, core: BounceCore) -> np.ndarray:
+    """One RGB frame of the core's current state (see `bounce_gym.envs.rendering`)."""
+    from bounce_gym.envs.rendering import RenderLayers
+
+    state = core.state
+    layers = RenderLayers(
+        trails=[np.array(trail) for trail in core.trails],
+        labels=[f"{core.task.name}  tick {state.ticks}  bumps {int(state.bumps.sum())}"],
+        **core.task.render_layers(),
+    )
+    return renderer.draw(state.position, state.heading, core.options.robot_radius, layers,
+                         blocked=state.blocked)
