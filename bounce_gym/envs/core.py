@@ -16,6 +16,7 @@ The true state goes to ``info`` only.
 from __future__ import annotations
 
 import math
+import warnings
 from collections import deque
 from collections.abc import Mapping
 
@@ -58,14 +59,23 @@ class BounceCore:
         return self.dynamics.state
 
     # -- episode ----------------------------------------------------------------------------
-    def reset(self, rng: np.random.Generator, options: Mapping | None) -> tuple[np.ndarray, dict]:
+    def reset(self, rng: np.random.Generator, options: Mapping | None,
+              strict: bool = True) -> tuple[np.ndarray, dict]:
+        """Place the robots and start an episode.
+
+        Unknown option keys raise `ConfigError`; with ``strict=False`` (PettingZoo, whose API
+        test passes arbitrary options) they only warn.
+        """
         options = {} if options is None else options
         if not isinstance(options, Mapping):
             raise ConfigError(f"reset options: expected a dict, got {type(options).__name__}")
         unknown = sorted(set(options) - self.option_keys)
         if unknown:
-            raise ConfigError(f"reset options: unknown keys {unknown}; allowed are "
-                              f"{sorted(self.option_keys)}")
+            message = (f"reset options: unknown keys {unknown}; allowed are "
+                       f"{sorted(self.option_keys)}")
+            if strict:
+                raise ConfigError(message)
+            warnings.warn(message + " (ignored)", UserWarning, stacklevel=3)
         m = self.options.n_robots
         poses = self.task.start_poses(rng, options) or _pose_option(options, "start", m)
         position, heading = poses if poses is not None else (None, None)

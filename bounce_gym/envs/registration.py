@@ -8,11 +8,17 @@ Gymnasium ids (``gym.make(id, **overrides)``):
 | ``bounce_gym/BounceNavigation-v0`` | lab_navigation | navigation (random start and goal) | 200 |
 | ``bounce_gym/BounceCoverage-v0`` | lab_fig1 | coverage (uniform target) | 500 |
 | ``bounce_gym/BounceLocalization-v0`` | lab_localization_a, φ = 45° | localization | 200 |
+
+PettingZoo ids (``pettingzoo.make("parallel" | "aec", id, **overrides)``), ``max_cycles`` 500:
+``bounce_gym/MultiBounce-v0`` (grid_15x15, 4 robots, free), ``bounce_gym/MultiBounceCoverage-v0``
+(grid_15x15, 4 robots, shared coverage) and ``bounce_gym/MultiBounceMonitoring-v0`` (grid_20x12,
+4 robots, one region each).
 """
 
 from __future__ import annotations
 
 import gymnasium as gym
+import pettingzoo
 
 GYM_ENVS = {
     "bounce_gym/Bounce-v0": ({"world": "two_rooms", "task": "free"}, 500),
@@ -24,9 +30,26 @@ GYM_ENVS = {
 }
 
 
+PETTINGZOO_ENVS = {
+    "bounce_gym/MultiBounce-v0": {"world": "grid_15x15", "task": "free"},
+    "bounce_gym/MultiBounceCoverage-v0": {"world": "grid_15x15", "task": "coverage"},
+    "bounce_gym/MultiBounceMonitoring-v0": {"world": "grid_20x12", "task": "monitoring"},
+}
+_ENTRY = {
+    "parallel": "bounce_gym.envs.multi_bounce_v0:parallel_env",
+    "aec": "bounce_gym.envs.multi_bounce_v0:env",
+}
+
+
 def register_envs() -> None:
     """Register every environment id (idempotent)."""
     for env_id, (kwargs, steps) in GYM_ENVS.items():
         if env_id not in gym.registry:
             gym.register(env_id, entry_point="bounce_gym.envs.bounce_env:BounceEnv",
                          kwargs=kwargs, max_episode_steps=steps)
+    for env_type, registry in (("parallel", pettingzoo.parallel_registry),
+                               ("aec", pettingzoo.aec_registry)):
+        for env_id, kwargs in PETTINGZOO_ENVS.items():
+            if env_id not in registry:
+                pettingzoo.register(env_type, env_id, entry_point=_ENTRY[env_type],
+                                    max_cycles=500, kwargs=kwargs)

@@ -1,0 +1,327 @@
+"""Several bouncing robots as a PettingZoo environment (parallel and AEC forms).
+
+| | |
+|---|---|
+| Import | ``from bounce_gym.envs import multi_bounce_v0`` (``parallel_env()``, ``env()``) or ``pettingzoo.make("parallel", "bounce_gym/MultiBounce-v0")`` |
+| Agents | ``robot_0`` … ``robot_{m-1}`` |
+| Actions | ``Discrete(len(Φ_i))`` or ``Box(-1, 1, (1,), float32)`` per robot |
+| Observations | per robot: contact, clock, optional history / privileged pose / task features (`bounce_gym.envs.core`) |
+| State | ``state()``: every robot's true pose (x, y scaled to [0, 1], cos θ, sin θ) |
+
+## Description
+
+m robots with contact sensors and clocks in one world. Robots bump into walls and — with
+``robot_collisions="bounce"`` — into each other (both robots of a head-on contact turn; thesis
+Eq. 3.9). **Parallel form** (`MultiBounceEnv`): every step all robots submit an angle; robots that
+are blocked use it, the others drive on. In ``step_mode="bounce"`` a step runs until some robot
+is blocked again. **AEC form** (`MultiBounceAEC`): event-driven — the agent to act is the next
+robot that bumps; once every blocked robot has chosen, the world runs until the next bump.
+
+## Rewards
+
+From the task: ``free`` (0), ``coverage`` (shared: new cells and distance to the target, split
+evenly), ``monitoring`` (time in the robot's own region minus a penalty per robot contact).
+
+## Episode End
+
+No task terminates early. Parallel: all robots are truncated after ``max_cycles`` steps.
+AEC: each robot is truncated after ``max_cycles`` decisions of its own.
+
+## Arguments
+
+Those of `BounceEnv` (``angles`` and ``angle_range`` may also be given per robot as a list or a
+``{"robot_i": ...}`` dict), plus ``n_robots``, ``robot_collisions`` (``"bounce"`` | ``"ignore"``)
+and ``max_cycles``. Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
+
+## Version History
+
+* v0: initial release.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from pettingzoo import AECEnv, ParallelEnv
+
+from bounce_gym.envs.actions import action_space, to_angle
+from bounce_gym.envs.core import BounceCore
+from bounce_gym.envs.options import parse_options
+from bounce_gym.envs.tasks import make_task
+from bounce_gym.errors import ActionError, ConfigError
+
+MULTI_ROBOT_TASKS = ("free", "coverage", "monitoring")
+METADATA = {
+    "render_modes": ["human", "rgb_array"],
+    "name": "multi_bounce_v0",
+    "is_parallelizable": True,
+    "render_fps": 10,
+}
+
+
+class _MultiBase:
+    """Construction, spaces, rendering and pickling shared by both forms."""
+
+    metadata = METADATA
+
+    def __init__(
+        self,
+        world: object = "grid_15x15",
+        n_robots: int = 4,
+        task: object = "free",
+        task_kwargs: Mapping | None = None,
+        backend: str = "kinematic",
+        bounce_rule: str = "relative",
+        angles: object = (45.0, 90.0, 135.0),
+        angle_range: object = None,
+        noise: object = None,
+        robot_radius: float = 0.3,
+        step_length: float = 1.0,
+        step_mode: str = "bounce",
+        action_type: str = "discrete",
+        history: int = 0,
+        privileged: bool = False,
+        robot_collisions: str = "bounce",
+        max_cycles: int = 500,
+        render_mode: str | None = None,
+    ) -> None:
+        if render_mode is not None and render_mode not in METADATA["render_modes"]:
+            raise ConfigError(f"render_mode: expected None or one of {METADATA['render_modes']}, "
+                              f"got {render_mode!r}")
+        if isinstance(max_cycles, bool) or not isinstance(max_cycles, int | np.integer) \
+                or max_cycles < 1:
+            raise ConfigError(f"max_cycles: expected an integer >= 1, got {max_cycles!r}")
+        self.options = parse_options(
+            world=world, n_robots=n_robots, backend=backend, bounce_rule=bounce_rule,
+            angles=angles, angle_range=angle_range, noise=noise, robot_radius=robot_radius,
+            step_length=step_length, step_mode=step_mode, action_type=action_type,
+            history=history, privileged=privileged, robot_collisions=robot_collisions,
+        )
+        self.core = BounceCore(self.options, make_task(task, task_kwargs, MULTI_ROBOT_TASKS))
+        self.max_cycles = int(max_cycles)
+        self.render_mode = render_mode
+        self.possible_agents = [f"robot_{i}" for i in range(self.options.n_robots)]
+        self.agent_index = {a: i for i, a in enumerate(self.possible_agents)}
+        self._obs_space = spaces.Box(self.core.obs_low, self.core.obs_high, dtype=np.float32)
+        self._action_spaces = {
+            a: action_space(self.options.action_type, len(self.options.angles[i]))
+            for a, i in self.agent_index.items()
+        }
+        m = self.options.n_robots
+        self.state_space = spaces.Box(
+            np.tile([0.0, 0.0, -1.0, -1.0], m).astype(np.float32),
+            np.ones(4 * m, dtype=np.float32), dtype=np.float32,
+        )
+        self._renderer = None
+        self.np_random = None
+        self.np_random_seed = None
+
+    @functools.lru_cache(maxsize=None)  # noqa: B019  (PettingZoo requires the same object)
+    def observation_space(self, agent: str) -> spaces.Space:
+        return self._obs_space
+
+    @functools.lru_cache(maxsize=None)  # noqa: B019
+    def action_space(self, agent: str) -> spaces.Space:
+        return self._action_spaces[agent]
+
+    def _seed(self, seed: int | None) -> None:
+        if seed is not None or self.np_random is None:
+            self.np_random, self.np_random_seed = seeding.np_random(seed)
+
+    def _angle(self, agent: str, action: object) -> float:
+        i = self.agent_index[agent]
+        return to_angle(action, self.options.action_type, self.options.angles[i],
+                        self.options.angle_range[i], who=f"action of {agent}")
+
+    def _agent_infos(self, info: dict, agents) -> dict[str, dict]:
+        per_robot = ("position", "heading", "cell", "clock", "bumps", "contact_edge",
+                     "contact_robot")
+        shared = {k: v for k, v in info.items() if k not in per_robot}
+        out = {}
+        for agent in agents:
+            i = self.agent_index[agent]
+            item = dict(shared)
+            item.update({k: info[k][i].copy() if hasattr(info[k][i], "copy") else info[k][i]
+                         for k in per_robot})
+            out[agent] = item
+        return out
+
+    def state(self) -> np.ndarray:
+        st = self.core.state
+        xmin, ymin, xmax, ymax = self.options.world.bounds
+        pos = (st.position - (xmin, ymin)) / (xmax - xmin, ymax - ymin)
+        flat = np.concatenate((pos, st.direction), axis=1).ravel().astype(np.float32)
+        return np.clip(flat, self.state_space.low, self.state_space.high)
+
+    def render(self):
+        if self.render_mode is None:
+            from gymnasium import logger
+
+            logger.warn("render() called with render_mode=None; pass render_mode to the env")
+            return None
+        from bounce_gym.envs.rendering import Renderer
+        from bounce_gym.envs.view import draw_core
+
+        if self._renderer is None:
+            self._renderer = Renderer(self.options.world)
+        frame = draw_core(self._renderer, self.core)
+        if self.render_mode == "human":
+            self._renderer.show(frame, METADATA["render_fps"])
+            return None
+        return frame
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state
+
+
+class MultiBounceEnv(_MultiBase, ParallelEnv):
+    """The parallel form; see the module docstring."""
+
+    def reset(self, seed: int | None = None, options: dict | None = None):
+        self._seed(seed)
+        obs, info = self.core.reset(self.np_random, options, strict=False)
+        self.agents = list(self.possible_agents)
+        self.cycles = 0
+        if self.render_mode == "human":
+            self.render()
+        return self._per_agent(obs), self._agent_infos(info, self.agents)
+
+    def _per_agent(self, obs: np.ndarray) -> dict[str, np.ndarray]:
+        return {a: obs[self.agent_index[a]] for a in self.agents}
+
+    def step(self, actions: Mapping):
+        if not getattr(self, "agents", None):
+            raise ConfigError("step() called with no live agents: call reset() first")
+        if not isinstance(actions, Mapping):
+            raise ActionError(f"actions: expected a dict agent -> action, got "
+                              f"{type(actions).__name__}")
+        unknown = sorted(set(actions) - set(self.agents))
+        missing = [a for a in self.agents if a not in actions]
+        if unknown or missing:
+            raise ActionError(f"actions: need exactly one action per live agent "
+                              f"(unknown {unknown}, missing {missing})")
+        angles = np.array([self._angle(a, actions[a]) for a in self.possible_agents])
+        obs, rewards, terminated, info = self.core.step(angles)
+        self.cycles += 1
+        truncated = self.cycles >= self.max_cycles
+        live = list(self.agents)
+        result = (
+            self._per_agent(obs),
+            {a: float(rewards[self.agent_index[a]]) for a in live},
+            {a: bool(terminated[self.agent_index[a]]) for a in live},
+            dict.fromkeys(live, truncated),
+            self._agent_infos(info, live),
+        )
+        self.agents = [a for a in live if not (result[2][a] or truncated)]
+        if self.render_mode == "human":
+            self.render()
+        return result
+
+
+class MultiBounceAEC(_MultiBase, AECEnv):
+    """The event-driven AEC form: the next robot to bump is the next agent to act.
+
+    Decisions are collected from every blocked robot (lowest index first); then the world runs
+    until some robot bumps again. A robot is truncated after ``max_cycles`` decisions; a truncated
+    robot that bumps keeps its last angle. Requires ``step_mode="bounce"``.
+    """
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        if self.options.step_mode != "bounce":
+            raise ConfigError("step_mode: the AEC form is event-driven and needs 'bounce'; use "
+                              "the parallel form for tick stepping")
+
+    def reset(self, seed: int | None = None, options: dict | None = None) -> None:
+        self._seed(seed)
+        obs, info = self.core.reset(self.np_random, options, strict=False)
+        self._obs = obs
+        self.agents = list(self.possible_agents)
+        self.rewards = dict.fromkeys(self.agents, 0.0)
+        self._cumulative_rewards = dict.fromkeys(self.agents, 0.0)
+        self.terminations = dict.fromkeys(self.agents, False)
+        self.truncations = dict.fromkeys(self.agents, False)
+        self.infos = self._agent_infos(info, self.agents)
+        self.decisions = dict.fromkeys(self.agents, 0)
+        self._pending: dict[str, float] = {}
+        self._last_angle = np.array([a[0] for a in self.options.angles])
+        self.agent_selection = self._next_agent()
+        if self.render_mode == "human":
+            self.render()
+
+    def observe(self, agent: str) -> np.ndarray:
+        return self._obs[self.agent_index[agent]].copy()
+
+    def _next_agent(self) -> str:
+        """The lowest-index live robot that is blocked and has not chosen yet."""
+        blocked = self.core.state.blocked
+        for agent in self.agents:
+            if blocked[self.agent_index[agent]] and agent not in self._pending:
+                return agent
+        raise RuntimeError("no live robot is waiting for a decision")
+
+    def step(self, action) -> None:
+        agent = self.agent_selection
+        if self.terminations[agent] or self.truncations[agent]:
+            self._was_dead_step(action)
+            if self.agents and not self._deads_waiting():
+                self.agent_selection = self._advance()
+            return
+        self._pending[agent] = self._angle(agent, action)
+        self.decisions[agent] += 1
+        self._cumulative_rewards[agent] = 0.0
+        if self.decisions[agent] >= self.max_cycles:
+            self.truncations[agent] = True
+        waiting = [a for a in self.agents if self.core.state.blocked[self.agent_index[a]]
+                   and a not in self._pending and not self.truncations[a]]
+        if waiting:
+            self.agent_selection = waiting[0]
+            self._clear_rewards()
+        else:
+            self.agent_selection = self._advance()
+        if self.render_mode == "human":
+            self.render()
+
+    def _deads_waiting(self) -> bool:
+        return any(self.terminations[a] or self.truncations[a] for a in self.agents)
+
+    def _advance(self) -> str:
+        """Run the world until a live robot must decide; returns the next agent to select."""
+        while True:
+            if self._deads_waiting():
+                # PettingZoo: finished agents are stepped once with None before they leave
+                self._clear_rewards()
+                return next(a for a in self.agents if self.terminations[a] or self.truncations[a])
+            angles = self._last_angle.copy()
+            for agent, angle in self._pending.items():
+                angles[self.agent_index[agent]] = angle
+            self._pending = {}
+            bumping = self.core.state.blocked.copy()
+            self._last_angle[bumping] = angles[bumping]
+            obs, rewards, terminated, info = self.core.step(angles)
+            self._obs = obs
+            self.rewards = {a: float(rewards[self.agent_index[a]]) for a in self.agents}
+            self._accumulate_rewards()
+            for a in self.agents:
+                self.terminations[a] = bool(terminated[self.agent_index[a]])
+            self.infos = self._agent_infos(info, self.agents)
+            if self._deads_waiting():
+                continue
+            blocked = self.core.state.blocked
+            live = [a for a in self.agents if blocked[self.agent_index[a]]]
+            if live:
+                return live[0]
+
+    def _clear_rewards(self) -> None:
+        self.rewards = dict.fromkeys(self.agents, 0.0)
