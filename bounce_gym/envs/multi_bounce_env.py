@@ -40,7 +40,6 @@ and ``max_cycles``. Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Mapping
 
 import numpy as np
@@ -120,11 +119,10 @@ class _MultiBase:
         self.np_random = None
         self.np_random_seed = None
 
-    @functools.lru_cache(maxsize=None)  # noqa: B019  (PettingZoo requires the same object)
     def observation_space(self, agent: str) -> spaces.Space:
+        """The same (shared) space object on every call, as PettingZoo's API test requires."""
         return self._obs_space
 
-    @functools.lru_cache(maxsize=None)  # noqa: B019
     def action_space(self, agent: str) -> spaces.Space:
         return self._action_spaces[agent]
 

@@ -365,7 +365,8 @@ class LocalizationTask(Task):
         terminate_when_localized: end the episode once the filter reports ``localized``.
 
     Without a filter the task reports the sensed history (``info["observations"]``: the
-    (bump ticks, clock, angle) triples so far) and gives no reward. With one, ``info`` carries
+    (bump ticks, clock, angle) triples so far; the angle is None on a tick without a bump, where
+    the filter is passed nan) and gives no reward. With one, ``info`` carries
     ``candidates`` and ``localized`` and the reward is the drop in log2(candidates) per step.
     """
 
@@ -383,7 +384,7 @@ class LocalizationTask(Task):
         self.filter = self.filter_factory(options) if self.filter_factory else None
 
     def reset(self, state, rng, options):
-        self.history: list[tuple[int, int, float]] = []
+        self.history: list[tuple[int, int, float | None]] = []
         if self.filter is not None:
             self.filter.reset()
         return self._info()
@@ -395,12 +396,15 @@ class LocalizationTask(Task):
         return info
 
     def step(self, state, events):
-        entry = (int(events.bumps[0]), int(state.clock[0]), float(events.angles[0]))
+        bumped = bool(events.bumps[0] > 0)
+        angle = float(events.angles[0])
+        # None, not nan, when the robot did not bump: nan != nan would make equal infos unequal
+        entry = (int(events.bumps[0]), int(state.clock[0]), angle if bumped else None)
         self.history.append(entry)
         reward, done = 0.0, False
         if self.filter is not None:
             before = max(self.filter.size, 1)
-            self.filter.update(entry[0] > 0, entry[1], entry[2])
+            self.filter.update(bumped, entry[1], angle)
             reward = math.log2(before) - math.log2(max(self.filter.size, 1))
             done = self.terminate_when_localized and bool(self.filter.localized)
         return np.array([reward]), np.array([done]), self._info()
