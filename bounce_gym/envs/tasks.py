@@ -110,7 +110,9 @@ def path_samples(events: StepEvents, step_length: float, spacing: float):
     """Points along each robot's path with the ticks spent near each.
 
     Returns (robot index, points (n, 2), ticks (n,)): drive time is spread evenly along the
-    segment (one tick per ``step_length``); each bump tick is spent at the start point.
+    segment (one tick per ``step_length``), each bump tick is spent at the start point, and the
+    rest of the step (a robot standing blocked until the step ends) at the end point. The ticks
+    of each robot add up to ``events.ticks``.
     """
     length = np.hypot(*(events.end - events.start).T)
     count = np.maximum(np.ceil(length / spacing).astype(int), 0)
@@ -120,9 +122,11 @@ def path_samples(events: StepEvents, step_length: float, spacing: float):
     pts = events.start[robot] + frac[:, None] * (events.end - events.start)[robot]
     ticks = np.repeat(length / np.maximum(count, 1) / step_length, count)
     bumping = np.flatnonzero(events.bumps > 0)
-    robot = np.concatenate((robot, bumping))
-    pts = np.concatenate((pts, events.start[bumping]))
-    ticks = np.concatenate((ticks, events.bumps[bumping].astype(float)))
+    idle = events.ticks - events.bumps - length / step_length
+    waiting = np.flatnonzero(idle > 1e-9)
+    robot = np.concatenate((robot, bumping, waiting))
+    pts = np.concatenate((pts, events.start[bumping], events.end[waiting]))
+    ticks = np.concatenate((ticks, events.bumps[bumping].astype(float), idle[waiting]))
     return robot, pts, ticks
 
 
