@@ -3,8 +3,11 @@
 Run with ``make bench`` (or ``python -m benchmarks.run``). Prints a table; asserts nothing.
 Each row is the best of ``--repeats`` timed runs on one process (one core).
 
-Rows (issue #2): one robot and 1024 independent robots on the kinematic backend, one robot and
-20 colliding robots on the pymunk backend, in ``two_rooms`` and ``grid_15x15``.
+Core rows (issue #2): one robot and 1024 independent robots on the kinematic backend, one robot
+and 20 colliding robots on the pymunk backend, in ``two_rooms`` and ``grid_15x15``.
+Env rows (issue #3): `BounceEnv` steps/s in bounce mode through ``gym.make`` (with Gymnasium's
+default wrappers) on both backends, Gymnasium's ``CartPole-v1`` in the same run as the floor for
+a Python env, and `MultiBounceEnv` with 20 robots (agent-steps/s).
 """
 
 from __future__ import annotations
@@ -13,10 +16,12 @@ import argparse
 import time
 from collections.abc import Callable
 
+import gymnasium as gym
 import numpy as np
 
 from bounce_gym import worlds
 from bounce_gym.dynamics import BounceDynamics
+from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
 
 
 def _time(setup: Callable[[], Callable[[], int]], repeats: int) -> float:
@@ -73,6 +78,50 @@ def colliding_robots(world, backend: str, n_robots: int, n_steps: int) -> Callab
     return run
 
 
+def gym_steps(env_id: str, n_steps: int, **kwargs) -> Callable[[], int]:
+    env = gym.make(env_id, **kwargs)
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    actions = [env.action_space.sample() for _ in range(n_steps)]
+
+    def run() -> int:
+        for a in actions:
+            _, _, terminated, truncated, _ = env.step(a)
+            if terminated or truncated:
+                env.reset()
+        return n_steps
+
+    return run
+
+
+def multi_steps(n_robots: int, n_steps: int) -> Callable[[], int]:
+    env = MultiBounceEnv(world="grid_15x15", n_robots=n_robots, max_cycles=10**9)
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    actions = [dict(zip(env.possible_agents, row.tolist(), strict=True))
+               for row in rng.integers(0, 3, (n_steps, n_robots))]
+
+    def run() -> int:
+        for a in actions:
+            env.step(a)
+        return n_steps * n_robots
+
+    return run
+
+
+def env_rows(quick: bool) -> list[tuple[str, str, str, Callable[[], Callable[[], int]]]]:
+    n = 2_000 if quick else 10_000
+    return [
+        ("two_rooms", "kinematic", "Bounce-v0 steps",
+         lambda: gym_steps("bounce_gym/Bounce-v0", n, backend="kinematic")),
+        ("two_rooms", "pymunk", "Bounce-v0 steps",
+         lambda: gym_steps("bounce_gym/Bounce-v0", n, backend="pymunk")),
+        ("-", "gymnasium", "CartPole-v1 steps", lambda: gym_steps("CartPole-v1", n)),
+        ("grid_15x15", "kinematic", "MultiBounce 20 robots",
+         lambda: multi_steps(20, n // 20)),
+    ]
+
+
 def rows(quick: bool) -> list[tuple[str, str, str, Callable[[], Callable[[], int]]]]:
     scale = 0.2 if quick else 1.0
     n1 = int(20_000 * scale)
@@ -101,6 +150,10 @@ def main(argv: list[str] | None = None) -> None:
     for world, backend, robots, setup in rows(args.quick):
         rate = _time(setup, args.repeats)
         print(f"{world:<12} {backend:<10} {robots:<22} {rate:>16,.0f}", flush=True)
+    print(f"\n{'world':<12} {'backend':<10} {'environment':<22} {'(agent-)steps/s':>16}")
+    for world, backend, what, setup in env_rows(args.quick):
+        rate = _time(setup, args.repeats)
+        print(f"{world:<12} {backend:<10} {what:<22} {rate:>16,.0f}", flush=True)
 
 
 if __name__ == "__main__":

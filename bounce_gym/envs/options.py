@@ -10,6 +10,7 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -45,7 +46,7 @@ class EnvOptions:
     privileged: bool
     robot_collisions: str
 
-    @property
+    @cached_property
     def max_clock(self) -> int:
         """An upper bound on the clock: the longest straight drive, in ticks, plus one."""
         return math.ceil(self.world.diameter / self.step_length) + 1

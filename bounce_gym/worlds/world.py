@@ -208,7 +208,7 @@ class World:
         """The free space as a shapely polygon."""
         return Polygon(self.outer, list(self.holes))
 
-    @property
+    @cached_property
     def bounds(self) -> tuple[float, float, float, float]:
         """(xmin, ymin, xmax, ymax) of the outer ring."""
         lo, hi = self.outer.min(axis=0), self.outer.max(axis=0)
@@ -218,7 +218,7 @@ class World:
     def area(self) -> float:
         return float(self.polygon.area)
 
-    @property
+    @cached_property
     def diameter(self) -> float:
         """Length of the bounding-box diagonal; the scale for tolerances."""
         xmin, ymin, xmax, ymax = self.bounds
