@@ -389,7 +389,7 @@ def test_record_episode_counts_frames(tmp_path, monkeypatch):
     env = gymnasium.make("CartPole-v1", render_mode="rgb_array")
     seen = {}
 
-    def fake_save(frames, path, fps=10):
+    def fake_save(frames, path, fps=10, width=None):
         seen["n"], seen["fps"] = len(frames), fps
         return path
 
@@ -419,3 +419,16 @@ def test_record_episode_needs_rgb_array(tmp_path):
             record_episode(env, None, tmp_path / "x.gif", max_steps=-1)
     finally:
         env.close()
+
+
+def test_save_gif_can_downscale(tmp_path):
+    from PIL import Image
+
+    from bounce_gym.envs.gif import save_gif
+    from bounce_gym.errors import ConfigError
+
+    frames = [np.full((40, 80, 3), v, dtype=np.uint8) for v in (0, 128, 255)]
+    out = save_gif(frames, tmp_path / "small.gif", width=20)
+    assert Image.open(out).size == (20, 10)
+    with pytest.raises(ConfigError, match="width"):
+        save_gif(frames, tmp_path / "bad.gif", width=0)

@@ -51,7 +51,8 @@ def _check_frames(frames: Sequence[np.ndarray]) -> list[np.ndarray]:
     return frames
 
 
-def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike, fps: float = 10) -> Path:
+def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike, fps: float = 10,
+             width: int | None = None) -> Path:
     """Write ``frames`` as a GIF that loops forever.
 
     Args:
@@ -59,6 +60,7 @@ def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike, fps: float =
         path: output file; its parent directory is created if missing.
         fps: frames per second (> 0). GIF delays are whole centiseconds, so the real rate is
             rounded.
+        width: resize frames to this width in pixels (aspect ratio kept); None keeps them.
 
     Returns:
         The output path.
@@ -82,6 +84,14 @@ def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike, fps: float =
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     images = [Image.fromarray(np.ascontiguousarray(f)) for f in frames]
+    if width is not None:
+        if isinstance(width, bool) or not isinstance(width, int | np.integer) or width < 1:
+            raise ConfigError(f"width must be a positive integer, got {width!r}")
+        height = max(1, round(images[0].height * width / images[0].width))
+        images = [im.resize((int(width), height), Image.Resampling.LANCZOS) for im in images]
+    # an adaptive palette without dithering: crisp flat colours and a much smaller file
+    images = [im.convert("P", palette=Image.Palette.ADAPTIVE, colors=128,
+                         dither=Image.Dither.NONE) for im in images]
     fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
@@ -108,6 +118,7 @@ def record_episode(
     max_steps: int = 200,
     seed: int | None = None,
     fps: float | None = 10,
+    width: int | None = None,
 ) -> Path:
     """Run one episode of ``env`` and save its frames as a GIF.
 
@@ -120,6 +131,7 @@ def record_episode(
             right after reset).
         seed: passed to ``env.reset(seed=seed)``.
         fps: frames per second of the GIF; None uses ``env.metadata["render_fps"]`` (or 10).
+        width: resize the frames to this width (see `save_gif`).
 
     Returns:
         The output path.
@@ -156,4 +168,4 @@ def record_episode(
         frames.append(grab())
         if terminated or truncated:
             break
-    return save_gif(frames, path, fps=fps)
+    return save_gif(frames, path, fps=fps, width=width)
