@@ -37,10 +37,10 @@ def to_angle(action: object, action_type: str, angles: np.ndarray,
         if not 0 <= index < len(angles):
             raise ActionError(f"{who}: index {index} is out of range [0, {len(angles)})")
         return float(angles[index])
-    try:
-        value = np.asarray(action, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ActionError(f"{who}: expected a number in [-1, 1], got {action!r}") from None
+    raw = np.asarray(action)
+    if raw.dtype == object or raw.dtype == bool or not np.issubdtype(raw.dtype, np.number):
+        raise ActionError(f"{who}: expected a number in [-1, 1], got {action!r}")
+    value = raw.astype(np.float64)
     if value.shape not in ((), (1,)):
         raise ActionError(f"{who}: expected shape (1,), got shape {value.shape}")
     a = float(value.reshape(()))

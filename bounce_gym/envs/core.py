@@ -53,6 +53,13 @@ class BounceCore:
         self.obs_low = np.array(low, dtype=np.float32)
         self.obs_high = np.array(high, dtype=np.float32)
         self.option_keys = frozenset({"start"}) | task.option_keys
+        # largest (col, row) of the step-length grid of `World.occupancy`: a robot touching the
+        # right or top wall (or a hair outside by rounding) still reports a cell of the grid
+        xmin, ymin, xmax, ymax = options.world.bounds
+        self._cell_max = np.array([
+            max(int(np.ceil((xmax - xmin) / options.step_length - 1e-9)) - 1, 0),
+            max(int(np.ceil((ymax - ymin) / options.step_length - 1e-9)) - 1, 0),
+        ])
 
     @property
     def state(self):
@@ -144,6 +151,7 @@ class BounceCore:
         state = self.dynamics.state
         xmin, ymin = self.options.world.bounds[:2]
         cells = np.floor((state.position - (xmin, ymin)) / self.options.step_length).astype(int)
+        cells = np.clip(cells, 0, self._cell_max)
         info = {
             "ticks": int(state.ticks),
             "position": state.position.copy(),

@@ -182,6 +182,12 @@ class NavigationTask(Task):
         if options.n_robots != 1:
             raise ConfigError("task 'navigation' is a single-robot task (n_robots must be 1)")
         self.goal_radius = float(self.goal_radius_arg or options.step_length)
+        for key, pose in self._fixed.items():
+            if pose is not None:
+                position = _pose_option(self._fixed, key, 1)[0]
+                if not options.world.contains(position, options.robot_radius).all():
+                    raise ConfigError(f"task_kwargs.{key}: position {position[0].tolist()} is "
+                                      "not in the free space")
 
     @property
     def observation_size(self) -> int:
