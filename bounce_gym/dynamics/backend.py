@@ -37,6 +37,10 @@ class MotionBackend(ABC):
     #: whether `drive_each` can move robots independently (no shared clock), which also gives
     #: `BounceDynamics` its scalar single-robot path
     drives_independently: bool = False
+    #: orientation bin width (radians) if headings are discrete (the cell model), else None
+    bin_width: float | None = None
+    #: whether robots of radius 0 can still bump into each other (true on the cell grid)
+    point_robots_collide: bool = False
 
     def __init__(
         self,
@@ -58,7 +62,8 @@ class MotionBackend(ABC):
             raise ConfigError(
                 f"robot_collisions: expected one of {ROBOT_COLLISIONS}, got {robot_collisions!r}"
             )
-        if robot_collisions == "bounce" and n_robots > 1 and radius <= 0:
+        if robot_collisions == "bounce" and n_robots > 1 and radius <= 0 \
+                and not self.point_robots_collide:
             raise ConfigError(
                 "robot_collisions='bounce' needs robot_radius > 0 (point robots never touch); "
                 "use robot_collisions='ignore' for point robots"
@@ -101,6 +106,22 @@ class MotionBackend(ABC):
     def drive_each(self, state: RobotState) -> np.ndarray:
         """Drive every unblocked robot to its own next contact (see `drives_independently`)."""
         raise ConfigError(f"backend {self.name!r} does not drive robots independently")
+
+    def random_positions(self, rng: np.random.Generator) -> np.ndarray:
+        """Uniform start positions in the free space (non-overlapping when robots collide)."""
+        if not self.collide:
+            return self.world.sample_free(rng, self.n_robots, self.radius)
+        chosen: list[np.ndarray] = []
+        for _ in range(100 * self.n_robots + 100):
+            p = self.world.sample_free(rng, 1, self.radius)[0]
+            if all(np.hypot(*(p - q)) > 2 * self.radius for q in chosen):
+                chosen.append(p)
+                if len(chosen) == self.n_robots:
+                    return np.array(chosen)
+        raise ConfigError(
+            f"could not place {self.n_robots} robots of radius {self.radius} without overlap "
+            f"in world {self.world.name!r}"
+        )
 
     # -- helpers shared by backends ---------------------------------------------------------
     def robot_blockers(self, state: RobotState, robots: np.ndarray):

@@ -31,6 +31,11 @@ class Exact:
         del rng
         return np.zeros(n)
 
+    def sample_bins(self, n: int, rng: np.random.Generator, bin_width: float) -> np.ndarray:
+        """Offsets in whole orientation bins (the cell model); see `Reliable.sample_bins`."""
+        del rng, bin_width
+        return np.zeros(n, dtype=np.int64)
+
 
 @dataclass(frozen=True)
 class Reliable:
@@ -49,6 +54,16 @@ class Reliable:
         slip = rng.random(n) >= self.r
         return np.where(slip, rng.uniform(-self.eps, self.eps, n), 0.0)
 
+    def sample_bins(self, n: int, rng: np.random.Generator, bin_width: float) -> np.ndarray:
+        """Offsets in whole bins, as in the GCM: 0 with probability r, otherwise uniform over
+        the 2·n_ε non-zero offsets within ±ε (n_ε = ε / bin width, which must be whole)."""
+        n_eps = _whole_bins(self.eps, bin_width, "eps")
+        slip = rng.random(n) >= self.r
+        if n_eps == 0:
+            return np.zeros(n, dtype=np.int64)
+        j = rng.integers(1, n_eps + 1, n) * rng.choice([-1, 1], n)
+        return np.where(slip, j, 0)
+
 
 @dataclass(frozen=True)
 class Interval:
@@ -65,6 +80,20 @@ class Interval:
 
     def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
         return rng.uniform(self.lo, self.hi, n)
+
+    def sample_bins(self, n: int, rng: np.random.Generator, bin_width: float) -> np.ndarray:
+        """Offsets in whole bins, uniform over the bins in [lo, hi] (both whole multiples)."""
+        lo = _whole_bins(self.lo, bin_width, "interval lo")
+        hi = _whole_bins(self.hi, bin_width, "interval hi")
+        return rng.integers(lo, hi + 1, n)
+
+
+def _whole_bins(angle: float, bin_width: float, field: str) -> int:
+    bins = angle / bin_width
+    if abs(bins - round(bins)) > 1e-6:
+        raise ConfigError(f"noise: {field} = {np.degrees(angle):g}° is not a whole number of "
+                          f"{np.degrees(bin_width):g}° orientation bins (cell model)")
+    return int(round(bins))
 
 
 NoiseModel = Exact | Reliable | Interval

@@ -79,6 +79,7 @@ import pymunk
 from bounce_gym.dynamics.backend import MotionBackend, pair_contact_times
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
+from bounce_gym.worlds.raycast import GRAZE
 
 #: Robot shapes are this much (times the world diameter) larger than the robot: the contact skin.
 SKIN_REL = 1e-6
@@ -301,7 +302,7 @@ class PymunkBackend(MotionBackend):
                 b = cx * dx + cy * dy
                 c = cx * cx + cy * cy - self.radius * self.radius
                 disc = b * b - c
-                if b >= 0.0 or disc < 0.0 or c < -2.0 * self.radius * tol:
+                if b >= 0.0 or disc <= (GRAZE * self.radius) ** 2 or c < -2.0 * self.radius * tol:
                     continue  # moving away, missing, or already inside the circle
                 t = max(-b - math.sqrt(disc), 0.0)
                 if t < best_v or (t == best_v and k < vertex):

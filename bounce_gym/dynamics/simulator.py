@@ -27,19 +27,25 @@ from bounce_gym.dynamics.state import RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
 
-BACKEND_NAMES = ("kinematic", "pymunk")
+BACKEND_NAMES = ("kinematic", "pymunk", "cell")
 
 
 def make_backend(name: str, world: World, n_robots: int = 1, radius: float = 0.0,
-                 step_length: float = 1.0, robot_collisions: str = "ignore") -> MotionBackend:
-    """Build a motion backend by name (``kinematic`` or ``pymunk``); imports it on first use."""
+                 step_length: float = 1.0, robot_collisions: str = "ignore",
+                 **options: object) -> MotionBackend:
+    """Build a motion backend by name (``kinematic``, ``pymunk`` or ``cell``); imports it on first
+    use. ``options`` go to the backend (the cell backend takes ``n_bins`` and ``corner_rule``)."""
     if name == "kinematic":
         from bounce_gym.dynamics.kinematic import KinematicBackend as Backend
     elif name == "pymunk":
         from bounce_gym.dynamics.pymunk_backend import PymunkBackend as Backend
+    elif name == "cell":
+        from bounce_gym.dynamics.cell_backend import CellBackend as Backend
     else:
         raise ConfigError(f"backend: unknown backend {name!r}; allowed are {list(BACKEND_NAMES)}")
-    return Backend(world, n_robots, radius, step_length, robot_collisions)
+    if options and name != "cell":
+        raise ConfigError(f"backend_options: backend {name!r} takes none, got {sorted(options)}")
+    return Backend(world, n_robots, radius, step_length, robot_collisions, **options)
 
 
 class BounceDynamics:
@@ -54,6 +60,7 @@ class BounceDynamics:
         radius: robot disk radius (0 = point robot).
         step_length: distance per tick.
         robot_collisions: ``"bounce"`` or ``"ignore"``.
+        backend_options: extra arguments of the backend (``cell``: ``n_bins``, ``corner_rule``).
 
     Randomness comes only from the generator passed to `reset`.
     """
@@ -69,11 +76,13 @@ class BounceDynamics:
         radius: float = 0.0,
         step_length: float = 1.0,
         robot_collisions: str = "ignore",
+        backend_options: dict | None = None,
     ) -> None:
         self.rule_name = rule
         self.rule = get_rule(rule)
         self.noise: NoiseModel = make_noise(noise)
-        self.backend = make_backend(backend, world, n_robots, radius, step_length, robot_collisions)
+        self.backend = make_backend(backend, world, n_robots, radius, step_length, robot_collisions,
+                                    **(backend_options or {}))
         #: scalar fast path for a lone robot on a backend that can drive robots independently
         self._scalar_path = n_robots == 1 and self.backend.drives_independently
         self.rng: np.random.Generator | None = None
@@ -99,7 +108,7 @@ class BounceDynamics:
         self.rng = rng
         m = self.n_robots
         if position is None:
-            position = self._random_positions(rng)
+            position = self.backend.random_positions(rng)
         position = np.asarray(position, dtype=np.float64)
         if position.shape != (m, 2) or not np.all(np.isfinite(position)):
             raise ConfigError(
@@ -113,22 +122,6 @@ class BounceDynamics:
         self.state = RobotState.at(position, heading)
         self.backend.reset(self.state)
         return self.state
-
-    def _random_positions(self, rng: np.random.Generator) -> np.ndarray:
-        backend = self.backend
-        if not backend.collide:
-            return self.world.sample_free(rng, self.n_robots, backend.radius)
-        chosen: list[np.ndarray] = []
-        for _ in range(100 * self.n_robots + 100):
-            p = self.world.sample_free(rng, 1, backend.radius)[0]
-            if all(np.hypot(*(p - q)) > 2 * backend.radius for q in chosen):
-                chosen.append(p)
-                if len(chosen) == self.n_robots:
-                    return np.array(chosen)
-        raise ConfigError(
-            f"could not place {self.n_robots} robots of radius {backend.radius} without overlap "
-            f"in world {self.world.name!r}"
-        )
 
     # -- stepping ---------------------------------------------------------------------------
     def tick(self, params: np.ndarray) -> np.ndarray:
@@ -183,7 +176,10 @@ class BounceDynamics:
         if len(idx) == 0:
             return
         heading = self.rule(state.heading[idx], state.contact_normal[idx], params[idx])
-        if not isinstance(self.noise, Exact):
+        width = self.backend.bin_width
+        if width is not None:  # discrete headings: whole-bin errors, as in the GCM
+            heading = wrap(heading + width * self.noise.sample_bins(len(idx), self.rng, width))
+        elif not isinstance(self.noise, Exact):
             heading = wrap(heading + self.noise.sample(len(idx), self.rng))
         state.heading[idx] = heading
         state.bumps[idx] += 1
@@ -219,6 +215,12 @@ class BounceDynamics:
             valid = lo > 0.0 and hi < math.pi
         if not valid:
             check_parameters(self.rule_name, values, field="bounce parameters")  # raises
+        width = self.backend.bin_width
+        if width is not None:
+            steps = values / width
+            if np.any(np.abs(steps - np.rint(steps)) > 1e-6):
+                raise ConfigError(f"bounce parameters: {np.degrees(values).tolist()} degrees are "
+                                  f"not whole {math.degrees(width):g}° bins of the cell backend")
         return values
 
     def _require_state(self) -> RobotState:

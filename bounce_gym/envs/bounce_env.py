@@ -26,7 +26,7 @@ class BounceEnv(gym.Env):
     drives on (Alam, Bobadilla & Shell; Nilles, Ren, Becerra & LaValle). The agent chooses the
     bounce angle. Time runs in ticks: in one tick the robot drives ``step_length`` or, when it is
     blocked by a wall it faces, turns (a *bump tick*). Physics runs on an exact event-driven
-    ``kinematic`` backend or on ``pymunk``.
+    ``kinematic`` backend, on ``pymunk``, or on the discrete ``cell`` model of the planners.
 
     ## Action Space
 
@@ -65,7 +65,10 @@ class BounceEnv(gym.Env):
     * ``world``: zoo name (`bounce_gym.worlds.names()`), map-file path, or `World`.
     * ``task``: ``"free"``, ``"navigation"``, ``"coverage"``, ``"localization"`` or a `Task`;
       ``task_kwargs``: keyword arguments of the task class (see `bounce_gym.envs.tasks`).
-    * ``backend``: ``"kinematic"`` or ``"pymunk"`` (``"cell"`` is not available yet).
+    * ``backend``: ``"kinematic"`` (exact, continuous), ``"pymunk"`` (physics engine) or
+      ``"cell"`` (the papers' discrete cell-to-cell model: cell size = ``step_length``,
+      ``cell_bins`` orientation bins, ``corner_rule``; relative rule and discrete actions whose
+      angles are whole bins; one tick = one cell step or one rotation).
     * ``bounce_rule``: ``"relative"`` (Alam), ``"fixed"``, ``"specular"``, ``"monotonic"``,
       ``"nilles_relative"`` (Nilles).
     * ``angles``: the set Φ, in degrees (default 45, 90, 135).
@@ -78,6 +81,8 @@ class BounceEnv(gym.Env):
     * ``action_type``: ``"discrete"`` or ``"continuous"``.
     * ``history``: number of (segment ticks, angle) pairs in the observation (default 0).
     * ``privileged``: add the true pose to the observation (default False).
+    * ``cell_bins``, ``corner_rule``: the cell backend's orientation bins (default 8) and diagonal
+      rule (default ``"target_only"``, see `bounce_gym.cells.model`).
     * ``render_mode``: None, ``"human"`` or ``"rgb_array"``.
 
     ## Version History
@@ -103,6 +108,8 @@ class BounceEnv(gym.Env):
         action_type: str = "discrete",
         history: int = 0,
         privileged: bool = False,
+        cell_bins: int = 8,
+        corner_rule: str = "target_only",
         render_mode: str | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -113,6 +120,7 @@ class BounceEnv(gym.Env):
             angle_range=angle_range, noise=noise, robot_radius=robot_radius,
             step_length=step_length, step_mode=step_mode, action_type=action_type,
             history=history, privileged=privileged, robot_collisions="ignore",
+            cell_bins=cell_bins, corner_rule=corner_rule,
         )
         self.core = BounceCore(self.options, make_task(task, task_kwargs, SINGLE_ROBOT_TASKS))
         self.render_mode = render_mode

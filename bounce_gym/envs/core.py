@@ -40,7 +40,7 @@ class BounceCore:
         self.dynamics = BounceDynamics(
             options.world, options.n_robots, backend=options.backend, rule=options.bounce_rule,
             noise=options.noise, radius=options.robot_radius, step_length=options.step_length,
-            robot_collisions=options.robot_collisions,
+            robot_collisions=options.robot_collisions, backend_options=options.backend_options,
         )
         k = options.history
         low = [0.0, 0.0] + [0.0] * (2 * k)

@@ -84,6 +84,8 @@ class _MultiBase:
         action_type: str = "discrete",
         history: int = 0,
         privileged: bool = False,
+        cell_bins: int = 8,
+        corner_rule: str = "target_only",
         robot_collisions: str = "bounce",
         max_cycles: int = 500,
         render_mode: str | None = None,
@@ -99,6 +101,7 @@ class _MultiBase:
             angles=angles, angle_range=angle_range, noise=noise, robot_radius=robot_radius,
             step_length=step_length, step_mode=step_mode, action_type=action_type,
             history=history, privileged=privileged, robot_collisions=robot_collisions,
+            cell_bins=cell_bins, corner_rule=corner_rule,
         )
         self.core = BounceCore(self.options, make_task(task, task_kwargs, MULTI_ROBOT_TASKS))
         self.max_cycles = int(max_cycles)

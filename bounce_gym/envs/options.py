@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from bounce_gym import worlds
+from bounce_gym.cells import CORNER_RULES
 from bounce_gym.dynamics.backend import ROBOT_COLLISIONS
 from bounce_gym.dynamics.noise import NoiseModel, make_noise
 from bounce_gym.dynamics.rules import RULES, check_parameters
@@ -45,6 +46,7 @@ class EnvOptions:
     history: int
     privileged: bool
     robot_collisions: str
+    backend_options: dict  # extra arguments of the backend (cell: n_bins, corner_rule)
 
     @cached_property
     def max_clock(self) -> int:
@@ -155,14 +157,11 @@ def parse_options(
     history: int,
     privileged: bool,
     robot_collisions: str,
+    cell_bins: int = 8,
+    corner_rule: str = "target_only",
 ) -> EnvOptions:
     """Validate the constructor arguments of `BounceEnv` / `MultiBounceEnv`."""
     backend = _choice("backend", backend, BACKENDS)
-    if backend == "cell":
-        raise ConfigError(
-            "backend: 'cell' (the discrete cell-to-cell model) is not available yet; "
-            "use 'kinematic' or 'pymunk'"
-        )
     bounce_rule = _choice("bounce_rule", bounce_rule, sorted(RULES))
     if isinstance(n_robots, bool) or not isinstance(n_robots, int | np.integer) or n_robots < 1:
         raise ConfigError(f"n_robots: expected an integer >= 1, got {n_robots!r}")
@@ -178,6 +177,11 @@ def parse_options(
                         angle_range is not None else [None] * int(n_robots), angle_sets,
                         strict=True)
     )
+    noise_model = make_noise(noise)
+    backend_options: dict = {}
+    if backend == "cell":
+        backend_options = _cell_options(bounce_rule, angle_sets, action_type, noise_model,
+                                        cell_bins, corner_rule)
     return EnvOptions(
         world=resolve_world(world),
         n_robots=int(n_robots),
@@ -185,7 +189,7 @@ def parse_options(
         bounce_rule=bounce_rule,
         angles=angle_sets,
         angle_range=ranges,
-        noise=make_noise(noise),
+        noise=noise_model,
         robot_radius=_number("robot_radius", robot_radius, minimum=0.0),
         step_length=_number("step_length", step_length, minimum=0.0, strict=True),
         step_mode=_choice("step_mode", step_mode, STEP_MODES),
@@ -193,4 +197,27 @@ def parse_options(
         history=int(history),
         privileged=privileged,
         robot_collisions=_choice("robot_collisions", robot_collisions, ROBOT_COLLISIONS),
+        backend_options=backend_options,
     )
+
+
+def _cell_options(rule: str, angle_sets, action_type: str, noise: NoiseModel, n_bins: object,
+                  corner_rule: object) -> dict:
+    """The cell backend steps whole orientation bins with Alam's relative rule."""
+    if isinstance(n_bins, bool) or not isinstance(n_bins, int | np.integer) or n_bins < 1 \
+            or 360 % n_bins:
+        raise ConfigError(f"cell_bins: expected a divisor of 360 (e.g. 4, 8, 360), got {n_bins!r}")
+    _choice("corner_rule", corner_rule, CORNER_RULES)
+    if rule != "relative":
+        raise ConfigError(f"bounce_rule: the cell backend supports 'relative' only, got {rule!r}")
+    if action_type != "discrete":
+        raise ConfigError("action_type: the cell backend needs discrete actions (angles must be "
+                          "whole orientation bins)")
+    width = 360.0 / n_bins
+    for angles in angle_sets:
+        steps = np.degrees(angles) / width
+        if np.any(np.abs(steps - np.rint(steps)) > 1e-6):
+            raise ConfigError(f"angles: {np.degrees(angles).tolist()} degrees are not whole "
+                              f"multiples of the {width:g}° bins of the cell backend")
+    noise.sample_bins(1, np.random.default_rng(0), math.radians(width))  # raises if not whole
+    return {"n_bins": int(n_bins), "corner_rule": corner_rule}

@@ -9,6 +9,10 @@ crossing time over both feature sets is exact (no polygonal approximation of the
 Only *approaching* crossings count (direction against the inward normal), so a robot resting on a
 wall and heading into free space is not stopped by that wall, while one heading into it is stopped
 at distance 0 — which is how the dynamics detects "still facing the wall" after a rotation.
+Grazing is not a contact either: a ray parallel to an edge, or a disk that passes a reflex vertex
+at exactly its radius (approach angle below `GRAZE` radians), slides on. Tangency is a measure-zero
+event in random worlds but the rule in grid worlds, where a disk of half a cell moving along a row
+of cell centres passes every obstacle corner at exactly its radius.
 """
 
 from __future__ import annotations
@@ -24,6 +28,9 @@ if TYPE_CHECKING:
 
 #: Upper bound on the size of the (rays x features) intermediate arrays, to cap memory.
 _MAX_PAIRS = 1 << 21
+#: Smallest approach angle (radians) at which a disk counts as hitting a vertex; sin²(GRAZE) · R²
+#: bounds ``disc`` below. Passing closer than that overlaps the vertex by < R·GRAZE²/2 ≈ 5e-13 R.
+GRAZE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -151,8 +158,8 @@ def _first_hit_chunk(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) 
         disc = b * b - c
         with np.errstate(invalid="ignore"):
             tv = -b - np.sqrt(disc)
-        # moving towards the vertex, and outside its circle or inside by at most tol
-        okv = (disc >= 0) & (b < 0) & (c >= -2.0 * radius * f.ttol)
+        # moving towards the vertex (not grazing it), outside its circle or inside by <= tol
+        okv = (disc > (GRAZE * radius) ** 2) & (b < 0) & (c >= -2.0 * radius * f.ttol)
         tv = np.where(okv, np.maximum(tv, 0.0), np.inf)
         kv = np.argmin(tv, axis=1)
         bestv = tv[rows, kv]
@@ -192,7 +199,7 @@ def _first_hit_one(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) ->
         c = cx * cx + cy * cy - radius * radius
         disc = b * b - c
         with np.errstate(invalid="ignore"):
-            tv = np.where((disc >= 0) & (b < 0) & (c >= -2.0 * radius * f.ttol),
+            tv = np.where((disc > (GRAZE * radius) ** 2) & (b < 0) & (c >= -2.0 * radius * f.ttol),
                           np.maximum(-b - np.sqrt(disc), 0.0), np.inf)
         kv = int(np.argmin(tv))
         if tv[kv] < distance:

@@ -1,0 +1,128 @@
+"""The ``cell`` backend: robots step exactly the papers' discrete cell-to-cell model.
+
+Positions are cell centres and headings bin centres of a `bounce_gym.cells.CellModel` built with
+cell size = ``step_length`` (and the C-space of ``radius``). One tick moves every unblocked robot to
+its king-move target cell; a robot whose target is blocked is ``blocked`` and its next tick is a
+bump (the controller rotates it by whole bins). With one robot and exact noise, the tick stream is
+exactly the simple cell mapping C of `CellModel.successor`, so analytic plans and filters execute
+exactly; with `Reliable` noise the bump rows follow the GCM matrix.
+
+Several robots (thesis Eq. 3.9; the rules of spec 002 §8.4, which the paper leaves open): each
+robot proposes its target; a robot is also blocked when its target is another moving robot's
+target, when two robots would swap cells, or when its target is the cell of a robot that stays
+(iterated to a fixpoint). Moving into a cell that another robot is vacating is allowed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bounce_gym.cells import CellModel
+from bounce_gym.dynamics.backend import MotionBackend
+from bounce_gym.dynamics.state import NO_CONTACT, RobotState
+from bounce_gym.errors import ConfigError
+
+
+class CellBackend(MotionBackend):
+    """Discrete motion on the cell grid (see the module docstring).
+
+    Extra args: ``n_bins`` orientation bins (a divisor of 360, default 8) and ``corner_rule``
+    (see `bounce_gym.cells.model`).
+    """
+
+    name = "cell"
+    point_robots_collide = True
+
+    def __init__(self, world, n_robots, radius, step_length, robot_collisions,
+                 n_bins: int = 8, corner_rule: str = "target_only") -> None:
+        super().__init__(world, n_robots, radius, step_length, robot_collisions)
+        self.model = CellModel(world, step_length, n_bins, radius, corner_rule)
+        self.bin_width = self.model.bin_width
+        if self.collide and self.model.n_positions < n_robots:
+            raise ConfigError(f"n_robots: {n_robots} robots do not fit in "
+                              f"{self.model.n_positions} free cells")
+
+    # -- placement --------------------------------------------------------------------------
+    def random_positions(self, rng: np.random.Generator) -> np.ndarray:
+        """Uniformly random free cells (distinct ones when robots collide)."""
+        cells = rng.choice(self.model.n_positions, self.n_robots, replace=not self.collide)
+        return self.model.centres[cells].copy()
+
+    def cells(self, state: RobotState) -> np.ndarray:
+        """The cell number of every robot."""
+        return self.model.cell_of(state.position, state.heading)
+
+    def reset(self, state: RobotState) -> None:
+        z = self.cells(state)
+        if np.any(z < 0):
+            bad = int(np.flatnonzero(z < 0)[0])
+            raise ConfigError(f"start position of robot {bad} {state.position[bad].tolist()} is "
+                              "not in a free cell of the cell model")
+        p, k = self.model.decode(z)
+        if self.collide and len(np.unique(p)) < len(p):
+            raise ConfigError("start positions: two robots share a cell")
+        state.position[:] = self.model.centres[p]  # snap to cell centres and bin headings
+        state.heading[:] = k * self.bin_width
+        self.update_contacts(state, np.arange(state.n_robots))
+
+    # -- contacts ---------------------------------------------------------------------------
+    def _plan(self, state: RobotState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(position index, target index or -1, blocking robot or -1) for every robot."""
+        p, k = self.model.decode(self.cells(state))
+        target = self.model.targets[k, p]
+        blocker = np.full(len(p), NO_CONTACT, dtype=np.int64)
+        if not self.collide:
+            return p, target, blocker
+        stays = target < 0
+        while True:
+            moving = ~stays
+            newly = np.zeros(len(p), dtype=bool)
+            where_is = dict(zip(p.tolist(), range(len(p)), strict=True))
+            seen: dict[int, int] = {}
+            for i in np.flatnonzero(moving).tolist():
+                t = int(target[i])
+                j = where_is.get(t)
+                if j is not None and (stays[j] or target[j] == p[i]):
+                    newly[i], blocker[i] = True, j  # occupied by a robot that stays, or a swap
+                elif t in seen:
+                    first = seen[t]
+                    newly[i], blocker[i] = True, first  # two robots want the same cell
+                    newly[first], blocker[first] = True, i
+                else:
+                    seen[t] = i
+            newly &= ~stays
+            if not newly.any():
+                return p, np.where(stays, -1, target), blocker
+            stays |= newly
+
+    def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
+        # blocking on the grid is a joint property of all robots: recompute for everyone
+        state.heading[:] = self.model.bin_of(state.heading) * self.bin_width  # exact bins
+        p, target, blocker = self._plan(state)
+        state.blocked[:] = target < 0
+        state.contact_robot[:] = np.where(state.blocked, blocker, NO_CONTACT)
+        state.contact_edge[:] = NO_CONTACT
+        # no wall normals on the grid: the normal points back along the heading
+        state.contact_normal[:] = -state.direction
+
+    def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        if until_first_block and state.blocked.any():
+            return 0
+        if not (until_first_block or np.isfinite(max_ticks)):
+            raise ValueError("drive needs a finite max_ticks unless until_first_block is set")
+        ticks = 0
+        while ticks < max_ticks:
+            p, target, _ = self._plan(state)
+            movers = np.flatnonzero(target >= 0)
+            if len(movers) == 0 and until_first_block:
+                break
+            new = self.model.centres[target[movers]]
+            state.odometer[movers] += np.hypot(*(new - state.position[movers]).T)
+            state.position[movers] = new
+            state.clock[movers] += 1
+            state.ticks += 1
+            ticks += 1
+            self.update_contacts(state, np.arange(state.n_robots))
+            if until_first_block and state.blocked.any():
+                break
+        return ticks
