@@ -123,7 +123,24 @@ class MotionBackend(ABC):
             f"in world {self.world.name!r}"
         )
 
-    # -- helpers shared by backends ---------------------------------------------------------
+    # -- helpers shared by backends
+    def _classify_contacts(self, state: RobotState, robots: np.ndarray, sel,
+                           distance: np.ndarray, edge: np.ndarray, normal: np.ndarray) -> None:
+        """Set ``blocked`` and the contact fields of ``robots`` from the wall ahead of each
+        (``distance``, ``edge``, ``normal``) and, when robots collide, the robots they face.
+        ``sel`` indexes the same robots (a slice where that is cheaper)."""
+        wall = distance <= self.contact_tol
+        state.contact_edge[sel] = np.where(wall, edge, NO_CONTACT)
+        state.contact_normal[sel] = normal
+        if not self.collide:
+            state.blocked[sel] = wall
+            return
+        blocker, robot_normal = self.robot_blockers(state, robots)
+        by_robot = ~wall & (blocker >= 0)
+        state.blocked[robots] = wall | by_robot
+        state.contact_robot[robots] = np.where(by_robot, blocker, NO_CONTACT)
+        state.contact_normal[robots[by_robot]] = robot_normal[by_robot]
+
     def robot_blockers(self, state: RobotState, robots: np.ndarray):
         """For each of ``robots``: the touching robot it faces (or -1) and the contact normal.
 

@@ -62,17 +62,7 @@ class KinematicBackend(MotionBackend):
         self._ahead_distance[sel] = hits.distance
         self._ahead_edge[sel] = hits.edge
         self._ahead_normal[sel] = hits.normal
-        wall = hits.distance <= self.contact_tol
-        state.contact_edge[sel] = np.where(wall, hits.edge, NO_CONTACT)
-        state.contact_normal[sel] = hits.normal
-        if not self.collide:
-            state.blocked[sel] = wall
-            return
-        blocker, robot_normal = self.robot_blockers(state, robots)
-        by_robot = ~wall & (blocker >= 0)
-        state.blocked[robots] = wall | by_robot
-        state.contact_robot[robots] = np.where(by_robot, blocker, NO_CONTACT)
-        state.contact_normal[robots[by_robot]] = robot_normal[by_robot]
+        self._classify_contacts(state, robots, sel, hits.distance, hits.edge, hits.normal)
 
     def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
         # Internally time is measured as distance driven (one tick = step_length), so a robot

@@ -374,17 +374,8 @@ class PymunkBackend(MotionBackend):
         if len(robots) == 0:
             return
         self._refresh_hits(state, robots)  # a pymunk query along the new heading
-        wall = self._hit_dist[robots] <= self.contact_tol
-        state.contact_edge[robots] = np.where(wall, self._hit_edge[robots], NO_CONTACT)
-        state.contact_normal[robots] = self._hit_normal[robots]
-        if not self.collide:
-            state.blocked[robots] = wall
-            return
-        blocker, robot_normal = self.robot_blockers(state, robots)
-        by_robot = ~wall & (blocker >= 0)
-        state.blocked[robots] = wall | by_robot
-        state.contact_robot[robots] = np.where(by_robot, blocker, NO_CONTACT)
-        state.contact_normal[robots[by_robot]] = robot_normal[by_robot]
+        self._classify_contacts(state, robots, robots, self._hit_dist[robots],
+                                self._hit_edge[robots], self._hit_normal[robots])
 
     def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
         # Engine time is distance driven: robots move at unit speed and one tick lasts
