@@ -547,11 +547,12 @@ class LocalizationFilter:
         steps: the number of observations consumed since `reset`.
     """
 
-    def __init__(self, dfa: DFA, open_world: bool = False) -> None:
+    def __init__(self, dfa: DFA, open_world: bool = False, phi: float | None = None) -> None:
         if not isinstance(dfa, DFA):
             raise ConfigError(f"dfa: expected a DFA from build_dfa, got {type(dfa).__name__}")
         self.dfa = dfa
         self.open_world = bool(open_world)
+        self.phi = phi  # the bounce angle the DFA was built for (radians), if known
         self._delta = dfa.delta.tolist()  # Python lists: the fastest O(1) lookup per symbol
         self._colour = dfa.colour.tolist()
         self._in_cycle = (dfa.cycle_of >= 0).tolist()
@@ -565,7 +566,7 @@ class LocalizationFilter:
     def from_model(cls, model: CellModel, phi: float, open_world: bool = False
                    ) -> LocalizationFilter:
         """The filter of a cell model for bounce angle ``phi`` (radians)."""
-        return cls.from_arrays(*model.successor(phi), open_world=open_world)
+        return cls(build_dfa(*model.successor(phi)), open_world=open_world, phi=phi)
 
     @classmethod
     def for_world(cls, world: World | str, phi: float, n_bins: int = 8, cell_size: float = 1.0,
@@ -586,9 +587,19 @@ class LocalizationFilter:
         self._state = self.dfa.start
         self.steps = 0
 
-    def update(self, symbol) -> int:
-        """Consume one observation (1 = bump tick, 0 = forward tick); returns the colour."""
+    def update(self, symbol, angle: float | None = None) -> int:
+        """Consume one observation (1 = bump tick, 0 = forward tick); returns the colour.
+
+        ``angle`` (radians), the bounce angle of a bump, is optional; when given it must be the
+        angle the filter was built for — a fixed-angle filter cannot follow another one.
+        """
         a = _symbol(symbol)
+        if angle is not None and self.phi is not None and not math.isclose(
+                (angle - self.phi) % (2 * math.pi), 0.0, abs_tol=1e-9) and not math.isclose(
+                (angle - self.phi) % (2 * math.pi), 2 * math.pi, abs_tol=1e-9):
+            raise ObservationError(
+                f"this filter was built for a bounce angle of {math.degrees(self.phi):g}°, "
+                f"got {math.degrees(angle):g}°; use ActiveLocalizationFilter for several angles")
         if self._state != TRAP:
             nxt = self._delta[self._state][a]
             if nxt == TRAP and not self.open_world:
@@ -762,8 +773,8 @@ class ActiveLocalizationFilter:
         candidates, size, trapped, steps: as in `LocalizationFilter`.
         converged: no further observation can shrink S under the current angle (all its cells
             are in one class of `future_classes`).
-        localized: converged and S holds periodic cells of the current angle only — for a
-            never-switching robot exactly "in a knowledge cycle" of that angle's DFA.
+        localized: no angle can shrink S any more and S holds periodic cells of the current
+            angle — for a robot with one angle exactly "in a knowledge cycle" of its DFA.
     """
 
     def __init__(self, model: CellModel, angles: Sequence[float], angle: float | None = None,
@@ -827,9 +838,10 @@ class ActiveLocalizationFilter:
     def trapped(self) -> bool:
         return self._trapped
 
-    def _classes(self) -> tuple[np.ndarray, np.ndarray]:
-        """Future classes and periodic mask of the angle in use (computed once per angle)."""
-        k = self._angle
+    def _classes(self, k: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Future classes and periodic mask of angle ``k`` (default: the one in use), computed
+        once per angle."""
+        k = self._angle if k is None else k
         if k not in self._per_angle:
             succ = self._set.successors[k]
             self._per_angle[k] = future_classes(succ, self._set.bump), periodic_cells(succ)
@@ -844,7 +856,15 @@ class ActiveLocalizationFilter:
 
     @property
     def localized(self) -> bool:
-        return self.converged and bool(self._classes()[1][self._cells].all())
+        """No angle can shrink S any more (S is converged under every angle) and S holds
+        periodic cells of the angle in use; with one angle, "in a knowledge cycle"."""
+        if self._trapped:
+            return False
+        for k in range(len(self.angles)):
+            cls = self._classes(k)[0][self._cells]
+            if not (cls == cls[0]).all():
+                return False
+        return bool(self._classes()[1][self._cells].all())
 
 
 class AngleSwitchPlanner:
@@ -1003,3 +1023,78 @@ def final_uncertainties(dfa: DFA, successor, bump) -> np.ndarray:
     if (states == TRAP).any() or (dfa.cycle_of[states] < 0).any():  # pragma: no cover
         raise AssertionError("a true run left its own world's DFA")
     return dfa.sizes[states]
+
+
+def task_filter(options) -> LocalizationFilter | ActiveLocalizationFilter:
+    """The filter for the environments' localization task.
+
+    Plug it in with ``task_kwargs={"filter_factory": "baselines.localization:task_filter"}`` (the
+    registered ``bounce_gym/BounceLocalization-v0`` does). ``options`` are the env's validated
+    `EnvOptions`: the world is discretised with cell size = ``step_length``, the cell backend's
+    ``n_bins`` (8 otherwise) and the robot's radius. One bounce angle gives the O(1) DFA filter
+    (Def. 8/9); several give the active filter. The filter is closed-world only on the noise-free
+    ``cell`` backend, where the robot steps the model exactly; elsewhere it is open-world and
+    reports ``trapped`` once the robot's observations leave the model.
+    """
+    if options.action_type != "discrete":
+        raise ConfigError("localization filter: needs discrete actions (each bounce angle must "
+                          "be a whole orientation bin of the cell model)")
+    n_bins = options.backend_options.get("n_bins", 8)
+    model = CellModel(options.world, cell_size=options.step_length, n_bins=n_bins,
+                      robot_radius=options.robot_radius,
+                      corner_rule=options.backend_options.get("corner_rule", "target_only"))
+    exact = options.backend == "cell" and type(options.noise).__name__ == "Exact"
+    angles = options.angles[0]
+    if len(angles) == 1:
+        return LocalizationFilter.from_model(model, float(angles[0]), open_world=not exact)
+    return ActiveLocalizationFilter(model, angles, open_world=not exact)
+
+
+class AngleSwitchPolicy:
+    """Reference policy for the localization task: at every bump, the planner's angle.
+
+    It runs its own `ActiveLocalizationFilter` on what the robot senses — rebuilt from the
+    task's ``info`` (``observations``, ``clock``, ``step_ticks``), nothing privileged — and asks
+    `AngleSwitchPlanner` for the angle minimising the worst-case candidate count.
+    ``act(observation, info)`` returns the discrete action (the index of the angle).
+    """
+
+    def __init__(self, model: CellModel, angles: Sequence[float], depth: int = 1,
+                 open_world: bool = True) -> None:
+        self.planner = AngleSwitchPlanner(model, angles, depth=depth)
+        self.filter = ActiveLocalizationFilter(model, angles, open_world=open_world)
+        self.angles = self.planner.angles
+
+    @classmethod
+    def for_env(cls, env, depth: int = 1) -> AngleSwitchPolicy:
+        """The policy for a `BounceEnv` (angles and discretisation taken from its options)."""
+        options = env.unwrapped.options
+        model = CellModel(options.world, cell_size=options.step_length,
+                          n_bins=options.backend_options.get("n_bins", 8),
+                          robot_radius=options.robot_radius,
+                          corner_rule=options.backend_options.get("corner_rule", "target_only"))
+        return cls(model, options.angles[0], depth=depth)
+
+    def act(self, observation, info: dict) -> int:
+        self.observe(info)
+        if self.filter.trapped or self.filter.size == 0:
+            return 0  # the observations left the model: no better choice than the first angle
+        try:
+            angle = self.planner.choose(self.filter.candidates)
+        except ObservationError:
+            return 0  # not at a bump (tick mode, driving): the action is not used
+        return int(np.argmin(np.abs(np.asarray(self.angles) - angle)))
+
+    def observe(self, info: dict) -> None:
+        """Feed the filter the ticks the env reported since the previous call."""
+        history = info["observations"]
+        if not history:  # a new episode: the drive to the first contact, if any
+            self.filter.reset()
+            for _ in range(int(info["clock"])):
+                self.filter.update(0)
+        else:
+            bumps, _, angle = history[-1]
+            for _ in range(bumps):
+                self.filter.update(1, angle)
+            for _ in range(int(info["step_ticks"]) - bumps):
+                self.filter.update(0)

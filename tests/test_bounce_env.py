@@ -54,6 +54,16 @@ def no_warnings():
     messages.extend(f"{w.category.__name__}: {w.message}" for w in caught)
 
 
+def make(env_id, **kwargs):
+    """``gym.make`` — for continuous actions the localization id runs on the kinematic backend
+    without its combinatorial filter: both the cell backend and the filter need discrete angles
+    (those combinations raise; see the tests below)."""
+    if kwargs.get("action_type") == "continuous" and env_id == "bounce_gym/BounceLocalization-v0":
+        kwargs["task_kwargs"] = {"filter_factory": None}
+        kwargs.setdefault("backend", "kinematic")
+    return gym.make(env_id, **kwargs)
+
+
 def square_env(**kwargs):
     kwargs.setdefault("world", "square")
     kwargs.setdefault("angles", [90.0])
@@ -63,11 +73,25 @@ def square_env(**kwargs):
 # -- Gymnasium's and SB3's checkers -------------------------------------------------------------
 
 @pytest.mark.parametrize("step_mode", STEP_MODES)
+@pytest.mark.parametrize("env_id", IDS)
+def test_gymnasium_check_env_on_the_cell_backend(env_id, step_mode):
+    env = gym.make(env_id, backend="cell", step_mode=step_mode)
+    with no_warnings() as rec:
+        check_env(env.unwrapped, skip_render_check=True)
+    assert rec == []
+
+
+def test_localization_filter_needs_discrete_actions():
+    with pytest.raises(ConfigError, match="needs discrete actions"):
+        gym.make("bounce_gym/BounceLocalization-v0", backend="kinematic", action_type="continuous")
+
+
+@pytest.mark.parametrize("step_mode", STEP_MODES)
 @pytest.mark.parametrize("action_type", ACTION_TYPES)
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("env_id", IDS)
 def test_gymnasium_check_env(env_id, backend, action_type, step_mode):
-    env = gym.make(env_id, backend=backend, action_type=action_type, step_mode=step_mode)
+    env = make(env_id, backend=backend, action_type=action_type, step_mode=step_mode)
     with no_warnings() as rec:
         check_env(env.unwrapped, skip_render_check=True)
     assert rec == []
@@ -80,7 +104,7 @@ def test_gymnasium_check_env(env_id, backend, action_type, step_mode):
 @pytest.mark.parametrize("env_id", IDS)
 def test_passive_env_checker(env_id, backend, action_type, step_mode):
     with no_warnings() as rec:
-        env = gym.make(env_id, backend=backend, action_type=action_type, step_mode=step_mode)
+        env = make(env_id, backend=backend, action_type=action_type, step_mode=step_mode)
         env.reset(seed=1)
         env.action_space.seed(1)
         for _ in range(10):
@@ -97,7 +121,7 @@ def test_passive_env_checker(env_id, backend, action_type, step_mode):
 def test_sb3_check_env(env_id, action_type, step_mode):
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    env = gym.make(env_id, action_type=action_type, step_mode=step_mode).unwrapped
+    env = make(env_id, action_type=action_type, step_mode=step_mode).unwrapped
     with no_warnings() as rec:
         sb3_check_env(env, warn=True)
     assert rec == []
@@ -618,7 +642,8 @@ def test_coverage_target_validation(world, make_target, detail):
 
 @pytest.mark.parametrize("step_mode", STEP_MODES)
 def test_localization_without_filter_reports_observations(step_mode):
-    env = gym.make("bounce_gym/BounceLocalization-v0", step_mode=step_mode).unwrapped
+    env = gym.make("bounce_gym/BounceLocalization-v0", step_mode=step_mode,
+                   task_kwargs={"filter_factory": None}).unwrapped
     _, info = env.reset(seed=3)
     assert info["observations"] == [] and "candidates" not in info
     phi = math.radians(45.0)
@@ -650,9 +675,9 @@ class HalvingFilter:
         self.size = self.start
         self.updates = []
 
-    def update(self, bumped, clock, angle):
-        self.updates.append((bumped, clock, angle))
-        if bumped:
+    def update(self, symbol, angle):
+        self.updates.append((symbol, angle))
+        if symbol == 1:
             self.size = max(self.size // 2, 1)
 
     @property
@@ -686,15 +711,19 @@ def test_localization_with_filter_rewards_log2_drop(step_mode):
         assert reward == pytest.approx(math.log2(before) - math.log2(after))
     assert sum(rewards) == pytest.approx(math.log2(12))
     updates = filters[0].updates
-    assert len(updates) == len(rewards)
-    assert [(b, c) for b, c, _ in updates] == [
-        (n > 0, c) for n, c, _ in info["observations"]]
-    assert all(a == pytest.approx(math.radians(45.0)) for b, _, a in updates if b)
+    # one symbol per tick since reset (incl. the drive to the first contact in bounce mode);
+    # bumps carry the angle used, forward ticks none
+    assert len(updates) == info["ticks"]
+    assert sum(symbol for symbol, _ in updates) == sum(n for n, _, _ in info["observations"])
+    assert all(a == pytest.approx(math.radians(45.0)) for symbol, a in updates if symbol == 1)
+    assert all(a is None for symbol, a in updates if symbol == 0)
     if step_mode == "bounce":
         assert len(rewards) == 3  # 12 -> 6 -> 3 -> 1
     # a new episode resets the filter
     _, info = env.reset()
-    assert info["candidates"] == 12 and filters[0].updates == []
+    # …and feeds it only the drive to the first contact (bounce mode) or nothing (tick mode)
+    assert info["candidates"] == 12
+    assert filters[0].updates == [(0, None)] * info["ticks"]
 
 
 def test_localization_filter_without_termination():

@@ -491,23 +491,29 @@ def test_future_classes_separate_exactly_the_distinguishable_cells():
 
 @pytest.mark.parametrize("name", ["lab_localization_a", "lab_localization_b"])
 def test_active_filter_equals_dfa_filter_without_switching(name):
-    """With one angle throughout the active filter is the DFA filter: same set, size and
-    localized flag after every observation."""
+    """With one angle throughout the active filter is the DFA filter: same set and size after
+    every observation (whatever other angles it could switch to), and the same localized flag
+    when that angle is its only one (with more angles, localized also asks that no other angle
+    could still shrink the set)."""
     model = lab(name)
     rng = np.random.default_rng(1)
     for degrees in (45, 135):
         succ, bump, dfa = scm(model, degrees)
         active = ActiveLocalizationFilter(model, [DEG(90), DEG(degrees)], angle=DEG(degrees))
+        single = ActiveLocalizationFilter(model, [DEG(degrees)])
         fixed = LocalizationFilter(dfa)
         for z0 in rng.choice(succ.size, size=8, replace=False):
             active.reset()
+            single.reset()
             fixed.reset()
             assert active.angle == DEG(degrees)
             for a in labels(succ, bump, z0, dfa.n_states + 10):
                 fixed.update(a)
+                single.update(a)
                 assert active.update(a) == fixed.size
                 assert np.array_equal(active.candidates, fixed.candidates)
-                assert active.localized == fixed.localized
+                assert single.localized == fixed.localized
+                assert not active.localized or fixed.localized
 
 
 def test_active_filter_is_exact_under_switching():
@@ -635,3 +641,36 @@ def test_online_active_filter_follows_the_policy_dfa():
             z, state = int(succs[k, z]), int(policy.delta[state, a])
             assert np.array_equal(filt.candidates, policy.states[state]) and z in filt.candidates
         assert policy.cycle_of[state] >= 0
+
+
+def test_angle_switch_policy_localizes_the_lab_in_the_env():
+    """Issue 4: the active planner as a reference policy in the env (cell backend, bounce mode).
+    With Φ = {45°, 135°} on lab_localization_a it ends every episode with one candidate, where
+    the fixed 45° filter keeps up to 4 (Table II's maximum)."""
+    import gymnasium as gym
+
+    import bounce_gym  # noqa: F401
+    from baselines.localization import AngleSwitchPolicy
+
+    env = gym.make("bounce_gym/BounceLocalization-v0", angles=[45.0, 135.0])
+    policy = AngleSwitchPolicy.for_env(env)
+    finals = []
+    for seed in range(12):
+        obs, info = env.reset(seed=seed)
+        terminated = truncated = False
+        while not (terminated or truncated):
+            obs, _, terminated, truncated, info = env.step(policy.act(obs, info))
+        assert terminated and info["localized"]
+        policy.observe(info)
+        assert policy.filter.size == info["candidates"]
+        finals.append(info["candidates"])
+    assert finals == [1] * 12
+    fixed = gym.make("bounce_gym/BounceLocalization-v0")  # φ = 45° only
+    sizes = []
+    for seed in range(12):
+        _, info = fixed.reset(seed=seed)
+        terminated = False
+        while not terminated:
+            _, _, terminated, _, info = fixed.step(0)
+        sizes.append(info["candidates"])
+    assert max(sizes) > 1

@@ -7,7 +7,7 @@ Gymnasium ids (``gym.make(id, **overrides)``):
 | ``bounce_gym/Bounce-v0`` | two_rooms | free | 500 |
 | ``bounce_gym/BounceNavigation-v0`` | lab_navigation | navigation (random start and goal) | 200 |
 | ``bounce_gym/BounceCoverage-v0`` | lab_fig1 | coverage (uniform target) | 500 |
-| ``bounce_gym/BounceLocalization-v0`` | lab_localization_a, φ = 45° | localization | 200 |
+| ``bounce_gym/BounceLocalization-v0`` | lab_localization_a, φ = 45°, cell backend | localization with the combinatorial filter | 200 |
 
 PettingZoo ids (``pettingzoo.make("parallel" | "aec", id, **overrides)``), ``max_cycles`` 500:
 ``bounce_gym/MultiBounce-v0`` (grid_15x15, 4 robots, free), ``bounce_gym/MultiBounceCoverage-v0``
@@ -26,7 +26,9 @@ GYM_ENVS = {
         {"world": "lab_navigation", "task": "navigation", "history": 4}, 200),
     "bounce_gym/BounceCoverage-v0": ({"world": "lab_fig1", "task": "coverage"}, 500),
     "bounce_gym/BounceLocalization-v0": (
-        {"world": "lab_localization_a", "task": "localization", "angles": (45.0,)}, 200),
+        {"world": "lab_localization_a", "task": "localization", "angles": (45.0,),
+         "backend": "cell",
+         "task_kwargs": {"filter_factory": "baselines.localization:task_filter"}}, 200),
 }
 
 
