@@ -8,6 +8,8 @@ and 20 colliding robots on the pymunk backend, in ``two_rooms`` and ``grid_15x15
 Env rows (issue #3): `BounceEnv` steps/s in bounce mode through ``gym.make`` (with Gymnasium's
 default wrappers) on both backends, Gymnasium's ``CartPole-v1`` in the same run as the floor for
 a Python env, and `MultiBounceEnv` with 20 robots (agent-steps/s).
+Cell-model rows (issue #4): `benchmarks.scm_gcm` (SCM on ~9 M cells, GCM on 65 880 cells) and
+`benchmarks.localization` (DFA construction for the 152-cell lab maps).
 """
 
 from __future__ import annotations
@@ -154,6 +156,13 @@ def main(argv: list[str] | None = None) -> None:
     for world, backend, what, setup in env_rows(args.quick):
         rate = _time(setup, args.repeats)
         print(f"{world:<12} {backend:<10} {what:<22} {rate:>16,.0f}", flush=True)
+    # the cell model's analyses (issue #4)
+    from benchmarks import localization, scm_gcm
+
+    print()
+    scm_gcm.main([])
+    print()
+    localization.main([])
 
 
 if __name__ == "__main__":
