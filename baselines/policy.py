@@ -1,0 +1,51 @@
+"""Reference policies run in the environments: the common interface and the simple baselines.
+
+A policy maps what the robot senses (the observation) plus the env's ``info`` to an action, one
+step at a time: ``act(observation, info) -> action``. ``reset(env)`` is called after every
+``env.reset`` (with the env, so a planner can read the episode's start, goal or options).
+Planners (`baselines.navigation`, `baselines.coverage`, `baselines.localization`) implement the
+same interface, so `evaluate.py` can run every policy on the same worlds and seeds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class Policy:
+    """Base class: ``reset`` is optional, ``act`` is required."""
+
+    name = "policy"
+
+    def reset(self, env) -> None:
+        """Start of an episode (after ``env.reset``)."""
+
+    def act(self, observation: np.ndarray, info: dict):
+        raise NotImplementedError
+
+
+class RandomAnglePolicy(Policy):
+    """A uniformly random bounce angle from Φ at every step (discrete actions)."""
+
+    name = "random"
+
+    def __init__(self, seed: int | None = None) -> None:
+        self.rng = np.random.default_rng(seed)
+        self.n = 0
+
+    def reset(self, env) -> None:
+        self.n = env.action_space.n
+
+    def act(self, observation, info):
+        return int(self.rng.integers(self.n))
+
+
+class FixedAnglePolicy(Policy):
+    """Always the same bounce angle: the papers' single bounce policy φ_i."""
+
+    def __init__(self, index: int, degrees: float) -> None:
+        self.index = int(index)
+        self.name = f"fixed {degrees:g}°"
+
+    def act(self, observation, info):
+        return self.index
