@@ -60,6 +60,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from baselines.policy import Policy
 from bounce_gym.cells import CellModel
 from bounce_gym.errors import BounceGymError, ConfigError
 from bounce_gym.worlds import World
@@ -1050,7 +1051,7 @@ def task_filter(options) -> LocalizationFilter | ActiveLocalizationFilter:
     return ActiveLocalizationFilter(model, angles, open_world=not exact)
 
 
-class AngleSwitchPolicy:
+class AngleSwitchPolicy(Policy):
     """Reference policy for the localization task: at every bump, the planner's angle.
 
     It runs its own `ActiveLocalizationFilter` on what the robot senses — rebuilt from the
@@ -1058,6 +1059,8 @@ class AngleSwitchPolicy:
     `AngleSwitchPlanner` for the angle minimising the worst-case candidate count.
     ``act(observation, info)`` returns the discrete action (the index of the angle).
     """
+
+    name = "planner (angle switching)"
 
     def __init__(self, model: CellModel, angles: Sequence[float], depth: int = 1,
                  open_world: bool = True) -> None:
