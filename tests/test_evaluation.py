@@ -1,0 +1,104 @@
+"""evaluate.py and train.py: configurations, outputs, and the RL round trip."""
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from baselines.evaluation import DEFAULT_CONFIG, run, summarise, validate_config
+from baselines.rl import validate_train_config
+from bounce_gym.errors import ConfigError
+
+ROOT = Path(__file__).parents[1]
+sys.path.insert(0, str(ROOT))
+
+import evaluate  # noqa: E402
+import train  # noqa: E402
+
+
+def _write(path: Path, data: dict) -> Path:
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("config", "message"),
+    [
+        ([], "expected a mapping"),
+        ({"experiments": [], "colour": "red"}, "unknown keys \\['colour'\\]"),
+        ({"name": "x"}, "missing key 'experiments'"),
+        ({"experiments": []}, "at least one experiment"),
+        ({"experiments": [{"name": "a"}]}, "missing key 'env'"),
+        ({"experiments": [{"name": "a", "env": "bounce_gym/Nope-v0"}]}, "unknown environment"),
+        ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "seeds": [0.5]}]},
+         "seeds"),
+        ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "policies": ["oracle"]}]},
+         "policies"),
+        ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "max_steps": "10"}]},
+         "max_steps: expected int"),
+        ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0"},
+                          {"name": "a", "env": "bounce_gym/Bounce-v0"}]}, "used twice"),
+    ],
+)
+def test_bad_evaluation_configs_raise(config, message):
+    with pytest.raises(ConfigError, match=message):
+        validate_config(config)
+
+
+def test_default_config_and_the_shipped_copy_agree():
+    assert validate_config(yaml.safe_load((ROOT / "configs/eval_default.yaml").read_text())) == \
+        validate_config(DEFAULT_CONFIG)
+
+
+@pytest.mark.parametrize(
+    ("config", "message"),
+    [
+        ({"name": "a", "env": "bounce_gym/Bounce-v0", "algo": "a2c", "total_timesteps": 10},
+         "algo"),
+        ({"name": "a", "env": "bounce_gym/Bounce-v0", "algo": "ppo"}, "total_timesteps"),
+        ({"name": "a", "env": "bounce_gym/Bounce-v0", "algo": "ppo", "total_timesteps": 10,
+          "lr": 1}, "unknown keys"),
+        ({"name": "a", "env": "bounce_gym/Bounce-v0", "algo": "ppo", "total_timesteps": True},
+         "total_timesteps: expected int"),
+    ],
+)
+def test_bad_training_configs_raise(config, message):
+    with pytest.raises(ConfigError, match=message):
+        validate_train_config(config)
+
+
+def test_evaluate_cli_writes_table_csv_json_and_plots(tmp_path, capsys):
+    config = {"name": "loc", "output": str(tmp_path / "runs"), "experiments": [
+        dict(DEFAULT_CONFIG["experiments"][2], seeds=[0, 1])]}
+    assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "planner (angle switching)" in out and "fixed 45°" in out
+    (folder,) = (tmp_path / "runs").iterdir()
+    results = json.loads((folder / "results.json").read_text())
+    assert len(results["episodes"]) == 2 * 4  # planner, random, two fixed angles
+    assert (folder / "episodes.csv").read_text().count("\n") == 1 + 8
+    assert list(folder.glob("*.png"))
+    assert evaluate.main([str(tmp_path / "missing.yaml")]) == 2
+
+
+def test_rl_smoke_train_then_evaluate_scores_the_model(tmp_path):
+    """Issue 5: a short PPO run on a small navigation world produces a model that evaluate.py
+    loads and scores."""
+    env_kwargs = {"world": "square", "backend": "cell", "angles": [90, 135]}
+    train_config = {"name": "nav-small", "env": "bounce_gym/BounceNavigation-v0",
+                    "env_kwargs": env_kwargs, "algo": "ppo", "total_timesteps": 512,
+                    "n_envs": 2, "hyperparams": {"n_steps": 128},
+                    "models": str(tmp_path / "models")}
+    assert train.main([str(_write(tmp_path / "t.yaml", train_config)), "--no-progress"]) == 0
+    assert (tmp_path / "models/nav-small/ppo_seed0.zip").is_file()
+    config = {"name": "smoke", "output": str(tmp_path / "runs"), "models": str(tmp_path / "models"),
+              "experiments": [{"name": "nav-small", "env": "bounce_gym/BounceNavigation-v0",
+                               "env_kwargs": env_kwargs, "seeds": [0, 1], "max_steps": 30,
+                               "policies": ["rl", "random"]}]}
+    rows, _ = run(config, progress=False)
+    scored = [r for r in rows if r.policy.startswith("rl ")]
+    assert [r.seed for r in scored] == [0, 1] and all(r.steps >= 1 for r in scored)
+    summary = {s["policy"]: s for s in summarise(rows)}
+    assert "rl ppo_seed0" in summary and "success" in summary["rl ppo_seed0"]
