@@ -27,6 +27,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon, box
 
+from bounce_gym.cells import king_offset
 from bounce_gym.dynamics.state import RobotState
 from bounce_gym.errors import ConfigError
 
@@ -107,11 +108,22 @@ def _pose_option(options: Mapping, key: str, m: int) -> tuple[np.ndarray, np.nda
     return pos, head
 
 
-def path_samples(events: StepEvents, step_length: float, spacing: float):
+def tick_length(options, heading: np.ndarray) -> np.ndarray:
+    """Distance one drive tick covers at each heading: ``step_length``, except on the cell
+    backend, whose ticks are king moves — √2 cells along a diagonal."""
+    heading = np.asarray(heading, dtype=np.float64)
+    if options.backend != "cell":
+        return np.full(heading.shape, options.step_length)
+    dcol, drow = king_offset(heading)
+    return options.step_length * np.hypot(dcol, drow)
+
+
+def path_samples(events: StepEvents, step_length: np.ndarray | float, spacing: float):
     """Points along each robot's path with the ticks spent near each.
 
     Returns (robot index, points (n, 2), ticks (n,)): drive time is spread evenly along the
-    segment (one tick per ``step_length``), each bump tick is spent at the start point, and the
+    segment (one tick per ``step_length``, a scalar or one per robot — see `tick_length`), each
+    bump tick is spent at the start point, and the
     rest of the step (a robot standing blocked until the step ends) at the end point. The ticks
     of each robot add up to ``events.ticks``.
     """
@@ -121,6 +133,7 @@ def path_samples(events: StepEvents, step_length: float, spacing: float):
     frac = (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count) + 0.5) / np.repeat(
         np.maximum(count, 1), count)
     pts = events.start[robot] + frac[:, None] * (events.end - events.start)[robot]
+    step_length = np.broadcast_to(np.asarray(step_length, dtype=np.float64), length.shape)
     ticks = np.repeat(length / np.maximum(count, 1) / step_length, count)
     bumping = np.flatnonzero(events.bumps > 0)
     idle = events.ticks - events.bumps - length / step_length
@@ -234,12 +247,13 @@ class NavigationTask(Task):
             d = seg / length
             b = float(rel @ d)
             disc = b * b - (float(rel @ rel) - self.goal_radius**2)
-            if disc < 0 or -b - math.sqrt(disc) > length:
+            if disc < 0:
                 return None
-            s = max(-b - math.sqrt(disc), 0.0)
-            if s > length:
-                return None
-        drive = math.ceil(s / self.options.step_length - 1e-9)
+            s = -b - math.sqrt(disc)  # where the segment's line enters the goal disk
+            if s < 0 or s > length:
+                return None  # the disk lies behind the start, or beyond the end
+        per_tick = float(tick_length(self.options, events.heading[:1])[0])
+        drive = math.ceil(s / per_tick - 1e-9)
         return float(events.bumps[0] + drive)
 
     def step(self, state, events):
@@ -349,7 +363,8 @@ class CoverageTask(Task):
                 "tv_distance": float(0.5 * np.abs(hist - self.target).sum())}
 
     def step(self, state, events):
-        _, points, ticks = path_samples(events, self.options.step_length, self.cell_size / 4)
+        _, points, ticks = path_samples(events, tick_length(self.options, events.heading),
+                                        self.cell_size / 4)
         new_cells = self._add(points, ticks)
         info = self._info()
         reward = (self.coverage_weight * new_cells / self.free.sum()
@@ -496,7 +511,7 @@ class MonitoringTask(Task):
         return out
 
     def step(self, state, events):
-        robot, points, ticks = path_samples(events, self.options.step_length,
+        robot, points, ticks = path_samples(events, tick_length(self.options, events.heading),
                                             self.options.step_length / 4)
         inside = self._inside(points, robot)
         m = state.n_robots

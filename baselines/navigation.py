@@ -1,0 +1,696 @@
+"""Navigation with bounce policies: the roadmap, minimum plans, all plans, and plan execution.
+
+This is Alg. 1 ROADMAP&PLAN and Alg. 2 ALLPLANGENERATION of Alam, Bobadilla & Shell, "Minimalist
+robot navigation and coverage using a dynamical system approach" (IEEE IRC 2017; thesis Alg. 3.1 /
+3.2), on the deterministic cell model `bounce_gym.cells.CellModel` (ε = 0: the robot rotates
+reliably by the angles of Φ).
+
+**The roadmap is the layered product graph** of spec 000 §4.1 [REC] (thesis §3.5 REC). The paper
+takes the union of one graph G_i per policy over the same vertex set, which loses which policy is
+active, so "the bounce changes the angle" (weight w2) cannot be known. Here a node is a pair
+(cell z, active angle i), numbered ``v = i·N + z``:
+
+* forward edge ``(z, i) → (z', i)`` of weight w1 when the step from z is free (observation 0);
+* bump edges at a blocked cell: ``(z, i) → (z ⊕ φ_i, i)`` of weight w1 (the angle is kept) and
+  ``(z, i) → (z ⊕ φ_k, k)`` of weight w2 for every k ≠ i (the angle changes); ``z ⊕ φ`` is the
+  same position with the heading rotated counter-clockwise by φ (a bump rotates in place,
+  spec 000 A1);
+* the first policy is free: a query starts from all layers ``(x_I, i)`` at distance 0 (one
+  Dijkstra with several sources and ``min_only=True``, i.e. a super-source) and ends at the best
+  layer of ``x_G``.
+
+A plan's weight is therefore ``w1·(ticks) + (w2 − w1)·(angle changes)``: with w2 larger than w1
+times the longest path this is lexicographic (fewest angle changes first, then fewest ticks).
+Every edge stores its kind (forward / bump) and its angle, and the observation string ỹ is read
+from the edges of the path: ``0`` per forward edge and φ (degrees) per bump edge, never from the
+index distance of consecutive cells (the paper's NAVIGATIONPLAN test, which needs orientation-major
+numbering and N_pos, not N, as threshold).
+
+**All plans (Alg. 2)** with the line-12 inversion fixed (A9: no path ⇒ L = −1, the diagonal is 0):
+one multi-layer single-source Dijkstra per start cell (N calls, not N² pair queries), keeping the
+weights ``L`` (N × N) and the predecessor trees (N × N·|Φ|); a plan ``M[i][j]`` is decoded when
+asked for, so the N² strings are never stored. The diagonal plan is the empty plan (the paper's M
+is NIL there); ``plan is None ⇔ L = −1`` holds for every pair.
+
+**Policies.** `PlanExecutor` replays a plan in a `bounce_gym.envs.BounceEnv` with
+``step_mode="bounce"`` (one step = one bump tick with the chosen angle, then driving to the next
+contact), using discrete actions (indices into the env's Φ); with ``backend="cell"`` the env steps
+the cell model exactly and the plan reaches its goal. `NavigationPlanner` reads the episode's
+start and goal from the env's navigation task, plans on the cell model, and executes.
+
+Cells are 0-based (``z = k·N_pos + p``); the papers' ids are ``z + 1``. Angles of Φ are given in
+**degrees** (as in the papers' plans and in the env's ``angles``); they must be whole orientation
+bins of the model and distinct modulo 360°.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
+
+from baselines.policy import Policy
+from bounce_gym.cells import CellModel
+from bounce_gym.errors import ConfigError
+
+__all__ = ["FORWARD", "BUMP", "Plan", "Roadmap", "AllPlans", "PlanExecutor", "NavigationPlanner",
+           "goal_cells"]
+
+#: edge kinds of the roadmap
+FORWARD, BUMP = 0, 1
+_NO_PRED = -9999  # scipy's predecessor value for "no predecessor"
+
+
+# -- plans ------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Plan:
+    """A minimum navigation plan (the observation string ỹ of the paper) and its path.
+
+    Attributes:
+        start, goal: cell numbers (0-based) of the query; ``goal`` is the cell the path ends in.
+        cells: the cell path, ``cells[0] == start``, ``cells[-1] == goal``; one more than symbols.
+        layers: the active angle index (into `Roadmap.angles`) at every node of the path.
+        symbols: one per tick: 0 for a forward move, the bounce angle in degrees for a bump.
+        weight: ``w1·ticks + (w2 − w1)·angle_changes``, the Dijkstra distance.
+        angle_changes: bumps whose angle differs from the previous bump's (the first is free).
+    """
+
+    start: int
+    goal: int
+    cells: tuple[int, ...]
+    layers: tuple[int, ...]
+    symbols: tuple[float, ...]
+    weight: float
+    angle_changes: int
+
+    @property
+    def ticks(self) -> int:
+        """Number of ticks (edges): forward moves plus bumps."""
+        return len(self.symbols)
+
+    @property
+    def bumps(self) -> tuple[float, ...]:
+        """The bounce angles of the plan, in order (degrees)."""
+        return tuple(s for s in self.symbols if s != 0)
+
+    @property
+    def distinct_angles(self) -> frozenset[float]:
+        """The set of bounce angles the plan uses (the paper's Fig. 7 / 8 statistic)."""
+        return frozenset(self.bumps)
+
+    @property
+    def leading_zeros(self) -> int:
+        """Forward ticks before the first bump (driven by the env's reset in bounce mode)."""
+        for n, s in enumerate(self.symbols):
+            if s != 0:
+                return n
+        return len(self.symbols)
+
+    def segments(self) -> list[tuple[float, int]]:
+        """``(angle, zeros before it)`` for every bump, in order (the executor's schedule)."""
+        out, run = [], 0
+        for s in self.symbols:
+            if s == 0:
+                run += 1
+            else:
+                out.append((s, run))
+                run = 0
+        return out
+
+    @property
+    def trailing_zeros(self) -> int:
+        """Forward ticks after the last bump."""
+        n = 0
+        for s in reversed(self.symbols):
+            if s != 0:
+                break
+            n += 1
+        return n
+
+    def __str__(self) -> str:
+        """Runs of 0s and angles separated by spaces, e.g. ``000000 135 135 000000 90``."""
+        parts, run = [], 0
+        for s in self.symbols:
+            if s == 0:
+                run += 1
+                continue
+            if run:
+                parts.append("0" * run)
+                run = 0
+            parts.append(f"{s:g}")
+        if run:
+            parts.append("0" * run)
+        return " ".join(parts)
+
+
+# -- the roadmap ------------------------------------------------------------------------------
+
+class Roadmap:
+    """The layered roadmap of a cell model for the bounce angles Φ (see the module docstring).
+
+    Args:
+        model: the deterministic cell model (positions x orientation bins).
+        angles: Φ in degrees, whole bins of the model, distinct and non-zero modulo 360°.
+        w1: weight of a forward move and of a bump that keeps the angle (> 0).
+        w2: weight of a bump that changes the angle (>= w1). The paper uses w1 = 1, w2 = 100.
+
+    Attributes:
+        graph: the (N·|Φ|) x (N·|Φ|) CSR weight matrix (sorted indices, no duplicate edges).
+        edge_kind, edge_angle: per stored edge (aligned with ``graph.data``): `FORWARD` or `BUMP`,
+            and the index of the bump's angle in ``angles`` (−1 for forward edges).
+        dijkstra_calls: number of Dijkstra runs made so far (one per query or start cell).
+    """
+
+    def __init__(self, model: CellModel, angles: Iterable[float], w1: float = 1.0,
+                 w2: float = 100.0) -> None:
+        try:
+            degrees = [float(a) for a in angles]
+        except (TypeError, ValueError):
+            raise ConfigError(f"angles: expected a sequence of angles in degrees, "
+                              f"got {angles!r}") from None
+        if not degrees or not all(math.isfinite(a) for a in degrees):
+            raise ConfigError(f"angles: expected at least one finite angle, got {degrees}")
+        bins = [model.angle_bins(math.radians(a), "angles") % model.n_bins for a in degrees]
+        if 0 in bins:
+            raise ConfigError(f"angles: a multiple of 360° never leaves the wall, got {degrees}")
+        if len(set(bins)) != len(bins):
+            raise ConfigError(f"angles: expected distinct angles modulo 360°, got {degrees}")
+        if not (math.isfinite(w1) and math.isfinite(w2) and w1 > 0 and w2 >= w1):
+            raise ConfigError(f"w1, w2: expected 0 < w1 <= w2 (finite), got w1={w1}, w2={w2}")
+        self.model = model
+        self.angles = tuple(int(a) if a.is_integer() else a for a in degrees)
+        self.angle_bins = tuple(bins)
+        self.w1, self.w2 = float(w1), float(w2)
+        self.n_cells = model.n_cells
+        self.n_layers = len(degrees)
+        self.n_nodes = self.n_cells * self.n_layers
+        self.dijkstra_calls = 0
+        self._build()
+        self._all: AllPlans | None = None
+
+    def _build(self) -> None:
+        model, n, m = self.model, self.n_cells, self.n_layers
+        z = np.arange(n, dtype=np.int64)
+        p, k = model.decode(z)
+        target = model.targets[k, p]
+        bump = target < 0
+        fz = z[~bump]
+        fnext = model.cell_id(target[~bump], k[~bump])
+        bz = z[bump]
+        rotated = [model.cell_id(p[bump], (k[bump] + b) % model.n_bins) for b in self.angle_bins]
+        rows, cols, weight, kind, angle = [], [], [], [], []
+        for i in range(m):
+            rows.append(i * n + fz)
+            cols.append(i * n + fnext)
+            weight.append(np.full(len(fz), self.w1))
+            kind.append(np.full(len(fz), FORWARD, dtype=np.int8))
+            angle.append(np.full(len(fz), -1, dtype=np.int8))
+            for j in range(m):
+                rows.append(i * n + bz)
+                cols.append(j * n + rotated[j])
+                weight.append(np.full(len(bz), self.w1 if i == j else self.w2))
+                kind.append(np.full(len(bz), BUMP, dtype=np.int8))
+                angle.append(np.full(len(bz), j, dtype=np.int8))
+        rows, cols = np.concatenate(rows), np.concatenate(cols)
+        order = np.lexsort((cols, rows))
+        rows, cols = rows[order], cols[order]
+        if len(rows) > 1 and np.any((rows[1:] == rows[:-1]) & (cols[1:] == cols[:-1])):
+            raise AssertionError("duplicate roadmap edge")  # impossible: distinct layers per bump
+        indptr = np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=self.n_nodes))))
+        self.graph = sp.csr_matrix((np.concatenate(weight)[order], cols.astype(np.int32),
+                                    indptr.astype(np.int32)), shape=(self.n_nodes, self.n_nodes))
+        self.edge_kind = np.concatenate(kind)[order]
+        self.edge_angle = np.concatenate(angle)[order]
+        self._max_degree = int(np.diff(indptr).max()) if self.n_nodes else 0
+
+    # -- nodes and edges ----------------------------------------------------------------------
+    def node(self, cell: int, layer: int) -> int:
+        """Node number of (cell, active angle index)."""
+        return int(layer) * self.n_cells + int(cell)
+
+    def split(self, node) -> tuple[np.ndarray, np.ndarray]:
+        """(cell, layer) of node numbers."""
+        node = np.asarray(node)
+        return node % self.n_cells, node // self.n_cells
+
+    def out_degree(self) -> np.ndarray:
+        """Out-degree of every node (|Φ| at bump cells, 1 at forward cells)."""
+        return np.diff(self.graph.indptr)
+
+    def edge(self, u: int, v: int) -> int:
+        """Index of the stored edge u → v (into ``graph.data``, ``edge_kind``, ``edge_angle``)."""
+        g = self.graph
+        lo, hi = int(g.indptr[u]), int(g.indptr[u + 1])
+        for e in range(lo, hi):
+            if g.indices[e] == v:
+                return e
+        raise KeyError(f"no roadmap edge {u} -> {v}")
+
+    def edges_between(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Vectorised `edge`: edge indices of pairs u → v, −1 where there is none."""
+        g = self.graph
+        u, v = np.asarray(u, dtype=np.int64), np.asarray(v, dtype=np.int64)
+        out = np.full(u.shape, -1, dtype=np.int64)
+        ok = (u >= 0) & (v >= 0)
+        uu, vv = u[ok], v[ok]
+        lo, hi = g.indptr[uu], g.indptr[uu + 1]
+        found = np.full(uu.shape, -1, dtype=np.int64)
+        for t in range(self._max_degree):
+            e = lo + t
+            inside = e < hi
+            hit = inside & (g.indices[np.where(inside, e, 0)] == vv)
+            found[hit] = e[hit]
+        out[ok] = found
+        return out
+
+    # -- queries ------------------------------------------------------------------------------
+    def _search(self, start: int) -> tuple[np.ndarray, np.ndarray]:
+        """One Dijkstra from all layers of ``start`` (the free first policy)."""
+        sources = [self.node(start, i) for i in range(self.n_layers)]
+        self.dijkstra_calls += 1
+        dist, pred, _ = dijkstra(self.graph, directed=True, indices=sources,
+                                 return_predecessors=True, min_only=True)
+        return dist, pred
+
+    def _check_cell(self, cell, field: str) -> int:
+        if isinstance(cell, bool) or not isinstance(cell, int | np.integer) \
+                or not 0 <= int(cell) < self.n_cells:
+            raise ConfigError(f"{field}: expected a cell number in [0, {self.n_cells}), "
+                              f"got {cell!r}")
+        return int(cell)
+
+    def plan(self, start: int, goal: int | Iterable[int]) -> Plan | None:
+        """The minimum plan from cell ``start`` to cell ``goal`` (Problem 1), None if none exists.
+
+        ``goal`` may also be a collection of cells (a goal region): the plan ends at the first
+        of them it can reach most cheaply. Ties between layers (and goal cells) go to the lowest
+        index. ``plan(z, z)`` is the empty plan.
+        """
+        start = self._check_cell(start, "start")
+        goals = [self._check_cell(g, "goal") for g in np.atleast_1d(np.asarray(goal)).tolist()]
+        if not goals:
+            raise ConfigError("goal: expected at least one cell")
+        if start in goals:
+            return self._empty(start)
+        dist, pred = self._search(start)
+        nodes = np.array([self.node(g, i) for g in goals for i in range(self.n_layers)])
+        best = int(nodes[np.argmin(dist[nodes])])
+        if not np.isfinite(dist[best]):
+            return None
+        return self._decode(pred, best, start)
+
+    def _empty(self, cell: int) -> Plan:
+        return Plan(start=cell, goal=cell, cells=(cell,), layers=(0,), symbols=(), weight=0.0,
+                    angle_changes=0)
+
+    def _decode(self, pred: np.ndarray, end: int, start: int) -> Plan:
+        """Walk a predecessor tree back from node ``end`` and read the symbols off the edges."""
+        nodes = [end]
+        while pred[nodes[-1]] != _NO_PRED:
+            nodes.append(int(pred[nodes[-1]]))
+            if len(nodes) > self.n_nodes:
+                raise AssertionError("cycle in a predecessor tree")
+        nodes.reverse()
+        symbols, weight, changes = [], 0.0, 0
+        for u, v in zip(nodes[:-1], nodes[1:], strict=True):
+            e = self.edge(u, v)
+            weight += float(self.graph.data[e])
+            if self.edge_kind[e] == FORWARD:
+                symbols.append(0)
+            else:
+                symbols.append(self.angles[int(self.edge_angle[e])])
+                changes += int(self.split(u)[1] != self.edge_angle[e])
+        cells, layers = self.split(np.array(nodes))
+        if int(cells[0]) != start:
+            raise AssertionError("predecessor path does not start at the start cell")
+        return Plan(start=start, goal=int(cells[-1]), cells=tuple(cells.tolist()),
+                    layers=tuple(layers.tolist()), symbols=tuple(symbols), weight=weight,
+                    angle_changes=changes)
+
+    def all_pairs(self) -> AllPlans:
+        """All minimum plans (Alg. 2, line 12 fixed): N Dijkstra runs, one per start cell.
+
+        The result is cached; `plan_between` uses it.
+        """
+        n, m = self.n_cells, self.n_layers
+        weights = np.empty((n, n))
+        layer = np.zeros((n, n), dtype=np.int8)
+        preds = np.empty((n, self.n_nodes), dtype=np.int32)
+        goal_nodes = np.arange(n)[None, :] + n * np.arange(m)[:, None]  # (m, n)
+        for s in range(n):
+            dist, pred = self._search(s)
+            preds[s] = pred
+            d = dist[goal_nodes]
+            layer[s] = np.argmin(d, axis=0)
+            weights[s] = d[layer[s], np.arange(n)]
+        weights[~np.isfinite(weights)] = -1.0  # Alg. 2 lines 11-12 with the test fixed: no path
+        layer[np.arange(n), np.arange(n)] = 0
+        weights[np.arange(n), np.arange(n)] = 0.0  # lines 1-2: the diagonal stays 0 (and NIL)
+        self._all = AllPlans(self, weights, preds, layer)
+        return self._all
+
+    def plan_between(self, i: int, j: int) -> Plan | None:
+        """``M[i][j]`` of the all-pairs result (computed on first use), decoded on demand."""
+        if self._all is None:
+            self.all_pairs()
+        return self._all.plan_between(i, j)
+
+
+@dataclass(eq=False)
+class AllPlans:
+    """Result of `Roadmap.all_pairs`: weights L and the predecessor trees of the N searches.
+
+    Attributes:
+        L: (N, N) plan weights, −1 where no plan exists, 0 on the diagonal.
+        predecessors: (N, N·|Φ|) int32, the Dijkstra predecessor tree of every start cell.
+        end_layer: (N, N) the active angle index at the goal of each plan.
+    """
+
+    roadmap: Roadmap
+    L: np.ndarray
+    predecessors: np.ndarray
+    end_layer: np.ndarray
+    _masks: np.ndarray | None = field(default=None, repr=False)
+
+    def reachable(self) -> np.ndarray:
+        """(N, N) bool: a plan exists (the diagonal included)."""
+        return self.L >= 0
+
+    def plan_between(self, i: int, j: int) -> Plan | None:
+        """``M[i][j]``: the plan from cell i to cell j, None if j is unreachable from i."""
+        rm = self.roadmap
+        i, j = rm._check_cell(i, "i"), rm._check_cell(j, "j")
+        if i == j:
+            return rm._empty(i)
+        if self.L[i, j] < 0:
+            return None
+        return rm._decode(self.predecessors[i], rm.node(j, int(self.end_layer[i, j])), i)
+
+    def angle_masks(self) -> np.ndarray:
+        """(N, N) bit masks of the angles each plan uses (bit i = ``angles[i]``); 0 where none.
+
+        Computed on the predecessor trees by pointer doubling (whole-array, no decoding).
+        """
+        if self._masks is not None:
+            return self._masks
+        rm = self.roadmap
+        n, v = rm.n_cells, rm.n_nodes
+        pred = self.predecessors.astype(np.int64)
+        has = pred >= 0
+        child = np.broadcast_to(np.arange(v), pred.shape)
+        e = np.full(pred.shape, -1, dtype=np.int64)
+        e[has] = rm.edges_between(pred[has], child[has])
+        if np.any(e[has] < 0):
+            raise AssertionError("a predecessor link is not a roadmap edge")
+        dtype = np.uint8 if rm.n_layers <= 8 else np.int64
+        bits = np.zeros(pred.shape, dtype=dtype)
+        bump = np.zeros(pred.shape, dtype=bool)
+        bump[has] = rm.edge_kind[e[has]] == BUMP
+        bits[bump] = np.left_shift(1, rm.edge_angle[e[bump]].astype(np.int64)).astype(dtype)
+        # pointer doubling on the flattened forest: OR the bits of ever farther ancestors
+        itype = np.int32 if pred.size < 2**31 else np.int64
+        rows = (np.arange(n, dtype=itype) * v)[:, None]
+        anc = (np.where(has, pred, child).astype(itype) + rows).ravel()
+        bits = bits.ravel()
+        while True:
+            bits |= bits[anc]
+            nxt = anc[anc]
+            if np.array_equal(nxt, anc):
+                break
+            anc = nxt
+        bits = bits.reshape(pred.shape).astype(np.int64)
+        ends = rm.node(0, 0) + np.arange(n)[None, :] + n * self.end_layer.astype(np.int64)
+        masks = np.take_along_axis(bits, ends, axis=1)
+        masks[self.L < 0] = 0
+        masks[np.arange(n), np.arange(n)] = 0
+        self._masks = masks
+        return masks
+
+    def distinct_angle_counts(self) -> np.ndarray:
+        """(N, N) number of distinct angles of each plan; −1 where there is no plan."""
+        masks = self.angle_masks()
+        counts = np.zeros(masks.shape, dtype=np.int64)
+        for b in range(self.roadmap.n_layers):
+            counts += (masks >> b) & 1
+        counts[self.L < 0] = -1
+        return counts
+
+    def histogram(self) -> dict:
+        """Plans of the ordered pairs i ≠ j by number of distinct angles (0..|Φ|), and the
+        number of unreachable pairs (key ``"none"``): the statistic of the paper's Figs. 7-8."""
+        counts = self.distinct_angle_counts()
+        off = ~np.eye(len(counts), dtype=bool)
+        out = {c: int(np.sum(counts[off] == c)) for c in range(self.roadmap.n_layers + 1)}
+        out["none"] = int(np.sum(counts[off] == -1))
+        return out
+
+
+# -- goal regions -----------------------------------------------------------------------------
+
+def goal_cells(model: CellModel, position: Sequence[float], heading: float,
+               radius: float | None = None, tolerance: float | None = None) -> np.ndarray:
+    """Cells of a goal pose: centres within ``radius`` of ``position`` and bin headings within
+    ``tolerance`` (radians) of ``heading``. Without a radius or tolerance (or when no cell
+    qualifies) the single cell containing the pose (`CellModel.cell_of`) is returned, or an
+    empty array if that is not free."""
+    if radius is not None and tolerance is not None:
+        gap = np.hypot(*(model.centres - np.asarray(position, dtype=np.float64)).T)
+        positions = np.flatnonzero(gap <= radius + 1e-9)
+        turn = np.arange(model.n_bins) * model.bin_width - float(heading)
+        err = np.abs((turn + math.pi) % (2 * math.pi) - math.pi)
+        bins = np.flatnonzero(err <= tolerance + 1e-9)
+        if len(positions) and len(bins):
+            return np.sort(model.cell_id(positions[None, :], bins[:, None]).ravel())
+    z = int(model.cell_of(np.asarray(position, dtype=np.float64)[None], [float(heading)])[0])
+    return np.array([z] if z >= 0 else [], dtype=np.int64)
+
+
+# -- policies ---------------------------------------------------------------------------------
+
+def _env_angles_deg(env) -> np.ndarray:
+    options = env.options
+    if options.step_mode != "bounce":
+        raise ConfigError("plans execute with step_mode='bounce' (one step per bump)")
+    if options.action_type != "discrete":
+        raise ConfigError("plans execute with discrete actions (indices into Φ)")
+    return np.degrees(np.asarray(options.angles[0], dtype=np.float64))
+
+
+def _angle_index(env_deg: np.ndarray, angle: float) -> int:
+    diff = np.abs((env_deg - angle + 180.0) % 360.0 - 180.0)
+    hits = np.flatnonzero(diff < 1e-6)
+    if not len(hits):
+        raise ConfigError(f"plan angle {angle:g}° is not one of the env's angles "
+                          f"{[round(float(a), 6) for a in env_deg]}")
+    return int(hits[0])
+
+
+class PlanExecutor(Policy):
+    """Replay a plan in a `BounceEnv` (``step_mode="bounce"``, discrete actions).
+
+    Every env step starts with a bump; the executor answers with the plan's next bump angle (as
+    an index into the env's Φ). Before each bump it compares the env's clock (ticks since the
+    last bump, ``info["clock"]``) with the plan's run of 0s before that bump; a mismatch sets
+    ``deviated`` (and is recorded in ``deviations`` as (bump number, expected, observed)). The
+    first bump after `reset` is preceded by the drive of the env's reset, which is the plan's
+    leading run of 0s. Once the plan's bumps are used up the executor repeats the last angle
+    (no change penalty) and sets ``exhausted``.
+
+    Args:
+        plan: the plan to replay; None (no plan) acts ``fallback_action`` throughout.
+        fallback_action: action when there is no plan or no angle was used yet.
+        check_first_clock: compare the clock before the first bump (False when a plan starts in
+            the middle of an episode, after an unplanned drive).
+    """
+
+    name = "plan"
+
+    def __init__(self, plan: Plan | None, fallback_action: int = 0,
+                 check_first_clock: bool = True) -> None:
+        self.plan = plan
+        self.fallback_action = int(fallback_action)
+        self.check_first_clock = bool(check_first_clock)
+        self._schedule: list[tuple[int, int]] = []
+        self.reset_state()
+
+    def reset_state(self) -> None:
+        self.next_bump = 0
+        self.deviated = False
+        self.exhausted = False
+        self.deviations: list[tuple[int, int, int]] = []
+        self.last_action: int | None = None
+
+    def bind(self, env) -> None:
+        """Map the plan's angles to the env's action indices (without resetting the counters)."""
+        env_deg = _env_angles_deg(env)
+        self._schedule = [] if self.plan is None else [
+            (_angle_index(env_deg, angle), zeros) for angle, zeros in self.plan.segments()]
+
+    def reset(self, env) -> None:
+        self.bind(env)
+        self.reset_state()
+
+    def expected_clock(self) -> int | None:
+        """The plan's run of 0s before the next bump (None once the plan is used up)."""
+        if self.next_bump >= len(self._schedule):
+            return None
+        return self._schedule[self.next_bump][1]
+
+    def checks_clock(self) -> bool:
+        """Whether the clock is compared before the next bump."""
+        return self.next_bump > 0 or self.check_first_clock
+
+    def act(self, observation, info):
+        if self.next_bump >= len(self._schedule):
+            self.exhausted = self.plan is not None
+            return self.fallback_action if self.last_action is None else self.last_action
+        action, zeros = self._schedule[self.next_bump]
+        clock = info.get("clock") if isinstance(info, dict) else None
+        if clock is not None and self.checks_clock() and int(clock) != zeros:
+            self.deviated = True
+            self.deviations.append((self.next_bump, zeros, int(clock)))
+        self.next_bump += 1
+        self.last_action = action
+        return action
+
+
+class NavigationPlanner(Policy):
+    """The reference navigation policy: plan on the roadmap at reset, then execute the plan.
+
+    At ``reset(env)`` it reads the episode's start and goal poses from the env's navigation task
+    (``env.task.start`` / ``env.task.goal``), maps the start to its cell and the goal to the
+    cells of the task's goal region (centres within ``goal_radius`` of the goal point, bins
+    within ``heading_tolerance``; see `goal_cells`), and plans on the layered roadmap with the
+    task's weights w1, w2 (so the plan minimises the env's cost). The cell model is the env's own
+    with ``backend="cell"``; for the other backends an equivalent model is built (cell size =
+    step length, ``cell_bins``, C-space of the robot radius) and the plan is replayed open-loop.
+
+    The robot follows the plan by counting ticks, as the papers' robot does. Where the plan runs
+    out before the episode ends (the goal was passed during the reset drive: a plan without
+    bumps or start = goal), it replans from the cell it must be in, which it tracks by stepping
+    the deterministic cell model with its own actions (dead reckoning on the model, no privileged
+    state). With ``replan_from_info=True`` it replans from the true pose in ``info`` instead,
+    which also recovers from deviations under noise.
+
+    Attributes:
+        plan: the current plan (None: the goal is unreachable in the model; acts angle 0).
+        executor: the `PlanExecutor` following it.
+        replans: how many times it replanned in this episode.
+    """
+
+    name = "roadmap planner"
+
+    def __init__(self, w1: float | None = None, w2: float | None = None,
+                 replan_from_info: bool = False) -> None:
+        self.w1, self.w2 = w1, w2
+        self.replan_from_info = bool(replan_from_info)
+        self._cache_key = None
+        self.roadmap: Roadmap | None = None
+        self.plan: Plan | None = None
+        self.executor = PlanExecutor(None)
+        self.replans = 0
+
+    # -- model --------------------------------------------------------------------------------
+    def _roadmap(self, env) -> Roadmap:
+        options, task = env.options, env.task
+        backend = env.core.dynamics.backend
+        w1 = task.w1 if self.w1 is None else self.w1
+        w2 = task.w2 if self.w2 is None else self.w2
+        angles = tuple(np.round(_env_angles_deg(env), 9).tolist())
+        if options.backend == "cell":
+            model_key = ("cell", id(backend.model))
+        else:
+            cell_opts = options.backend_options
+            model_key = (id(options.world), options.step_length, options.robot_radius,
+                         cell_opts.get("n_bins", 8), cell_opts.get("corner_rule", "target_only"))
+        key = (model_key, angles, w1, w2)
+        if key != self._cache_key:
+            if options.backend == "cell":
+                model = backend.model
+            else:
+                model = CellModel(options.world, options.step_length, model_key[3],
+                                  options.robot_radius, model_key[4])
+            self.roadmap = Roadmap(model, angles, w1, w2)
+            self._cache_key = key
+        return self.roadmap
+
+    def reset(self, env) -> None:
+        task = env.task
+        if getattr(task, "name", None) != "navigation":
+            raise ConfigError("NavigationPlanner needs an env with task='navigation'")
+        rm = self._roadmap(env)
+        model = rm.model
+        self._env_deg = _env_angles_deg(env)
+        start_pos, start_head = task.start[0][0], float(task.start[1][0])
+        goal_pos, goal_head = task.goal[0][0], float(task.goal[1][0])
+        self.start_cell = int(model.cell_of(start_pos[None], [start_head])[0])
+        self.goal_cells = goal_cells(model, goal_pos, goal_head, task.goal_radius,
+                                     task.heading_tolerance)
+        self.replans = 0
+        self.plan = None
+        if self.start_cell >= 0 and len(self.goal_cells):
+            self.plan = rm.plan(self.start_cell, self.goal_cells)
+        self.executor = PlanExecutor(self.plan)
+        self.executor.reset(env)
+        self._env = env
+        # the robot's cell after the env's reset drive, predicted on the model
+        self.cell = self._drive(self.start_cell) if self.start_cell >= 0 else -1
+
+    # -- dead reckoning on the model ----------------------------------------------------------
+    def _drive(self, z: int) -> int:
+        model = self.roadmap.model
+        for _ in range(model.n_cells + 1):
+            p, k = model.decode(z)
+            t = int(model.targets[k, p])
+            if t < 0:
+                return z
+            z = int(model.cell_id(t, k))
+        raise AssertionError("a straight drive never reached a wall")
+
+    def _after_bump(self, z: int, action: int) -> int:
+        model = self.roadmap.model
+        p, k = model.decode(z)
+        turn = model.angle_bins(math.radians(float(self._env_deg[action])))
+        return self._drive(int(model.cell_id(p, (k + turn) % model.n_bins)))
+
+    def act(self, observation, info):
+        ex = self.executor
+        info = info if isinstance(info, dict) else {}
+        if self.plan is not None:
+            expected = ex.expected_clock()
+            clock = info.get("clock")
+            off_plan = (self.replan_from_info and expected is not None and clock is not None
+                        and ex.checks_clock() and int(clock) != expected)
+            if expected is None or off_plan:
+                self._replan(info)
+                ex = self.executor
+        action = ex.act(observation, info)
+        if self.cell >= 0:
+            self.cell = self._after_bump(self.cell, int(action))
+        return action
+
+    def _replan(self, info: dict) -> None:
+        """A new plan from the current cell (model-tracked, or the true pose of ``info``)."""
+        here = self.cell
+        if self.replan_from_info and "position" in info and "heading" in info:
+            here = int(self.roadmap.model.cell_of(np.asarray(info["position"])[None],
+                                                  [float(info["heading"])])[0])
+            self.cell = here
+        new = self.roadmap.plan(here, self.goal_cells) if here >= 0 else None
+        if new is None or new.ticks == 0:
+            return  # nothing better to do: the executor repeats its last angle
+        self.replans += 1
+        self.plan = new
+        last = self.executor.last_action
+        self.executor = PlanExecutor(new, check_first_clock=False)
+        self.executor.bind(self._env)
+        self.executor.last_action = last
+
+    @property
+    def deviated(self) -> bool:
+        return self.executor.deviated
