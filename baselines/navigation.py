@@ -585,6 +585,16 @@ class NavigationPlanner(Policy):
 
     name = "roadmap planner"
 
+    @property
+    def predicted_ticks(self) -> int | None:
+        """Ticks of the episode's plan (start to goal), or None without a plan."""
+        return None if self.plan is None else int(self.plan.ticks)
+
+    @property
+    def predicted_weight(self) -> float | None:
+        """Roadmap weight of the episode's plan (w1 per tick, w2 per angle change)."""
+        return None if self.plan is None else float(self.plan.weight)
+
     def __init__(self, w1: float | None = None, w2: float | None = None,
                  replan_from_info: bool = False) -> None:
         self.w1, self.w2 = w1, w2
@@ -620,6 +630,7 @@ class NavigationPlanner(Policy):
         return self.roadmap
 
     def reset(self, env) -> None:
+        env = getattr(env, "unwrapped", env)  # gym.make wrappers hide the task
         task = env.task
         if getattr(task, "name", None) != "navigation":
             raise ConfigError("NavigationPlanner needs an env with task='navigation'")

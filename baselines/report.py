@@ -28,7 +28,7 @@ def atomic_write(path: Path, data: bytes) -> None:
 def format_table(summary: list[dict]) -> str:
     """A plain-text table of the per-(experiment, policy) means."""
     columns = ["experiment", "policy", "episodes", "return", "ticks", "success",
-               "ticks_to_goal", "predicted_ticks", "coverage", "distance", "candidates"]
+               "ticks_to_goal", "predicted_ticks", "predicted_weight", "coverage", "distance", "candidates"]
     present = [c for c in columns if any(c in row for row in summary)]
 
     def cell(value) -> str:

@@ -9,7 +9,8 @@ Env rows (issue #3): `BounceEnv` steps/s in bounce mode through ``gym.make`` (wi
 default wrappers) on both backends, Gymnasium's ``CartPole-v1`` in the same run as the floor for
 a Python env, and `MultiBounceEnv` with 20 robots (agent-steps/s).
 Cell-model rows (issue #4): `benchmarks.scm_gcm` (SCM on ~9 M cells, GCM on 65 880 cells) and
-`benchmarks.localization` (DFA construction for the 152-cell lab maps).
+`benchmarks.localization` (DFA construction for the 152-cell lab maps); issue #5:
+`benchmarks.navigation` (all-pairs plans) and `benchmarks.coverage` (α and simulated coverage).
 """
 
 from __future__ import annotations
@@ -157,12 +158,13 @@ def main(argv: list[str] | None = None) -> None:
         rate = _time(setup, args.repeats)
         print(f"{world:<12} {backend:<10} {what:<22} {rate:>16,.0f}", flush=True)
     # the cell model's analyses (issue #4)
-    from benchmarks import localization, scm_gcm
+    from benchmarks import coverage, localization, navigation, scm_gcm
 
+    for module in (scm_gcm, localization, navigation):
+        print()
+        module.main([])
     print()
-    scm_gcm.main([])
-    print()
-    localization.main([])
+    coverage.main(["--seeds", "2", "--steps", "1500"])
 
 
 if __name__ == "__main__":

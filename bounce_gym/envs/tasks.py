@@ -27,7 +27,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon, box
 
-from bounce_gym.cells import king_offset
+from bounce_gym.cells import CellModel, king_offset
 from bounce_gym.dynamics.state import RobotState
 from bounce_gym.errors import ConfigError
 
@@ -155,7 +155,9 @@ class NavigationTask(Task):
     """Reach a goal pose: within ``goal_radius`` of the goal point, heading within tolerance.
 
     Args:
-        start, goal: ``{"position": [x, y], "heading": radians}``; None draws one per episode.
+        start, goal: ``{"position": [x, y], "heading": radians}``; None draws one per episode
+            (uniformly in the free space, or — on the cell backend — a random cell centre and
+            bin heading).
             Both can also be given per episode through ``reset(options={"start": ..., "goal": ...})``.
         goal_radius: size of the goal region (default: one step length).
         heading_tolerance_deg: heading tolerance at the goal (default 22.5°, half a 45° bin).
@@ -196,6 +198,13 @@ class NavigationTask(Task):
         if options.n_robots != 1:
             raise ConfigError("task 'navigation' is a single-robot task (n_robots must be 1)")
         self.goal_radius = float(self.goal_radius_arg or options.step_length)
+        # on the cell backend, random starts and goals are cells (centre and bin heading): the
+        # papers' x_I and x_G
+        self._cells = None
+        if options.backend == "cell":
+            self._cells = CellModel(options.world, options.step_length,
+                                    options.backend_options["n_bins"], options.robot_radius,
+                                    options.backend_options["corner_rule"])
         for key, pose in self._fixed.items():
             if pose is not None:
                 position = _pose_option(self._fixed, key, 1)[0]
@@ -212,7 +221,10 @@ class NavigationTask(Task):
                   for k in ("start", "goal")}
         world, radius = self.options.world, self.options.robot_radius
         for key in ("start", "goal"):
-            if chosen[key] is None:
+            if chosen[key] is None and self._cells is not None:
+                p, k = rng.integers(self._cells.n_positions), rng.integers(self._cells.n_bins)
+                chosen[key] = (self._cells.centres[[p]], np.array([k * self._cells.bin_width]))
+            elif chosen[key] is None:
                 chosen[key] = (world.sample_free(rng, 1, radius), rng.uniform(0, 2 * np.pi, 1))
             elif not world.contains(chosen[key][0], radius).all():
                 raise ConfigError(f"{key} position {chosen[key][0][0].tolist()} is not in the "
@@ -261,10 +273,11 @@ class NavigationTask(Task):
         arrive = self._ticks_to_goal(events)
         ticks = events.ticks if arrive is None else min(events.ticks, arrive)
         reward = -self.w1 * ticks - (self.w2 - self.w1) * changed
+        info = self._info(state)
         if arrive is not None:
             self.reached = True
             reward += self.goal_bonus
-        info = self._info(state)
+            info.update(is_success=True, ticks_to_goal=int(state.ticks - events.ticks + arrive))
         info["angle_changed"] = changed
         return np.array([reward]), np.array([self.reached]), info
 
