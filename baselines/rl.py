@@ -21,6 +21,7 @@ Training resumes from the checkpoint of the same name when ``resume: true``.
 from __future__ import annotations
 
 import copy
+import importlib.util
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -84,6 +85,9 @@ def train(config: Mapping, progress: bool = True) -> Path:
     out = model_path(config)
     out.parent.mkdir(parents=True, exist_ok=True)
     log_dir = str(out.parent / "tensorboard") if config["tensorboard"] else None
+    if log_dir is not None and importlib.util.find_spec("tensorboard") is None:
+        raise ConfigError("config.tensorboard: needs the tensorboard package "
+                          "(pip install tensorboard), or set tensorboard: false")
     if config["resume"] and out.is_file():
         model = algo_class.load(out, env=env, device="cpu")
         reset = False
