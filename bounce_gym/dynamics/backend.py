@@ -107,6 +107,24 @@ class MotionBackend(ABC):
         """Drive every unblocked robot to its own next contact (see `drives_independently`)."""
         raise ConfigError(f"backend {self.name!r} does not drive robots independently")
 
+    def check_start(self, state: RobotState) -> None:
+        """Raise `ConfigError` unless every robot starts in the free space (``radius`` from the
+        walls) and, when robots collide, no two overlap."""
+        inside = self.world.contains(state.position, self.radius)
+        if not inside.all():
+            bad = int(np.flatnonzero(~inside)[0])
+            raise ConfigError(
+                f"start position of robot {bad} {state.position[bad].tolist()} is not in the free "
+                f"space at distance >= robot_radius={self.radius} from the walls"
+            )
+        if self.collide:
+            diff = state.position[:, None, :] - state.position[None, :, :]
+            dist = np.hypot(diff[..., 0], diff[..., 1])
+            np.fill_diagonal(dist, np.inf)
+            if np.any(dist < 2 * self.radius - self.world.tol):
+                i, j = np.unravel_index(np.argmin(dist), dist.shape)
+                raise ConfigError(f"start positions of robots {i} and {j} overlap")
+
     def random_positions(self, rng: np.random.Generator) -> np.ndarray:
         """Uniform start positions in the free space (non-overlapping when robots collide)."""
         if not self.collide:

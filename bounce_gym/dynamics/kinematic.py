@@ -32,20 +32,7 @@ class KinematicBackend(MotionBackend):
     drives_independently = True
 
     def reset(self, state: RobotState) -> None:
-        inside = self.world.contains(state.position, self.radius)
-        if not inside.all():
-            bad = int(np.flatnonzero(~inside)[0])
-            raise ConfigError(
-                f"start position of robot {bad} {state.position[bad].tolist()} is not in the free "
-                f"space at distance >= robot_radius={self.radius} from the walls"
-            )
-        if self.collide:
-            diff = state.position[:, None, :] - state.position[None, :, :]
-            dist = np.hypot(diff[..., 0], diff[..., 1])
-            np.fill_diagonal(dist, np.inf)
-            if np.any(dist < 2 * self.radius - self.world.tol):
-                i, j = np.unravel_index(np.argmin(dist), dist.shape)
-                raise ConfigError(f"start positions of robots {i} and {j} overlap")
+        self.check_start(state)
         m = state.n_robots
         self._ahead_distance = np.zeros(m)
         self._ahead_edge = np.full(m, NO_CONTACT, dtype=np.int64)

@@ -348,20 +348,7 @@ class PymunkBackend(MotionBackend):
             raise ConfigError(
                 f"state: expected {self.n_robots} robots, got {state.n_robots}"
             )
-        inside = self.world.contains(state.position, self.radius)
-        if not inside.all():
-            bad = int(np.flatnonzero(~inside)[0])
-            raise ConfigError(
-                f"start position of robot {bad} {state.position[bad].tolist()} is not in the free "
-                f"space at distance >= robot_radius={self.radius} from the walls"
-            )
-        if self.collide:
-            diff = state.position[:, None, :] - state.position[None, :, :]
-            dist = np.hypot(diff[..., 0], diff[..., 1])
-            np.fill_diagonal(dist, np.inf)
-            if np.any(dist < 2 * self.radius - self.world.tol):
-                i, j = np.unravel_index(np.argmin(dist), dist.shape)
-                raise ConfigError(f"start positions of robots {i} and {j} overlap")
+        self.check_start(state)
         if self._space is None:
             self._build_space()
         else:
