@@ -9,19 +9,22 @@ same interface, so `evaluate.py` can run every policy on the same worlds and see
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 import numpy as np
 
 
-class Policy:
+class Policy(ABC):
     """Base class: ``reset`` is optional, ``act`` is required."""
 
     name = "policy"
 
-    def reset(self, env) -> None:
+    def reset(self, env) -> None:  # noqa: B027  (optional hook, a no-op by default)
         """Start of an episode (after ``env.reset``)."""
 
+    @abstractmethod
     def act(self, observation: np.ndarray, info: dict):
-        raise NotImplementedError
+        """The action for this step."""
 
 
 class RandomAnglePolicy(Policy):

@@ -8,7 +8,6 @@ os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
 import contextlib
 import gc
-import importlib.util
 import math
 import pickle
 import sys
@@ -29,16 +28,6 @@ IDS = list(GYM_ENVS)
 BACKENDS = ["kinematic", "pymunk"]
 ACTION_TYPES = ["discrete", "continuous"]
 STEP_MODES = ["bounce", "tick"]
-
-# The renderer is written concurrently; render tests skip until it can be imported.
-try:
-    HAVE_RENDERER = importlib.util.find_spec("bounce_gym.envs.rendering") is not None
-    if HAVE_RENDERER:
-        import bounce_gym.envs.rendering  # noqa: F401
-except Exception:  # noqa: BLE001 - a half-written module must not break the other tests
-    HAVE_RENDERER = False
-needs_renderer = pytest.mark.skipif(not HAVE_RENDERER,
-                                    reason="bounce_gym.envs.rendering is not importable yet")
 
 SQUARE_LOOP_START = {"position": [1.5, 0.5], "heading": 0.0}
 MAX_CLOCK_SQUARE = 16  # ceil(10 * sqrt(2)) + 1
@@ -185,7 +174,6 @@ def test_pickle_mid_episode(env_id, backend, wrapped):
 
 # -- rendering (skipped until the renderer lands) -----------------------------------------------
 
-@needs_renderer
 @pytest.mark.parametrize("env_id", IDS)
 def test_check_env_with_render_modes(env_id):
     env = gym.make(env_id, render_mode="rgb_array")
@@ -195,7 +183,6 @@ def test_check_env_with_render_modes(env_id):
     env.close()
 
 
-@needs_renderer
 @pytest.mark.parametrize("step_mode", STEP_MODES)
 @pytest.mark.parametrize("env_id", IDS)
 def test_render_rgb_array_after_reset_and_step(env_id, step_mode):
@@ -215,7 +202,6 @@ def test_render_rgb_array_after_reset_and_step(env_id, step_mode):
     env.close()
 
 
-@needs_renderer
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("env_id", IDS)
 def test_rendering_does_not_change_observations(env_id, backend):
