@@ -85,6 +85,8 @@ def write_plots(folder: Path, plots: dict) -> list[Path]:
                 ax.plot(closed[:, 0], closed[:, 1], color="#223", lw=1.5)
             path = data["paths"][policy]
             ax.plot(path[:, 0], path[:, 1], lw=0.8, color="#2a6fdb")
+            ax.plot(*path[0], "o", color="#1a9850", ms=4, label="start")
+            ax.plot(*path[-1], "x", color="#d73027", ms=5, label="end")
             ax.set_title(policy, fontsize=8)
             ax.set_aspect("equal")
             ax.axis("off")
@@ -95,7 +97,8 @@ def write_plots(folder: Path, plots: dict) -> list[Path]:
                 (p, v / max(v.sum(), 1e-12)) for p, v in data["coverage"].items()]
             fig, axes = plt.subplots(1, len(items), figsize=(3.0 * len(items), 2.8),
                                      squeeze=False)
-            top = max(float(np.max(v)) for _, v in items)
+            # a shared scale, capped so that one concentrated policy does not blacken the rest
+            top = 4 * float(np.max(data["target"]))
             for ax, (label, values) in zip(axes[0], items, strict=True):
                 ax.imshow(values, origin="lower", vmin=0, vmax=top, cmap="magma")
                 ax.set_title(label, fontsize=8)
