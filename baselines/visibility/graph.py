@@ -1,0 +1,317 @@
+"""Bounce visibility graph (BVG), maximal safe intervals (Prop. 2) and G_safe (spec 004 §3, §5).
+
+* `entirely_visible` / `visibility_matrix`: Def. 6. Two segments are entirely visible iff the
+  convex hull of their union lies in P (the hull is the union of all segments joining them), which
+  also rejects holes inside the hull (§3 [R], §8.11). Each segment must face the other (closed
+  left side of the other's supporting line); segments on one supporting line are never adjacent.
+  ``closed=True`` (default, §8.1): grazing a vertex or sliding along collinear boundary counts as
+  visible. ``closed=False``: no vertex of P' other than the four end points may touch the hull.
+* `safe_interval`: Prop. 2 with ``atan2`` angles; θ_r = 0 for a shared vertex v_{i+1} = v_j and
+  θ_l = π for v_{j+1} = v_i.
+* `bvg`, `safe_graph`: `networkx.DiGraph` over segment ids; G_safe arcs carry ``lo``, ``hi``,
+  ``width`` and drop intervals narrower than ``w_min`` (§3 [R], §8.3).
+* `reachability`: the §5 analysis (Prop. 5 unreachable nodes, SCCs, WCCs, sinks).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import networkx as nx
+import numpy as np
+import shapely
+
+from baselines.visibility.partition import Partition, _touches_points, closed_region
+
+__all__ = [
+    "Reachability",
+    "bvg",
+    "entirely_visible",
+    "reachability",
+    "safe_graph",
+    "safe_interval",
+    "safe_intervals",
+    "visibility_matrix",
+    "weak_visibility_matrix",
+]
+
+#: Angle tolerance (rad) for deciding singletons, and default width threshold of G_safe.
+ANGLE_TOL = 1e-12
+W_MIN = 1e-6
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return u[..., 0] * v[..., 0] + u[..., 1] * v[..., 1]
+
+
+def _candidate_pairs(part: Partition) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (i, j), i != j, that face each other and are not on one supporting line."""
+    eps = part.tol
+    a, b = part.start, part.end
+    # height of every vertex above every segment's line: h[i, k] for point k over segment i
+    h_start = _cross(part.tangent[:, None, :], a[None, :, :] - a[:, None, :])
+    h_end = _cross(part.tangent[:, None, :], b[None, :, :] - a[:, None, :])
+    up = (h_start >= -eps) & (h_end >= -eps)  # segment j on the closed left side of i
+    on_line = (np.abs(h_start) <= eps) & (np.abs(h_end) <= eps)
+    ok = up & up.T & ~on_line & ~on_line.T
+    np.fill_diagonal(ok, False)
+    i, j = np.nonzero(ok)
+    keep = i < j
+    return i[keep], j[keep]
+
+
+def visibility_matrix(part: Partition, closed: bool | None = None) -> np.ndarray:
+    """(m, m) symmetric boolean matrix of entire visibility (Def. 6) between P' segments."""
+    closed = part.closed if closed is None else closed
+    m = part.n
+    out = np.zeros((m, m), dtype=bool)
+    i, j = _candidate_pairs(part)
+    if len(i):
+        corners = np.stack((part.start[i], part.end[i], part.start[j], part.end[j]), axis=1)
+        hulls = shapely.convex_hull(shapely.multipoints(corners))
+        ok = shapely.covers(closed_region(part.world, part.tol), hulls)
+        if not closed:
+            ends = [corners[:, k] for k in range(4)]
+            ok &= ~_touches_points(hulls, ends, part.start, part.tol)
+        out[i[ok], j[ok]] = True
+        out[j[ok], i[ok]] = True
+    return out
+
+
+def entirely_visible(part: Partition, i: int, j: int, closed: bool | None = None) -> bool:
+    """Def. 6 for one pair of P' segments (see `visibility_matrix`)."""
+    return bool(visibility_matrix(part, closed)[i, j])
+
+
+def _angles(a, b, c, d, t, shared_tol):
+    """θ_r, θ_l of Prop. 2 for arrays of e_i = (a, b) with unit tangent t, e_j = (c, d)."""
+    rc = c - b
+    theta_r = np.arctan2(_cross(t, rc), _dot(t, rc))
+    ld = d - a
+    theta_l = np.arctan2(_cross(t, ld), _dot(t, ld))
+    theta_r = np.where(np.hypot(rc[..., 0], rc[..., 1]) <= shared_tol, 0.0, theta_r)
+    theta_l = np.where(np.hypot(ld[..., 0], ld[..., 1]) <= shared_tol, np.pi, theta_l)
+    # a ray from e_i that heads into e_i's own half-plane boundary: clamp to [0, π]
+    theta_r = np.where(theta_r < -ANGLE_TOL, theta_r + 2 * np.pi, theta_r)
+    theta_l = np.where(theta_l < -ANGLE_TOL, theta_l + 2 * np.pi, theta_l)
+    return np.clip(theta_r, 0.0, np.pi), np.clip(theta_l, 0.0, np.pi)
+
+
+def safe_interval(seg_i, seg_j, w_min: float = 0.0) -> tuple[float, float] | None:
+    """Maximal safe interval [θ_r, θ_l] from ``seg_i`` to ``seg_j`` (Prop. 2), or None.
+
+    Args:
+        seg_i, seg_j: ``((x0, y0), (x1, y1))`` directed segments with free space on the left
+            (P' segments ``(v_i, v_{i+1})``, ``(v_j, v_{j+1})``), assumed entirely visible.
+        w_min: intervals narrower than this are dropped (0 keeps the case-3 singleton).
+
+    Returns:
+        ``(θ_r, θ_l)`` in radians, measured counter-clockwise from seg_i's tangent, or None when
+        θ_l < θ_r (case 2) or the width is below ``w_min``.
+    """
+    a, b = (np.asarray(p, dtype=np.float64) for p in seg_i)
+    c, d = (np.asarray(p, dtype=np.float64) for p in seg_j)
+    length = float(np.hypot(*(b - a)))
+    scale = max(length, float(np.hypot(*(d - c))))
+    theta_r, theta_l = _angles(a, b, c, d, (b - a) / length, 1e-9 * scale)
+    theta_r, theta_l = float(theta_r), float(theta_l)
+    if theta_l - theta_r < max(w_min, 0.0) - ANGLE_TOL:
+        return None
+    if abs(theta_l - theta_r) <= ANGLE_TOL:
+        theta_l = theta_r = 0.5 * (theta_l + theta_r)
+    return theta_r, theta_l
+
+
+def safe_intervals(part: Partition, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vectorised Prop. 2 angles (θ_r, θ_l) for arcs i -> j of P' (no visibility test)."""
+    i, j = np.asarray(i), np.asarray(j)
+    shared = part.tol
+    return _angles(part.start[i], part.end[i], part.start[j], part.end[j], part.tangent[i],
+                   shared)
+
+
+def _weak_candidates(part: Partition, i: int, j: int, inside: np.ndarray) -> np.ndarray:
+    """Parameters (s, u) of candidate sight lines p = a + s(b - a), q = c + u(d - c).
+
+    If the closed set of visible pairs is non-empty, one of its corners is a candidate: both
+    end points fixed, one end point fixed and the line through a vertex ``w`` of P', or the line
+    through two vertices (each constraint is "s or u at a bound" or "passes through w").
+    """
+    a, b, c, d = part.start[i], part.end[i], part.start[j], part.end[j]
+    cands = [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0), (1.0, 1.0)]
+
+    def meet(p0, p1, q0, q1):
+        """Parameter along q0->q1 of its intersection with the line p0-p1 (None if parallel)."""
+        den = _cross(p1 - p0, q1 - q0)
+        if abs(den) <= 1e-12 * np.hypot(*(p1 - p0)) * np.hypot(*(q1 - q0)):
+            return None
+        return float(_cross(p0 - q0, p1 - p0) / -den)
+
+    for w in inside:
+        for s0, p in ((0.0, a), (1.0, b)):
+            if np.hypot(*(w - p)) > part.tol:
+                u = meet(p, w, c, d)
+                if u is not None:
+                    cands.append((s0, u))
+        for u0, q in ((0.0, c), (1.0, d)):
+            if np.hypot(*(w - q)) > part.tol:
+                s_ = meet(q, w, a, b)
+                if s_ is not None:
+                    cands.append((s_, u0))
+    for k1 in range(len(inside)):
+        for k2 in range(k1 + 1, len(inside)):
+            w1, w2 = inside[k1], inside[k2]
+            s_, u = meet(w1, w2, a, b), meet(w1, w2, c, d)
+            if s_ is not None and u is not None:
+                cands.append((s_, u))
+    out = np.asarray(cands)
+    slack = 1e-12
+    ok = (out >= -slack).all(axis=1) & (out <= 1 + slack).all(axis=1)
+    return np.clip(out[ok], 0.0, 1.0)
+
+
+def weak_visibility_matrix(part: Partition, closed: bool | None = None) -> np.ndarray:
+    """(m, m) symmetric matrix of Def. 5 visibility: some point of e_i sees some point of e_j.
+
+    The sight line must leave each segment into free space (its far end strictly left of the
+    segment's supporting line), so segments on one line, or meeting only at a reflex vertex, are
+    not adjacent. ``closed=True``: exact, via the corner candidates of `_weak_candidates`.
+    ``closed=False`` (Def. 5 with open segments and the interior of P) is approximated by testing
+    the midpoints of pairs of closed-visible candidates with open sight lines.
+    """
+    closed = part.closed if closed is None else closed
+    m, eps = part.n, part.tol
+    a, b = part.start, part.end
+    h_start = _cross(part.tangent[:, None, :], a[None, :, :] - a[:, None, :])
+    h_end = _cross(part.tangent[:, None, :], b[None, :, :] - a[:, None, :])
+    some_up = (h_start > eps) | (h_end > eps)
+    ok = some_up & some_up.T
+    np.fill_diagonal(ok, False)
+    ii, jj = np.nonzero(np.triu(ok))
+    out = np.zeros((m, m), dtype=bool)
+    if len(ii) == 0:
+        return out
+    corners = np.stack((a[ii], b[ii], a[jj], b[jj]), axis=1)
+    hulls = shapely.convex_hull(shapely.multipoints(corners))
+    tree = shapely.STRtree(shapely.points(part.start))
+    hi, vi = tree.query(hulls, predicate="dwithin", distance=eps)
+    inside: list[list[int]] = [[] for _ in range(len(ii))]
+    for h, v in zip(hi.tolist(), vi.tolist(), strict=True):
+        inside[h].append(v)
+    region = closed_region(part.world, eps)
+    for k, (i, j) in enumerate(zip(ii.tolist(), jj.tolist(), strict=True)):
+        cand = _weak_candidates(part, i, j, part.start[inside[k]])
+        p = a[i] + cand[:, :1] * (b[i] - a[i])
+        q = a[j] + cand[:, 1:] * (b[j] - a[j])
+        good = (_cross(part.tangent[i], q - a[i]) > eps) & (_cross(part.tangent[j], p - a[j]) > eps)
+        if not good.any():
+            continue
+        p, q, cand = p[good], q[good], cand[good]
+        vis = shapely.covers(region, shapely.linestrings(np.stack((p, q), axis=1)))
+        if closed:
+            seen = bool(vis.any())
+        else:
+            cand = cand[vis]
+            if len(cand) == 0:
+                continue
+            mids = np.vstack([(cand[:, None, :] + cand[None, :, :]).reshape(-1, 2) / 2,
+                              cand.mean(axis=0, keepdims=True)])
+            p = a[i] + mids[:, :1] * (b[i] - a[i])
+            q = a[j] + mids[:, 1:] * (b[j] - a[j])
+            good = ((_cross(part.tangent[i], q - a[i]) > eps)
+                    & (_cross(part.tangent[j], p - a[j]) > eps))
+            lines = shapely.linestrings(np.stack((p[good], q[good]), axis=1))
+            seen = bool(good.any()) and bool(
+                (shapely.covers(region, lines)
+                 & ~_touches_points(lines, [p[good], q[good]], part.start, eps)).any())
+        out[i, j] = out[j, i] = seen
+    return out
+
+
+def _nodes(part: Partition) -> nx.DiGraph:
+    g = nx.DiGraph(closed=part.closed)
+    for k in range(part.n):
+        g.add_node(k, start=tuple(part.start[k]), end=tuple(part.end[k]),
+                   length=float(part.length[k]), ring=int(part.ring[k]), edge=int(part.edge[k]))
+    return g
+
+
+def bvg(part: Partition, closed: bool = False) -> nx.DiGraph:
+    """Bounce visibility graph: the directed edge visibility graph of P' (Def. 5).
+
+    Arcs i -> j and j -> i for every pair of segments with some line of sight between them
+    (`weak_visibility_matrix`). The arcs carry no guarantee (§3 [R]); plan with `safe_graph`,
+    whose arcs need entire visibility (Def. 6).
+
+    ``closed=False`` (default) is Def. 5 as stated: open segments, sight lines in the interior of
+    P; it reproduces the §9.7 arc lists. ``closed=True`` also counts sight lines that graze
+    vertices, even when they are isolated (e.g. a single grazing line ending at a corner).
+    """
+    vis = weak_visibility_matrix(part, closed)
+    g = _nodes(part)
+    g.graph["closed"] = bool(closed)
+    g.add_edges_from(zip(*(x.tolist() for x in np.nonzero(vis)), strict=True))
+    return g
+
+
+def safe_graph(part: Partition, w_min: float = W_MIN, closed: bool | None = None) -> nx.DiGraph:
+    """G_safe: BVG arcs with a non-empty safe interval of width >= ``w_min``.
+
+    Arc attributes: ``lo`` = θ_r, ``hi`` = θ_l, ``width`` = θ_l − θ_r (radians). Intervals are
+    stored closed; their end rays hit vertices, so sample strictly inside (§8.4).
+    """
+    vis = visibility_matrix(part, closed)
+    i, j = np.nonzero(vis)
+    lo, hi = safe_intervals(part, i, j)
+    width = hi - lo
+    keep = width >= w_min
+    g = _nodes(part)
+    g.graph["closed"] = part.closed if closed is None else bool(closed)
+    g.graph["w_min"] = w_min
+    for a, b, x, y, w in zip(i[keep].tolist(), j[keep].tolist(), lo[keep].tolist(),
+                             hi[keep].tolist(), width[keep].tolist(), strict=True):
+        g.add_edge(a, b, lo=x, hi=y, width=w)
+    return g
+
+
+@dataclass(frozen=True)
+class Reachability:
+    """§5 / Prop. 5 analysis of a G_safe.
+
+    Attributes:
+        unreachable: nodes with in-degree 0 (no safe action reaches them from another segment).
+        unreachable_fraction: their total length over the perimeter of P.
+        sccs: strongly connected components (sets of nodes), largest first.
+        wccs: weakly connected components, largest first.
+        sinks: nodes with out-degree 0.
+        condensation: DAG of the SCCs (``mapping`` node attribute as in networkx).
+    """
+
+    unreachable: list[int]
+    unreachable_fraction: float
+    sccs: list[set[int]]
+    wccs: list[set[int]]
+    sinks: list[int]
+    condensation: nx.DiGraph
+
+    @property
+    def n_sccs(self) -> int:
+        return len(self.sccs)
+
+    @property
+    def n_wccs(self) -> int:
+        return len(self.wccs)
+
+
+def reachability(g: nx.DiGraph, part: Partition) -> Reachability:
+    """Unreachable nodes, their perimeter fraction, SCCs, WCCs and sinks of G_safe (§5)."""
+    unreachable = sorted(k for k, d in g.in_degree() if d == 0)
+    frac = float(part.length[unreachable].sum() / part.perimeter) if unreachable else 0.0
+    sccs = sorted(nx.strongly_connected_components(g), key=lambda c: (-len(c), min(c)))
+    wccs = sorted(nx.weakly_connected_components(g), key=lambda c: (-len(c), min(c)))
+    sinks = sorted(k for k, d in g.out_degree() if d == 0)
+    return Reachability(unreachable, frac, sccs, wccs, sinks, nx.condensation(g, sccs))
