@@ -10,7 +10,8 @@ default wrappers) on both backends, Gymnasium's ``CartPole-v1`` in the same run 
 a Python env, and `MultiBounceEnv` with 20 robots (agent-steps/s).
 Cell-model rows (issue #4): `benchmarks.scm_gcm` (SCM on ~9 M cells, GCM on 65 880 cells) and
 `benchmarks.localization` (DFA construction for the 152-cell lab maps); issue #5:
-`benchmarks.navigation` (all-pairs plans) and `benchmarks.coverage` (α and simulated coverage).
+`benchmarks.navigation` (all-pairs plans) and `benchmarks.coverage` (α and simulated coverage);
+issue #6: `benchmarks.visibility` (partition + safe graph, random-polygon reachability).
 """
 
 from __future__ import annotations
@@ -158,9 +159,9 @@ def main(argv: list[str] | None = None) -> None:
         rate = _time(setup, args.repeats)
         print(f"{world:<12} {backend:<10} {what:<22} {rate:>16,.0f}", flush=True)
     # the cell model's analyses (issue #4)
-    from benchmarks import coverage, localization, navigation, scm_gcm
+    from benchmarks import coverage, localization, navigation, scm_gcm, visibility
 
-    for module in (scm_gcm, localization, navigation):
+    for module in (scm_gcm, localization, navigation, visibility):
         print()
         module.main([])
     print()
