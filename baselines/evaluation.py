@@ -5,7 +5,9 @@ registered environment id (or ``bounce_gym/Bounce-v0``) with overrides, the seed
 policies to run:
 
 * ``planner`` — the task's analytic reference policy (navigation: the roadmap plan executor;
-  coverage: the optimal policy mixture α; localization: the angle-switching planner);
+  coverage: the optimal policy mixture α; localization: the angle-switching planner; an
+  experiment with a ``visibility`` block: the safe plan of Nilles et al., see
+  `baselines.visibility.scenario`);
 * ``random`` — a random angle from Φ at every bump;
 * ``fixed`` — one policy per angle of Φ (the papers' single bounce policies);
 * ``rl`` — every Stable-Baselines3 model found under ``models/<experiment name>/`` (what
@@ -59,6 +61,16 @@ DEFAULT_CONFIG: dict = {
             "policies": ["planner", "random", "fixed"],
         },
         {
+            "name": "visibility-two-rooms",
+            "env": "bounce_gym/Bounce-v0",
+            "env_kwargs": {"world": "two_rooms", "bounce_rule": "fixed",
+                           "action_type": "continuous", "angle_range": [0.5, 179.5]},
+            "visibility": {"start": 0, "goal": 16, "plan": "fewest"},
+            "seeds": list(range(20)),
+            "max_steps": 10,
+            "policies": ["planner", "random", "rl"],
+        },
+        {
             "name": "localization-lab",
             "env": "bounce_gym/BounceLocalization-v0",
             "env_kwargs": {"angles": [45, 135]},
@@ -71,7 +83,7 @@ DEFAULT_CONFIG: dict = {
 
 _TOP_KEYS = {"name": str, "output": str, "models": str, "experiments": list}
 _EXPERIMENT_KEYS = {"name": str, "env": str, "env_kwargs": dict, "seeds": list,
-                    "max_steps": int, "policies": list}
+                    "max_steps": int, "policies": list, "visibility": dict}
 
 
 def validate_config(config: object) -> dict:
@@ -152,10 +164,16 @@ def policies_for(experiment: Mapping, env: gym.Env, models_dir: Path) -> list[Po
     task = env.unwrapped.task.name
     angles = env.unwrapped.options.angles[0]
     discrete = env.unwrapped.options.action_type == "discrete"
+    scenario = experiment.get("_scenario")
     for kind in experiment["policies"]:
-        if kind == "planner" and discrete:
+        if kind == "planner" and scenario is not None:
+            from baselines.visibility.planning import PlanPolicy
+
+            out.append(PlanPolicy(scenario.plan, scenario.part, seed=0,
+                                  name=f"safe plan ({scenario.plan.kind})"))
+        elif kind == "planner" and discrete:
             out.append(reference_policy(task, env))
-        elif kind == "random" and discrete:
+        elif kind == "random":
             out.append(RandomAnglePolicy(seed=0))
         elif kind == "fixed" and discrete:
             out += [FixedAnglePolicy(i, math.degrees(a)) for i, a in enumerate(angles)]
@@ -225,19 +243,29 @@ def rl_policies(folder: Path) -> list[Policy]:
     return [SB3Policy(path) for path in sorted(folder.glob("*.zip"))] if folder.is_dir() else []
 
 
-def run_episode(env: gym.Env, policy: Policy, seed: int, max_steps: int) -> tuple[dict, list]:
-    """One episode; returns the summary and the trajectory (positions after every step)."""
-    obs, info = env.reset(seed=seed)
+def run_episode(env: gym.Env, policy: Policy, seed: int, max_steps: int,
+                scenario=None) -> tuple[dict, list]:
+    """One episode; returns the summary and the trajectory (positions after every step).
+
+    With a visibility ``scenario`` the episode starts on its start segment and ends as a
+    success when a contact lands on its goal segment.
+    """
+    options = scenario.start_options(np.random.default_rng(seed)) if scenario else None
+    obs, info = env.reset(seed=seed, options=options)
     policy.reset(env)
     total, steps = 0.0, 0
     path = [np.array(info["position"], dtype=float)]
-    terminated = truncated = False
-    while not (terminated or truncated) and steps < max_steps:
+    terminated = truncated = reached = False
+    while not (terminated or truncated or reached) and steps < max_steps:
         obs, reward, terminated, truncated, info = env.step(policy.act(obs, info))
         total += reward
         steps += 1
         path.append(np.array(info["position"], dtype=float))
-    return {"info": info, "return": total, "steps": steps, "terminated": terminated}, path
+        reached = scenario is not None and scenario.segment(info) == scenario.goal
+    summary = {"info": info, "return": total, "steps": steps, "terminated": terminated}
+    if scenario is not None:
+        summary["segment_reached"] = reached
+    return summary, path
 
 
 def task_metrics(task: str, summary: dict, policy: Policy) -> dict:
@@ -276,14 +304,23 @@ def run(config: Mapping, progress: bool = True) -> tuple[list[EpisodeResult], di
     for exp, seed in tqdm(jobs, desc="evaluating", disable=not progress, unit="seed"):
         env = make_env(exp)
         task = env.unwrapped.task.name
+        scenario = None
+        if "visibility" in exp:
+            from baselines.visibility.scenario import VisibilityScenario
+
+            scenario = VisibilityScenario.for_experiment(env, exp["visibility"])
+            exp = {**exp, "_scenario": scenario}
         for policy in policies_for(exp, env, models):
-            summary, path = run_episode(env, policy, seed, exp["max_steps"])
+            summary, path = run_episode(env, policy, seed, exp["max_steps"], scenario)
             ticks = int(summary["info"]["ticks"])
             metrics = task_metrics(task, summary, policy)
+            if scenario is not None:
+                metrics["success"] = summary["segment_reached"]
             rows.append(EpisodeResult(exp["name"], policy.name, seed, summary["steps"], ticks,
                                       float(summary["return"]), metrics))
             data = plots.setdefault(exp["name"], {"world": env.unwrapped.world, "task": task,
-                                                  "paths": {}, "coverage": {}})
+                                                  "paths": {}, "coverage": {},
+                                                  "visibility": scenario})
             data["paths"].setdefault(policy.name, np.array(path))
             if task == "coverage":
                 core_task = env.unwrapped.task

@@ -28,7 +28,8 @@ class Policy(ABC):
 
 
 class RandomAnglePolicy(Policy):
-    """A uniformly random bounce angle from Φ at every step (discrete actions)."""
+    """A uniformly random bounce angle at every step: an index into Φ (discrete actions) or a
+    uniform a ∈ [-1, 1] (continuous actions)."""
 
     name = "random"
 
@@ -37,10 +38,12 @@ class RandomAnglePolicy(Policy):
         self.n = 0
 
     def reset(self, env) -> None:
-        self.n = env.action_space.n
+        self.n = getattr(env.action_space, "n", 0)  # 0: continuous
 
     def act(self, observation, info):
-        return int(self.rng.integers(self.n))
+        if self.n:
+            return int(self.rng.integers(self.n))
+        return self.rng.uniform(-1.0, 1.0, 1).astype(np.float32)
 
 
 class FixedAnglePolicy(Policy):

@@ -19,6 +19,9 @@ def atomic_write(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes files private; results are not
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -105,6 +108,19 @@ def write_plots(folder: Path, plots: dict) -> list[Path]:
                 ax.axis("off")
             fig.suptitle(f"{name}: time spent per cell vs target (first seed)", fontsize=9)
             written.append(_save(fig, folder / f"{name}-coverage.png"))
+        scenario = data.get("visibility")
+        if scenario is not None:
+            from baselines.visibility import plots as vis
+
+            written += [
+                vis.plot_partition(scenario.part, folder / f"{name}-partition.png",
+                                   title=f"{name}: P' with segment ids"),
+                vis.plot_safe_graph(scenario.graph, folder / f"{name}-safe-graph.png",
+                                    title=f"{name}: safe graph"),
+                vis.plot_plan_cone(scenario.part, scenario.plan, folder / f"{name}-plan.png",
+                                   title=f"{name}: {scenario.plan.kind} plan "
+                                         f"{scenario.start}→{scenario.goal}"),
+            ]
         if "alpha" in data:
             alpha, degrees = data["alpha"]
             fig, ax = plt.subplots(figsize=(3.5, 2.5))

@@ -18,6 +18,10 @@ import evaluate  # noqa: E402
 import train  # noqa: E402
 
 
+def _experiment(name: str) -> dict:
+    return next(e for e in DEFAULT_CONFIG["experiments"] if e["name"] == name)
+
+
 def _write(path: Path, data: dict) -> Path:
     path.write_text(yaml.safe_dump(data), encoding="utf-8")
     return path
@@ -71,7 +75,7 @@ def test_bad_training_configs_raise(config, message):
 
 def test_evaluate_cli_writes_table_csv_json_and_plots(tmp_path, capsys):
     config = {"name": "loc", "output": str(tmp_path / "runs"), "experiments": [
-        dict(DEFAULT_CONFIG["experiments"][2], seeds=[0, 1])]}
+        dict(_experiment("localization-lab"), seeds=[0, 1])]}
     assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
     out = capsys.readouterr().out
     assert "planner (angle switching)" in out and "fixed 45°" in out
@@ -102,3 +106,29 @@ def test_rl_smoke_train_then_evaluate_scores_the_model(tmp_path):
     assert [r.seed for r in scored] == [0, 1] and all(r.steps >= 1 for r in scored)
     summary = {s["policy"]: s for s in summarise(rows)}
     assert "rl ppo_seed0" in summary and "success" in summary["rl ppo_seed0"]
+
+
+def test_visibility_scenario_runs_the_safe_plan(tmp_path):
+    """Issue 6: the two_rooms plan e0→e16 as a policy in BounceEnv(fixed rule) reaches segment 16
+    in every episode; random angles do not; plots of P', G_safe and the plan's cone are written."""
+    config = {"name": "vis", "output": str(tmp_path / "runs"), "experiments": [
+        dict(_experiment("visibility-two-rooms"), seeds=[0, 1, 2, 3, 4])]}
+    assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
+    (folder,) = (tmp_path / "runs").iterdir()
+    summary = {s["policy"]: s for s in json.loads((folder / "results.json").read_text())["summary"]}
+    assert summary["safe plan (fewest)"]["success"] == 1.0
+    assert summary["random"]["success"] < 1.0
+    for plot in ("partition", "safe-graph", "plan"):
+        assert (folder / f"visibility-two-rooms-{plot}.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize(("block", "message"), [
+    ({"start": 0, "goal": 99}, "visibility.goal"),
+    ({"start": 0, "goal": 16, "plan": "shortest"}, "visibility.plan"),
+    ({"start": 0, "goal": 16, "colour": 1}, "unknown keys"),
+    ({"start": 7, "goal": 14}, "no safe fewest plan"),
+])
+def test_bad_visibility_blocks_raise(block, message):
+    exp = dict(_experiment("visibility-two-rooms"), visibility=block, seeds=[0])
+    with pytest.raises(ConfigError, match=message):
+        run({"experiments": [exp]}, progress=False)
