@@ -71,6 +71,16 @@ DEFAULT_CONFIG: dict = {
             "policies": ["planner", "random", "rl"],
         },
         {
+            "name": "visibility-patrol-heptagon",
+            "env": "bounce_gym/Bounce-v0",
+            "env_kwargs": {"world": "heptagon", "bounce_rule": "fixed",
+                           "action_type": "continuous", "angle_range": [0.5, 179.5]},
+            "visibility": {"start": 0, "patrol": [0, 1, 2, 3, 4, 5, 6], "theta": 0.1},
+            "seeds": list(range(10)),
+            "max_steps": 60,
+            "policies": ["planner", "random", "rl"],
+        },
+        {
             "name": "localization-lab",
             "env": "bounce_gym/BounceLocalization-v0",
             "env_kwargs": {"angles": [45, 135]},
@@ -167,10 +177,7 @@ def policies_for(experiment: Mapping, env: gym.Env, models_dir: Path) -> list[Po
     scenario = experiment.get("_scenario")
     for kind in experiment["policies"]:
         if kind == "planner" and scenario is not None:
-            from baselines.visibility.planning import PlanPolicy
-
-            out.append(PlanPolicy(scenario.plan, scenario.part, seed=0,
-                                  name=f"safe plan ({scenario.plan.kind})"))
+            out.append(scenario.planner(seed=0))
         elif kind == "planner" and discrete:
             out.append(reference_policy(task, env))
         elif kind == "random":
@@ -247,8 +254,8 @@ def run_episode(env: gym.Env, policy: Policy, seed: int, max_steps: int,
                 scenario=None) -> tuple[dict, list]:
     """One episode; returns the summary and the trajectory (positions after every step).
 
-    With a visibility ``scenario`` the episode starts on its start segment and ends as a
-    success when a contact lands on its goal segment.
+    With a visibility ``scenario`` the episode starts on its start segment; the scenario says
+    when it is done (goal segment reached) and whether it succeeded.
     """
     options = scenario.start_options(np.random.default_rng(seed)) if scenario else None
     obs, info = env.reset(seed=seed, options=options)
@@ -261,10 +268,10 @@ def run_episode(env: gym.Env, policy: Policy, seed: int, max_steps: int,
         total += reward
         steps += 1
         path.append(np.array(info["position"], dtype=float))
-        reached = scenario is not None and scenario.segment(info) == scenario.goal
+        reached = scenario is not None and scenario.done(info)
     summary = {"info": info, "return": total, "steps": steps, "terminated": terminated}
     if scenario is not None:
-        summary["segment_reached"] = reached
+        summary["scenario_success"] = scenario.success(info)
     return summary, path
 
 
@@ -315,7 +322,7 @@ def run(config: Mapping, progress: bool = True) -> tuple[list[EpisodeResult], di
             ticks = int(summary["info"]["ticks"])
             metrics = task_metrics(task, summary, policy)
             if scenario is not None:
-                metrics["success"] = summary["segment_reached"]
+                metrics["success"] = summary["scenario_success"]
             rows.append(EpisodeResult(exp["name"], policy.name, seed, summary["steps"], ticks,
                                       float(summary["return"]), metrics))
             data = plots.setdefault(exp["name"], {"world": env.unwrapped.world, "task": task,

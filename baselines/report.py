@@ -117,10 +117,15 @@ def write_plots(folder: Path, plots: dict) -> list[Path]:
                                    title=f"{name}: P' with segment ids"),
                 vis.plot_safe_graph(scenario.graph, folder / f"{name}-safe-graph.png",
                                     title=f"{name}: safe graph"),
-                vis.plot_plan_cone(scenario.part, scenario.plan, folder / f"{name}-plan.png",
-                                   title=f"{name}: {scenario.plan.kind} plan "
-                                         f"{scenario.start}→{scenario.goal}"),
             ]
+            if scenario.goal is None:
+                written.append(vis.plot_limit_cycle(scenario.part, scenario.plan,
+                                                    folder / f"{name}-limit-cycle.png",
+                                                    title=f"{name}: patrolled limit cycle"))
+            else:
+                written.append(vis.plot_plan_cone(
+                    scenario.part, scenario.plan, folder / f"{name}-plan.png",
+                    title=f"{name}: {scenario.plan.kind} plan {scenario.start}→{scenario.goal}"))
         if "alpha" in data:
             alpha, degrees = data["alpha"]
             fig, ax = plt.subplots(figsize=(3.5, 2.5))

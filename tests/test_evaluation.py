@@ -122,8 +122,24 @@ def test_visibility_scenario_runs_the_safe_plan(tmp_path):
         assert (folder / f"visibility-two-rooms-{plot}.png").stat().st_size > 1000
 
 
+def test_patrol_scenario_converges_to_the_limit_cycle(tmp_path):
+    """Issue 6: patrolling the heptagon's edges with the fixed rule at θ = 0.1 (Def. 15,
+    C(F) = 5.0864e-6, spec §9.5) — the robot ends on the predicted limit cycle; random angles do
+    not; the limit cycle is plotted."""
+    config = {"name": "patrol", "output": str(tmp_path / "runs"), "experiments": [
+        dict(_experiment("visibility-patrol-heptagon"), seeds=[0, 1, 2])]}
+    assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
+    (folder,) = (tmp_path / "runs").iterdir()
+    summary = {s["policy"]: s for s in json.loads((folder / "results.json").read_text())["summary"]}
+    assert summary["patrol cycle (C(F) = 5.1e-06)"]["success"] == 1.0
+    assert summary["random"]["success"] == 0.0
+    assert (folder / "visibility-patrol-heptagon-limit-cycle.png").stat().st_size > 1000
+
+
 @pytest.mark.parametrize(("block", "message"), [
     ({"start": 0, "goal": 99}, "visibility.goal"),
+    ({"start": 0, "goal": 16, "patrol": [3, 4]}, "exactly one of"),
+    ({"start": 0, "patrol": "all"}, "visibility.patrol"),
     ({"start": 0, "goal": 16, "plan": "shortest"}, "visibility.plan"),
     ({"start": 0, "goal": 16, "colour": 1}, "unknown keys"),
     ({"start": 7, "goal": 14}, "no safe fewest plan"),

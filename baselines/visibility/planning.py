@@ -565,3 +565,52 @@ def monte_carlo(world, part: Partition, plan: VisibilityPlan, n: int = 1000, see
         ok &= np.isin(seg, np.asarray(plan.goal))
     rate = float(ok.mean())
     return (rate, int(ok.sum())) if return_counts else rate
+
+
+@dataclass
+class PatrolPolicy(Policy):
+    """Run a `PatrolPlan` in `BounceEnv` (``bounce_rule="fixed"``, continuous actions).
+
+    On a segment of the cycle the robot bounces with that stage's action (``plan.thetas``), so it
+    converges to the cycle's fixed point (Theorem 1 / the composite form); elsewhere it follows a
+    fewest-bounce plan to the cycle (sampling strictly inside each interval).
+    """
+
+    plan: PatrolPlan
+    part: Partition
+    graph: nx.DiGraph
+    seed: int | None = None
+    margin: float = 0.02
+    name: str = "patrol cycle"
+    rng: np.random.Generator = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.rng = np.random.default_rng(self.seed)
+        self.range = (0.0, math.pi)
+
+    def reset(self, env) -> None:
+        opts = env.unwrapped.options
+        if opts.bounce_rule != "fixed" or opts.action_type != "continuous":
+            raise ValueError("PatrolPolicy needs BounceEnv(bounce_rule='fixed', "
+                             "action_type='continuous')")
+        self.range = tuple(float(x) for x in opts.angle_range[0])
+        outside = [t for t in self.plan.thetas if not self.range[0] <= t <= self.range[1]]
+        if outside:
+            raise ValueError(f"the cycle's actions {outside} rad lie outside the env's "
+                             f"angle_range {self.range} rad")
+
+    def act(self, observation, info):
+        seg = int(self.part.locate([int(info["contact_edge"])], [info["position"]])[0])
+        if seg in self.plan.cycle:
+            theta = self.plan.thetas[self.plan.cycle.index(seg)]
+        else:
+            approach = fewest_bounce_plan(self.graph, seg, set(self.plan.cycle))
+            if approach is None or approach.n_arcs == 0:
+                theta = 0.5 * (self.range[0] + self.range[1])
+            else:
+                lo, hi = approach.intervals[0]
+                lo, hi = max(lo, self.range[0]), min(hi, self.range[1])
+                theta = float(_inside(self.rng, lo, hi, self.margin))
+        lo, hi = self.range
+        return np.array([min(max(2.0 * (theta - lo) / (hi - lo) - 1.0, -1.0), 1.0)],
+                        dtype=np.float32)
