@@ -21,6 +21,7 @@ import numpy as np
 
 from baselines.visibility.graph import reachability, safe_graph
 from baselines.visibility.partition import partition
+from baselines.visibility.planning import fewest_bounce_plan
 from bounce_gym.worlds import get
 from bounce_gym.worlds.generators import random_star_polygon
 
@@ -34,7 +35,10 @@ def _timed(world):
     t1 = time.perf_counter()
     g = safe_graph(part)
     t2 = time.perf_counter()
-    return part, g, t1 - t0, t2 - t1
+    # one plan: fewest bounces from segment 0 to the segment halfway round the boundary
+    plan = fewest_bounce_plan(g, 0, part.n // 2)
+    t3 = time.perf_counter()
+    return part, g, t1 - t0, t2 - t1, t3 - t2, plan
 
 
 def timings(seed: int = 0) -> list[dict]:
@@ -45,13 +49,14 @@ def timings(seed: int = 0) -> list[dict]:
                                                         spikiness=0.3)))
     rows = []
     print(f"{'world':<12} {'|P|':>5} {'|P_prime|':>9} {'arcs':>7} {'partition s':>12} "
-          f"{'G_safe s':>10}")
+          f"{'G_safe s':>10} {'plan s':>9} {'plan arcs':>9}")
     for name, world in cases:
-        part, g, tp, tg = _timed(world)
+        part, g, tp, tg, tplan, plan = _timed(world)
+        arcs = "none" if plan is None else str(plan.n_arcs)
         rows.append(dict(world=name, n=world.n_edges, nodes=part.n, arcs=g.number_of_edges(),
-                         partition_s=tp, safe_graph_s=tg))
+                         partition_s=tp, safe_graph_s=tg, plan_s=tplan))
         print(f"{name:<12} {world.n_edges:>5} {part.n:>9} {g.number_of_edges():>7} "
-              f"{tp:>12.4f} {tg:>10.4f}")
+              f"{tp:>12.4f} {tg:>10.4f} {tplan:>9.5f} {arcs:>9}")
     return rows
 
 
