@@ -94,7 +94,7 @@ def write_plots(folder: Path, plots: dict) -> list[Path]:
             ax.set_aspect("equal")
             ax.axis("off")
         fig.suptitle(f"{name}: trajectories (first seed)", fontsize=9)
-        written.append(_save(fig, folder / f"{name}-trajectories.png"))
+        written.append(save_figure(fig, folder / f"{name}-trajectories.png"))
         if data["coverage"]:
             items = [("target", data["target"])] + [
                 (p, v / max(v.sum(), 1e-12)) for p, v in data["coverage"].items()]
@@ -107,7 +107,7 @@ def write_plots(folder: Path, plots: dict) -> list[Path]:
                 ax.set_title(label, fontsize=8)
                 ax.axis("off")
             fig.suptitle(f"{name}: time spent per cell vs target (first seed)", fontsize=9)
-            written.append(_save(fig, folder / f"{name}-coverage.png"))
+            written.append(save_figure(fig, folder / f"{name}-coverage.png"))
         scenario = data.get("visibility")
         if scenario is not None:
             from baselines.visibility import plots as vis
@@ -132,13 +132,15 @@ def write_plots(folder: Path, plots: dict) -> list[Path]:
             ax.bar([f"{d:g}°" for d in degrees], alpha, color="#2a6fdb")
             ax.set_ylabel("α (share of time)")
             ax.set_title(f"{name}: optimal policy mixture", fontsize=9)
-            written.append(_save(fig, folder / f"{name}-alpha.png"))
+            written.append(save_figure(fig, folder / f"{name}-alpha.png"))
     return written
 
 
-def _save(fig, path: Path) -> Path:
+def save_figure(fig, path: Path | str) -> Path:
+    """Save a matplotlib figure as a PNG atomically and close it."""
     import matplotlib.pyplot as plt
 
+    path = Path(path)
     buf = io.BytesIO()
     fig.tight_layout()
     fig.savefig(buf, format="png", dpi=110)

@@ -259,6 +259,14 @@ def partition(world: World, closed: bool = True) -> Partition:
         edge.extend([e] * len(cuts))
         inserted.extend([False] + [True] * (len(cuts) - 1))
         reflex.extend([bool(world.reflex[e])] + [False] * (len(cuts) - 1))
+    return assemble(world, start, ring, edge, inserted, reflex, bool(closed),
+                    VIS_REL * world.diameter)
+
+
+def assemble(world: World, start, ring, edge, inserted, reflex, closed: bool,
+             tol: float) -> Partition:
+    """A `Partition` from its segments' start points (ring by ring, in boundary order) and
+    per-segment flags; ends, successors, tangents and inward normals are derived."""
     start = np.asarray(start, dtype=np.float64)
     ring = np.asarray(ring, dtype=np.int64)
     m = len(start)
@@ -276,6 +284,5 @@ def partition(world: World, closed: bool = True) -> Partition:
     return Partition(
         world=world, start=start, end=end, ring=ring, edge=np.asarray(edge, dtype=np.int64),
         tangent=tangent, normal=normal, length=length, reflex=np.asarray(reflex),
-        inserted=np.asarray(inserted), succ=succ, pred=pred, closed=bool(closed),
-        tol=VIS_REL * world.diameter,
+        inserted=np.asarray(inserted), succ=succ, pred=pred, closed=closed, tol=tol,
     )

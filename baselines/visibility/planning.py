@@ -31,7 +31,7 @@ import numpy as np
 
 from baselines.policy import Policy
 from baselines.visibility.dynamics import CompositeCycle, composite_fixed_point, contraction
-from baselines.visibility.partition import Partition
+from baselines.visibility.partition import Partition, assemble
 
 __all__ = [
     "PatrolPlan",
@@ -286,24 +286,7 @@ def split_at(part: Partition, points: object) -> Partition:
             edge.append(e)
             inserted.append(flags[e][i][0])
             reflex.append(flags[e][i][1])
-    start = np.asarray(start, dtype=np.float64)
-    ring = np.asarray(ring, dtype=np.int64)
-    m = len(start)
-    succ = np.arange(1, m + 1)
-    for r in np.unique(ring):
-        idx = np.flatnonzero(ring == r)
-        succ[idx[-1]] = idx[0]
-    pred = np.empty(m, dtype=np.int64)
-    pred[succ] = np.arange(m)
-    end = start[succ]
-    vec = end - start
-    length = np.hypot(vec[:, 0], vec[:, 1])
-    tangent = vec / length[:, None]
-    normal = np.column_stack((-tangent[:, 1], tangent[:, 0]))
-    return Partition(world=world, start=start, end=end, ring=ring,
-                     edge=np.asarray(edge, dtype=np.int64), tangent=tangent, normal=normal,
-                     length=length, reflex=np.asarray(reflex), inserted=np.asarray(inserted),
-                     succ=succ, pred=pred, closed=part.closed, tol=part.tol)
+    return assemble(world, start, ring, edge, inserted, reflex, part.closed, part.tol)
 
 
 # -- patrolling (Def. 15) -----------------------------------------------------------------------

@@ -4,7 +4,6 @@ the PNG atomically (`baselines.report.atomic_write`) and returns its path."""
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import matplotlib
@@ -15,20 +14,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import networkx as nx  # noqa: E402
 import numpy as np  # noqa: E402
 
-from baselines.report import atomic_write  # noqa: E402
+from baselines.report import save_figure  # noqa: E402
 from baselines.visibility.partition import Partition  # noqa: E402
 
 __all__ = ["plot_limit_cycle", "plot_partition", "plot_plan_cone", "plot_safe_graph"]
-
-
-def _save(fig, path: Path | str) -> Path:
-    path = Path(path)
-    buf = io.BytesIO()
-    fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    atomic_write(path, buf.getvalue())
-    return path
 
 
 def _draw_boundary(ax, part: Partition, labels: bool = True, highlight=()) -> None:
@@ -53,7 +42,7 @@ def plot_partition(part: Partition, path: Path | str, title: str | None = None) 
     fig, ax = plt.subplots(figsize=(6, 4.5))
     _draw_boundary(ax, part)
     ax.set_title(title or f"P': {part.n} segments", fontsize=9)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_safe_graph(g: nx.DiGraph, path: Path | str, title: str | None = None) -> Path:
@@ -70,7 +59,7 @@ def plot_safe_graph(g: nx.DiGraph, path: Path | str, title: str | None = None) -
     ax.set_title(title or f"G_safe: {g.number_of_nodes()} nodes, {g.number_of_edges()} arcs",
                  fontsize=9)
     ax.axis("off")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_plan_cone(part: Partition, plan, path: Path | str, n_rays: int = 100, seed: int = 0,
@@ -104,7 +93,7 @@ def plot_plan_cone(part: Partition, plan, path: Path | str, n_rays: int = 100, s
         ax.plot(r[:, 0], r[:, 1], color="#2ca02c", lw=0.5, alpha=0.35)
     label = " → ".join("/".join(map(str, s)) for s in plan.stages)
     ax.set_title(title or f"{plan.kind} plan {label}", fontsize=9)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_limit_cycle(part: Partition, cycle, path: Path | str, title: str | None = None) -> Path:
@@ -118,4 +107,4 @@ def plot_limit_cycle(part: Partition, cycle, path: Path | str, title: str | None
     ax.plot(closed[:, 0], closed[:, 1], "-", color="#9467bd", lw=1.5)
     ax.plot(pts[:, 0], pts[:, 1], "o", color="#9467bd", ms=4)
     ax.set_title(title or f"limit cycle, C(F) = {fixed.coefficient:.3g}", fontsize=9)
-    return _save(fig, path)
+    return save_figure(fig, path)
