@@ -1,0 +1,182 @@
+"""Persistent monitoring (spec 002 §5 Algorithm 2, §8.11-13, §9 items 5 and 11)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from baselines.monitoring import (
+    default_regions,
+    joint_successor,
+    persistent_behavior,
+    region_indices,
+)
+from baselines.scm import simple_cell_mapping
+from bounce_gym.cells import CellModel
+from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
+from bounce_gym.errors import ConfigError
+from bounce_gym.worlds import world_from_grid
+
+ROOM = world_from_grid(np.ones((6, 8), dtype=bool), name="room_8x6")
+
+
+@pytest.fixture(scope="module")
+def model():
+    return CellModel(ROOM)
+
+
+@pytest.fixture(scope="module", params=[45, 90])
+def result(request, model):
+    phi = math.radians(request.param)
+    return persistent_behavior(model, [phi, phi])
+
+
+def test_r_positive_for_45_and_90(result):
+    assert result.r > 0
+    assert len(result.cycles) == len(result.periods) == len(result.basins) == result.r
+    assert result.n_groups > result.r  # the sink is a group and is never accepted
+
+
+def test_cycles_are_periodic_groups(result):
+    succ = result.scm.successor
+    for cyc, period in zip(result.cycles, result.periods, strict=True):
+        assert len(cyc) == period == len(np.unique(cyc))
+        assert np.array_equal(succ[cyc], np.roll(cyc, -1))
+        assert result.sink not in cyc
+
+
+def test_cycles_collision_free_and_visit_regions(result, model):
+    f1, f2 = (set(f.tolist()) for f in result.regions)
+    for cyc in result.cycles:
+        z1, z2 = result.split(cyc)
+        p1, p2 = model.decode(z1)[0], model.decode(z2)[0]
+        assert np.all(p1 != p2)
+        assert f1 & set(p1.tolist()) and f2 & set(p2.tolist())
+
+
+def test_period_is_lcm_of_individual_periods(result, model):
+    """Robots ignore each other: a joint cycle runs two individual cycles in lock step."""
+    singles = [simple_cell_mapping(model.successor(phi)[0]) for phi in result.phis]
+    for cyc, period in zip(result.cycles, result.periods, strict=True):
+        z1, z2 = result.split(cyc[:1])
+        k1, k2 = singles[0].period_of(z1)[0], singles[1].period_of(z2)[0]
+        assert period == math.lcm(int(k1), int(k2))
+        assert period % k1 == 0 and period % k2 == 0
+
+
+def test_basins_lead_into_their_group(result):
+    res = result.scm
+    for g, basin in zip(result.accepted, result.basins, strict=True):
+        transient = res.transient_trajectory(g)
+        assert len(transient) == basin
+        # transient cells are collision-free too: none of them maps to the sink
+        assert not np.any(res.successor[transient] == result.sink)
+
+
+def test_sink_is_absorbing(model):
+    phi = math.radians(90)
+    succ, n_coll = joint_successor(model, [phi, phi])
+    n = model.n_cells
+    sink = n * n
+    assert len(succ) == sink + 1 and succ[sink] == sink
+    assert n_coll == model.n_positions * model.n_bins**2
+    z1, z2 = np.divmod(np.arange(sink), n)
+    same = model.decode(z1)[0] == model.decode(z2)[0]
+    assert np.all(succ[:sink][same] == sink)
+    assert np.all(succ[:sink][~same] < sink)
+    # the sink is a period-1 group that is rejected
+    res = persistent_behavior(model, [phi, phi])
+    assert res.scm.periods[res.scm.group[sink]] == 1
+    assert res.scm.group[sink] not in res.accepted
+
+
+def test_product_structure_without_collisions(model):
+    """Spec §9 item 5: individual periods p1, p2 give gcd(p1, p2) joint groups of period
+    lcm(p1, p2) without the collision filter; the filter only removes groups."""
+    phi1, phi2 = math.radians(90), math.radians(45)
+    s1, s2 = model.successor(phi1)[0], model.successor(phi2)[0]
+    g1, g2 = simple_cell_mapping(s1), simple_cell_mapping(s2)
+    expected = sorted(math.lcm(int(a), int(b)) for a in g1.periods for b in g2.periods
+                      for _ in range(math.gcd(int(a), int(b))))
+    product = simple_cell_mapping((s1[:, None] * model.n_cells + s2[None, :]).ravel())
+    assert sorted(product.periods.tolist()) == expected
+    res = persistent_behavior(model, [phi1, phi2], mode="any")
+    assert res.n_groups - 1 <= len(expected)  # minus the sink
+    # in this room every 90°/45° pair of cycles meets: no accepted group (a true negative)
+    assert res.r == 0 and res.n_groups == 1
+
+
+def test_swaps_forbidden_is_stricter(model):
+    phi = math.radians(45)
+    loose = persistent_behavior(model, [phi, phi])
+    strict = persistent_behavior(model, [phi, phi], forbid_swaps=True)
+    assert strict.r <= loose.r
+    assert strict.n_collision_cells >= loose.n_collision_cells
+
+
+def test_modes(model):
+    phi = math.radians(90)
+    visit = persistent_behavior(model, [phi, phi], mode="visit")
+    anyr = persistent_behavior(model, [phi, phi], mode="any")
+    assert set(visit.accepted.tolist()) <= set(anyr.accepted.tolist())
+    # "cover" with regions taken from an accepted cycle accepts that cycle
+    cyc = visit.cycles[0]
+    z1, z2 = visit.split(cyc)
+    f1, f2 = np.unique(model.decode(z1)[0]), np.unique(model.decode(z2)[0])
+    cover = persistent_behavior(model, [phi, phi], regions=[f1, f2], mode="cover")
+    assert visit.accepted[0] in cover.accepted
+    with pytest.raises(ConfigError):
+        persistent_behavior(model, [phi, phi], mode="bogus")
+
+
+def test_regions(model):
+    f1, f2 = default_regions(model)
+    assert len(f1) + len(f2) == model.n_positions and not set(f1) & set(f2)
+    assert model.position_rc[f1, 1].max() < model.position_rc[f2, 1].min()
+    assert np.array_equal(region_indices(model, model.position_rc[f1]), f1)
+    with pytest.raises(ConfigError):
+        region_indices(model, [[100, 100]])
+
+
+@pytest.mark.parametrize("deg", [45, 90])
+def test_replay_in_env(model, deg):
+    """Every accepted cycle, replayed in the cell backend, repeats with its period, never puts both
+    robots in one cell and visits each robot's region every period."""
+    phi = math.radians(deg)
+    res = persistent_behavior(model, [phi, phi])
+    env = MultiBounceEnv(world=ROOM, n_robots=2, backend="cell", robot_radius=0.0,
+                         robot_collisions="ignore", angles=[[deg], [deg]], step_mode="tick",
+                         max_cycles=10_000)
+    actions = {"robot_0": 0, "robot_1": 0}
+    f1, f2 = (set(f.tolist()) for f in res.regions)
+    for cyc, period in zip(res.cycles, res.periods, strict=True):
+        _, info = env.reset(seed=0, options=res.start_options(int(cyc[0])))
+        seen = [set(), set()]
+        for t in range(2 * int(period)):
+            z = [int(model.cell_of(info[a]["position"], info[a]["heading"])[0])
+                 for a in ("robot_0", "robot_1")]
+            assert z[0] * model.n_cells + z[1] == cyc[t % period]
+            p = [model.decode(zi)[0] for zi in z]
+            assert p[0] != p[1]
+            seen[0].add(int(p[0]))
+            seen[1].add(int(p[1]))
+            if (t + 1) % period == 0:
+                assert seen[0] & f1 and seen[1] & f2
+                seen = [set(), set()]
+            _, _, _, _, info = env.step(actions)
+    env.close()
+
+
+@pytest.mark.parametrize("deg", [45, 90])
+def test_zoo_grid_10x10_r_positive(deg):
+    from bounce_gym.worlds import get
+
+    model = CellModel(get("grid_10x10"))
+    phi = math.radians(deg)
+    res = persistent_behavior(model, [phi, phi])
+    assert res.r > 0
+    for cyc in res.cycles:
+        z1, z2 = res.split(cyc)
+        assert np.all(model.decode(z1)[0] != model.decode(z2)[0])
