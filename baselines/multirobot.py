@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bounce_gym.cells import CellModel
+from bounce_gym.cells import CellModel, resolve_moves
 from bounce_gym.errors import ConfigError
 
 NEIGHBORS = ("rotation", "full")
@@ -111,29 +111,9 @@ class JointCellModel:
         joint = np.atleast_2d(np.asarray(joint, dtype=np.int64))
         p, k = self.model.decode(joint)
         target0 = self.model.targets[k, p]
-        stays = target0 < 0
-        pairs = np.zeros(len(joint), dtype=np.int64)
         if not self.collisions or self.m == 1:
-            return p, k, target0, pairs
-        eye = np.eye(self.m, dtype=bool)[None]
-        wants = target0 >= 0
-        # same target (only robots that want to move), swaps: fixed by the initial proposals
-        same = (target0[:, :, None] == target0[:, None, :]) & wants[:, :, None] & ~eye
-        at = (target0[:, :, None] == p[:, None, :]) & wants[:, :, None]  # i's target = j's cell
-        swap = at & np.swapaxes(at, 1, 2)
-        while True:
-            moving = ~stays
-            mm = moving[:, :, None] & moving[:, None, :]
-            newly = moving & (np.any(same & mm, axis=2) | np.any(swap & mm, axis=2)
-                              | np.any(at & stays[:, None, :], axis=2))
-            if not newly.any():
-                break
-            stays |= newly
-        blocked_by_robot = stays & wants
-        bb = blocked_by_robot[:, :, None]
-        contact = bb & (same | swap | (at & stays[:, None, :]))
-        contact = contact | np.swapaxes(contact, 1, 2)
-        pairs = np.triu(contact, 1).sum(axis=(1, 2))
+            return p, k, target0, np.zeros(len(joint), dtype=np.int64)
+        stays, _, pairs = resolve_moves(p, target0)
         return p, k, np.where(stays, -1, target0), pairs
 
     def step(self, joint: np.ndarray, return_collisions: bool = False):

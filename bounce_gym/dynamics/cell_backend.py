@@ -7,17 +7,15 @@ bump (the controller rotates it by whole bins). With one robot and exact noise, 
 exactly the simple cell mapping C of `CellModel.successor`, so analytic plans and filters execute
 exactly; with `Reliable` noise the bump rows follow the GCM matrix.
 
-Several robots (thesis Eq. 3.9; the rules of spec 002 §8.4, which the paper leaves open): each
-robot proposes its target; a robot is also blocked when its target is another moving robot's
-target, when two robots would swap cells, or when its target is the cell of a robot that stays
-(iterated to a fixpoint). Moving into a cell that another robot is vacating is allowed.
+Several robots: the grid conflict rules of `bounce_gym.cells.conflicts` (thesis Eq. 3.9, spec 002
+§8.4), the same function the multi-robot planners use.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from bounce_gym.cells import CellModel
+from bounce_gym.cells import CellModel, resolve_moves
 from bounce_gym.dynamics.backend import MotionBackend
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
@@ -70,30 +68,10 @@ class CellBackend(MotionBackend):
         """(position index, target index or -1, blocking robot or -1) for every robot."""
         p, k = self.model.decode(self.cells(state))
         target = self.model.targets[k, p]
-        blocker = np.full(len(p), NO_CONTACT, dtype=np.int64)
         if not self.collide:
-            return p, target, blocker
-        stays = target < 0
-        while True:
-            moving = ~stays
-            newly = np.zeros(len(p), dtype=bool)
-            where_is = dict(zip(p.tolist(), range(len(p)), strict=True))
-            seen: dict[int, int] = {}
-            for i in np.flatnonzero(moving).tolist():
-                t = int(target[i])
-                j = where_is.get(t)
-                if j is not None and (stays[j] or target[j] == p[i]):
-                    newly[i], blocker[i] = True, j  # occupied by a robot that stays, or a swap
-                elif t in seen:
-                    first = seen[t]
-                    newly[i], blocker[i] = True, first  # two robots want the same cell
-                    newly[first], blocker[first] = True, i
-                else:
-                    seen[t] = i
-            newly &= ~stays
-            if not newly.any():
-                return p, np.where(stays, -1, target), blocker
-            stays |= newly
+            return p, target, np.full(len(p), NO_CONTACT, dtype=np.int64)
+        stays, blocker, _ = resolve_moves(p[None], target[None])
+        return p, np.where(stays[0], -1, target), blocker[0]
 
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
         # blocking on the grid is a joint property of all robots: recompute for everyone
