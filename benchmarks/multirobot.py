@@ -76,6 +76,27 @@ def large_map(seeds: int, max_steps: int, neighbors: str, m: int = 10) -> None:
     print(f"mean coverage {np.mean(covs):.1f} ± {np.std(covs):.1f} %")
 
 
+def monitoring_enumeration() -> None:
+    """Algorithm 2's joint map for m = 2 on grid_15x15: every joint cell, time and memory."""
+    import resource
+
+    import numpy as np
+
+    from baselines.monitoring import persistent_behavior
+    from bounce_gym import worlds
+    from bounce_gym.cells import CellModel
+
+    model = CellModel(worlds.get("grid_15x15"), n_bins=8)
+    print(f"\nmonitoring, m = 2, grid_15x15: {model.n_cells ** 2 + 1:,} joint cells (with the sink)")
+    for phi in (45, 90, 135):
+        start = time.perf_counter()
+        result = persistent_behavior(model, [np.radians(phi)] * 2)
+        elapsed = time.perf_counter() - start
+        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+        print(f"  φ = {phi:>3}°: {elapsed:.2f} s, peak RSS {rss:.2f} GiB, accepted groups "
+              f"r = {result.r}, periods {sorted({int(p) for p in result.periods})[:8]}")
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20)
@@ -87,6 +108,7 @@ def main(argv: list[str] | None = None) -> None:
     for world in ("grid_10x10", "grid_15x15"):
         steps_table(world, (2, 3, 4, 5), args.seeds, args.max_steps, args.neighbors)
     large_map(args.large_seeds, 10_000, args.neighbors)
+    monitoring_enumeration()
     print(f"\ntotal {time.perf_counter() - start:.1f} s")
 
 

@@ -11,7 +11,8 @@ a Python env, and `MultiBounceEnv` with 20 robots (agent-steps/s).
 Cell-model rows (issue #4): `benchmarks.scm_gcm` (SCM on ~9 M cells, GCM on 65 880 cells) and
 `benchmarks.localization` (DFA construction for the 152-cell lab maps); issue #5:
 `benchmarks.navigation` (all-pairs plans) and `benchmarks.coverage` (α and simulated coverage);
-issue #6: `benchmarks.visibility` (partition + safe graph, random-polygon reachability).
+issue #6: `benchmarks.visibility` (partition + safe graph, random-polygon reachability);
+issue #7: `benchmarks.multirobot` (steps to coverage vs m, the m = 2 monitoring joint map).
 """
 
 from __future__ import annotations
@@ -159,13 +160,15 @@ def main(argv: list[str] | None = None) -> None:
         rate = _time(setup, args.repeats)
         print(f"{world:<12} {backend:<10} {what:<22} {rate:>16,.0f}", flush=True)
     # the cell model's analyses (issue #4)
-    from benchmarks import coverage, localization, navigation, scm_gcm, visibility
+    from benchmarks import coverage, localization, multirobot, navigation, scm_gcm, visibility
 
     for module in (scm_gcm, localization, navigation, visibility):
         print()
         module.main([])
     print()
     coverage.main(["--seeds", "2", "--steps", "1500"])
+    print()
+    multirobot.main(["--seeds", "5"])
 
 
 if __name__ == "__main__":
