@@ -20,7 +20,7 @@ from bounce_gym.cells import CORNER_RULES
 from bounce_gym.dynamics.backend import ROBOT_COLLISIONS
 from bounce_gym.dynamics.noise import NoiseModel, make_noise
 from bounce_gym.dynamics.rules import RULES, check_parameters
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import ConfigError, InvalidWorldError
 from bounce_gym.worlds import World
 
 BACKENDS = ("kinematic", "pymunk", "cell")
@@ -66,7 +66,7 @@ def resolve_world(world: object) -> World:
     if isinstance(world, str):
         try:
             return worlds.get(world)
-        except Exception as exc:  # the zoo lists the available names
+        except InvalidWorldError as exc:  # its message lists the available names
             raise ConfigError(f"world: {exc}") from None
     raise ConfigError(
         f"world: expected a zoo name, a map file path or a World, got {type(world).__name__}"
