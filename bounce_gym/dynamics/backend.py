@@ -10,6 +10,7 @@ something first and stops). Robots that touch a wall or another robot while faci
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 
 import numpy as np
@@ -142,6 +143,51 @@ class MotionBackend(ABC):
         )
 
     # -- helpers shared by backends
+    @staticmethod
+    def _check_drive_window(max_ticks: float, until_first_block: bool) -> None:
+        if not (until_first_block or math.isfinite(max_ticks)):
+            raise ValueError("drive needs a finite max_ticks unless until_first_block is set")
+
+    def _end_of_tick(self, elapsed: float) -> float:
+        """The drive window (as distance) rounded up to the end of the current tick: a drive
+        ``until_first_block`` stops at the end of the tick in which the first robot blocks."""
+        step = self.step_length
+        return max(math.ceil(elapsed / step - self.time_tol), 0) * step
+
+    def _finish_drive(self, state: RobotState, driven: np.ndarray, limit: float,
+                      elapsed: float) -> int:
+        """Account a drive: every robot's clock gains the ticks it drove in, odometers the
+        distance, the global clock the ticks of the window. Returns those ticks."""
+        step = self.step_length
+        ticks = math.ceil((limit if math.isfinite(limit) else elapsed) / step - self.time_tol)
+        drove = np.ceil(driven / step - self.time_tol).astype(np.int64)
+        state.clock += np.minimum(drove, ticks)
+        state.odometer += driven
+        state.ticks += ticks
+        return ticks
+
+    @staticmethod
+    def _block_at_walls(state: RobotState, robots: np.ndarray, edge: np.ndarray,
+                        normal: np.ndarray) -> None:
+        """Robots that reached a wall (``edge``, inward ``normal``) stop there, blocked."""
+        state.blocked[robots] = True
+        state.contact_edge[robots] = edge
+        state.contact_robot[robots] = NO_CONTACT
+        state.contact_normal[robots] = normal
+
+    def _stop_touching(self, state: RobotState, robots: np.ndarray) -> None:
+        """Block the robots of a disk–disk contact that face the robot they touch.
+
+        Contact times are symmetric, so both robots of a pair are in ``robots``; at least one of
+        two approaching robots faces the other, so every contact blocks someone.
+        """
+        blocker, normal = self.robot_blockers(state, robots)
+        hit = blocker >= 0
+        state.blocked[robots[hit]] = True
+        state.contact_robot[robots[hit]] = blocker[hit]
+        state.contact_edge[robots[hit]] = NO_CONTACT
+        state.contact_normal[robots[hit]] = normal[hit]
+
     def _classify_contacts(self, state: RobotState, robots: np.ndarray, sel,
                            distance: np.ndarray, edge: np.ndarray, normal: np.ndarray) -> None:
         """Set ``blocked`` and the contact fields of ``robots`` from the wall ahead of each

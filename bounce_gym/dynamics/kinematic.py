@@ -56,10 +56,9 @@ class KinematicBackend(MotionBackend):
         # that stops at a wall lands exactly at position + direction * (its wall distance).
         if until_first_block and state.blocked.any():
             return 0
-        if not (until_first_block or math.isfinite(max_ticks)):
-            raise ValueError("drive needs a finite max_ticks unless until_first_block is set")
-        step, tol = self.step_length, self.contact_tol
-        limit = float(max_ticks) * step
+        self._check_drive_window(max_ticks, until_first_block)
+        tol = self.contact_tol
+        limit = float(max_ticks) * self.step_length
         driven = np.zeros(state.n_robots)
         elapsed, zeno = 0.0, 0
         while elapsed < limit - tol:
@@ -88,25 +87,13 @@ class KinematicBackend(MotionBackend):
             zeno = zeno + 1 if ds <= tol else 0
             if zeno > _MAX_ZENO:
                 raise RuntimeError("kinematic integrator made no progress (contact bookkeeping bug)")
-            at_wall = s_wall <= s_next + tol
-            walls = moving[at_wall]
-            state.blocked[walls] = True
-            state.contact_edge[walls] = self._ahead_edge[walls]
-            state.contact_robot[walls] = NO_CONTACT
-            state.contact_normal[walls] = self._ahead_normal[walls]
+            walls = moving[s_wall <= s_next + tol]
+            self._block_at_walls(state, walls, self._ahead_edge[walls], self._ahead_normal[walls])
             if self.collide and np.any(s_robot <= s_next + tol):
                 self._stop_touching(state, moving[s_robot <= s_next + tol])
             if until_first_block:
-                limit = min(limit, max(math.ceil(elapsed / step - self.time_tol), 0) * step)
-        if math.isfinite(limit):
-            ticks = math.ceil(limit / step - self.time_tol)
-        else:
-            ticks = math.ceil(elapsed / step - self.time_tol)
-        drove = np.ceil(driven / step - self.time_tol).astype(np.int64)
-        state.clock += np.minimum(drove, ticks)
-        state.odometer += driven
-        state.ticks += ticks
-        return ticks
+                limit = min(limit, self._end_of_tick(elapsed))
+        return self._finish_drive(state, driven, limit, elapsed)
 
     def drive_each(self, state: RobotState) -> np.ndarray:
         """Drive every unblocked robot to its own next contact, independently of the others.
@@ -155,16 +142,3 @@ class KinematicBackend(MotionBackend):
         state.clock[0] += ticks
         state.ticks += ticks
         return ticks
-
-    def _stop_touching(self, state: RobotState, robots: np.ndarray) -> None:
-        """Block the robots of a disk–disk contact that face the robot they touch.
-
-        Contact times are symmetric, so both robots of a pair are in ``robots``; at least one of
-        two approaching robots faces the other, so every contact blocks someone.
-        """
-        blocker, normal = self.robot_blockers(state, robots)
-        hit = blocker >= 0
-        state.blocked[robots[hit]] = True
-        state.contact_robot[robots[hit]] = blocker[hit]
-        state.contact_edge[robots[hit]] = NO_CONTACT
-        state.contact_normal[robots[hit]] = normal[hit]

@@ -370,10 +370,9 @@ class PymunkBackend(MotionBackend):
         # ``position + direction * dt``.
         if until_first_block and state.blocked.any():
             return 0
-        if not (until_first_block or math.isfinite(max_ticks)):
-            raise ValueError("drive needs a finite max_ticks unless until_first_block is set")
-        step, tol = self.step_length, self.contact_tol
-        limit = float(max_ticks) * step
+        self._check_drive_window(max_ticks, until_first_block)
+        tol = self.contact_tol
+        limit = float(max_ticks) * self.step_length
         driven = np.zeros(state.n_robots)
         elapsed, zeno = 0.0, 0
         synced = False  # positions may have been changed from outside since the last call
@@ -422,25 +421,14 @@ class PymunkBackend(MotionBackend):
             walls_touched, pairs_touched = self._sensed()
             if len(walls):
                 self._confirm_walls(state, walls, walls_touched)
-                state.blocked[walls] = True
-                state.contact_edge[walls] = self._hit_edge[walls]
-                state.contact_robot[walls] = NO_CONTACT
-                state.contact_normal[walls] = self._hit_normal[walls]
+                self._block_at_walls(state, walls, self._hit_edge[walls], self._hit_normal[walls])
             if np.any(at_robot):
                 robots = moving[at_robot]
                 self._confirm_pairs(state, robots, s_pairs[at_robot] <= s_next + tol, pairs_touched)
                 self._stop_touching(state, robots)
             if until_first_block:
-                limit = min(limit, max(math.ceil(elapsed / step - self.time_tol), 0) * step)
-        if math.isfinite(limit):
-            ticks = math.ceil(limit / step - self.time_tol)
-        else:
-            ticks = math.ceil(elapsed / step - self.time_tol)
-        drove = np.ceil(driven / step - self.time_tol).astype(np.int64)
-        state.clock += np.minimum(drove, ticks)
-        state.odometer += driven
-        state.ticks += ticks
-        return ticks
+                limit = min(limit, self._end_of_tick(elapsed))
+        return self._finish_drive(state, driven, limit, elapsed)
 
     # -- helpers ----------------------------------------------------------------------------
     def _sensed(self) -> tuple[dict[int, set[int]], set[tuple[int, int]]]:
@@ -482,11 +470,3 @@ class PymunkBackend(MotionBackend):
                 f"{state.position[i].tolist()} although the robot reached it"
             )
 
-    def _stop_touching(self, state: RobotState, robots: np.ndarray) -> None:
-        """Block the robots of a disk–disk contact that face the robot they touch."""
-        blocker, normal = self.robot_blockers(state, robots)
-        hit = blocker >= 0
-        state.blocked[robots[hit]] = True
-        state.contact_robot[robots[hit]] = blocker[hit]
-        state.contact_edge[robots[hit]] = NO_CONTACT
-        state.contact_normal[robots[hit]] = normal[hit]
