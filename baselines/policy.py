@@ -5,6 +5,9 @@ step at a time: ``act(observation, info) -> action``. ``reset(env)`` is called a
 ``env.reset`` (with the env, so a planner can read the episode's start, goal or options).
 Planners (`baselines.navigation`, `baselines.coverage`, `baselines.localization`) implement the
 same interface, so `evaluate.py` can run every policy on the same worlds and seeds.
+
+`MultiPolicy` is the same for a PettingZoo parallel env (`bounce_gym.envs.MultiBounceEnv`): one
+call decides the action of every live robot, ``act(observations, infos) -> {agent: action}``.
 """
 
 from __future__ import annotations
@@ -55,3 +58,25 @@ class FixedAnglePolicy(Policy):
 
     def act(self, observation, info):
         return self.index
+
+
+class MultiPolicy(ABC):
+    """A policy for a PettingZoo parallel env: every step, one action per live agent.
+
+    Call order per episode: ``options = start_options(env, seed)``; ``env.reset(seed=seed,
+    options=options)``; ``reset(env)``; then ``act`` every step.
+    """
+
+    name = "policy"
+
+    def start_options(self, env, seed: int) -> dict | None:
+        """Reset options the policy needs (e.g. a planner's start configuration); ``None`` lets
+        the env draw its own random start."""
+        return None
+
+    def reset(self, env) -> None:  # noqa: B027  (optional hook, a no-op by default)
+        """Start of an episode (after ``env.reset``)."""
+
+    @abstractmethod
+    def act(self, observations: dict, infos: dict) -> dict:
+        """``{agent: action}`` for every live agent."""
