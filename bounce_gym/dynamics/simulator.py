@@ -152,6 +152,43 @@ class BounceDynamics:
         self.tick(params)
         return 1 + self.backend.drive(state, np.inf, until_first_block=True)
 
+    def turn(self, turns: np.ndarray) -> np.ndarray:
+        """A *command tick*: the clock-timed turn of spec 002 §8.6 (Algorithm 1's neighbour jump).
+
+        Robots with a finite entry in ``turns`` (m,) rotate in place by it (radians,
+        counter-clockwise positive; the noise model perturbs the executed heading as for a
+        bounce); every other robot waits in place. The tick is not a bump: bump counts are
+        unchanged and every clock advances by one tick. A robot that turns to face what it
+        touches becomes blocked. Returns the (m,) mask of robots that turned.
+        """
+        state = self._require_state()
+        try:
+            turns = np.asarray(turns, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            raise ConfigError(f"turns: expected numbers, got {turns!r}") from None
+        if turns.shape != (self.n_robots,):
+            raise ConfigError(f"turns: expected {self.n_robots} values (NaN = no turn), got "
+                              f"{turns.shape[0]}")
+        turning = ~np.isnan(turns)
+        if np.any(np.isinf(turns)):
+            raise ConfigError(f"turns: expected finite angles or NaN, got {turns.tolist()}")
+        idx = np.flatnonzero(turning)
+        heading = state.heading[idx] + turns[idx]
+        width = self.backend.bin_width
+        if width is not None:
+            steps = turns[idx] / width
+            if np.any(np.abs(steps - np.rint(steps)) > 1e-6):
+                raise ConfigError(f"turns: {np.degrees(turns[idx]).tolist()} degrees are not "
+                                  f"whole {math.degrees(width):g}° bins of the cell backend")
+            heading = heading + width * self.noise.sample_bins(len(idx), self.rng, width)
+        elif not isinstance(self.noise, Exact):
+            heading = heading + self.noise.sample(len(idx), self.rng)
+        state.heading[idx] = wrap(heading)
+        state.clock += 1
+        state.ticks += 1
+        self.backend.update_contacts(state, np.arange(self.n_robots))
+        return turning
+
     def drive_to_contact(self) -> int:
         """Drive until some robot is blocked (used after reset in bounce mode)."""
         return self.backend.drive(self._require_state(), np.inf, until_first_block=True)

@@ -95,14 +95,24 @@ class BounceCore:
         info = self.task.reset(state, rng, options)
         return self.observation(), self._info(info)
 
-    def step(self, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
-        """Advance one env step with bounce angles (m,) in radians."""
+    def step(self, angles: np.ndarray, turns: np.ndarray | None = None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+        """Advance one env step with bounce angles (m,) in radians.
+
+        With ``turns`` (m,) radians, NaN = none, and some robot commanded: the step is one
+        command tick instead (`BounceDynamics.turn`: those robots turn in place, the others
+        wait; no bumps, so ``angles`` are unused), in either step mode.
+        """
         state = self.dynamics.state
         start = state.position.copy()
         bumping = state.blocked.copy()
         clock_before = state.clock.copy()
         bumps_before = state.bumps.copy()
-        if self.options.step_mode == "bounce":
+        if turns is not None and not np.all(np.isnan(turns)):
+            self.dynamics.turn(turns)
+            bumping[:] = False
+            ticks = 1
+        elif self.options.step_mode == "bounce":
             ticks = self.dynamics.bounce(angles)
         else:
             self.dynamics.tick(angles)

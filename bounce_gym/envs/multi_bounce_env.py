@@ -4,7 +4,7 @@
 |---|---|
 | Import | ``from bounce_gym.envs import multi_bounce_v0`` (``parallel_env()``, ``env()``) or ``pettingzoo.make("parallel", "bounce_gym/MultiBounce-v0")`` |
 | Agents | ``robot_0`` … ``robot_{m-1}`` |
-| Actions | ``Discrete(len(Φ_i))`` or ``Box(-1, 1, (1,), float32)`` per robot |
+| Actions | ``Discrete(len(Φ_i))`` (+ ``len(turn_angles)`` turn commands) or ``Box(-1, 1, (1,), float32)`` per robot |
 | Observations | per robot: contact, clock, optional history / privileged pose / task features (`bounce_gym.envs.core`) |
 | State | ``state()``: every robot's true pose (x, y scaled to [0, 1], cos θ, sin θ) |
 
@@ -16,6 +16,14 @@ Eq. 3.9). **Parallel form** (`MultiBounceEnv`): every step all robots submit an 
 are blocked use it, the others drive on. In ``step_mode="bounce"`` a step runs until some robot
 is blocked again. **AEC form** (`MultiBounceAEC`): event-driven — the agent to act is the next
 robot that bumps; once every blocked robot has chosen, the world runs until the next bump.
+
+**Turn commands** (parallel form, discrete actions): with ``turn_angles=[45, -45]`` each robot
+has ``len(turn_angles)`` extra actions after its angles — index ``len(Φ_i) + j`` is a
+clock-timed turn in place by ``turn_angles[j]`` degrees (CCW positive), the one-robot ±Δθ
+"neighbour jump" of Alam & Bobadilla's Algorithm 1 (spec 002 §8.6). If any robot picks a turn,
+the step is one *command tick*: the robots that picked a turn turn, every other robot waits in
+place (`bounce_gym.dynamics.BounceDynamics.turn`); no bump happens and every clock advances by
+one. Otherwise the step is an ordinary one.
 
 ## Rewards
 
@@ -30,8 +38,8 @@ AEC: each robot is truncated after ``max_cycles`` decisions of its own.
 ## Arguments
 
 Those of `BounceEnv` (``angles`` and ``angle_range`` may also be given per robot as a list or a
-``{"robot_i": ...}`` dict), plus ``n_robots``, ``robot_collisions`` (``"bounce"`` | ``"ignore"``)
-and ``max_cycles``. Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
+``{"robot_i": ...}`` dict), plus ``n_robots``, ``robot_collisions`` (``"bounce"`` | ``"ignore"``),
+``turn_angles`` (degrees; parallel form only) and ``max_cycles``. Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
 
 ## Version History
 
@@ -87,6 +95,7 @@ class _MultiBase:
         cell_bins: int = 8,
         corner_rule: str = "target_only",
         robot_collisions: str = "bounce",
+        turn_angles: object = (),
         max_cycles: int = 500,
         render_mode: str | None = None,
     ) -> None:
@@ -101,7 +110,7 @@ class _MultiBase:
             angles=angles, angle_range=angle_range, noise=noise, robot_radius=robot_radius,
             step_length=step_length, step_mode=step_mode, action_type=action_type,
             history=history, privileged=privileged, robot_collisions=robot_collisions,
-            cell_bins=cell_bins, corner_rule=corner_rule,
+            cell_bins=cell_bins, corner_rule=corner_rule, turn_angles=turn_angles,
         )
         self.core = BounceCore(self.options, make_task(task, task_kwargs, MULTI_ROBOT_TASKS))
         self.max_cycles = int(max_cycles)
@@ -110,7 +119,8 @@ class _MultiBase:
         self.agent_index = {a: i for i, a in enumerate(self.possible_agents)}
         self._obs_space = spaces.Box(self.core.obs_low, self.core.obs_high, dtype=np.float32)
         self._action_spaces = {
-            a: action_space(self.options.action_type, len(self.options.angles[i]))
+            a: action_space(self.options.action_type,
+                            len(self.options.angles[i]) + len(self.options.turn_angles))
             for a, i in self.agent_index.items()
         }
         m = self.options.n_robots
@@ -134,8 +144,12 @@ class _MultiBase:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
 
     def _angle(self, agent: str, action: object) -> float:
+        """The radians an action selects: a bounce angle of Φ_i or, past Φ_i, a turn command."""
         i = self.agent_index[agent]
-        return to_angle(action, self.options.action_type, self.options.angles[i],
+        angles = self.options.angles[i]
+        if len(self.options.turn_angles):
+            angles = np.concatenate((angles, self.options.turn_angles))
+        return to_angle(action, self.options.action_type, angles,
                         self.options.angle_range[i], who=f"action of {agent}")
 
     def _agent_infos(self, info: dict, agents) -> dict[str, dict]:
@@ -213,7 +227,15 @@ class MultiBounceEnv(_MultiBase, ParallelEnv):
             raise ActionError(f"actions: need exactly one action per live agent "
                               f"(unknown {unknown}, missing {missing})")
         angles = np.array([self._angle(a, actions[a]) for a in self.possible_agents])
-        obs, rewards, terminated, info = self.core.step(angles)
+        turns = None
+        if len(self.options.turn_angles):
+            index = np.array([int(np.asarray(actions[a]).reshape(())) for a in self.possible_agents])
+            n_phi = np.array([len(phi) for phi in self.options.angles])
+            commanded = index >= n_phi
+            turns = np.where(commanded, angles, np.nan)
+            # a turn step uses no bounce angle; keep a valid one in the unused slots
+            angles = np.where(commanded, [phi[0] for phi in self.options.angles], angles)
+        obs, rewards, terminated, info = self.core.step(angles, turns)
         self.cycles += 1
         truncated = self.cycles >= self.max_cycles
         live = list(self.agents)
@@ -243,6 +265,9 @@ class MultiBounceAEC(_MultiBase, AECEnv):
         if self.options.step_mode != "bounce":
             raise ConfigError("step_mode: the AEC form is event-driven and needs 'bounce'; use "
                               "the parallel form for tick stepping")
+        if len(self.options.turn_angles):
+            raise ConfigError("turn_angles: turn commands need the parallel form (the AEC form "
+                              "asks only robots that bump)")
 
     def reset(self, seed: int | None = None, options: dict | None = None) -> None:
         self._seed(seed)

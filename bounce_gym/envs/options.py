@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
@@ -47,6 +47,7 @@ class EnvOptions:
     privileged: bool
     robot_collisions: str
     backend_options: dict  # extra arguments of the backend (cell: n_bins, corner_rule)
+    turn_angles: np.ndarray = field(default_factory=lambda: np.zeros(0))  # turn commands (multi)
 
     @cached_property
     def max_clock(self) -> int:
@@ -159,6 +160,7 @@ def parse_options(
     robot_collisions: str,
     cell_bins: int = 8,
     corner_rule: str = "target_only",
+    turn_angles: object = (),
 ) -> EnvOptions:
     """Validate the constructor arguments of `BounceEnv` / `MultiBounceEnv`."""
     backend = _choice("backend", backend, BACKENDS)
@@ -182,6 +184,7 @@ def parse_options(
     if backend == "cell":
         backend_options = _cell_options(bounce_rule, angle_sets, action_type, noise_model,
                                         cell_bins, corner_rule)
+    turns = _turn_angles(turn_angles, action_type, backend_options.get("n_bins"))
     return EnvOptions(
         world=resolve_world(world),
         n_robots=int(n_robots),
@@ -198,7 +201,29 @@ def parse_options(
         privileged=privileged,
         robot_collisions=_choice("robot_collisions", robot_collisions, ROBOT_COLLISIONS),
         backend_options=backend_options,
+        turn_angles=turns,
     )
+
+
+def _turn_angles(value: object, action_type: str, n_bins: int | None) -> np.ndarray:
+    """Turn commands (degrees in, radians out): distinct, non-zero, whole bins on the grid."""
+    if isinstance(value, str | bytes) or not isinstance(value, Sequence | np.ndarray):
+        raise ConfigError(f"turn_angles: expected a list of angles in degrees, got {value!r}")
+    degrees = [_number(f"turn_angles[{k}]", v) for k, v in enumerate(value)]
+    if not degrees:
+        return np.zeros(0)
+    if action_type != "discrete":
+        raise ConfigError("turn_angles: turn commands are extra discrete actions; they need "
+                          "action_type='discrete'")
+    if len(set(degrees)) != len(degrees) or any(d % 360.0 == 0.0 for d in degrees):
+        raise ConfigError(f"turn_angles: expected distinct angles that are not multiples of "
+                          f"360, got {degrees}")
+    if n_bins is not None:
+        width = 360.0 / n_bins
+        if any(abs(d / width - round(d / width)) > 1e-6 for d in degrees):
+            raise ConfigError(f"turn_angles: {degrees} degrees are not whole multiples of the "
+                              f"{width:g}° bins of the cell backend")
+    return np.radians(np.array(degrees, dtype=np.float64))
 
 
 def _cell_options(rule: str, angle_sets, action_type: str, noise: NoiseModel, n_bins: object,
