@@ -1,0 +1,258 @@
+"""The multi-robot planners of Alam & Bobadilla as policies for `MultiBounceEnv` (spec 002).
+
+* `CoveragePlanPolicy` — executes the joint trajectory x̃ of Algorithm 1 (MULTIROBOTCOVERAGE,
+  `baselines.multirobot.plan_coverage`): on a joint-map edge every robot bounces with its φ_i; on a
+  neighbour jump (one robot's heading ±Δθ, spec 002 §8.6) the robot gets a clock-timed *turn
+  command* and the others wait one tick (the env's ``turn_angles``). After the plan the robots keep
+  bouncing with φ_i. Edges a turn cannot execute — a random restart, or a position jump of the
+  ``"full"`` neighbourhood — end the plan there (``executable_steps``); the robots bounce on.
+* `MonitoringPlanPolicy` — Algorithm 2 (PERSISTENTBEHAVIOR, `baselines.monitoring`): places the two
+  robots on an accepted collision-free joint limit cycle (chosen by the seed) and lets them bounce
+  with their φ_i forever; the cycle repeats with no robot–robot contact and visits each robot's
+  region every period.
+
+Both are exact on the ``cell`` backend (the papers' grid model) in ``step_mode="tick"``: the env's
+joint cell after step t is the plan's (tests replay whole plans). On the continuous backends they
+run open loop from the grid plan — one tick is then ``step_length`` of driving, a diagonal king
+move is √2 on the grid (spec 002 §8.3), so the motion drifts from the plan; `evaluate.py` reports
+how much coverage and how many contacts that costs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from baselines.monitoring import MonitoringResult, persistent_behavior
+from baselines.multirobot import CoverageResult, JointCellModel, plan_coverage, random_start
+from baselines.policy import MultiPolicy
+from bounce_gym.cells import CellModel
+from bounce_gym.errors import ConfigError
+
+__all__ = ["CoveragePlanPolicy", "MonitoringPlanPolicy", "cell_model_of", "regions_of"]
+
+
+def cell_model_of(env, cell_bins: int = 8, corner_rule: str = "no_squeeze") -> CellModel:
+    """The env's cell model: the ``cell`` backend's own, else one built at cell size
+    ``step_length`` for its robot radius with ``cell_bins`` and ``corner_rule``."""
+    backend = env.core.dynamics.backend
+    if getattr(backend, "model", None) is not None:
+        return backend.model
+    opts = env.options
+    return CellModel(opts.world, opts.step_length, cell_bins, opts.robot_radius, corner_rule)
+
+
+def _angle_index(env, robot: int, phi_deg: float) -> int:
+    """The action index of φ in robot ``robot``'s angle set Φ_i."""
+    angles = np.degrees(env.options.angles[robot])
+    hit = np.flatnonzero(np.isclose(np.mod(angles - phi_deg + 180.0, 360.0) - 180.0, 0.0,
+                                    atol=1e-6))
+    if len(hit) == 0:
+        raise ConfigError(f"phi: {phi_deg:g}° is not among robot_{robot}'s angles "
+                          f"{angles.tolist()}; add it to the env's angles")
+    return int(hit[0])
+
+
+def _check_tick_mode(env, who: str) -> None:
+    if env.options.step_mode != "tick":
+        raise ConfigError(f"{who}: the plan is a sequence of ticks; make the env with "
+                          "step_mode='tick'")
+
+
+class CoveragePlanPolicy(MultiPolicy):
+    """Execute Algorithm 1's joint trajectory (module docstring).
+
+    Args:
+        joint_model: the joint cell model the plan is made on (its angles are the φ_i).
+        phi_index: per robot, the action index of its φ_i in the env's Φ_i.
+        turn_index: ``{signed bins: action index offset}`` of the env's turn commands.
+        neighbors, max_steps, lookahead: passed to `plan_coverage`.
+        seed: the random start on continuous backends and the planner's random fallback.
+
+    After `reset`: ``result`` (the `CoverageResult`), ``predicted_steps_to_full`` (env steps
+    until the plan covers every reachable free cell, or None) and ``executable_steps``.
+    """
+
+    name = "planner"
+
+    def __init__(self, joint_model: JointCellModel, phi_index: list[int],
+                 turn_index: dict[int, int], neighbors: str = "rotation",
+                 max_steps: int = 10_000, lookahead: int = 300) -> None:
+        self.joint_model = joint_model
+        self.phi_index = list(phi_index)
+        self.turn_index = dict(turn_index)
+        self.neighbors = neighbors
+        self.max_steps = int(max_steps)
+        self.lookahead = int(lookahead)
+        self.result: CoverageResult | None = None
+
+    @classmethod
+    def for_env(cls, env, phi: float = 135.0, neighbors: str = "rotation",
+                max_steps: int | None = None, lookahead: int = 300, cell_bins: int = 8,
+                corner_rule: str = "no_squeeze") -> CoveragePlanPolicy:
+        """The planner for a `MultiBounceEnv` (parallel form, discrete actions, tick mode).
+
+        ``phi`` (degrees, every robot) must be in each robot's angle set; the env's
+        ``turn_angles`` must hold ±360°/bins for the neighbour jumps. ``max_steps`` defaults to
+        the env's ``max_cycles``. ``cell_bins`` and ``corner_rule`` apply on continuous backends
+        (the cell backend brings its own model).
+        """
+        env = getattr(env, "unwrapped", env)
+        _check_tick_mode(env, "CoveragePlanPolicy")
+        model = cell_model_of(env, cell_bins, corner_rule)
+        m = env.options.n_robots
+        jm = JointCellModel(model, [float(phi)] * m,
+                            collisions=env.options.robot_collisions == "bounce")
+        phi_index = [_angle_index(env, i, float(phi)) for i in range(m)]
+        width = 360.0 / model.n_bins
+        turns = np.degrees(env.options.turn_angles)
+        turn_index: dict[int, int] = {}
+        for j, deg in enumerate(turns):
+            bins = deg / width
+            if abs(bins - round(bins)) < 1e-6:
+                signed = (round(bins) + model.n_bins // 2) % model.n_bins - model.n_bins // 2
+                turn_index.setdefault(signed, j)
+        if 1 not in turn_index or -1 not in turn_index:
+            raise ConfigError(f"turn_angles: the neighbour jumps need turn commands of "
+                              f"±{width:g}°, got {turns.tolist()}")
+        return cls(jm, phi_index, turn_index, neighbors,
+                   env.max_cycles if max_steps is None else max_steps, lookahead)
+
+    def start_options(self, env, seed: int) -> dict | None:
+        """None on the cell backend (the env's random start is a joint cell); on continuous
+        backends a random joint cell's centres and headings (`random_start`, spec 002 §8.10)."""
+        env = getattr(env, "unwrapped", env)
+        if env.options.backend == "cell":
+            return None
+        centres, headings = self.joint_model.model.configuration(random_start(self.joint_model,
+                                                                             seed))
+        return {"start": {"position": centres.tolist(), "heading": headings.tolist()}}
+
+    def reset(self, env) -> None:
+        env = getattr(env, "unwrapped", env)
+        state = env.core.state
+        start = self.joint_model.from_poses(state.position, np.degrees(state.heading))
+        self.result = plan_coverage(self.joint_model, start, max_steps=self.max_steps,
+                                    neighbors=self.neighbors, lookahead=self.lookahead,
+                                    seed=0, stop_at_full=True)
+        self.actions = self._compile(self.result, env)
+        self.predicted_steps_to_full = self.result.steps_to_full
+        if self.predicted_steps_to_full is not None \
+                and self.predicted_steps_to_full > len(self.actions):
+            self.predicted_steps_to_full = None  # the plan broke off before full coverage
+        self.t = 0
+        self.agents = list(env.possible_agents)
+
+    def _compile(self, result: CoverageResult, env) -> list[list[int]]:
+        """One action list per executable edge of x̃, stopping at the first edge no command tick
+        can execute."""
+        model = self.joint_model.model
+        nb = model.n_bins
+        actions: list[list[int]] = []
+        for t, kind in enumerate(result.edge_kinds):
+            if kind == "step":
+                actions.append(list(self.phi_index))
+                continue
+            a, b = result.trajectory[t], result.trajectory[t + 1]
+            (pa, ka), (pb, kb) = model.decode(a), model.decode(b)
+            row = list(self.phi_index)
+            if kind == "random" or np.any(pa != pb):
+                break
+            for i in np.flatnonzero(ka != kb):
+                signed = (int(kb[i] - ka[i]) + nb // 2) % nb - nb // 2
+                if signed not in self.turn_index:
+                    return actions
+                row[i] = len(env.options.angles[i]) + self.turn_index[signed]
+            actions.append(row)
+        return actions
+
+    @property
+    def executable_steps(self) -> int:
+        """How many edges of x̃ the env executes (the rest of the episode: plain bouncing)."""
+        return len(self.actions)
+
+    def act(self, observations: dict, infos: dict) -> dict:
+        row = self.actions[self.t] if self.t < len(self.actions) else self.phi_index
+        self.t += 1
+        return {a: row[i] for i, a in enumerate(self.agents) if a in observations}
+
+
+def regions_of(env, model: CellModel) -> list[np.ndarray]:
+    """The monitoring task's region polygons as position cells: the cells whose centre lies in
+    (or on the boundary of) robot i's polygon."""
+    import shapely
+
+    task = env.core.task
+    if getattr(task, "name", None) != "monitoring":
+        raise ConfigError("MonitoringPlanPolicy: the env's task must be 'monitoring'")
+    out = []
+    for i, poly in enumerate(task.regions):
+        inside = shapely.intersects_xy(poly, model.centres[:, 0], model.centres[:, 1])
+        if not inside.any():
+            raise ConfigError(f"regions[{i}]: contains no free cell centre of the cell model")
+        out.append(np.flatnonzero(inside))
+    return out
+
+
+class MonitoringPlanPolicy(MultiPolicy):
+    """Start two robots on an accepted cycle of Algorithm 2 and let them bounce (module docstring).
+
+    ``result`` is the `MonitoringResult`; ``r`` the number of accepted groups. After
+    `start_options`: ``group`` (index into ``result.cycles``), ``period`` and ``start_cell``.
+    With r = 0 there is nothing to follow: the env draws its own start and the robots bounce.
+    """
+
+    name = "planner"
+
+    def __init__(self, result: MonitoringResult, phi_index: list[int]) -> None:
+        self.result = result
+        self.phi_index = list(phi_index)
+        self.group = self.period = self.start_cell = None
+
+    @property
+    def r(self) -> int:
+        return self.result.r
+
+    @classmethod
+    def for_env(cls, env, phi: object = None, mode: str = "visit",
+                forbid_swaps: bool | None = None, cell_bins: int = 8,
+                corner_rule: str = "no_squeeze") -> MonitoringPlanPolicy:
+        """The planner for a 2-robot monitoring `MultiBounceEnv` in tick mode.
+
+        ``phi``: degrees, one for both robots or a pair (default: each robot's first angle).
+        Regions: the task's polygons (`regions_of`). ``forbid_swaps`` defaults to whether the env's
+        robots bounce off each other (a swap on the grid is then a conflict, spec 002 §8.4).
+        """
+        env = getattr(env, "unwrapped", env)
+        _check_tick_mode(env, "MonitoringPlanPolicy")
+        if env.options.n_robots != 2:
+            raise ConfigError(f"n_robots: Algorithm 2 is implemented for 2 robots, got "
+                              f"{env.options.n_robots}")
+        if phi is None:
+            phis = [math.degrees(float(env.options.angles[i][0])) for i in range(2)]
+        else:
+            phis = [float(p) for p in np.broadcast_to(np.asarray(phi, dtype=float), (2,))]
+        model = cell_model_of(env, cell_bins, corner_rule)
+        if forbid_swaps is None:
+            forbid_swaps = env.options.robot_collisions == "bounce"
+        result = persistent_behavior(model, [math.radians(p) for p in phis], regions_of(env, model),
+                                     mode=mode, forbid_swaps=forbid_swaps)
+        return cls(result, [_angle_index(env, i, p) for i, p in enumerate(phis)])
+
+    def start_options(self, env, seed: int) -> dict | None:
+        """Accepted group ``seed mod r``, entered at cycle cell ``(seed div r) mod period``."""
+        if self.r == 0:
+            self.group = self.period = self.start_cell = None
+            return None
+        self.group = seed % self.r
+        cycle = self.result.cycles[self.group]
+        self.period = len(cycle)
+        self.start_cell = int(cycle[(seed // self.r) % self.period])
+        return self.result.start_options(self.start_cell)
+
+    def reset(self, env) -> None:
+        self.agents = list(getattr(env, "unwrapped", env).possible_agents)
+
+    def act(self, observations: dict, infos: dict) -> dict:
+        return {a: self.phi_index[i] for i, a in enumerate(self.agents) if a in observations}
