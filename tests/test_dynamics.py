@@ -2,6 +2,7 @@
 
 import contextlib
 import io
+import math
 import pickle
 import subprocess
 import sys
@@ -9,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 
+from bounce_gym import worlds
 from bounce_gym.dynamics import BounceDynamics
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
@@ -260,3 +262,19 @@ def test_same_seed_same_trajectory_across_processes(backend):
     with contextlib.redirect_stdout(here):
         exec(code, {})
     assert runs == {here.getvalue()}
+
+
+@pytest.mark.parametrize("backend", ["kinematic", "pymunk"])
+@pytest.mark.parametrize("dx", [0.0, 4e-16, -4e-16])
+def test_touching_robot_sliding_past_tangentially_is_no_contact(backend, dx):
+    # robot 0 faces robot 1 (touching, radius 0.3) and is blocked; robot 1 drives east,
+    # perpendicular to the line of centres: a graze, not a contact (this once stalled the
+    # kinematic integrator when rounding made the pair look approaching)
+    dyn = BounceDynamics(worlds.get("grid_10x10"), 2, backend=backend, radius=0.3,
+                         robot_collisions="bounce")
+    dyn.reset(np.random.default_rng(0), position=[[2.7, 8.7], [2.7 + dx, 9.3]],
+              heading=[math.pi / 2, 0.0])
+    assert dyn.state.blocked.tolist() == [True, False]
+    dyn.tick([math.pi / 2, math.pi / 2])
+    np.testing.assert_allclose(dyn.state.position[1], [3.7 + dx, 9.3], atol=1e-9)
+    assert dyn.state.bumps.tolist() == [1, 0]

@@ -18,6 +18,7 @@ import numpy as np
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
+from bounce_gym.worlds.raycast import GRAZE
 
 ROBOT_COLLISIONS = ("bounce", "ignore")
 
@@ -219,7 +220,8 @@ class MotionBackend(ABC):
         rel = state.position[None, :, :] - state.position[robots, None, :]  # i -> j
         dist = np.hypot(rel[..., 0], rel[..., 1])
         d = state.direction[robots]
-        facing = np.einsum("ik,ijk->ij", d, rel) > 1e-12 * np.maximum(dist, 1e-300)
+        # facing = heading within 90° − GRAZE of the other centre (a tangential touch is none)
+        facing = np.einsum("ik,ijk->ij", d, rel) > GRAZE * np.maximum(dist, 1e-300)
         touching = dist <= 2 * self.radius + self.contact_tol
         touching[np.arange(len(robots)), robots] = False
         cand = touching & facing
@@ -240,7 +242,9 @@ def pair_contact_times(position: np.ndarray, velocity: np.ndarray, radius: float
 
     Closed form for disks of equal radius moving with constant velocities: the smallest t >= 0
     with |Δp + Δv t| = 2R while approaching. Returns (len(rows), m) with ``inf`` where the pair
-    never touches (or is the same robot, or is separating).
+    never touches (or is the same robot, or is separating, or only grazes: the relative path
+    meets the 2R circle at an angle below `GRAZE`, as for walls — two touching robots sliding
+    past each other tangentially are not a contact).
     """
     dp = position[rows, None, :] - position[None, :, :]
     dv = velocity[rows, None, :] - velocity[None, :, :]
@@ -250,7 +254,8 @@ def pair_contact_times(position: np.ndarray, velocity: np.ndarray, radius: float
     disc = b * b - a * c
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (-b - np.sqrt(np.maximum(disc, 0.0))) / a
-    ok = (b < 0) & (disc >= 0) & (a > 0)
+    # disc / a = (2R)² − (closest approach)²: at least sin²(GRAZE) · (2R)²
+    ok = (b < 0) & (disc > a * (GRAZE * 2 * radius) ** 2) & (a > 0)
     t = np.where(ok, np.maximum(t, 0.0), np.inf)
     t[np.arange(len(rows)), rows] = np.inf
     return t
