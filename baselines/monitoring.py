@@ -2,7 +2,8 @@
 
 Alam & Bobadilla's Algorithm 2 enumerates the periodic groups (joint limit cycles) of the simple
 cell mapping of m robots and keeps those that monitor the target regions without a robot-robot
-collision. This module does it for **m = 2** robots, with the resolutions of spec 002 §8.11-13:
+collision. This module does it for **m = 2** robots, with the resolutions of spec 002 §8.4 and
+§8.11-13:
 
 * **Dynamics.** Each robot i follows its own cell map C_i (`CellModel.successor` with its own
   bounce angle φ_i); robots bounce only off the walls and ignore each other (§5, "monitoring
@@ -10,16 +11,26 @@ collision. This module does it for **m = 2** robots, with the resolutions of spe
 * **Joint cells.** ``z = z1 · N2 + z2`` (mixed radix, robot 1 most significant) for
   ``z1, z2`` the single-robot cells, ``N1 = N2 = 8 · n_free`` cells each; ``SINK = N1 · N2`` is one
   extra cell ⊥.
-* **Collisions.** A joint cell whose two robots are in the same position cell — and, with
-  ``forbid_swaps=True``, one whose step makes the two robots swap cells (they would pass through
-  each other) — maps to the absorbing sink ⊥ instead of its product successor. So every cycle
-  other than ⊥ itself, and every transient trajectory into it, is collision-free by construction.
+* **Collisions.** A joint cell whose two robots' position cells are within Chebyshev (king-move)
+  distance ``min_sep_cells`` on the grid — 0 (default) = the same cell; 1, 2, … for cells smaller
+  than the robot diameter (§8.4) — and, with ``forbid_swaps=True``, one whose step makes the two
+  robots swap cells (they would pass through each other) maps to the absorbing sink ⊥ instead of
+  its product successor. So every cycle other than ⊥ itself, and every transient trajectory into
+  it, is collision-free by construction (§8.11(b)). A swap moves each robot one king move, so it
+  starts from Chebyshev distance 1 and ``forbid_swaps`` only matters for ``min_sep_cells=0``.
 * **SCM.** The joint successor array is analysed with `baselines.scm.simple_cell_mapping`
   (array-based, so every joint cell is processed once, as in Algorithm 2's outer loop).
 * **SAMEREGION(F, x̃).** Robot j is assigned region F_j (a set of free position cells);
   ``mode="visit"`` (default): robot j's cycle positions intersect F_j; ``"cover"``: they contain
   all of F_j; ``"any"``: every F_j is visited by some robot each period. The sink group is always
-  rejected. r counts only the accepted groups (§8.12); rejected groups keep their SCM numbers.
+  rejected.
+* **Bookkeeping (§8.12).** r counts only the accepted groups, numbered 0..r-1 in the order of
+  their SCM group numbers. ``MonitoringResult.label`` gives every joint cell one final label:
+  the accepted group number for its periodic cells (P_g) *and* its transient cells (Q_g: the
+  runs that end in an already-labelled group take that group's number), and ``REJECTED = -2``
+  for every cell, periodic or transient, of a rejected group — the sink ⊥ and its basin
+  included. ``MonitoringResult.periodic`` tells P from Q, so every joint cell is exactly one of
+  accepted-periodic, accepted-transient or rejected (§9 item 4).
 
 Because the robots ignore each other, a joint cycle is a pair of individual cycles of periods
 p1, p2 run in lock step: its period is lcm(p1, p2), and one pair of individual cycles gives
@@ -39,10 +50,11 @@ from baselines.scm import SCMResult, simple_cell_mapping
 from bounce_gym.cells import CellModel
 from bounce_gym.errors import ConfigError
 
-__all__ = ["MODES", "MonitoringResult", "default_regions", "joint_successor",
-           "persistent_behavior", "region_indices", "summary"]
+__all__ = ["MODES", "REJECTED", "MonitoringResult", "default_regions", "joint_successor",
+           "persistent_behavior", "region_indices", "summary", "too_close"]
 
 MODES = ("visit", "cover", "any")
+REJECTED = -2  # the label of every cell of a group rejected by SAMEREGION (spec 002 §8.12)
 
 
 @dataclass(eq=False)
@@ -54,9 +66,15 @@ class MonitoringResult:
         phis: (φ1, φ2) in radians.
         regions: two sorted arrays of position indices, F_1 and F_2.
         mode: the SAMEREGION mode.
+        min_sep_cells: the collision distance (Chebyshev, in grid cells; 0 = same cell).
+        forbid_swaps: whether swapping cells in one step counts as a collision.
         scm: the SCM of the joint map (cells 0..N1·N2, the last one the sink).
         sink: the sink cell number ``N1 · N2``.
-        accepted: sorted SCM group numbers of the accepted groups (r of them).
+        accepted: sorted SCM group numbers of the accepted groups (r of them); accepted group g
+            is SCM group ``accepted[g]``.
+        label: (N1·N2 + 1,) int32, Algorithm 2's final group label of every joint cell, sink
+            included (§8.12): g in 0..r-1 for the periodic and transient cells of accepted group
+            g (P_g ∪ Q_g), `REJECTED` (-2) for every cell of a rejected group.
         cycles: the accepted groups' joint cycles (P_1..P_r), in the order of C.
         periods: (r,) their periods.
         basins: (r,) the number of transient joint cells leading into each (|Q_1|..|Q_r|).
@@ -68,9 +86,12 @@ class MonitoringResult:
     phis: tuple[float, float]
     regions: tuple[np.ndarray, np.ndarray]
     mode: str
+    min_sep_cells: int
+    forbid_swaps: bool
     scm: SCMResult
     sink: int
     accepted: np.ndarray
+    label: np.ndarray
     cycles: list[np.ndarray]
     periods: np.ndarray
     basins: np.ndarray
@@ -81,6 +102,12 @@ class MonitoringResult:
     def r(self) -> int:
         """The number of accepted periodic groups."""
         return len(self.accepted)
+
+    @property
+    def periodic(self) -> np.ndarray:
+        """(N1·N2 + 1,) bool, True for periodic joint cells (the SCM's view): with `label`, a
+        cell with ``label >= 0`` is in P_label if periodic and in Q_label otherwise (§8.12)."""
+        return self.scm.periodic
 
     def split(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Single-robot cells (z1, z2) of joint cells z (not the sink)."""
@@ -141,15 +168,31 @@ def default_regions(model: CellModel) -> tuple[np.ndarray, np.ndarray]:
     return left, right
 
 
-def joint_successor(model: CellModel, phis: Sequence[float],
-                    forbid_swaps: bool = False) -> tuple[np.ndarray, int]:
-    """The joint map of two independent robots with a collision sink, vectorised.
+def too_close(model: CellModel, min_sep_cells: int = 0) -> np.ndarray:
+    """(n_positions, n_positions) bool: two robots at position indices (p, q) collide (§8.4).
+
+    True when the grid cells ``model.position_rc[p]`` and ``[q]`` are within Chebyshev distance
+    ``min_sep_cells`` (0 = the same cell only: the identity matrix).
+    """
+    if isinstance(min_sep_cells, bool) or not isinstance(min_sep_cells, int | np.integer) \
+            or min_sep_cells < 0:
+        raise ConfigError(f"min_sep_cells: expected a non-negative integer, got {min_sep_cells!r}")
+    rc = model.position_rc
+    return np.abs(rc[:, None, :] - rc[None, :, :]).max(axis=2) <= min_sep_cells
+
+
+def joint_successor(model: CellModel, phis: Sequence[float], forbid_swaps: bool = False,
+                    min_sep_cells: int = 0) -> tuple[np.ndarray, int]:
+    """The joint map of two independent robots with a collision sink, vectorised (§8.11, §8.13).
 
     Returns ``(successor, n_collision_cells)``: ``successor`` has N1·N2 + 1 entries (the last is
-    the sink ⊥, which maps to itself); joint cells that collide map to ⊥.
+    the sink ⊥, which maps to itself); joint cells that collide — position cells within
+    Chebyshev distance ``min_sep_cells`` (`too_close`), or a swap when ``forbid_swaps`` — map
+    to ⊥.
     """
     if len(phis) != 2:
         raise ConfigError(f"phis: expected two bounce angles, got {len(phis)}")
+    close = too_close(model, min_sep_cells)
     n = model.n_cells
     s1, _ = model.successor(float(phis[0]))
     s2, _ = model.successor(float(phis[1]))
@@ -158,7 +201,7 @@ def joint_successor(model: CellModel, phis: Sequence[float],
     succ = np.empty(sink + 1, dtype=np.int64)
     joint = succ[:sink].reshape(n, n)
     np.add(s1[:, None] * n, s2[None, :], out=joint)
-    collide = pos[:, None] == pos[None, :]
+    collide = close[pos[:, None], pos[None, :]]
     if forbid_swaps:
         npos1, npos2 = model.decode(s1)[0], model.decode(s2)[0]
         collide |= (npos1[:, None] == pos[None, :]) & (npos2[None, :] == pos[:, None])
@@ -173,6 +216,7 @@ def persistent_behavior(
     regions: Sequence[object] | None = None,
     mode: str = "visit",
     forbid_swaps: bool = False,
+    min_sep_cells: int = 0,
 ) -> MonitoringResult:
     """Algorithm 2 for two robots: the collision-free joint limit cycles that monitor F.
 
@@ -182,9 +226,15 @@ def persistent_behavior(
         regions: (F_1, F_2), see `region_indices`; default `default_regions`.
         mode: ``"visit"`` | ``"cover"`` | ``"any"`` (module docstring).
         forbid_swaps: also treat two robots swapping cells in one step as a collision.
+        min_sep_cells: collide when the robots' cells are within this Chebyshev distance
+            (§8.4; 0 = the same cell only, for cells smaller than the robot diameter use ≥ 1).
 
     Returns:
-        A `MonitoringResult`; ``result.r`` is the number of accepted groups.
+        A `MonitoringResult`; ``result.r`` is the number of accepted groups and
+        ``result.label`` Algorithm 2's final label of every joint cell (§8.12).
+
+    Raises:
+        ConfigError: a bad ``mode``, ``regions``, ``phis`` or ``min_sep_cells``.
     """
     if mode not in MODES:
         raise ConfigError(f"mode: expected one of {MODES}, got {mode!r}")
@@ -194,7 +244,7 @@ def persistent_behavior(
         if len(regions) != 2:
             raise ConfigError(f"regions: expected two regions, got {len(regions)}")
         f1, f2 = (region_indices(model, r) for r in regions)
-    succ, n_coll = joint_successor(model, phis, forbid_swaps)
+    succ, n_coll = joint_successor(model, phis, forbid_swaps, min_sep_cells)
     res = simple_cell_mapping(succ)
     sink = len(succ) - 1
     n = model.n_cells
@@ -222,20 +272,22 @@ def persistent_behavior(
         ok = per_group_covers(p1, in1, len(f1)) & per_group_covers(p2, in2, len(f2))
     else:
         ok = (per_group_any(in1[p1] | in1[p2])) & (per_group_any(in2[p1] | in2[p2]))
-    ok[res.group[sink]] = False
-    # belt and braces: an accepted cycle never holds a colliding cell (it would map to the sink)
-    collide_grp = per_group_any(p1 == p2)
-    ok &= ~collide_grp
+    ok[res.group[sink]] = False  # SAMEREGION (b): the sink is the only colliding cycle
     accepted = np.flatnonzero(ok)
+    number = np.full(ng, REJECTED, dtype=np.int32)  # SCM group -> Algorithm 2 label (§8.12)
+    number[accepted] = np.arange(len(accepted), dtype=np.int32)
     transient_counts = np.bincount(res.group[~res.periodic], minlength=ng)
     return MonitoringResult(
         model=model,
         phis=(float(phis[0]), float(phis[1])),
         regions=(f1, f2),
         mode=mode,
+        min_sep_cells=int(min_sep_cells),
+        forbid_swaps=bool(forbid_swaps),
         scm=res,
         sink=sink,
         accepted=accepted,
+        label=number[res.group],
         cycles=[res.cycles[g] for g in accepted],
         periods=res.periods[accepted].copy(),
         basins=transient_counts[accepted].astype(np.int64),
@@ -249,6 +301,7 @@ def summary(result: MonitoringResult) -> dict:
     return {
         "phis_deg": [math.degrees(p) for p in result.phis],
         "mode": result.mode,
+        "min_sep_cells": result.min_sep_cells,
         "n_joint_cells": int(result.sink + 1),
         "n_groups": result.n_groups,
         "r": result.r,

@@ -12,7 +12,8 @@ Cell-model rows (issue #4): `benchmarks.scm_gcm` (SCM on ~9 M cells, GCM on 65 8
 `benchmarks.localization` (DFA construction for the 152-cell lab maps); issue #5:
 `benchmarks.navigation` (all-pairs plans) and `benchmarks.coverage` (α and simulated coverage);
 issue #6: `benchmarks.visibility` (partition + safe graph, random-polygon reachability);
-issue #7: `benchmarks.multirobot` (steps to coverage vs m, the m = 2 monitoring joint map).
+issue #7: `benchmarks.multirobot` (steps to coverage vs m, planning time and memory for
+m = 2..10, the m = 2 monitoring joint map).
 """
 
 from __future__ import annotations

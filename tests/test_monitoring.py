@@ -1,4 +1,4 @@
-"""Persistent monitoring (spec 002 §5 Algorithm 2, §8.11-13, §9 items 5 and 11)."""
+"""Persistent monitoring (spec 002 §5 Algorithm 2, §8.4, §8.11-13, §9 items 4, 5 and 11)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,12 @@ import numpy as np
 import pytest
 
 from baselines.monitoring import (
+    REJECTED,
     default_regions,
     joint_successor,
     persistent_behavior,
     region_indices,
+    too_close,
 )
 from baselines.scm import simple_cell_mapping
 from bounce_gym.cells import CellModel
@@ -75,6 +77,39 @@ def test_basins_lead_into_their_group(result):
         assert not np.any(res.successor[transient] == result.sink)
 
 
+def test_labels_partition_joint_cells(result):
+    """Spec §9 item 4 / §8.12: every joint cell, the sink included, ends up exactly one of
+    accepted-periodic (P_g), accepted-transient (Q_g) or rejected."""
+    label, periodic = result.label, result.periodic
+    n_joint = result.model.n_cells ** 2 + 1
+    assert label.shape == periodic.shape == (n_joint,)
+    assert np.issubdtype(label.dtype, np.integer)
+    assert set(np.unique(label).tolist()) <= {REJECTED, *range(result.r)}
+    accepted = label >= 0
+    n_p, n_q = int((accepted & periodic).sum()), int((accepted & ~periodic).sum())
+    n_rej = int((label == REJECTED).sum())
+    assert n_p + n_q + n_rej == n_joint
+    assert n_p == int(result.periods.sum()) and n_q == int(result.basins.sum())
+    # the sink and its whole basin are rejected
+    sink_group = result.scm.group[result.sink]
+    assert label[result.sink] == REJECTED
+    assert np.all(label[result.scm.group == sink_group] == REJECTED)
+
+
+def test_labels_follow_accepted_groups(result):
+    """The cells labelled g are exactly SCM group ``accepted[g]``: its cycle P_g and its
+    transients Q_g (|Q_g| = ``basins[g]``); the other groups are rejected."""
+    group, periodic = result.scm.group, result.periodic
+    for g, (scm_g, cyc, basin) in enumerate(zip(result.accepted, result.cycles, result.basins,
+                                                strict=True)):
+        mine = result.label == g
+        assert np.array_equal(mine, group == scm_g)
+        assert np.array_equal(np.flatnonzero(mine & periodic), np.sort(cyc))
+        assert int((mine & ~periodic).sum()) == basin
+    rejected = ~np.isin(group, result.accepted)
+    assert np.array_equal(result.label == REJECTED, rejected)
+
+
 def test_sink_is_absorbing(model):
     phi = math.radians(90)
     succ, n_coll = joint_successor(model, [phi, phi])
@@ -114,6 +149,48 @@ def test_swaps_forbidden_is_stricter(model):
     strict = persistent_behavior(model, [phi, phi], forbid_swaps=True)
     assert strict.r <= loose.r
     assert strict.n_collision_cells >= loose.n_collision_cells
+
+
+def test_min_sep_zero_is_same_cell(model):
+    """§8.4: ``min_sep_cells=0`` is the same-cell rule (the identity matrix) and the default."""
+    assert np.array_equal(too_close(model, 0), np.eye(model.n_positions, dtype=bool))
+    phi = math.radians(90)
+    for swaps in (False, True):
+        succ, n_coll = joint_successor(model, [phi, phi], swaps)
+        succ0, n_coll0 = joint_successor(model, [phi, phi], swaps, min_sep_cells=0)
+        assert np.array_equal(succ, succ0) and n_coll == n_coll0
+        a = persistent_behavior(model, [phi, phi], forbid_swaps=swaps)
+        b = persistent_behavior(model, [phi, phi], forbid_swaps=swaps, min_sep_cells=0)
+        assert np.array_equal(a.accepted, b.accepted) and np.array_equal(a.label, b.label)
+
+
+@pytest.mark.parametrize("deg", [90, 135])
+def test_min_sep_cells_shrinks_accepted_set(model, deg):
+    """A larger separation only adds collision cells, so each accepted cycle at separation k is
+    an accepted cycle at k - 1 and r is non-increasing; every accepted cycle keeps Chebyshev
+    separation > k at every step."""
+    phi = math.radians(deg)
+    results = [persistent_behavior(model, [phi, phi], min_sep_cells=k) for k in (0, 1, 2)]
+    rs = [res.r for res in results]
+    assert rs[0] > rs[1] > 0 and rs[1] >= rs[2]
+    for k, res in enumerate(results):
+        z1, z2 = res.split(np.concatenate(res.cycles))
+        rc1 = model.position_rc[model.decode(z1)[0]]
+        rc2 = model.position_rc[model.decode(z2)[0]]
+        assert np.all(np.abs(rc1 - rc2).max(axis=1) > k)
+        if k:
+            before = {tuple(c.tolist()) for c in results[k - 1].cycles}
+            assert {tuple(c.tolist()) for c in res.cycles} <= before
+            assert res.n_collision_cells > results[k - 1].n_collision_cells
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, "1", True, None])
+def test_min_sep_cells_rejects_bad_values(model, bad):
+    phi = math.radians(90)
+    with pytest.raises(ConfigError, match="min_sep_cells"):
+        persistent_behavior(model, [phi, phi], min_sep_cells=bad)
+    with pytest.raises(ConfigError, match="min_sep_cells"):
+        joint_successor(model, [phi, phi], min_sep_cells=bad)
 
 
 def test_modes(model):
