@@ -203,3 +203,26 @@ def test_full_neighbourhood_jumps_change_one_robot_by_one_unit(grid10):
     for t in res.jumps:
         a, b = res.trajectory[t], res.trajectory[t + 1]
         assert np.count_nonzero(a != b) == 1 and jm.valid(b).all()
+
+
+def test_trend_more_robots_cover_grid_10x10_faster(grid10):
+    """Spec 002 §9 item 9 (paper Fig. 7b, layouts unpublished): 20 seeds, φ = 135°, mean steps
+    to full coverage with m = 2 exceed those with m = 5 and are of the order of 10³."""
+    mean = {}
+    for m in (2, 5):
+        jm = JointCellModel(grid10, [135] * m)
+        steps = [plan_coverage(jm, random_start(jm, s), max_steps=30_000,
+                               stop_at_full=True).steps_to_full for s in range(20)]
+        assert None not in steps
+        mean[m] = float(np.mean(steps))
+    assert mean[2] > mean[5]
+    assert 10 ** 2.5 < mean[2] < 10 ** 3.5
+
+
+def test_ten_robots_cover_grid_20x12():
+    """Spec 002 §9 item 10 (paper Fig. 9: 98 %): m = 10, φ = 135° reach ≥ 95 % coverage."""
+    model = CellModel(worlds.get("grid_20x12"), corner_rule="no_squeeze")
+    jm = JointCellModel(model, [135] * 10)
+    for seed in range(3):
+        res = plan_coverage(jm, random_start(jm, seed), max_steps=5000, stop_at_full=True)
+        assert res.final_coverage >= 0.95
