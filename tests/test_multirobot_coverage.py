@@ -226,3 +226,17 @@ def test_ten_robots_cover_grid_20x12():
     for seed in range(3):
         res = plan_coverage(jm, random_start(jm, seed), max_steps=5000, stop_at_full=True)
         assert res.final_coverage >= 0.95
+
+
+@pytest.mark.parametrize("phi, size", [(45, 8), (135, 8), (90, 4), (180, 2)])
+def test_orientation_orbit_sizes(phi, size):
+    """Spec 002 §9 item 2: a robot that can never move (a one-cell world) only rotates by φ; its
+    orbit over the 8 headings has 8 / gcd(φ/45°, 8) cells."""
+    model = _model(["."])
+    jm = JointCellModel(model, [phi])
+    z = np.array([_cell(model, 0, 0, 0)])
+    seen = []
+    while int(z[0]) not in seen:
+        seen.append(int(z[0]))
+        z = jm.step(z)
+    assert len(seen) == size and int(z[0]) == seen[0]
