@@ -76,7 +76,7 @@ class CellBackend(MotionBackend):
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
         # blocking on the grid is a joint property of all robots: recompute for everyone
         state.heading[:] = self.model.bin_of(state.heading) * self.bin_width  # exact bins
-        p, target, blocker = self._plan(state)
+        p, target, blocker = self._last_plan = self._plan(state)
         state.blocked[:] = target < 0
         state.contact_robot[:] = np.where(state.blocked, blocker, NO_CONTACT)
         state.contact_edge[:] = NO_CONTACT
@@ -90,7 +90,8 @@ class CellBackend(MotionBackend):
             raise ValueError("drive needs a finite max_ticks unless until_first_block is set")
         ticks = 0
         while ticks < max_ticks:
-            p, target, _ = self._plan(state)
+            # every change of a pose ends in update_contacts, which keeps the plan it computed
+            p, target, _ = self._last_plan
             movers = np.flatnonzero(target >= 0)
             if len(movers) == 0 and until_first_block:
                 break
