@@ -49,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
     print(format_table(summary))
     folder = Path(config["output"]) / f"{config['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
     write_results(folder, [r.row() for r in rows], summary, config)
-    written = write_plots(folder, plots)
+    written = write_plots(folder, plots, summary)
     print(f"\nwrote {folder}/episodes.csv, results.json and {len(written)} plots")
     return 0
 

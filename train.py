@@ -3,7 +3,9 @@
     python train.py configs/train_navigation.yaml
 
 The model is saved as ``models/<name>/<algo>_seed<seed>.zip``, where ``evaluate.py`` finds it for
-the experiment of the same name. The configuration format is documented in `baselines.rl`.
+the experiment of the same name (or those with ``rl_models: <name>``). With a multi-robot
+PettingZoo id (``python train.py configs/train_multirobot_coverage.yaml``) all robots train one
+shared PPO policy. The configuration format is documented in `baselines.rl`.
 """
 
 from __future__ import annotations

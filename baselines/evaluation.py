@@ -13,10 +13,19 @@ policies to run:
 * ``rl`` — every Stable-Baselines3 model found under ``models/<experiment name>/`` (what
   ``train.py`` saves there).
 
+``rl_models`` (optional) names the sub-folder of ``models/`` to load instead of the experiment
+name, so several experiments can score one trained model.
+
+An experiment whose ``env`` is a multi-robot PettingZoo id (``bounce_gym/MultiBounce*-v0``) runs
+through `baselines.multi_evaluation` — the planners of Alam & Bobadilla, random bouncing, fixed
+angles and one shared PPO policy, with steps to full coverage or monitoring metrics; it may set
+``planner_kwargs`` (see that module).
+
 Results are one row per (experiment, policy, seed): return, steps, ticks and the task's metrics
 (success and ticks to goal vs the planner's predicted cost; coverage fraction and distance to the
-target; final localization candidates). `run` returns them; `evaluate.py` prints the table and
-writes CSV, JSON and plots into a run folder.
+target; final localization candidates). `run` returns them; `summarise` gives mean and standard
+deviation per (experiment, policy); `evaluate.py` prints the tables and writes CSV, JSON and
+plots into a run folder.
 """
 
 from __future__ import annotations
@@ -31,6 +40,12 @@ import gymnasium as gym
 import numpy as np
 
 import bounce_gym  # noqa: F401  (registers the environments)
+from baselines.multi_evaluation import (
+    MULTI_ENV_IDS,
+    is_multi,
+    run_multi_experiment,
+    validate_multi_experiment,
+)
 from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy
 from bounce_gym.errors import ConfigError
 
@@ -88,12 +103,41 @@ DEFAULT_CONFIG: dict = {
             "max_steps": 200,
             "policies": ["planner", "random", "fixed"],
         },
+        {
+            "name": "multirobot-coverage-10x10",
+            "env": "bounce_gym/MultiBounceCoverage-v0",
+            "env_kwargs": {"world": "grid_10x10", "n_robots": 3, "backend": "cell",
+                           "step_mode": "tick", "angles": [45, 90, 135],
+                           "corner_rule": "no_squeeze", "robot_collisions": "bounce",
+                           "turn_angles": [45, -45]},
+            "seeds": [0, 1, 2, 3, 4],
+            "max_steps": 5000,
+            "policies": ["planner", "random", "rl"],
+            "planner_kwargs": {"phi": 135},
+            "rl_models": "multirobot-coverage",
+        },
+        {
+            "name": "multirobot-monitoring-15x15",
+            "env": "bounce_gym/MultiBounceMonitoring-v0",
+            "env_kwargs": {"world": "grid_15x15", "n_robots": 2, "backend": "cell",
+                           "step_mode": "tick", "angles": [45, 90, 135],
+                           "corner_rule": "no_squeeze", "robot_collisions": "ignore",
+                           "task_kwargs": {"regions": [
+                               [[0, 0], [7.5, 0], [7.5, 15], [0, 15]],
+                               [[7.5, 0], [15, 0], [15, 15], [7.5, 15]]]}},
+            "seeds": [0, 1, 2, 3, 4],
+            "max_steps": 300,
+            "policies": ["planner", "random", "rl"],
+            "planner_kwargs": {"phi": 90},
+            "rl_models": "multirobot-monitoring",
+        },
     ],
 }
 
 _TOP_KEYS = {"name": str, "output": str, "models": str, "experiments": list}
 _EXPERIMENT_KEYS = {"name": str, "env": str, "env_kwargs": dict, "seeds": list,
-                    "max_steps": int, "policies": list, "visibility": dict}
+                    "max_steps": int, "policies": list, "visibility": dict,
+                    "planner_kwargs": dict, "rl_models": str}
 
 
 def validate_config(config: object) -> dict:
@@ -120,9 +164,19 @@ def validate_config(config: object) -> dict:
         if exp["name"] in names:
             raise ConfigError(f"{where}.name: {exp['name']!r} is used twice")
         names.add(exp["name"])
-        if exp["env"] not in gym.registry:
+        if is_multi(exp["env"]):
+            validate_multi_experiment(where, exp)
+        elif exp["env"] not in gym.registry:
+            known = sorted(i for i in gym.registry if i.startswith("bounce_gym/"))
             raise ConfigError(f"{where}.env: unknown environment id {exp['env']!r}; registered: "
-                              f"{sorted(i for i in gym.registry if i.startswith('bounce_gym/'))}")
+                              f"{known + list(MULTI_ENV_IDS)}")
+        elif "planner_kwargs" in exp:
+            raise ConfigError(f"{where}.planner_kwargs: only for multi-robot experiments "
+                              f"(env one of {list(MULTI_ENV_IDS)})")
+        if "rl_models" in exp and (Path(exp["rl_models"]).name != exp["rl_models"]
+                                   or exp["rl_models"] in ("", ".", "..")):
+            raise ConfigError(f"{where}.rl_models: expected the name of a folder in models/, "
+                              f"got {exp['rl_models']!r}")
         if not all(isinstance(s, int) and not isinstance(s, bool) for s in exp["seeds"]):
             raise ConfigError(f"{where}.seeds: expected a list of integers, got {exp['seeds']!r}")
         if exp["max_steps"] < 1:
@@ -185,7 +239,7 @@ def policies_for(experiment: Mapping, env: gym.Env, models_dir: Path) -> list[Po
         elif kind == "fixed" and discrete:
             out += [FixedAnglePolicy(i, math.degrees(a)) for i, a in enumerate(angles)]
         elif kind == "rl":
-            out += rl_policies(models_dir / experiment["name"])
+            out += rl_policies(models_dir / experiment.get("rl_models", experiment["name"]))
     return out
 
 
@@ -299,7 +353,8 @@ def run(config: Mapping, progress: bool = True) -> tuple[list[EpisodeResult], di
     """Run every experiment of a (validated) configuration.
 
     Returns the result rows and, per experiment, the data for plots (trajectories, coverage
-    histograms and targets, mixture weights).
+    histograms and targets, mixture weights; for multi-robot experiments see
+    `baselines.multi_evaluation.run_multi_experiment`).
     """
     from tqdm import tqdm
 
@@ -307,42 +362,61 @@ def run(config: Mapping, progress: bool = True) -> tuple[list[EpisodeResult], di
     models = Path(config["models"])
     rows: list[EpisodeResult] = []
     plots: dict = {}
-    jobs = [(exp, seed) for exp in config["experiments"] for seed in exp["seeds"]]
-    for exp, seed in tqdm(jobs, desc="evaluating", disable=not progress, unit="seed"):
-        env = make_env(exp)
-        task = env.unwrapped.task.name
-        scenario = None
-        if "visibility" in exp:
-            from baselines.visibility.scenario import VisibilityScenario
-
-            scenario = VisibilityScenario.for_experiment(env, exp["visibility"])
-            exp = {**exp, "_scenario": scenario}
-        for policy in policies_for(exp, env, models):
-            summary, path = run_episode(env, policy, seed, exp["max_steps"], scenario)
-            ticks = int(summary["info"]["ticks"])
-            metrics = task_metrics(task, summary, policy)
-            if scenario is not None:
-                metrics["success"] = summary["scenario_success"]
-            rows.append(EpisodeResult(exp["name"], policy.name, seed, summary["steps"], ticks,
-                                      float(summary["return"]), metrics))
-            data = plots.setdefault(exp["name"], {"world": env.unwrapped.world, "task": task,
-                                                  "paths": {}, "coverage": {},
-                                                  "visibility": scenario})
-            data["paths"].setdefault(policy.name, np.array(path))
-            if task == "coverage":
-                core_task = env.unwrapped.task
-                data["coverage"].setdefault(policy.name, core_task.visits.copy())
-                data["target"] = core_task.target
-                if hasattr(policy, "alpha"):
-                    data["alpha"] = (policy.alpha, [math.degrees(a) for a in
-                                                    env.unwrapped.options.angles[0]])
-        env.close()
+    total = sum(len(exp["seeds"]) for exp in config["experiments"])
+    with tqdm(total=total, desc="evaluating", disable=not progress, unit="seed") as bar:
+        for exp in config["experiments"]:
+            if is_multi(exp["env"]):
+                episodes, plots[exp["name"]] = run_multi_experiment(exp, models, bar.update)
+                rows += [EpisodeResult(exp["name"], policy, seed, e["steps"], e["ticks"],
+                                       e["return"], e["metrics"])
+                         for policy, seed, e in episodes]
+                continue
+            for seed in exp["seeds"]:
+                _run_single_seed(exp, seed, models, rows, plots)
+                bar.update()
     return rows, plots
 
 
+def _run_single_seed(exp: Mapping, seed: int, models: Path, rows: list, plots: dict) -> None:
+    """Every policy of a single-robot experiment on one seed; appends rows and plot data."""
+    env = make_env(exp)
+    task = env.unwrapped.task.name
+    scenario = None
+    if "visibility" in exp:
+        from baselines.visibility.scenario import VisibilityScenario
+
+        scenario = VisibilityScenario.for_experiment(env, exp["visibility"])
+        exp = {**exp, "_scenario": scenario}
+    for policy in policies_for(exp, env, models):
+        summary, path = run_episode(env, policy, seed, exp["max_steps"], scenario)
+        ticks = int(summary["info"]["ticks"])
+        metrics = task_metrics(task, summary, policy)
+        if scenario is not None:
+            metrics["success"] = summary["scenario_success"]
+        rows.append(EpisodeResult(exp["name"], policy.name, seed, summary["steps"], ticks,
+                                  float(summary["return"]), metrics))
+        data = plots.setdefault(exp["name"], {"world": env.unwrapped.world, "task": task,
+                                              "paths": {}, "coverage": {},
+                                              "visibility": scenario})
+        data["paths"].setdefault(policy.name, np.array(path))
+        if task == "coverage":
+            core_task = env.unwrapped.task
+            data["coverage"].setdefault(policy.name, core_task.visits.copy())
+            data["target"] = core_task.target
+            if hasattr(policy, "alpha"):
+                data["alpha"] = (policy.alpha, [math.degrees(a) for a in
+                                                env.unwrapped.options.angles[0]])
+    env.close()
+
+
 def summarise(rows: list[EpisodeResult]) -> list[dict]:
-    """Mean of every numeric column per (experiment, policy), over the episodes that have it
-    (``ticks_to_goal`` exists only for successful episodes)."""
+    """Per (experiment, policy): the mean and the population standard deviation (``<key>_std``)
+    of every numeric column, over the episodes that have it (``ticks_to_goal`` exists only for
+    successful episodes, ``steps_to_full`` only for episodes that reached full coverage).
+
+    A column whose values are all the same integer (``robots``) stays that integer. Where
+    episodes report ``steps_to_full``, ``full`` counts those that reached full coverage.
+    """
     groups: dict[tuple[str, str], list[dict]] = {}
     for r in rows:
         groups.setdefault((r.experiment, r.policy), []).append(r.row())
@@ -355,6 +429,12 @@ def summarise(rows: list[EpisodeResult]) -> list[dict]:
                 continue
             values = [i[key] for i in items if key in i and i[key] is not None]
             if values and all(isinstance(v, bool | int | float | np.floating) for v in values):
-                entry[key] = float(np.mean([float(v) for v in values]))
+                numbers = np.array([float(v) for v in values])
+                constant_int = all(isinstance(v, int) and not isinstance(v, bool) and v == values[0]
+                                   for v in values)
+                entry[key] = values[0] if constant_int else float(numbers.mean())
+                entry[f"{key}_std"] = float(numbers.std())
+        if "steps_to_full" in keys:
+            entry["full"] = sum(i.get("steps_to_full") is not None for i in items)
         out.append(entry)
     return out

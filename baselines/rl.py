@@ -16,6 +16,14 @@ A training configuration (YAML, see ``configs/train_*.yaml``)::
     models: models                   # saved as models/<name>/<algo>_seed<seed>.zip
 
 Training resumes from the checkpoint of the same name when ``resume: true``.
+
+**Several robots.** With a PettingZoo id (``bounce_gym/MultiBounceCoverage-v0``, …) the robots
+share one policy (parameter sharing): the parallel env becomes one SB3 VecEnv with a slot per
+robot (`baselines.marl.ParallelToVecEnv`, wrapped in ``VecMonitor``), so ``n_envs`` must stay 1
+and ``algo`` must be ``ppo``; ``env_kwargs`` may set ``max_cycles`` (the episode length; see
+``configs/train_multirobot_coverage.yaml``). `baselines.multi_evaluation` runs the saved model
+as one shared policy for every robot; ``rl_models: <name>`` lets several evaluation experiments
+(e.g. m = 2..5) use it.
 """
 
 from __future__ import annotations
@@ -28,9 +36,11 @@ from pathlib import Path
 import gymnasium as gym
 
 import bounce_gym  # noqa: F401  (registers the environments)
+from baselines.multi_evaluation import MULTI_ENV_IDS, is_multi
 from bounce_gym.errors import ConfigError
 
 ALGOS = ("ppo", "dqn", "recurrentppo")
+MULTI_ALGOS = ("ppo",)
 _KEYS = {"name": str, "env": str, "env_kwargs": dict, "algo": str, "total_timesteps": int,
          "seed": int, "n_envs": int, "hyperparams": dict, "checkpoint_every": int,
          "tensorboard": bool, "models": str, "resume": bool}
@@ -53,17 +63,43 @@ def validate_train_config(config: object) -> dict:
     config = copy.deepcopy(dict(config))
     if config["algo"] not in ALGOS:
         raise ConfigError(f"config.algo: expected one of {ALGOS}, got {config['algo']!r}")
-    if config["env"] not in gym.registry:
-        raise ConfigError(f"config.env: unknown environment id {config['env']!r}")
+    multi = is_multi(config["env"])
+    if not multi and config["env"] not in gym.registry:
+        raise ConfigError(f"config.env: unknown environment id {config['env']!r}; multi-robot "
+                          f"ids are {list(MULTI_ENV_IDS)}")
+    if multi and config["algo"] not in MULTI_ALGOS:
+        raise ConfigError(f"config.algo: a multi-robot env trains one shared policy with one of "
+                          f"{MULTI_ALGOS}, got {config['algo']!r}")
     if config["total_timesteps"] < 1:
         raise ConfigError("config.total_timesteps: expected an integer >= 1")
-    defaults = {"env_kwargs": {}, "seed": 0, "n_envs": 4, "hyperparams": {},
+    defaults = {"env_kwargs": {}, "seed": 0, "n_envs": 1 if multi else 4, "hyperparams": {},
                 "checkpoint_every": 0, "tensorboard": False, "models": "models", "resume": False}
     for key, value in defaults.items():
         config.setdefault(key, value)
     if config["n_envs"] < 1:
         raise ConfigError("config.n_envs: expected an integer >= 1")
+    if multi and config["n_envs"] != 1:
+        raise ConfigError("config.n_envs: a multi-robot env is one VecEnv with a slot per robot; "
+                          "n_envs must be 1")
     return config
+
+
+def make_train_env(config: Mapping):
+    """The VecEnv to train on: SB3's ``make_vec_env`` copies, or for a PettingZoo id the
+    parameter-sharing adapter (one slot per robot) under ``VecMonitor``."""
+    if is_multi(config["env"]):
+        import pettingzoo
+        from stable_baselines3.common.vec_env import VecMonitor
+
+        from baselines.marl import ParallelToVecEnv
+
+        return VecMonitor(ParallelToVecEnv(pettingzoo.make("parallel", config["env"],
+                                                           **config["env_kwargs"])))
+    from stable_baselines3.common.env_util import make_vec_env
+
+    n_envs = 1 if config["algo"] == "dqn" else config["n_envs"]
+    return make_vec_env(config["env"], n_envs=n_envs, seed=config["seed"],
+                        env_kwargs=config["env_kwargs"])
 
 
 def model_path(config: Mapping) -> Path:
@@ -75,13 +111,10 @@ def train(config: Mapping, progress: bool = True) -> Path:
     from sb3_contrib import RecurrentPPO
     from stable_baselines3 import DQN, PPO
     from stable_baselines3.common.callbacks import CheckpointCallback
-    from stable_baselines3.common.env_util import make_vec_env
 
     config = validate_train_config(config)
     algo_class = {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[config["algo"]]
-    n_envs = 1 if config["algo"] == "dqn" else config["n_envs"]
-    env = make_vec_env(config["env"], n_envs=n_envs, seed=config["seed"],
-                       env_kwargs=config["env_kwargs"])
+    env = make_train_env(config)
     out = model_path(config)
     out.parent.mkdir(parents=True, exist_ok=True)
     log_dir = str(out.parent / "tensorboard") if config["tensorboard"] else None
@@ -101,7 +134,7 @@ def train(config: Mapping, progress: bool = True) -> Path:
         reset = True
     callbacks = []
     if config["checkpoint_every"]:
-        callbacks.append(CheckpointCallback(max(config["checkpoint_every"] // n_envs, 1),
+        callbacks.append(CheckpointCallback(max(config["checkpoint_every"] // env.num_envs, 1),
                                             str(out.parent / "checkpoints"),
                                             name_prefix=out.stem))
     model.learn(config["total_timesteps"], callback=callbacks or None, progress_bar=progress,

@@ -481,6 +481,13 @@ class MonitoringTask(Task):
 
     Reward of robot i per step: the fraction of the step's ticks it spent in its region minus
     ``contact_penalty`` if it ended the step blocked by another robot.
+
+    ``info`` per step: ``in_region_fraction`` (per robot, the share of the step's ticks spent in
+    its region), ``robot_contacts`` (robots that ended the step blocked by another robot) and
+    ``encounters`` — robot pairs that are together at the end of the step: closer than
+    2 · robot_radius, or, on the ``cell`` backend or with radius 0, in the same position cell
+    (cell size = step_length). With ``robot_collisions="ignore"`` robots pass through each
+    other, so encounters are the collisions Algorithm 2's accepted cycles avoid.
     """
 
     name = "monitoring"
@@ -532,8 +539,20 @@ class MonitoringTask(Task):
         total = max(events.ticks, 1)
         rewards = time_in / total - self.contact_penalty * events.robot_contact
         info = {"in_region_fraction": (time_in / total).tolist(),
-                "robot_contacts": int(events.robot_contact.sum())}
+                "robot_contacts": int(events.robot_contact.sum()),
+                "encounters": self._encounters(events.end)}
         return rewards, np.zeros(m, dtype=bool), info
+
+    def _encounters(self, points: np.ndarray) -> int:
+        """Robot pairs together at ``points`` (m, 2): see the class docstring."""
+        opts = self.options
+        i, j = np.triu_indices(len(points), k=1)
+        if opts.backend == "cell" or opts.robot_radius == 0:
+            cells = np.floor((points - opts.world.bounds[:2]) / opts.step_length)
+            together = np.all(cells[i] == cells[j], axis=1)
+        else:
+            together = np.hypot(*(points[i] - points[j]).T) < 2 * opts.robot_radius
+        return int(together.sum())
 
     def render_layers(self):
         rings = []
