@@ -265,8 +265,8 @@ def run_multi_experiment(exp: Mapping, models_dir: Path, on_seed: Callable[[], N
     task = inner.core.task
     policies = multi_policies_for(exp, env, models_dir)
     episodes = []
-    plot = {"world": inner.options.world, "task": task.name, "multi": True, "paths": {},
-            "visits": {}}
+    plot = {"world": inner.options.world, "backend": inner.options.backend, "task": task.name,
+            "multi": True, "paths": {}, "visits": {}}
     for k, seed in enumerate(exp["seeds"]):
         for policy in policies:
             summary, path = run_multi_episode(env, policy, seed, exp["max_steps"], record=k == 0)

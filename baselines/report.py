@@ -216,14 +216,15 @@ def _multi_plots(folder: Path, name: str, data: dict) -> list[Path]:
 
 def _steps_vs_robots(folder: Path, plots: dict, summary: list[dict]) -> list[Path]:
     """Steps to full coverage (mean ± std over the episodes that reached it) against the number
-    of robots, one panel per world with at least two multi-robot coverage experiments."""
+    of robots, one figure per (world, backend) with at least two team sizes."""
     import matplotlib.pyplot as plt
 
     by_world: dict[str, list[dict]] = {}
     for row in summary:
         data = plots.get(row["experiment"], {})
         if data.get("multi") and row.get("steps_to_full") is not None:
-            by_world.setdefault(data["world"].name, []).append(row)
+            key = f"{data['world'].name}-{data['backend']}"
+            by_world.setdefault(key, []).append(row)
     written = []
     for world, rows in by_world.items():
         if len({r["robots"] for r in rows}) < 2:

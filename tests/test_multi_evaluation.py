@@ -233,7 +233,7 @@ def test_shared_ppo_trained_by_train_py_is_scored_by_evaluate(tmp_path):
     summary = {(s["experiment"], s["policy"]): s for s in results["summary"]}
     assert {"coverage", "coverage_std", "full"} <= set(summary[("m3", "rl ppo_seed0")])
     assert all(summary[(m, "random")]["full"] == 2 for m in ("m3", "m4"))
-    for name in ("m3-trajectories", "m3-visits", "steps-vs-robots-grid_10x10"):
+    for name in ("m3-trajectories", "m3-visits", "steps-vs-robots-grid_10x10-cell"):
         assert (folder / f"{name}.png").stat().st_size > 1000
     # a model for other action spaces is refused with the field named
     wrong = dict(experiments[0], env_kwargs=dict(GRID, n_robots=3, turn_angles=[]))
