@@ -88,23 +88,28 @@ class CoveragePlanPolicy(MultiPolicy):
         self.result: CoverageResult | None = None
 
     @classmethod
-    def for_env(cls, env, phi: float = 135.0, neighbors: str = "rotation",
+    def for_env(cls, env, phi: object = 135.0, neighbors: str = "rotation",
                 max_steps: int | None = None, lookahead: int = 300, cell_bins: int = 8,
                 corner_rule: str = "no_squeeze") -> CoveragePlanPolicy:
         """The planner for a `MultiBounceEnv` (parallel form, discrete actions, tick mode).
 
-        ``phi`` (degrees, every robot) must be in each robot's angle set; the env's
-        ``turn_angles`` must hold ±360°/bins for the neighbour jumps. ``max_steps`` defaults to
-        the env's ``max_cycles``. ``cell_bins`` and ``corner_rule`` apply on continuous backends
-        (the cell backend brings its own model).
+        ``phi``: degrees, one for every robot or one per robot (spec 002 §8.9: a fixed φ_i per
+        robot); each must be in that robot's angle set. The env's ``turn_angles`` must hold
+        ±360°/bins for the neighbour jumps. ``max_steps`` defaults to the env's
+        ``max_cycles``. ``cell_bins`` and ``corner_rule`` apply on continuous backends (the cell
+        backend brings its own model).
         """
         env = getattr(env, "unwrapped", env)
         _check_tick_mode(env, "CoveragePlanPolicy")
         model = cell_model_of(env, cell_bins, corner_rule)
         m = env.options.n_robots
-        jm = JointCellModel(model, [float(phi)] * m,
-                            collisions=env.options.robot_collisions == "bounce")
-        phi_index = [_angle_index(env, i, float(phi)) for i in range(m)]
+        try:
+            phis = [float(p) for p in np.broadcast_to(np.asarray(phi, dtype=float), (m,))]
+        except ValueError:
+            raise ConfigError(f"phi: expected one angle or {m} (one per robot), got {phi!r}") \
+                from None
+        jm = JointCellModel(model, phis, collisions=env.options.robot_collisions == "bounce")
+        phi_index = [_angle_index(env, i, p) for i, p in enumerate(phis)]
         width = 360.0 / model.n_bins
         turns = np.degrees(env.options.turn_angles)
         turn_index: dict[int, int] = {}

@@ -58,6 +58,16 @@ def test_coverage_plan_is_executed_exactly(m, seed):
         assert policy.result.jumps  # these seeds need neighbour jumps: turn commands ran
 
 
+def test_one_angle_per_robot():
+    env = MultiBounceEnv(n_robots=3, **COVER)
+    policy = CoveragePlanPolicy.for_env(env, phi=[45, 135, 90])
+    assert policy.joint_model.angles == [45.0, 135.0, 90.0] and policy.phi_index == [0, 2, 1]
+    cells, coverage, _ = _run(env, policy, 2, plan_only=True)
+    assert np.array_equal(cells, np.array(policy.result.trajectory))
+    with pytest.raises(ConfigError, match="one per robot"):
+        CoveragePlanPolicy.for_env(env, phi=[45, 135])
+
+
 def test_jumps_are_one_turn_command_and_the_rest_wait():
     env = MultiBounceEnv(n_robots=2, **COVER)
     policy = CoveragePlanPolicy.for_env(env)
