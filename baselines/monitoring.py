@@ -47,11 +47,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from baselines.scm import SCMResult, simple_cell_mapping
-from bounce_gym.cells import CellModel
+from bounce_gym.cells import CellModel, too_close
 from bounce_gym.errors import ConfigError
 
 __all__ = ["MODES", "REJECTED", "MonitoringResult", "default_regions", "joint_successor",
-           "persistent_behavior", "region_indices", "summary", "too_close"]
+           "persistent_behavior", "region_indices", "summary"]
 
 MODES = ("visit", "cover", "any")
 REJECTED = -2  # the label of every cell of a group rejected by SAMEREGION (spec 002 §8.12)
@@ -168,31 +168,18 @@ def default_regions(model: CellModel) -> tuple[np.ndarray, np.ndarray]:
     return left, right
 
 
-def too_close(model: CellModel, min_sep_cells: int = 0) -> np.ndarray:
-    """(n_positions, n_positions) bool: two robots at position indices (p, q) collide (§8.4).
-
-    True when the grid cells ``model.position_rc[p]`` and ``[q]`` are within Chebyshev distance
-    ``min_sep_cells`` (0 = the same cell only: the identity matrix).
-    """
-    if isinstance(min_sep_cells, bool) or not isinstance(min_sep_cells, int | np.integer) \
-            or min_sep_cells < 0:
-        raise ConfigError(f"min_sep_cells: expected a non-negative integer, got {min_sep_cells!r}")
-    rc = model.position_rc
-    return np.abs(rc[:, None, :] - rc[None, :, :]).max(axis=2) <= min_sep_cells
-
-
 def joint_successor(model: CellModel, phis: Sequence[float], forbid_swaps: bool = False,
                     min_sep_cells: int = 0) -> tuple[np.ndarray, int]:
     """The joint map of two independent robots with a collision sink, vectorised (§8.11, §8.13).
 
     Returns ``(successor, n_collision_cells)``: ``successor`` has N1·N2 + 1 entries (the last is
     the sink ⊥, which maps to itself); joint cells that collide — position cells within
-    Chebyshev distance ``min_sep_cells`` (`too_close`), or a swap when ``forbid_swaps`` — map
-    to ⊥.
+    Chebyshev distance ``min_sep_cells`` (`bounce_gym.cells.too_close`), or a swap when
+    ``forbid_swaps`` — map to ⊥.
     """
     if len(phis) != 2:
         raise ConfigError(f"phis: expected two bounce angles, got {len(phis)}")
-    close = too_close(model, min_sep_cells)
+    close = too_close(model.position_rc, min_sep_cells)
     n = model.n_cells
     s1, _ = model.successor(float(phis[0]))
     s2, _ = model.successor(float(phis[1]))

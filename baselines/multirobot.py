@@ -15,6 +15,8 @@ robots would swap cells, or when its target is the cell of a robot that stays. M
 that another robot vacates is allowed. Blocked robots stay and rotate CCW by their own φ_i; the
 others move and keep their heading. This is exactly `bounce_gym.dynamics.cell_backend.CellBackend`
 ticked with ``step_mode="tick"``. A robot–robot collision counts once per colliding pair per step.
+``min_sep_cells`` = s > 0 (§8.4, for cells smaller than the robot) widens "the same cell" to
+"within Chebyshev distance s" in these rules and in the validity of joint cells.
 
 **Coverage** (§8.5–8.8): follow the joint map while the next joint cell is unprocessed; at a
 processed cell, if coverage is incomplete, jump to the best unprocessed neighbour — ±Δθ of one
@@ -34,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bounce_gym.cells import CellModel, resolve_moves
+from bounce_gym.cells import CellModel, resolve_moves, too_close
 from bounce_gym.errors import ConfigError
 
 NEIGHBORS = ("rotation", "full")
@@ -49,9 +51,12 @@ class JointCellModel:
             is not accepted because m is taken from it). Each must be a multiple of the bins.
         collisions: robot–robot collisions block (the coverage task); ``False`` = the robots
             ignore each other and may share cells.
+        min_sep_cells: with collisions, the Chebyshev distance at or below which two robots
+            collide (0 = the same cell; module docstring).
     """
 
-    def __init__(self, model: CellModel, angles_per_robot, collisions: bool = True) -> None:
+    def __init__(self, model: CellModel, angles_per_robot, collisions: bool = True,
+                 min_sep_cells: int = 0) -> None:
         angles = [float(a) for a in np.atleast_1d(np.asarray(angles_per_robot, dtype=float))]
         if not angles:
             raise ConfigError("angles_per_robot: expected one angle per robot")
@@ -65,6 +70,9 @@ class JointCellModel:
         self.collisions = bool(collisions)
         if self.collisions and model.n_positions < self.m:
             raise ConfigError(f"{self.m} robots do not fit in {model.n_positions} free cells")
+        close = too_close(model.position_rc, min_sep_cells)  # validates min_sep_cells
+        self.min_sep_cells = int(min_sep_cells)
+        self.close = close if self.collisions and self.min_sep_cells > 0 else None
         self.n_robot_cells = model.n_cells
         self.n_joint = model.n_cells ** self.m  # a Python int: may exceed int64
 
@@ -100,9 +108,13 @@ class JointCellModel:
         joint = np.atleast_2d(joint)
         ok = np.all((joint >= 0) & (joint < self.n_robot_cells), axis=1)
         if self.collisions and self.m > 1:
-            p = joint % self.model.n_positions
-            ps = np.sort(p, axis=1)
-            ok &= ~np.any(ps[:, 1:] == ps[:, :-1], axis=1)
+            p = np.where(ok[:, None], joint, 0) % self.model.n_positions
+            if self.close is None:
+                ps = np.sort(p, axis=1)
+                ok &= ~np.any(ps[:, 1:] == ps[:, :-1], axis=1)
+            else:
+                near = self.close[p[:, :, None], p[:, None, :]] & ~np.eye(self.m, dtype=bool)
+                ok &= ~near.any(axis=(1, 2))
         return ok
 
     # -- the map ----------------------------------------------------------------------------
@@ -113,7 +125,7 @@ class JointCellModel:
         target0 = self.model.targets[k, p]
         if not self.collisions or self.m == 1:
             return p, k, target0, np.zeros(len(joint), dtype=np.int64)
-        stays, _, pairs = resolve_moves(p, target0)
+        stays, _, pairs = resolve_moves(p, target0, self.close)
         return p, k, np.where(stays, -1, target0), pairs
 
     def step(self, joint: np.ndarray, return_collisions: bool = False):
@@ -162,14 +174,24 @@ class JointCellModel:
         return out[self.valid(out)]
 
     def random_joint(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
-        """Random valid joint cells (n, m): distinct free cells (with collisions), uniform bins."""
+        """Random valid joint cells (n, m): distinct free cells (with collisions; at least
+        ``min_sep_cells`` + 1 apart, by rejection), uniform bins."""
         npos = self.model.n_positions
-        if self.collisions:
-            p = np.array([rng.choice(npos, self.m, replace=False) for _ in range(n)])
-        else:
-            p = rng.integers(0, npos, (n, self.m))
-        k = rng.integers(0, self.model.n_bins, (n, self.m))
-        return self.model.cell_id(p, k).reshape(n, self.m)
+        out = np.empty((n, self.m), dtype=np.int64)
+        for row in range(n):
+            for _ in range(10_000):
+                if self.collisions:
+                    p = rng.choice(npos, self.m, replace=False)
+                else:
+                    p = rng.integers(0, npos, self.m)
+                k = rng.integers(0, self.model.n_bins, self.m)
+                out[row] = self.model.cell_id(p, k)
+                if self.valid(out[row])[0]:
+                    break
+            else:
+                raise ConfigError(f"could not place {self.m} robots min_sep_cells = "
+                                  f"{self.min_sep_cells} apart in 10,000 tries")
+        return out
 
     def reachable_positions(self, start_positions) -> np.ndarray:
         """Free position cells reachable by king moves allowed by the corner rule from any of

@@ -108,7 +108,8 @@ class CoveragePlanPolicy(MultiPolicy):
         except ValueError:
             raise ConfigError(f"phi: expected one angle or {m} (one per robot), got {phi!r}") \
                 from None
-        jm = JointCellModel(model, phis, collisions=env.options.robot_collisions == "bounce")
+        jm = JointCellModel(model, phis, collisions=env.options.robot_collisions == "bounce",
+                            min_sep_cells=env.options.backend_options.get("min_sep_cells", 0))
         phi_index = [_angle_index(env, i, p) for i, p in enumerate(phis)]
         width = 360.0 / model.n_bins
         turns = np.degrees(env.options.turn_angles)

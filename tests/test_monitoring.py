@@ -13,10 +13,9 @@ from baselines.monitoring import (
     joint_successor,
     persistent_behavior,
     region_indices,
-    too_close,
 )
 from baselines.scm import simple_cell_mapping
-from bounce_gym.cells import CellModel
+from bounce_gym.cells import CellModel, too_close
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import world_from_grid
@@ -153,7 +152,7 @@ def test_swaps_forbidden_is_stricter(model):
 
 def test_min_sep_zero_is_same_cell(model):
     """§8.4: ``min_sep_cells=0`` is the same-cell rule (the identity matrix) and the default."""
-    assert np.array_equal(too_close(model, 0), np.eye(model.n_positions, dtype=bool))
+    assert np.array_equal(too_close(model.position_rc, 0), np.eye(model.n_positions, dtype=bool))
     phi = math.radians(90)
     for swaps in (False, True):
         succ, n_coll = joint_successor(model, [phi, phi], swaps)

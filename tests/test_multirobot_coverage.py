@@ -7,8 +7,9 @@ import pytest
 
 from baselines.multirobot import JointCellModel, plan_coverage, random_start
 from bounce_gym import worlds
-from bounce_gym.cells import CellModel
+from bounce_gym.cells import CellModel, resolve_moves, too_close
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
+from bounce_gym.errors import ConfigError
 
 
 def _model(rows, rule="target_only"):
@@ -240,3 +241,59 @@ def test_orientation_orbit_sizes(phi, size):
         seen.append(int(z[0]))
         z = jm.step(z)
     assert len(seen) == size and int(z[0]) == seen[0]
+
+
+def test_min_sep_zero_is_the_same_cell_rule(grid10):
+    jm0, jm = JointCellModel(grid10, [135] * 5), JointCellModel(grid10, [135] * 5, min_sep_cells=0)
+    x = jm0.random_joint(np.random.default_rng(1), 64)
+    assert jm.close is None
+    p, k = grid10.decode(x)
+    target = grid10.targets[k, p]
+    plain = resolve_moves(p, target)
+    explicit = resolve_moves(p, target, too_close(grid10.position_rc, 0))
+    for a, b in zip(plain, explicit, strict=True):
+        assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("sep", [1, 2])
+def test_min_sep_cells_keeps_robots_apart(grid10, sep):
+    """Spec 002 §8.4 option: robots never come within Chebyshev distance min_sep_cells."""
+    jm = JointCellModel(grid10, [135] * 4, min_sep_cells=sep)
+    x = jm.random_joint(np.random.default_rng(0), 32)
+    rc = grid10.position_rc
+    for _ in range(200):
+        x = jm.step(x)
+        assert jm.valid(x).all()
+        pos = rc[x % grid10.n_positions]  # (32, 4, 2)
+        cheb = np.abs(pos[:, :, None] - pos[:, None, :]).max(axis=3) + 100 * np.eye(4, dtype=int)
+        assert cheb.min() > sep
+
+
+def test_min_sep_cells_in_the_env_agrees_with_the_joint_map():
+    env = MultiBounceEnv(world="grid_10x10", n_robots=4, backend="cell", angles=[135],
+                         step_mode="tick", robot_collisions="bounce", min_sep_cells=1)
+    env.reset(seed=3)
+    backend, state = env.core.dynamics.backend, env.core.state
+    jm = JointCellModel(backend.model, [135] * 4, min_sep_cells=1)
+    x = backend.cells(state)
+    assert jm.valid(x)[0]
+    for _ in range(300):
+        x = jm.step(x)
+        env.step(dict.fromkeys(env.agents, 0))
+        assert np.array_equal(x, backend.cells(state))
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(min_sep_cells=1, backend="kinematic", robot_radius=0.3), "only the cell backend"),
+    (dict(min_sep_cells=-1), "min_sep_cells: expected a non-negative integer"),
+    (dict(min_sep_cells=1.5), "min_sep_cells: expected a non-negative integer"),
+])
+def test_min_sep_cells_bad_arguments(kwargs, message):
+    with pytest.raises(ConfigError, match=message):
+        MultiBounceEnv(**{"world": "grid_10x10", "n_robots": 2, "backend": "cell", **kwargs})
+
+
+def test_min_sep_cells_rejects_close_starts():
+    env = MultiBounceEnv(world="grid_10x10", n_robots=2, backend="cell", min_sep_cells=1)
+    with pytest.raises(ConfigError, match="within min_sep_cells"):
+        env.reset(options={"start": {"position": [[0.5, 0.5], [1.5, 1.5]], "heading": [0, 0]}})

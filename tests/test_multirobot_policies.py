@@ -58,6 +58,15 @@ def test_coverage_plan_is_executed_exactly(m, seed):
         assert policy.result.jumps  # these seeds need neighbour jumps: turn commands ran
 
 
+def test_coverage_plan_with_a_minimum_separation_is_executed_exactly():
+    env = MultiBounceEnv(n_robots=3, min_sep_cells=1, **COVER)
+    policy = CoveragePlanPolicy.for_env(env)
+    assert policy.joint_model.min_sep_cells == 1
+    cells, coverage, _ = _run(env, policy, 0, plan_only=True)
+    assert np.array_equal(cells, np.array(policy.result.trajectory))
+    assert coverage[-1] == 1.0 and len(coverage) == policy.predicted_steps_to_full
+
+
 def test_one_angle_per_robot():
     env = MultiBounceEnv(n_robots=3, **COVER)
     policy = CoveragePlanPolicy.for_env(env, phi=[45, 135, 90])

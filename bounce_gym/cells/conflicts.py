@@ -5,20 +5,37 @@ also blocked when its target is another moving robot's target, when two robots w
 or when its target is the cell of a robot that stays — iterated to a fixpoint. Moving into a cell
 that another robot is vacating is allowed. Vectorised over a batch of joint states; shared by the
 ``cell`` backend of the environments and the joint cell model of the multi-robot planners.
+
+**Minimum separation** (§8.4's ``min_sep_cells`` s, for cells smaller than the robot diameter):
+"the same cell" becomes "within Chebyshev distance s" (`too_close`) — a move is blocked when its
+target is that close to another mover's target or to a stayer's cell; s = 0 is the rule above.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from bounce_gym.errors import ConfigError
 
-def resolve_moves(position: np.ndarray, target: np.ndarray
+
+def too_close(position_rc: np.ndarray, min_sep_cells: int = 0) -> np.ndarray:
+    """(n, n) bool over position cells with grid coordinates ``position_rc`` (n, 2): True where
+    two robots would collide — Chebyshev distance ≤ ``min_sep_cells`` (0: the identity)."""
+    if isinstance(min_sep_cells, bool) or not isinstance(min_sep_cells, int | np.integer) \
+            or min_sep_cells < 0:
+        raise ConfigError(f"min_sep_cells: expected a non-negative integer, got {min_sep_cells!r}")
+    rc = np.asarray(position_rc)
+    return np.abs(rc[:, None, :] - rc[None, :, :]).max(axis=2) <= min_sep_cells
+
+
+def resolve_moves(position: np.ndarray, target: np.ndarray, close: np.ndarray | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Which robots stay, given their cells and proposed targets.
 
     Args:
         position: (batch, m) current position cell of every robot.
         target: (batch, m) proposed target position cell, −1 where an obstacle blocks the move.
+        close: the `too_close` matrix of a minimum separation; ``None`` = the same cell only.
 
     Returns:
         stays (batch, m) bool; blocker (batch, m): for a robot stopped by another robot, the
@@ -33,9 +50,17 @@ def resolve_moves(position: np.ndarray, target: np.ndarray
         return stays, blocker, np.zeros(len(position), dtype=np.int64)
     eye = np.eye(m, dtype=bool)[None]
     wants = ~stays
-    same = (target[:, :, None] == target[:, None, :]) & wants[:, :, None] & ~eye
-    at = (target[:, :, None] == position[:, None, :]) & wants[:, :, None]  # i's target = j's cell
-    swap = at & np.swapaxes(at, 1, 2)
+    if close is None:
+        same = target[:, :, None] == target[:, None, :]
+        at = target[:, :, None] == position[:, None, :]  # i's target = j's cell
+    else:
+        t = np.where(wants, target, 0)
+        same = close[t[:, :, None], t[:, None, :]]
+        at = close[t[:, :, None], position[:, None, :]]
+    same &= wants[:, :, None] & wants[:, None, :] & ~eye
+    at &= wants[:, :, None] & ~eye
+    swap = (target[:, :, None] == position[:, None, :]) & wants[:, :, None]
+    swap &= np.swapaxes(swap, 1, 2)
     while True:
         moving = ~stays
         mm = moving[:, :, None] & moving[:, None, :]

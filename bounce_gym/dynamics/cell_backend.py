@@ -8,14 +8,14 @@ exactly the simple cell mapping C of `CellModel.successor`, so analytic plans an
 exactly; with `Reliable` noise the bump rows follow the GCM matrix.
 
 Several robots: the grid conflict rules of `bounce_gym.cells.conflicts` (thesis Eq. 3.9, spec 002
-§8.4), the same function the multi-robot planners use.
+§8.4), the same function the multi-robot planners use, with its ``min_sep_cells`` option.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from bounce_gym.cells import CellModel, resolve_moves
+from bounce_gym.cells import CellModel, resolve_moves, too_close
 from bounce_gym.dynamics.backend import MotionBackend
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
@@ -24,27 +24,44 @@ from bounce_gym.errors import ConfigError
 class CellBackend(MotionBackend):
     """Discrete motion on the cell grid (see the module docstring).
 
-    Extra args: ``n_bins`` orientation bins (a divisor of 360, default 8) and ``corner_rule``
-    (see `bounce_gym.cells.model`).
+    Extra args: ``n_bins`` orientation bins (a divisor of 360, default 8), ``corner_rule``
+    (see `bounce_gym.cells.model`) and ``min_sep_cells`` (colliding robots: the Chebyshev
+    distance at or below which they collide, 0 = the same cell; `bounce_gym.cells.conflicts`).
     """
 
     name = "cell"
     point_robots_collide = True
 
     def __init__(self, world, n_robots, radius, step_length, robot_collisions,
-                 n_bins: int = 8, corner_rule: str = "target_only") -> None:
+                 n_bins: int = 8, corner_rule: str = "target_only",
+                 min_sep_cells: int = 0) -> None:
         super().__init__(world, n_robots, radius, step_length, robot_collisions)
         self.model = CellModel(world, step_length, n_bins, radius, corner_rule)
         self.bin_width = self.model.bin_width
         if self.collide and self.model.n_positions < n_robots:
             raise ConfigError(f"n_robots: {n_robots} robots do not fit in "
                               f"{self.model.n_positions} free cells")
+        close = too_close(self.model.position_rc, min_sep_cells)  # validates it
+        self.min_sep_cells = int(min_sep_cells)
+        self.close = close if self.collide and self.min_sep_cells > 0 else None
 
     # -- placement --------------------------------------------------------------------------
     def random_positions(self, rng: np.random.Generator) -> np.ndarray:
-        """Uniformly random free cells (distinct ones when robots collide)."""
-        cells = rng.choice(self.model.n_positions, self.n_robots, replace=not self.collide)
-        return self.model.centres[cells].copy()
+        """Uniformly random free cells (distinct ones when robots collide; at least
+        ``min_sep_cells`` + 1 apart, by rejection)."""
+        for _ in range(10_000):
+            cells = rng.choice(self.model.n_positions, self.n_robots, replace=not self.collide)
+            if not self._too_close(cells):
+                return self.model.centres[cells].copy()
+        raise ConfigError(f"could not place {self.n_robots} robots min_sep_cells = "
+                          f"{self.min_sep_cells} apart in world {self.world.name!r}")
+
+    def _too_close(self, cells: np.ndarray) -> bool:
+        """Whether two of the robots at position cells ``cells`` collide (min_sep_cells > 0)."""
+        if self.close is None:
+            return False
+        near = self.close[cells[:, None], cells[None, :]]
+        return bool((near & ~np.eye(len(cells), dtype=bool)).any())
 
     def cells(self, state: RobotState) -> np.ndarray:
         """The cell number of every robot."""
@@ -59,6 +76,9 @@ class CellBackend(MotionBackend):
         p, k = self.model.decode(z)
         if self.collide and len(np.unique(p)) < len(p):
             raise ConfigError("start positions: two robots share a cell")
+        if self._too_close(p):
+            raise ConfigError(f"start positions: two robots are within min_sep_cells = "
+                              f"{self.min_sep_cells} cells")
         state.position[:] = self.model.centres[p]  # snap to cell centres and bin headings
         state.heading[:] = k * self.bin_width
         self.update_contacts(state, np.arange(state.n_robots))
@@ -70,7 +90,7 @@ class CellBackend(MotionBackend):
         target = self.model.targets[k, p]
         if not self.collide:
             return p, target, np.full(len(p), NO_CONTACT, dtype=np.int64)
-        stays, blocker, _ = resolve_moves(p[None], target[None])
+        stays, blocker, _ = resolve_moves(p[None], target[None], self.close)
         return p, np.where(stays[0], -1, target), blocker[0]
 
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:

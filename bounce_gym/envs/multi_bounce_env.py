@@ -39,7 +39,8 @@ AEC: each robot is truncated after ``max_cycles`` decisions of its own.
 
 Those of `BounceEnv` (``angles`` and ``angle_range`` may also be given per robot as a list or a
 ``{"robot_i": ...}`` dict), plus ``n_robots``, ``robot_collisions`` (``"bounce"`` | ``"ignore"``),
-``turn_angles`` (degrees; parallel form only) and ``max_cycles``. Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
+``turn_angles`` (degrees; parallel form only), ``min_sep_cells`` (``cell`` backend: robots
+within this Chebyshev distance collide, 0 = the same cell; spec 002 §8.4) and ``max_cycles``. Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
 
 ## Version History
 
@@ -96,6 +97,7 @@ class _MultiBase:
         corner_rule: str = "target_only",
         robot_collisions: str = "bounce",
         turn_angles: object = (),
+        min_sep_cells: int = 0,
         max_cycles: int = 500,
         render_mode: str | None = None,
     ) -> None:
@@ -111,6 +113,7 @@ class _MultiBase:
             step_length=step_length, step_mode=step_mode, action_type=action_type,
             history=history, privileged=privileged, robot_collisions=robot_collisions,
             cell_bins=cell_bins, corner_rule=corner_rule, turn_angles=turn_angles,
+            min_sep_cells=min_sep_cells,
         )
         self.core = BounceCore(self.options, make_task(task, task_kwargs, MULTI_ROBOT_TASKS))
         self.max_cycles = int(max_cycles)

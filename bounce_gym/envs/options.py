@@ -161,6 +161,7 @@ def parse_options(
     cell_bins: int = 8,
     corner_rule: str = "target_only",
     turn_angles: object = (),
+    min_sep_cells: int = 0,
 ) -> EnvOptions:
     """Validate the constructor arguments of `BounceEnv` / `MultiBounceEnv`."""
     backend = _choice("backend", backend, BACKENDS)
@@ -184,6 +185,12 @@ def parse_options(
     if backend == "cell":
         backend_options = _cell_options(bounce_rule, angle_sets, action_type, noise_model,
                                         cell_bins, corner_rule)
+        if min_sep_cells != 0:
+            backend_options["min_sep_cells"] = min_sep_cells  # the backend validates it
+    elif min_sep_cells != 0:
+        raise ConfigError(f"min_sep_cells: only the cell backend has it (continuous robots "
+                          f"collide by robot_radius), got {min_sep_cells!r} with backend "
+                          f"{backend!r}")
     turns = _turn_angles(turn_angles, action_type, backend_options.get("n_bins"))
     return EnvOptions(
         world=resolve_world(world),
