@@ -222,13 +222,14 @@ class MonitoringPlanPolicy(MultiPolicy):
 
     @classmethod
     def for_env(cls, env, phi: object = None, mode: str = "visit",
-                forbid_swaps: bool | None = None, cell_bins: int = 8,
-                corner_rule: str = "no_squeeze") -> MonitoringPlanPolicy:
+                forbid_swaps: bool | None = None, min_sep_cells: int | None = None,
+                cell_bins: int = 8, corner_rule: str = "no_squeeze") -> MonitoringPlanPolicy:
         """The planner for a 2-robot monitoring `MultiBounceEnv` in tick mode.
 
         ``phi``: degrees, one for both robots or a pair (default: each robot's first angle).
         Regions: the task's polygons (`regions_of`). ``forbid_swaps`` defaults to whether the env's
-        robots bounce off each other (a swap on the grid is then a conflict, spec 002 §8.4).
+        robots bounce off each other (a swap on the grid is then a conflict, spec 002 §8.4);
+        ``min_sep_cells`` (the cycles' safety margin, `persistent_behavior`) to the env's.
         """
         env = getattr(env, "unwrapped", env)
         _check_tick_mode(env, "MonitoringPlanPolicy")
@@ -242,8 +243,11 @@ class MonitoringPlanPolicy(MultiPolicy):
         model = cell_model_of(env, cell_bins, corner_rule)
         if forbid_swaps is None:
             forbid_swaps = env.options.robot_collisions == "bounce"
+        if min_sep_cells is None:
+            min_sep_cells = env.options.backend_options.get("min_sep_cells", 0)
         result = persistent_behavior(model, [math.radians(p) for p in phis], regions_of(env, model),
-                                     mode=mode, forbid_swaps=forbid_swaps)
+                                     mode=mode, forbid_swaps=forbid_swaps,
+                                     min_sep_cells=min_sep_cells)
         return cls(result, [_angle_index(env, i, p) for i, p in enumerate(phis)])
 
     def start_options(self, env, seed: int) -> dict | None:

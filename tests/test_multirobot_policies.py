@@ -162,6 +162,17 @@ def test_monitoring_contacts_are_zero_on_the_cycle_and_groups_match_algorithm_2(
     assert contacts == 0
 
 
+def test_monitoring_cycles_with_a_safety_margin_keep_it():
+    env = MultiBounceEnv(**MONITOR)
+    policy = MonitoringPlanPolicy.for_env(env, phi=90, min_sep_cells=1)
+    assert 0 < policy.r < MonitoringPlanPolicy.for_env(env, phi=90).r
+    rc = cell_model_of(env).position_rc
+    for seed in range(3):
+        cells, _, _ = _run(env, policy, seed)
+        pos = rc[cells % cell_model_of(env).n_positions]
+        assert np.abs(pos[:, 0] - pos[:, 1]).max(axis=1).min() > 1
+
+
 def test_monitoring_without_groups_falls_back_to_the_env_start():
     env = MultiBounceEnv(**{**MONITOR, "robot_collisions": "bounce"})
     policy = MonitoringPlanPolicy.for_env(env, phi=45)  # swaps forbidden: no group survives
