@@ -40,7 +40,8 @@ AEC: each robot is truncated after ``max_cycles`` decisions of its own.
 Those of `BounceEnv` (``angles`` and ``angle_range`` may also be given per robot as a list or a
 ``{"robot_i": ...}`` dict), plus ``n_robots``, ``robot_collisions`` (``"bounce"`` | ``"ignore"``),
 ``turn_angles`` (degrees; parallel form only), ``min_sep_cells`` (``cell`` backend: robots
-within this Chebyshev distance collide, 0 = the same cell; spec 002 §8.4) and ``max_cycles``. Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
+within this Chebyshev distance collide, 0 = the same cell; spec 002 §8.4) and ``max_cycles``.
+Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
 
 ## Version History
 
@@ -121,9 +122,11 @@ class _MultiBase:
         self.possible_agents = [f"robot_{i}" for i in range(self.options.n_robots)]
         self.agent_index = {a: i for i, a in enumerate(self.possible_agents)}
         self._obs_space = spaces.Box(self.core.obs_low, self.core.obs_high, dtype=np.float32)
+        #: per robot, what its action indices select: Φ_i, then the turn commands
+        self._choices = [np.concatenate((phi, self.options.turn_angles))
+                         for phi in self.options.angles]
         self._action_spaces = {
-            a: action_space(self.options.action_type,
-                            len(self.options.angles[i]) + len(self.options.turn_angles))
+            a: action_space(self.options.action_type, len(self._choices[i]))
             for a, i in self.agent_index.items()
         }
         m = self.options.n_robots
@@ -149,10 +152,7 @@ class _MultiBase:
     def _angle(self, agent: str, action: object) -> float:
         """The radians an action selects: a bounce angle of Φ_i or, past Φ_i, a turn command."""
         i = self.agent_index[agent]
-        angles = self.options.angles[i]
-        if len(self.options.turn_angles):
-            angles = np.concatenate((angles, self.options.turn_angles))
-        return to_angle(action, self.options.action_type, angles,
+        return to_angle(action, self.options.action_type, self._choices[i],
                         self.options.angle_range[i], who=f"action of {agent}")
 
     def _agent_infos(self, info: dict, agents) -> dict[str, dict]:
@@ -231,10 +231,10 @@ class MultiBounceEnv(_MultiBase, ParallelEnv):
                               f"(unknown {unknown}, missing {missing})")
         angles = np.array([self._angle(a, actions[a]) for a in self.possible_agents])
         turns = None
-        if len(self.options.turn_angles):
-            index = np.array([int(np.asarray(actions[a]).reshape(())) for a in self.possible_agents])
-            n_phi = np.array([len(phi) for phi in self.options.angles])
-            commanded = index >= n_phi
+        if len(self.options.turn_angles):  # discrete: the actions are valid indices by now
+            commanded = np.array([int(np.asarray(actions[a]).reshape(())) >= len(phi)
+                                  for a, phi in zip(self.possible_agents, self.options.angles,
+                                                    strict=True)])
             turns = np.where(commanded, angles, np.nan)
             # a turn step uses no bounce angle; keep a valid one in the unused slots
             angles = np.where(commanded, [phi[0] for phi in self.options.angles], angles)
