@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bounce_gym.cells import CellModel, resolve_moves, too_close
+from bounce_gym.cells import CellModel, crowded, resolve_moves, too_close
 from bounce_gym.errors import ConfigError
 
 NEIGHBORS = ("rotation", "full")
@@ -108,13 +108,7 @@ class JointCellModel:
         joint = np.atleast_2d(joint)
         ok = np.all((joint >= 0) & (joint < self.n_robot_cells), axis=1)
         if self.collisions and self.m > 1:
-            p = np.where(ok[:, None], joint, 0) % self.model.n_positions
-            if self.close is None:
-                ps = np.sort(p, axis=1)
-                ok &= ~np.any(ps[:, 1:] == ps[:, :-1], axis=1)
-            else:
-                near = self.close[p[:, :, None], p[:, None, :]] & ~np.eye(self.m, dtype=bool)
-                ok &= ~near.any(axis=(1, 2))
+            ok &= ~crowded(np.where(ok[:, None], joint, 0) % self.model.n_positions, self.close)
         return ok
 
     # -- the map ----------------------------------------------------------------------------

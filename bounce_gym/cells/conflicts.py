@@ -28,6 +28,18 @@ def too_close(position_rc: np.ndarray, min_sep_cells: int = 0) -> np.ndarray:
     return np.abs(rc[:, None, :] - rc[None, :, :]).max(axis=2) <= min_sep_cells
 
 
+def crowded(position: np.ndarray, close: np.ndarray | None = None) -> np.ndarray:
+    """(batch,) bool: some two robots of a joint state (batch, m) of position cells collide —
+    share a cell, or with a `too_close` matrix are within its separation."""
+    position = np.atleast_2d(position)
+    m = position.shape[1]
+    if close is None:
+        ps = np.sort(position, axis=1)
+        return np.any(ps[:, 1:] == ps[:, :-1], axis=1)
+    near = close[position[:, :, None], position[:, None, :]] & ~np.eye(m, dtype=bool)
+    return near.any(axis=(1, 2))
+
+
 def resolve_moves(position: np.ndarray, target: np.ndarray, close: np.ndarray | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Which robots stay, given their cells and proposed targets.

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bounce_gym.cells import CellModel, resolve_moves, too_close
+from bounce_gym.cells import CellModel, crowded, resolve_moves, too_close
 from bounce_gym.dynamics.backend import MotionBackend
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
@@ -51,17 +51,10 @@ class CellBackend(MotionBackend):
         ``min_sep_cells`` + 1 apart, by rejection)."""
         for _ in range(10_000):
             cells = rng.choice(self.model.n_positions, self.n_robots, replace=not self.collide)
-            if not self._too_close(cells):
+            if not (self.collide and crowded(cells, self.close)[0]):
                 return self.model.centres[cells].copy()
         raise ConfigError(f"could not place {self.n_robots} robots min_sep_cells = "
                           f"{self.min_sep_cells} apart in world {self.world.name!r}")
-
-    def _too_close(self, cells: np.ndarray) -> bool:
-        """Whether two of the robots at position cells ``cells`` collide (min_sep_cells > 0)."""
-        if self.close is None:
-            return False
-        near = self.close[cells[:, None], cells[None, :]]
-        return bool((near & ~np.eye(len(cells), dtype=bool)).any())
 
     def cells(self, state: RobotState) -> np.ndarray:
         """The cell number of every robot."""
@@ -74,11 +67,9 @@ class CellBackend(MotionBackend):
             raise ConfigError(f"start position of robot {bad} {state.position[bad].tolist()} is "
                               "not in a free cell of the cell model")
         p, k = self.model.decode(z)
-        if self.collide and len(np.unique(p)) < len(p):
-            raise ConfigError("start positions: two robots share a cell")
-        if self._too_close(p):
-            raise ConfigError(f"start positions: two robots are within min_sep_cells = "
-                              f"{self.min_sep_cells} cells")
+        if self.collide and crowded(p, self.close)[0]:
+            raise ConfigError(f"start positions: two robots share a cell or are within "
+                              f"min_sep_cells = {self.min_sep_cells} cells")
         state.position[:] = self.model.centres[p]  # snap to cell centres and bin headings
         state.heading[:] = k * self.bin_width
         self.update_contacts(state, np.arange(state.n_robots))
