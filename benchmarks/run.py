@@ -100,8 +100,8 @@ def gym_steps(env_id: str, n_steps: int, **kwargs) -> Callable[[], int]:
     return run
 
 
-def multi_steps(n_robots: int, n_steps: int) -> Callable[[], int]:
-    env = MultiBounceEnv(world="grid_15x15", n_robots=n_robots, max_cycles=10**9)
+def multi_steps(n_robots: int, n_steps: int, **kwargs) -> Callable[[], int]:
+    env = MultiBounceEnv(world="grid_15x15", n_robots=n_robots, max_cycles=10**9, **kwargs)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     actions = [dict(zip(env.possible_agents, row.tolist(), strict=True))
@@ -125,6 +125,9 @@ def env_rows(quick: bool) -> list[tuple[str, str, str, Callable[[], Callable[[],
         ("-", "gymnasium", "CartPole-v1 steps", lambda: gym_steps("CartPole-v1", n)),
         ("grid_15x15", "kinematic", "MultiBounce 20 robots",
          lambda: multi_steps(20, n // 20)),
+        ("grid_15x15", "cell", "MultiBounce 5, tick",
+         lambda: multi_steps(5, n // 5, backend="cell", step_mode="tick",
+                             corner_rule="no_squeeze", turn_angles=[45, -45])),
     ]
 
 
