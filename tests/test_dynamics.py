@@ -278,3 +278,18 @@ def test_touching_robot_sliding_past_tangentially_is_no_contact(backend, dx):
     dyn.tick([math.pi / 2, math.pi / 2])
     np.testing.assert_allclose(dyn.state.position[1], [3.7 + dx, 9.3], atol=1e-9)
     assert dyn.state.bumps.tolist() == [1, 0]
+
+
+def test_lone_robot_bump_in_plain_floats_equals_the_relative_rule():
+    """The single-robot hot path rotates with float arithmetic; it must match the numpy rule
+    bit for bit (same trajectories with one robot as with the vectorised path)."""
+    from bounce_gym.dynamics.rules import relative
+
+    dyn = BounceDynamics(BOX)
+    dyn.reset(np.random.default_rng(0), position=[[5.0, 4.0]], heading=[0.0])
+    rng = np.random.default_rng(1)
+    for heading, phi in zip(rng.uniform(0, 2 * np.pi, 500), rng.uniform(-20, 20, 500),
+                            strict=True):
+        dyn.state.heading[0] = heading
+        dyn._rotate(dyn._lone, np.array([phi]))
+        assert dyn.state.heading[0] == relative(np.array([heading]), None, phi)[0]
