@@ -97,8 +97,7 @@ class CellBackend(MotionBackend):
     def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
         if until_first_block and state.blocked.any():
             return 0
-        if not (until_first_block or np.isfinite(max_ticks)):
-            raise ValueError("drive needs a finite max_ticks unless until_first_block is set")
+        self._check_drive_window(max_ticks, until_first_block)
         ticks = 0
         while ticks < max_ticks:
             # every change of a pose ends in update_contacts, which keeps the plan it computed
