@@ -5,7 +5,7 @@
 
 Prints a table (means per experiment and policy) and writes ``episodes.csv``, ``results.json``
 and plots into ``<output>/<name>-<timestamp>/``. The configuration format is documented in
-`baselines.evaluation`.
+`experiments.evaluation`.
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ from pathlib import Path
 
 import yaml
 
-from baselines.evaluation import DEFAULT_CONFIG, run, summarise, validate_config
-from baselines.report import format_table, write_plots, write_results
 from bounce_gym.errors import ConfigError
+from experiments.evaluation import DEFAULT_CONFIG, run, summarise, validate_config
+from experiments.report import format_table, write_plots, write_results
 
 
 def load_config(path: str | None) -> dict:

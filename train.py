@@ -5,7 +5,7 @@
 The model is saved as ``models/<name>/<algo>_seed<seed>.zip``, where ``evaluate.py`` finds it for
 the experiment of the same name (or those with ``rl_models: <name>``). With a multi-robot
 PettingZoo id (``python train.py configs/train_multirobot_coverage.yaml``) all robots train one
-shared PPO policy. The configuration format is documented in `baselines.rl`.
+shared PPO policy. The configuration format is documented in `baselines.rl.train`.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--resume", action="store_true", help="continue from the saved model")
     parser.add_argument("--no-progress", action="store_true")
     args = parser.parse_args(argv)
-    from baselines.rl import train
+    from baselines.rl.train import train
 
     try:
         path = Path(args.config)

@@ -20,14 +20,11 @@ import math
 import time
 from collections.abc import Callable
 
-from baselines.localization import (
-    AngleSwitchPlanner,
-    LocalizationFilter,
-    build_dfa,
-    build_policy_dfa,
-)
+from baselines.localization import AngleSwitchPlanner, build_policy_dfa
 from bounce_gym import worlds
 from bounce_gym.cells import CellModel
+from bounce_gym.markov.automata import build_dfa
+from bounce_gym.markov.filters import LocalizationFilter
 
 PAPER_TABLE_1 = {  # (map, φ°) -> (DFA states, JFLAP conversion time in s)
     ("lab_localization_a", 45): (129, 24.0),

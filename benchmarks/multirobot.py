@@ -26,9 +26,9 @@ import tracemalloc
 
 import numpy as np
 
-from baselines.multirobot import JointCellModel, plan_coverage, random_start
+from baselines.multirobot import plan_coverage, random_start
 from bounce_gym import worlds
-from bounce_gym.cells import CellModel
+from bounce_gym.cells import CellModel, JointCellModel
 
 
 def _mean_std(values) -> str:
@@ -118,7 +118,7 @@ def monitoring_enumeration() -> None:
 
     import numpy as np
 
-    from baselines.monitoring import persistent_behavior
+    from baselines.multirobot.monitoring import persistent_behavior
     from bounce_gym import worlds
     from bounce_gym.cells import CellModel
 

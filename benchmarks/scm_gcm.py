@@ -24,9 +24,9 @@ import tracemalloc
 
 import numpy as np
 
-from baselines.gcm import generalized_cell_mapping
-from baselines.scm import simple_cell_mapping
 from bounce_gym.cells import CellModel
+from bounce_gym.markov.gcm import generalized_cell_mapping
+from bounce_gym.markov.scm import simple_cell_mapping
 from bounce_gym.worlds import get, world_from_grid
 
 GIB = 1024**3

@@ -14,8 +14,8 @@ import gymnasium as gym
 import numpy as np
 
 import bounce_gym  # noqa: F401  (registers the environments)
-from bounce_gym.envs.gif import record_episode, save_gif
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
+from bounce_gym.envs.render.gif import record_episode, save_gif
 
 HERE = Path(__file__).parent
 WIDTH = 360

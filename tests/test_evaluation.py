@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from baselines.evaluation import DEFAULT_CONFIG, run, summarise, validate_config
-from baselines.rl import validate_train_config
+from baselines.rl.train import validate_train_config
 from bounce_gym.errors import ConfigError
+from experiments.evaluation import DEFAULT_CONFIG, run, summarise, validate_config
 
 ROOT = Path(__file__).parents[1]
 sys.path.insert(0, str(ROOT))

@@ -14,27 +14,23 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from baselines.localization import (
+from baselines.localization import AngleSwitchPlanner, build_policy_dfa, final_uncertainties
+from bounce_gym import worlds
+from bounce_gym.cells import CellModel
+from bounce_gym.errors import ConfigError
+from bounce_gym.markov.automata import (
     TRAP,
-    ActiveLocalizationFilter,
-    AngleSwitchPlanner,
     ImpossibleObservationError,
     IStateNFA,
-    LocalizationFilter,
     ObservationError,
-    WorldIdentifier,
     build_dfa,
-    build_policy_dfa,
-    final_uncertainties,
     future_classes,
     istate_graph,
     istate_graphs,
     periodic_cells,
     periodic_groups,
 )
-from bounce_gym import worlds
-from bounce_gym.cells import CellModel
-from bounce_gym.errors import ConfigError
+from bounce_gym.markov.filters import ActiveLocalizationFilter, LocalizationFilter, WorldIdentifier
 
 DEG = math.radians
 

@@ -8,7 +8,7 @@ import pytest
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from baselines.marl import ParallelToVecEnv, evaluate_shared_policy
+from baselines.rl.parallel_vec_env import ParallelToVecEnv, evaluate_shared_policy
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
 
 

@@ -7,17 +7,17 @@ import math
 import numpy as np
 import pytest
 
-from baselines.monitoring import (
+from baselines.multirobot.monitoring import (
     REJECTED,
     default_regions,
     joint_successor,
     persistent_behavior,
     region_indices,
 )
-from baselines.scm import simple_cell_mapping
 from bounce_gym.cells import CellModel, too_close
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
 from bounce_gym.errors import ConfigError
+from bounce_gym.markov.scm import simple_cell_mapping
 from bounce_gym.worlds import world_from_grid
 
 ROOM = world_from_grid(np.ones((6, 8), dtype=bool), name="room_8x6")

@@ -209,7 +209,7 @@ def test_aec_rejects_tick_mode_and_bad_actions():
 
 
 def test_path_samples_account_for_every_tick():
-    from bounce_gym.envs.tasks import StepEvents, path_samples
+    from bounce_gym.envs.tasks.base import StepEvents, path_samples
 
     events = StepEvents(ticks=4, start=np.array([[3.0, 9.5], [17.0, 9.5]]),
                         end=np.array([[0.5, 9.5], [14.0, 9.5]]), heading=np.array([np.pi, np.pi]),

@@ -1,4 +1,4 @@
-"""evaluate.py / train.py with the multi-robot PettingZoo envs (baselines.multi_evaluation)."""
+"""evaluate.py / train.py with the multi-robot PettingZoo envs (experiments.multi_evaluation)."""
 
 import json
 import math
@@ -9,17 +9,17 @@ import numpy as np
 import pytest
 import yaml
 
-from baselines.evaluation import EpisodeResult, run, summarise, validate_config
-from baselines.multi_evaluation import (
+from baselines.rl.train import validate_train_config
+from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
+from bounce_gym.errors import ConfigError
+from experiments.evaluation import EpisodeResult, run, summarise, validate_config
+from experiments.multi_evaluation import (
     FixedBouncePolicy,
     RandomBouncePolicy,
     make_multi_env,
     run_multi_episode,
 )
-from baselines.report import format_table
-from baselines.rl import validate_train_config
-from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
-from bounce_gym.errors import ConfigError
+from experiments.report import format_table
 
 ROOT = Path(__file__).parents[1]
 sys.path.insert(0, str(ROOT))

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from baselines.multirobot import JointCellModel, plan_coverage, random_start
+from baselines.multirobot import plan_coverage, random_start
 from bounce_gym import worlds
-from bounce_gym.cells import CellModel, resolve_moves, too_close
+from bounce_gym.cells import CellModel, JointCellModel, resolve_moves, too_close
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
 from bounce_gym.errors import ConfigError
 

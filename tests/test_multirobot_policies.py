@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from baselines.monitoring import persistent_behavior
 from baselines.multirobot import CoverageResult
-from baselines.multirobot_policies import (
+from baselines.multirobot.monitoring import persistent_behavior
+from baselines.multirobot.policies import (
     CoveragePlanPolicy,
     MonitoringPlanPolicy,
     cell_model_of,

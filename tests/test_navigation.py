@@ -14,7 +14,7 @@ import networkx as nx
 import numpy as np
 import pytest
 
-import baselines.navigation as navigation
+import baselines.navigation.roadmap as roadmap
 from baselines.navigation import (
     BUMP,
     FORWARD,
@@ -287,13 +287,13 @@ def test_all_pairs_runs_exactly_n_dijkstras(monkeypatch, lab):
     """Spec 000 §8.14 / §4.2 [REC]: Alg. 2 makes exactly N single-source Dijkstra calls (one per
     start cell, all its layers as sources), not N² pair queries."""
     calls = []
-    real = navigation.dijkstra
+    real = roadmap.dijkstra
 
     def counting(*args, **kwargs):
         calls.append(np.atleast_1d(kwargs["indices"]).tolist())
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(navigation, "dijkstra", counting)
+    monkeypatch.setattr(roadmap, "dijkstra", counting)
     rm = Roadmap(lab, PHI)
     rm.all_pairs()
     assert len(calls) == lab.n_cells == rm.dijkstra_calls

@@ -7,7 +7,7 @@ import pytest
 
 from bounce_gym import worlds
 from bounce_gym.dynamics import BounceDynamics
-from bounce_gym.dynamics.pymunk_backend import PymunkBackend
+from bounce_gym.dynamics.backends.pymunk import PymunkBackend
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World, parse_ascii, world_from_grid
 

@@ -17,9 +17,9 @@ import pytest
 from PIL import Image
 
 from bounce_gym import worlds
-from bounce_gym.envs import gif
-from bounce_gym.envs.gif import record_episode, save_gif
-from bounce_gym.envs.rendering import (
+from bounce_gym.envs.render import gif
+from bounce_gym.envs.render.gif import record_episode, save_gif
+from bounce_gym.envs.render.renderer import (
     BLOCKED_RING,
     EXTERIOR,
     FREE,
@@ -243,7 +243,7 @@ def test_pygame_selective_init():
         import numpy as np
         import pygame
         from bounce_gym import worlds
-        from bounce_gym.envs.rendering import Renderer, RenderLayers
+        from bounce_gym.envs.render.renderer import Renderer, RenderLayers
         world = worlds.get("two_rooms")
         r = Renderer(world)
         frame = r.draw(np.array([[2.0, 2.0]]), np.zeros(1), 0.3,
@@ -424,7 +424,7 @@ def test_record_episode_needs_rgb_array(tmp_path):
 def test_save_gif_can_downscale(tmp_path):
     from PIL import Image
 
-    from bounce_gym.envs.gif import save_gif
+    from bounce_gym.envs.render.gif import save_gif
     from bounce_gym.errors import ConfigError
 
     frames = [np.full((40, 80, 3), v, dtype=np.uint8) for v in (0, 128, 255)]

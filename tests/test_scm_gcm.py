@@ -1,4 +1,4 @@
-"""Simple and generalized cell mapping analyses (issue #4): `baselines.scm`, `baselines.gcm`.
+"""Simple and generalized cell mapping analyses (issue #4): `bounce_gym.markov.scm`, `bounce_gym.markov.gcm`.
 
 Sources: spec 001 (localization filters) §2 and §8; spec 003a (thesis Ch. 1-3) §1.3, §3.1, §3.7,
 §7; spec 000 (navigation and coverage) §2, §4.3, §7 A6/A11, §8; spec 003b §2.5 (GCM groups).
@@ -16,10 +16,10 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from baselines.gcm import MODES, gcm, generalized_cell_mapping
-from baselines.scm import scm, simple_cell_mapping
 from bounce_gym.cells import CellModel
 from bounce_gym.errors import ConfigError
+from bounce_gym.markov.gcm import MODES, gcm, generalized_cell_mapping
+from bounce_gym.markov.scm import scm, simple_cell_mapping
 from bounce_gym.worlds import get, random_grid, world_from_grid
 
 DEG = math.pi / 180

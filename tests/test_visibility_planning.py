@@ -11,14 +11,14 @@ import pytest
 from baselines.visibility import planning as P
 from baselines.visibility.graph import safe_graph
 from baselines.visibility.partition import partition
-from baselines.visibility.plots import (
+from bounce_gym import worlds
+from bounce_gym.envs.bounce_env import BounceEnv
+from experiments.plots.visibility import (
     plot_limit_cycle,
     plot_partition,
     plot_plan_cone,
     plot_safe_graph,
 )
-from bounce_gym import worlds
-from bounce_gym.envs.bounce_env import BounceEnv
 
 
 @pytest.fixture(scope="module")

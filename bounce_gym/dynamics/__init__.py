@@ -5,7 +5,7 @@
 """
 
 from bounce_gym.dynamics import noise, rules
-from bounce_gym.dynamics.backend import MotionBackend
+from bounce_gym.dynamics.backends.base import MotionBackend
 from bounce_gym.dynamics.noise import Exact, Interval, Reliable, make_noise
 from bounce_gym.dynamics.simulator import BACKEND_NAMES, BounceDynamics, make_backend
 from bounce_gym.dynamics.state import RobotState

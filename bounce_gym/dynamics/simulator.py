@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from bounce_gym.dynamics.backend import MotionBackend
+from bounce_gym.dynamics.backends.base import MotionBackend
 from bounce_gym.dynamics.noise import Exact, NoiseModel, make_noise
 from bounce_gym.dynamics.rules import TWO_PI, check_parameters, get_rule, wrap
 from bounce_gym.dynamics.state import RobotState
@@ -36,11 +36,11 @@ def make_backend(name: str, world: World, n_robots: int = 1, radius: float = 0.0
     """Build a motion backend by name (``kinematic``, ``pymunk`` or ``cell``); imports it on first
     use. ``options`` go to the backend (the cell backend takes ``n_bins`` and ``corner_rule``)."""
     if name == "kinematic":
-        from bounce_gym.dynamics.kinematic import KinematicBackend as Backend
+        from bounce_gym.dynamics.backends.kinematic import KinematicBackend as Backend
     elif name == "pymunk":
-        from bounce_gym.dynamics.pymunk_backend import PymunkBackend as Backend
+        from bounce_gym.dynamics.backends.pymunk import PymunkBackend as Backend
     elif name == "cell":
-        from bounce_gym.dynamics.cell_backend import CellBackend as Backend
+        from bounce_gym.dynamics.backends.cell import CellBackend as Backend
     else:
         raise ConfigError(f"backend: unknown backend {name!r}; allowed are {list(BACKEND_NAMES)}")
     if options and name != "cell":

@@ -157,10 +157,10 @@ class BounceEnv(gym.Env):
         if self.render_mode is None:
             gym.logger.warn("render() called with render_mode=None; pass render_mode to the env")
             return None
-        from bounce_gym.envs.view import draw_core
+        from bounce_gym.envs.render.view import draw_core
 
         if self._renderer is None:
-            from bounce_gym.envs.rendering import Renderer
+            from bounce_gym.envs.render.renderer import Renderer
 
             self._renderer = Renderer(self.world)
         frame = draw_core(self._renderer, self.core)

@@ -24,7 +24,7 @@ import numpy as np
 
 from bounce_gym.dynamics import BounceDynamics
 from bounce_gym.envs.options import EnvOptions
-from bounce_gym.envs.tasks import StepEvents, Task, _pose_option
+from bounce_gym.envs.tasks.base import StepEvents, Task, pose_option
 from bounce_gym.errors import ConfigError
 
 TRAIL_LENGTH = 64
@@ -84,7 +84,7 @@ class BounceCore:
                 raise ConfigError(message)
             warnings.warn(message + " (ignored)", UserWarning, stacklevel=3)
         m = self.options.n_robots
-        poses = self.task.start_poses(rng, options) or _pose_option(options, "start", m)
+        poses = self.task.start_poses(rng, options) or pose_option(options, "start", m)
         position, heading = poses if poses is not None else (None, None)
         state = self.dynamics.reset(rng, position, heading)
         if self.options.step_mode == "bounce":

@@ -181,8 +181,8 @@ class _MultiBase:
 
             logger.warn("render() called with render_mode=None; pass render_mode to the env")
             return None
-        from bounce_gym.envs.rendering import Renderer
-        from bounce_gym.envs.view import draw_core
+        from bounce_gym.envs.render.renderer import Renderer
+        from bounce_gym.envs.render.view import draw_core
 
         if self._renderer is None:
             self._renderer = Renderer(self.options.world)

@@ -17,7 +17,7 @@ import numpy as np
 
 from bounce_gym import worlds
 from bounce_gym.cells import CORNER_RULES
-from bounce_gym.dynamics.backend import ROBOT_COLLISIONS
+from bounce_gym.dynamics.backends.base import ROBOT_COLLISIONS
 from bounce_gym.dynamics.noise import NoiseModel, make_noise
 from bounce_gym.dynamics.rules import RULES, check_parameters
 from bounce_gym.errors import ConfigError, InvalidWorldError

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from bounce_gym.cells import CellModel, crowded, resolve_moves, too_close
-from bounce_gym.dynamics.backend import MotionBackend
+from bounce_gym.dynamics.backends.base import MotionBackend
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
 

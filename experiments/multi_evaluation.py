@@ -1,4 +1,4 @@
-"""Multi-robot experiments of `baselines.evaluation`: PettingZoo parallel envs, shared policies.
+"""Multi-robot experiments of `experiments.evaluation`: PettingZoo parallel envs, shared policies.
 
 An experiment whose ``env`` is a PettingZoo id (``bounce_gym/MultiBounce-v0``,
 ``bounce_gym/MultiBounceCoverage-v0``, ``bounce_gym/MultiBounceMonitoring-v0``) runs here. The
@@ -12,9 +12,9 @@ Extra experiment keys:
 
 Policies (`baselines.policy.MultiPolicy`):
 
-* ``planner`` — coverage: `baselines.multirobot_policies.CoveragePlanPolicy` (Algorithm 1's
+* ``planner`` — coverage: `baselines.multirobot.policies.CoveragePlanPolicy` (Algorithm 1's
   joint trajectory, executed with turn commands for the neighbour jumps); monitoring:
-  `baselines.multirobot_policies.MonitoringPlanPolicy` (Algorithm 2: the robots start on an
+  `baselines.multirobot.policies.MonitoringPlanPolicy` (Algorithm 2: the robots start on an
   accepted collision-free periodic group);
 * ``random`` — random bouncing: every robot a uniformly random angle of its Φ_i at every step
   (never a turn command);
@@ -107,7 +107,7 @@ class FixedBouncePolicy(MultiPolicy):
 
 class SharedSB3Policy(MultiPolicy):
     """A Stable-Baselines3 PPO model as one policy shared by every robot (parameter sharing, as
-    in training through `baselines.marl.ParallelToVecEnv`).
+    in training through `baselines.rl.parallel_vec_env.ParallelToVecEnv`).
 
     Every step the model gives each live robot's action distribution from its own observation
     (one batched forward pass), and each robot's action is **sampled** from it with a generator
@@ -167,13 +167,13 @@ def shared_rl_policies(folder: Path) -> list[MultiPolicy]:
 # -- planners ----------------------------------------------------------------------------------
 
 def _coverage_planner(env, kwargs: Mapping) -> MultiPolicy:
-    from baselines.multirobot_policies import CoveragePlanPolicy
+    from baselines.multirobot.policies import CoveragePlanPolicy
 
     return CoveragePlanPolicy.for_env(env, **kwargs)
 
 
 def _monitoring_planner(env, kwargs: Mapping) -> MultiPolicy:
-    from baselines.multirobot_policies import MonitoringPlanPolicy
+    from baselines.multirobot.policies import MonitoringPlanPolicy
 
     return MonitoringPlanPolicy.for_env(env, **kwargs)
 

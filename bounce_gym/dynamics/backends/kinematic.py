@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from bounce_gym.dynamics.backend import MotionBackend, pair_contact_times
+from bounce_gym.dynamics.backends.base import MotionBackend, pair_contact_times
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
 

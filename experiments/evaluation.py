@@ -17,7 +17,7 @@ policies to run:
 name, so several experiments can score one trained model.
 
 An experiment whose ``env`` is a multi-robot PettingZoo id (``bounce_gym/MultiBounce*-v0``) runs
-through `baselines.multi_evaluation` — the planners of Alam & Bobadilla, random bouncing, fixed
+through `experiments.multi_evaluation` — the planners of Alam & Bobadilla, random bouncing, fixed
 angles and one shared PPO policy, with steps to full coverage or monitoring metrics; it may set
 ``planner_kwargs`` (see that module).
 
@@ -40,14 +40,14 @@ import gymnasium as gym
 import numpy as np
 
 import bounce_gym  # noqa: F401  (registers the environments)
-from baselines.multi_evaluation import (
+from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy
+from bounce_gym.errors import ConfigError
+from experiments.multi_evaluation import (
     MULTI_ENV_IDS,
     is_multi,
     run_multi_experiment,
     validate_multi_experiment,
 )
-from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy
-from bounce_gym.errors import ConfigError
 
 POLICY_KINDS = ("planner", "random", "fixed", "rl")
 
@@ -354,7 +354,7 @@ def run(config: Mapping, progress: bool = True) -> tuple[list[EpisodeResult], di
 
     Returns the result rows and, per experiment, the data for plots (trajectories, coverage
     histograms and targets, mixture weights; for multi-robot experiments see
-    `baselines.multi_evaluation.run_multi_experiment`).
+    `experiments.multi_evaluation.run_multi_experiment`).
     """
     from tqdm import tqdm
 

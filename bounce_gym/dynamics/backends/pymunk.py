@@ -76,7 +76,7 @@ import math
 import numpy as np
 import pymunk
 
-from bounce_gym.dynamics.backend import MotionBackend, pair_contact_times
+from bounce_gym.dynamics.backends.base import MotionBackend, pair_contact_times
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds.raycast import GRAZE

@@ -19,9 +19,9 @@ Training resumes from the checkpoint of the same name when ``resume: true``.
 
 **Several robots.** With a PettingZoo id (``bounce_gym/MultiBounceCoverage-v0``, …) the robots
 share one policy (parameter sharing): the parallel env becomes one SB3 VecEnv with a slot per
-robot (`baselines.marl.ParallelToVecEnv`, wrapped in ``VecMonitor``), so ``n_envs`` must stay 1
+robot (`baselines.rl.parallel_vec_env.ParallelToVecEnv`, wrapped in ``VecMonitor``), so ``n_envs`` must stay 1
 and ``algo`` must be ``ppo``; ``env_kwargs`` may set ``max_cycles`` (the episode length; see
-``configs/train_multirobot_coverage.yaml``). `baselines.multi_evaluation` runs the saved model
+``configs/train_multirobot_coverage.yaml``). `experiments.multi_evaluation` runs the saved model
 as one shared policy for every robot; ``rl_models: <name>`` lets several evaluation experiments
 (e.g. m = 2..5) use it.
 """
@@ -36,8 +36,8 @@ from pathlib import Path
 import gymnasium as gym
 
 import bounce_gym  # noqa: F401  (registers the environments)
-from baselines.multi_evaluation import MULTI_ENV_IDS, is_multi
 from bounce_gym.errors import ConfigError
+from experiments.multi_evaluation import MULTI_ENV_IDS, is_multi
 
 ALGOS = ("ppo", "dqn", "recurrentppo")
 MULTI_ALGOS = ("ppo",)
@@ -91,7 +91,7 @@ def make_train_env(config: Mapping):
         import pettingzoo
         from stable_baselines3.common.vec_env import VecMonitor
 
-        from baselines.marl import ParallelToVecEnv
+        from baselines.rl.parallel_vec_env import ParallelToVecEnv
 
         return VecMonitor(ParallelToVecEnv(pettingzoo.make("parallel", config["env"],
                                                            **config["env_kwargs"])))

@@ -18,7 +18,7 @@ collision. This module does it for **m = 2** robots, with the resolutions of spe
   its product successor. So every cycle other than ⊥ itself, and every transient trajectory into
   it, is collision-free by construction (§8.11(b)). A swap moves each robot one king move, so it
   starts from Chebyshev distance 1 and ``forbid_swaps`` only matters for ``min_sep_cells=0``.
-* **SCM.** The joint successor array is analysed with `baselines.scm.simple_cell_mapping`
+* **SCM.** The joint successor array is analysed with `bounce_gym.markov.scm.simple_cell_mapping`
   (array-based, so every joint cell is processed once, as in Algorithm 2's outer loop).
 * **SAMEREGION(F, x̃).** Robot j is assigned region F_j (a set of free position cells);
   ``mode="visit"`` (default): robot j's cycle positions intersect F_j; ``"cover"``: they contain
@@ -46,9 +46,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from baselines.scm import SCMResult, simple_cell_mapping
 from bounce_gym.cells import CellModel, too_close
 from bounce_gym.errors import ConfigError
+from bounce_gym.markov.scm import SCMResult, simple_cell_mapping
 
 __all__ = ["MODES", "REJECTED", "MonitoringResult", "default_regions", "joint_successor",
            "persistent_behavior", "region_indices", "summary"]

@@ -1,6 +1,6 @@
 """Figures for the bounce visibility graph (spec 004 §6): the partition P', G_safe, the cone of
 trajectories of a plan and a limit cycle. Every function renders with matplotlib (Agg), writes
-the PNG atomically (`baselines.report.atomic_write`) and returns its path."""
+the PNG atomically (`experiments.report.atomic_write`) and returns its path."""
 
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import networkx as nx  # noqa: E402
 import numpy as np  # noqa: E402
 
-from baselines.report import save_figure  # noqa: E402
 from baselines.visibility.partition import Partition  # noqa: E402
+from experiments.report import save_figure  # noqa: E402
 
 __all__ = ["plot_limit_cycle", "plot_partition", "plot_plan_cone", "plot_safe_graph"]
 

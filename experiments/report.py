@@ -145,7 +145,7 @@ def write_plots(folder: Path, plots: dict, summary: list[dict] | None = None) ->
             written.append(save_figure(fig, folder / f"{name}-coverage.png"))
         scenario = data.get("visibility")
         if scenario is not None:
-            from baselines.visibility import plots as vis
+            from experiments.plots import visibility as vis
 
             written += [
                 vis.plot_partition(scenario.part, folder / f"{name}-partition.png",

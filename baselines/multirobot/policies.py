@@ -6,7 +6,7 @@
   command* and the others wait one tick (the env's ``turn_angles``). After the plan the robots keep
   bouncing with φ_i. Edges a turn cannot execute — a random restart, or a position jump of the
   ``"full"`` neighbourhood — end the plan there (``executable_steps``); the robots bounce on.
-* `MonitoringPlanPolicy` — Algorithm 2 (PERSISTENTBEHAVIOR, `baselines.monitoring`): places the two
+* `MonitoringPlanPolicy` — Algorithm 2 (PERSISTENTBEHAVIOR, `baselines.multirobot.monitoring`): places the two
   robots on an accepted collision-free joint limit cycle (chosen by the seed) and lets them bounce
   with their φ_i forever; the cycle repeats with no robot–robot contact and visits each robot's
   region every period.
@@ -24,10 +24,10 @@ import math
 
 import numpy as np
 
-from baselines.monitoring import MonitoringResult, persistent_behavior
-from baselines.multirobot import CoverageResult, JointCellModel, plan_coverage, random_start
+from baselines.multirobot.coverage import CoverageResult, plan_coverage, random_start
+from baselines.multirobot.monitoring import MonitoringResult, persistent_behavior
 from baselines.policy import MultiPolicy
-from bounce_gym.cells import CellModel
+from bounce_gym.cells import CellModel, JointCellModel
 from bounce_gym.errors import ConfigError
 
 __all__ = ["CoveragePlanPolicy", "MonitoringPlanPolicy", "cell_model_of", "regions_of"]

@@ -8,8 +8,8 @@ from bounce_gym.envs.core import BounceCore
 
 
 def draw_core(renderer, core: BounceCore) -> np.ndarray:
-    """One RGB frame of the core's current state (see `bounce_gym.envs.rendering`)."""
-    from bounce_gym.envs.rendering import RenderLayers
+    """One RGB frame of the core's current state (see `bounce_gym.envs.render.renderer`)."""
+    from bounce_gym.envs.render.renderer import RenderLayers
 
     state = core.state
     layers = RenderLayers(

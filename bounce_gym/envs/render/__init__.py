@@ -1,0 +1,1 @@
+"""Drawing the environments: the pygame renderer, what the envs draw, and GIF recording."""

@@ -1,0 +1,57 @@
+"""Tasks: the part of an environment that owns reward, termination and task diagnostics.
+
+The environment owns physics, observation and rendering; after every step it hands the task a
+`StepEvents` record. Within one env step every robot rotates at most once (at the start) and then
+drives straight, so its path is the segment ``start → end``; tasks integrate over it.
+
+* `FreeTask` — no reward, never ends (rollouts, demos).
+* `NavigationTask` — reach a goal pose; −w1 per tick, −(w2 − w1) per change of bounce angle, a
+  bonus at the goal: the weights of the roadmap of Alam et al. (navigation paper Alg. 1, w1 = 1,
+  w2 = 100).
+* `CoverageTask` — match a target distribution over cells (uniform by default): reward for newly
+  covered cells and for reducing the L2 distance between the visit histogram (time spent per cell)
+  and the target (thesis §3.4.3, Eq. 3.8's objective).
+* `LocalizationTask` — the robot starts at an unknown pose; a localization filter plugged in
+  through ``filter_factory`` reports how much the robot can know.
+* `MonitoringTask` (multi-robot) — each robot keeps to its own region; robot–robot contacts cost.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from bounce_gym.envs.tasks.base import FreeTask, StepEvents, Task
+from bounce_gym.envs.tasks.coverage import CoverageTask
+from bounce_gym.envs.tasks.localization import LocalizationTask
+from bounce_gym.envs.tasks.monitoring import MonitoringTask
+from bounce_gym.envs.tasks.navigation import NavigationTask
+from bounce_gym.errors import ConfigError
+
+TASKS: dict[str, type[Task]] = {
+    "free": FreeTask,
+    "navigation": NavigationTask,
+    "coverage": CoverageTask,
+    "localization": LocalizationTask,
+    "monitoring": MonitoringTask,
+}
+
+__all__ = ["TASKS", "CoverageTask", "FreeTask", "LocalizationTask", "MonitoringTask",
+           "NavigationTask", "StepEvents", "Task", "make_task"]
+
+
+def make_task(task: object, task_kwargs: Mapping | None, allowed: tuple[str, ...]) -> Task:
+    """A task from its name (plus keyword arguments) or an instance."""
+    if isinstance(task, Task):
+        if task_kwargs:
+            raise ConfigError("task_kwargs: only allowed together with a task name")
+        if task.name not in allowed:
+            raise ConfigError(f"task: {task.name!r} is not available here; allowed: {list(allowed)}")
+        return task
+    if task not in allowed:
+        raise ConfigError(f"task: expected one of {list(allowed)} or a Task, got {task!r}")
+    if task_kwargs is not None and not isinstance(task_kwargs, Mapping):
+        raise ConfigError(f"task_kwargs: expected a dict, got {task_kwargs!r}")
+    try:
+        return TASKS[task](**dict(task_kwargs or {}))
+    except TypeError as exc:
+        raise ConfigError(f"task_kwargs for {task!r}: {exc}") from None

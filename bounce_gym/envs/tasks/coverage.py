@@ -1,0 +1,104 @@
+"""Coverage: match a target distribution over cells."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bounce_gym.envs.tasks.base import Task, path_samples, tick_length
+from bounce_gym.errors import ConfigError
+
+
+class CoverageTask(Task):
+    """Cover the world to match a target distribution over cells.
+
+    Args:
+        target: None (uniform over free cells), an array (rows, cols) with row 0 at the bottom
+            (the layout of `World.occupancy`), or a path to a ``.npy`` file of that array.
+            Non-negative, positive total, zero on blocked cells; it is normalised to sum 1.
+        cell_size: grid cell size (default: the step length, the cell of the papers' model).
+        coverage_weight, distance_weight: reward = coverage_weight × (fraction of free cells
+            newly visited) + distance_weight × (decrease of the L2 distance to the target).
+
+    ``info`` reports ``coverage`` (fraction of free cells visited), ``distance`` (L2 between the
+    normalised visit histogram — time spent per cell — and the target) and ``tv_distance``.
+    """
+
+    name = "coverage"
+
+    def __init__(self, target: object = None, cell_size: float | None = None,
+                 coverage_weight: float = 1.0, distance_weight: float = 1.0) -> None:
+        self.target_arg = target
+        self.cell_size_arg = cell_size
+        if cell_size is not None and not cell_size > 0:
+            raise ConfigError(f"cell_size: expected a number > 0, got {cell_size}")
+        self.coverage_weight, self.distance_weight = float(coverage_weight), float(distance_weight)
+
+    def configure(self, options) -> None:
+        super().configure(options)
+        self.cell_size = float(self.cell_size_arg or options.step_length)
+        self.free = options.world.occupancy(self.cell_size, options.robot_radius)
+        if not self.free.any():
+            raise ConfigError("coverage: the world has no free cell of this size for this robot")
+        self.target = self._target(self.target_arg)
+
+    def _target(self, spec: object) -> np.ndarray:
+        if spec is None:
+            return self.free / self.free.sum()
+        if isinstance(spec, str):
+            try:
+                spec = np.load(spec)
+            except (OSError, ValueError) as exc:
+                raise ConfigError(f"coverage target: cannot read {spec!r}: {exc}") from None
+        target = np.asarray(spec, dtype=np.float64)
+        if target.shape != self.free.shape:
+            raise ConfigError(f"coverage target: expected shape {self.free.shape} (rows, cols of "
+                              f"the cell grid), got {target.shape}")
+        if not np.all(np.isfinite(target)) or np.any(target < 0) or target.sum() <= 0:
+            raise ConfigError("coverage target: values must be finite, >= 0, with a positive sum")
+        if np.any(target[~self.free] > 0):
+            raise ConfigError("coverage target: puts mass on blocked cells")
+        return target / target.sum()
+
+    def reset(self, state, rng, options):
+        self.visits = np.zeros(self.free.shape)
+        self.visited = np.zeros(self.free.shape, dtype=bool)
+        self.distance = float(np.hypot.reduce(self.target.ravel()))
+        self._add(state.position, np.zeros(state.n_robots))
+        return self._info()
+
+    def _cells(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        xmin, ymin = self.options.world.bounds[:2]
+        col = np.clip(((points[:, 0] - xmin) / self.cell_size).astype(int), 0, self.free.shape[1] - 1)
+        row = np.clip(((points[:, 1] - ymin) / self.cell_size).astype(int), 0, self.free.shape[0] - 1)
+        return row, col
+
+    def _add(self, points: np.ndarray, ticks: np.ndarray) -> int:
+        row, col = self._cells(points)
+        np.add.at(self.visits, (row, col), ticks)
+        new = ~self.visited[row, col] & self.free[row, col]
+        self.visited[row, col] = True
+        return int(len(set(zip(row[new].tolist(), col[new].tolist(), strict=True))))
+
+    def _info(self) -> dict:
+        total = self.visits.sum()
+        hist = self.visits / total if total > 0 else self.visits
+        return {"coverage": float(self.visited[self.free].mean()),
+                "distance": float(np.hypot.reduce((hist - self.target).ravel())),
+                "tv_distance": float(0.5 * np.abs(hist - self.target).sum())}
+
+    def step(self, state, events):
+        _, points, ticks = path_samples(events, tick_length(self.options, events.heading),
+                                        self.cell_size / 4)
+        new_cells = self._add(points, ticks)
+        info = self._info()
+        reward = (self.coverage_weight * new_cells / self.free.sum()
+                  + self.distance_weight * (self.distance - info["distance"]))
+        self.distance = info["distance"]
+        m = state.n_robots
+        return np.full(m, reward / m), np.zeros(m, dtype=bool), info
+
+    def render_layers(self):
+        origin = self.options.world.bounds[:2]
+        return {"heatmap": (self.visits.copy(), origin, self.cell_size)}
+
+

@@ -1,0 +1,1 @@
+"""Experiments: configurations, the episode runner, per-family metrics and plots, reports."""
