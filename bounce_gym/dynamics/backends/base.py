@@ -236,6 +236,83 @@ class MotionBackend(ABC):
         return blocker, normal
 
 
+#: Consecutive zero-length events after which a drive declares itself stuck (a bug).
+MAX_ZENO = 10_000
+
+
+class EventDrivenBackend(MotionBackend):
+    """A continuous backend that advances all robots from one contact event to the next.
+
+    `drive` is written once here: find each moving robot's distance to its wall ahead
+    (`_wall_distances`) and, with collisions on, the first disk–disk contact of each pair; move
+    everyone to the earliest event or to the end of the window (`_advance`, the backend's own
+    way of moving: closed form or one physics step); then stop the robots involved
+    (`_settle_contacts`). Time is distance driven: one tick lasts ``step_length``.
+    """
+
+    def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        if until_first_block and state.blocked.any():
+            return 0
+        self._check_drive_window(max_ticks, until_first_block)
+        tol = self.contact_tol
+        limit = float(max_ticks) * self.step_length
+        driven = np.zeros(state.n_robots)
+        elapsed, zeno = 0.0, 0
+        self._start_drive()
+        while elapsed < limit - tol:
+            moving = np.flatnonzero(~state.blocked)
+            if len(moving) == 0:
+                break
+            s_wall = self._wall_distances(state, moving)
+            if not np.all(np.isfinite(s_wall)):
+                lost = int(moving[~np.isfinite(s_wall)][0])
+                raise RuntimeError(f"robot {lost} left the free space at {state.position[lost]}")
+            s_pairs = None
+            s_robot = np.full(len(moving), np.inf)
+            if self.collide:
+                velocity = np.zeros_like(state.position)
+                velocity[moving] = state.direction[moving]
+                s_pairs = pair_contact_times(state.position, velocity, self.radius, moving)
+                s_robot = s_pairs.min(axis=1)
+            s_next = float(min(s_wall.min(), s_robot.min()))
+            ds = min(s_next, limit - elapsed)
+            event = s_next <= ds + tol
+            driven[moving] += self._advance(state, moving, s_wall, ds, event)
+            elapsed += ds
+            if not event:
+                break  # the window closed before the next contact
+            zeno = zeno + 1 if ds <= tol else 0
+            if zeno > MAX_ZENO:
+                raise RuntimeError(f"{self.name} integrator made no progress (contact "
+                                   "bookkeeping bug)")
+            walls = moving[s_wall <= s_next + tol]
+            at_robot = s_robot <= s_next + tol
+            pairs = None if s_pairs is None else s_pairs[at_robot] <= s_next + tol
+            self._settle_contacts(state, walls, moving[at_robot], pairs)
+            if until_first_block:
+                limit = min(limit, self._end_of_tick(elapsed))
+        return self._finish_drive(state, driven, limit, elapsed)
+
+    def _start_drive(self) -> None:
+        """Hook called once at the start of every `drive`."""
+
+    @abstractmethod
+    def _wall_distances(self, state: RobotState, robots: np.ndarray) -> np.ndarray:
+        """Distance each of ``robots`` drives before it touches its wall ahead."""
+
+    @abstractmethod
+    def _advance(self, state: RobotState, moving: np.ndarray, s_wall: np.ndarray, ds: float,
+                 event: bool) -> np.ndarray | float:
+        """Move the ``moving`` robots by ``ds`` (a robot whose wall is nearer stops there) and
+        return the distance each drove; ``event`` says a contact is due at the end."""
+
+    @abstractmethod
+    def _settle_contacts(self, state: RobotState, walls: np.ndarray, robots: np.ndarray,
+                         partners: np.ndarray | None) -> None:
+        """Stop the robots that reached a wall (``walls``) or another robot (``robots``, with
+        ``partners`` (len(robots), m): which robots each one reached)."""
+
+
 def pair_contact_times(position: np.ndarray, velocity: np.ndarray, radius: float,
                        rows: np.ndarray) -> np.ndarray:
     """Earliest future time at which robot ``rows[k]`` starts to overlap robot j, per pair.

@@ -17,15 +17,12 @@ import math
 
 import numpy as np
 
-from bounce_gym.dynamics.backends.base import MotionBackend, pair_contact_times
+from bounce_gym.dynamics.backends.base import EventDrivenBackend
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
 
-#: Consecutive zero-length events after which the integrator declares itself stuck (a bug).
-_MAX_ZENO = 10_000
 
-
-class KinematicBackend(MotionBackend):
+class KinematicBackend(EventDrivenBackend):
     """Analytic ray-cast backend: the ground truth the other backends are checked against."""
 
     name = "kinematic"
@@ -51,49 +48,21 @@ class KinematicBackend(MotionBackend):
         self._ahead_normal[sel] = hits.normal
         self._classify_contacts(state, robots, sel, hits.distance, hits.edge, hits.normal)
 
-    def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
-        # Internally time is measured as distance driven (one tick = step_length), so a robot
-        # that stops at a wall lands exactly at position + direction * (its wall distance).
-        if until_first_block and state.blocked.any():
-            return 0
-        self._check_drive_window(max_ticks, until_first_block)
-        tol = self.contact_tol
-        limit = float(max_ticks) * self.step_length
-        driven = np.zeros(state.n_robots)
-        elapsed, zeno = 0.0, 0
-        while elapsed < limit - tol:
-            moving = np.flatnonzero(~state.blocked)
-            if len(moving) == 0:
-                break
-            dirs = state.direction[moving]
-            s_wall = self._ahead_distance[moving]
-            s_robot = np.full(len(moving), np.inf)
-            if self.collide:
-                velocity = np.zeros_like(state.position)
-                velocity[moving] = dirs
-                s_robot = pair_contact_times(state.position, velocity, self.radius, moving).min(axis=1)
-            if not np.isfinite(s_wall).all():
-                lost = int(moving[~np.isfinite(s_wall)][0])
-                raise RuntimeError(f"robot {lost} left the free space at {state.position[lost]}")
-            s_next = float(min(s_wall.min(), s_robot.min()))
-            ds = min(s_next, limit - elapsed)
-            travel = np.minimum(s_wall, ds)  # the robot meeting its wall travels exactly s_wall
-            state.position[moving] += dirs * travel[:, None]
-            self._ahead_distance[moving] = s_wall - travel
-            driven[moving] += travel
-            elapsed += ds
-            if s_next > ds + tol:
-                break  # the window closed before the next contact
-            zeno = zeno + 1 if ds <= tol else 0
-            if zeno > _MAX_ZENO:
-                raise RuntimeError("kinematic integrator made no progress (contact bookkeeping bug)")
-            walls = moving[s_wall <= s_next + tol]
-            self._block_at_walls(state, walls, self._ahead_edge[walls], self._ahead_normal[walls])
-            if self.collide and np.any(s_robot <= s_next + tol):
-                self._stop_touching(state, moving[s_robot <= s_next + tol])
-            if until_first_block:
-                limit = min(limit, self._end_of_tick(elapsed))
-        return self._finish_drive(state, driven, limit, elapsed)
+    # Time is distance driven (one tick = step_length), so a robot that stops at a wall lands
+    # exactly at position + direction * (its wall distance).
+    def _wall_distances(self, state: RobotState, robots: np.ndarray) -> np.ndarray:
+        return self._ahead_distance[robots]
+
+    def _advance(self, state, moving, s_wall, ds, event):
+        travel = np.minimum(s_wall, ds)  # the robot meeting its wall travels exactly s_wall
+        state.position[moving] += state.direction[moving] * travel[:, None]
+        self._ahead_distance[moving] = s_wall - travel
+        return travel
+
+    def _settle_contacts(self, state, walls, robots, partners):
+        self._block_at_walls(state, walls, self._ahead_edge[walls], self._ahead_normal[walls])
+        if len(robots):
+            self._stop_touching(state, robots)
 
     def drive_each(self, state: RobotState) -> np.ndarray:
         """Drive every unblocked robot to its own next contact, independently of the others.

@@ -76,7 +76,7 @@ import math
 import numpy as np
 import pymunk
 
-from bounce_gym.dynamics.backends.base import MotionBackend, pair_contact_times
+from bounce_gym.dynamics.backends.base import EventDrivenBackend
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds.raycast import GRAZE
@@ -87,8 +87,6 @@ SKIN_REL = 1e-6
 #: loses about sqrt(machine epsilon) x query length, so much thinner shapes (``world.tol``) are
 #: missed by rays that graze a vertex: the pad must be well above 1e-8 x diameter.
 PAD_REL = 1e-6
-#: Consecutive zero-length events after which the integrator declares itself stuck (a bug).
-_MAX_ZENO = 10_000
 #: Step length used when an event is due immediately (pymunk ignores ``step(0)``): moves nothing.
 _SENSE_DT = 1e-300
 #: Smallest approach speed (unit heading against unit normal) counted as facing a wall, as in
@@ -100,7 +98,7 @@ _CAT_WALL, _CAT_ROBOT, _CAT_CSPACE, _CAT_QUERY = 0x1, 0x2, 0x4, 0x8
 _EDGE, _VERTEX = 0, 1
 
 
-class PymunkBackend(MotionBackend):
+class PymunkBackend(EventDrivenBackend):
     """pymunk 7 backend: static segment walls, disk robots, contact callbacks as bump sensor."""
 
     name = "pymunk"
@@ -364,71 +362,41 @@ class PymunkBackend(MotionBackend):
         self._classify_contacts(state, robots, robots, self._hit_dist[robots],
                                 self._hit_edge[robots], self._hit_normal[robots])
 
-    def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
-        # Engine time is distance driven: robots move at unit speed and one tick lasts
-        # ``step_length`` time units of the space, so a step of dt moves a robot by exactly
-        # ``position + direction * dt``.
-        if until_first_block and state.blocked.any():
-            return 0
-        self._check_drive_window(max_ticks, until_first_block)
-        tol = self.contact_tol
-        limit = float(max_ticks) * self.step_length
-        driven = np.zeros(state.n_robots)
-        elapsed, zeno = 0.0, 0
-        synced = False  # positions may have been changed from outside since the last call
-        while elapsed < limit - tol:
-            moving = np.flatnonzero(~state.blocked)
-            if len(moving) == 0:
-                break
-            space = self._engine()
-            s_wall = self._wall_distances(state, moving)
-            velocity = np.zeros_like(state.position)
-            velocity[moving] = state.direction[moving]
-            if not np.all(np.isfinite(s_wall)):
-                lost = int(moving[~np.isfinite(s_wall)][0])
-                raise RuntimeError(f"robot {lost} left the free space at {state.position[lost]}")
-            s_robot = np.full(len(moving), np.inf)
-            if self.collide:
-                s_pairs = pair_contact_times(state.position, velocity, self.radius, moving)
-                s_robot = s_pairs.min(axis=1)
-            s_next = float(min(s_wall.min(), s_robot.min()))
-            ds = min(s_next, limit - elapsed)
-            event = s_next <= ds + tol
-            # conservative advancement: one physics step, to the event or to the window's end
-            self._write_bodies(state, velocity, positions=not synced)
-            synced = True
-            self._touching.clear()
-            self._armed = event
-            try:
-                space.step(ds if ds > 0.0 else _SENSE_DT)
-            finally:
-                self._armed = False
-            bodies = self._bodies
-            for i in moving.tolist():
-                state.position[i] = bodies[i].position
-            self._body_pos[moving] = state.position[moving]
-            self._hit_origin[moving] = state.position[moving]
-            self._hit_dist[moving] = s_wall - ds
-            driven[moving] += ds
-            elapsed += ds
-            if not event:
-                break  # the window closed before the next contact
-            zeno = zeno + 1 if ds <= tol else 0
-            if zeno > _MAX_ZENO:
-                raise RuntimeError("pymunk integrator made no progress (contact bookkeeping bug)")
-            walls = moving[s_wall <= s_next + tol]
-            at_robot = s_robot <= s_next + tol
-            walls_touched, pairs_touched = self._sensed()
-            if len(walls):
-                self._confirm_walls(state, walls, walls_touched)
-                self._block_at_walls(state, walls, self._hit_edge[walls], self._hit_normal[walls])
-            if np.any(at_robot):
-                robots = moving[at_robot]
-                self._confirm_pairs(state, robots, s_pairs[at_robot] <= s_next + tol, pairs_touched)
-                self._stop_touching(state, robots)
-            if until_first_block:
-                limit = min(limit, self._end_of_tick(elapsed))
-        return self._finish_drive(state, driven, limit, elapsed)
+    # Engine time is distance driven: robots move at unit speed and one tick lasts
+    # ``step_length`` time units of the space, so a step of dt moves a robot by exactly
+    # ``position + direction * dt``.
+    def _start_drive(self) -> None:
+        self._synced = False  # positions may have been changed from outside since the last drive
+
+    def _advance(self, state, moving, s_wall, ds, event):
+        # conservative advancement: one physics step, to the event or to the window's end
+        space = self._engine()
+        velocity = np.zeros_like(state.position)
+        velocity[moving] = state.direction[moving]
+        self._write_bodies(state, velocity, positions=not self._synced)
+        self._synced = True
+        self._touching.clear()
+        self._armed = event
+        try:
+            space.step(ds if ds > 0.0 else _SENSE_DT)
+        finally:
+            self._armed = False
+        bodies = self._bodies
+        for i in moving.tolist():
+            state.position[i] = bodies[i].position
+        self._body_pos[moving] = state.position[moving]
+        self._hit_origin[moving] = state.position[moving]
+        self._hit_dist[moving] = s_wall - ds
+        return ds
+
+    def _settle_contacts(self, state, walls, robots, partners):
+        walls_touched, pairs_touched = self._sensed()
+        if len(walls):
+            self._confirm_walls(state, walls, walls_touched)
+            self._block_at_walls(state, walls, self._hit_edge[walls], self._hit_normal[walls])
+        if len(robots):
+            self._confirm_pairs(state, robots, partners, pairs_touched)
+            self._stop_touching(state, robots)
 
     # -- helpers ----------------------------------------------------------------------------
     def _sensed(self) -> tuple[dict[int, set[int]], set[tuple[int, int]]]:
