@@ -7,10 +7,9 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from bounce_gym.errors import BounceGymError, ConfigError
+from bounce_gym.markov.scm import simple_cell_mapping
 
 TRAP = -1
 """State index of the implicit trap state (Def. 9); `DFA.delta` holds it for missing transitions."""
@@ -58,36 +57,29 @@ def _check_scm(successor, bump) -> tuple[np.ndarray, np.ndarray]:
     return succ.astype(np.int64, copy=False), obs
 
 
-def _graph_matrix(succ: np.ndarray) -> coo_matrix:
-    n = succ.size
-    return coo_matrix((np.ones(n, dtype=np.int8), (np.arange(n), succ)), shape=(n, n))
-
-
 def periodic_cells(successor) -> np.ndarray:
     """Boolean mask of the periodic cells (Def. 1: ``z = C^m(z)`` for some m ≥ 1).
 
-    The SCM graph is functional, so the periodic cells are exactly the cells on its cycles: the
-    strongly connected components with more than one cell, plus fixed points.
+    The cells on the cycles of the functional graph, as found by `simple_cell_mapping`.
     """
-    succ = np.asarray(successor, dtype=np.int64)
-    _, labels = connected_components(_graph_matrix(succ), directed=True, connection="strong")
-    counts = np.bincount(labels)
-    return (counts[labels] > 1) | (succ == np.arange(succ.size))
+    return simple_cell_mapping(np.asarray(successor, dtype=np.int64)).periodic
 
 
 def periodic_groups(successor) -> tuple[np.ndarray, int]:
     """Group number of every cell and the number r of periodic groups (Def. 3, Def. 4).
 
     Each weakly connected component of the functional graph holds exactly one periodic group (its
-    cycle) and that group's transient trajectories. Groups are numbered 0 … r − 1 in order of
-    their smallest cell id, which is the order Algorithm 1 discovers them in (spec G3).
+    cycle) and that group's transient trajectories; `simple_cell_mapping` finds them. Here groups
+    are renumbered 0 … r − 1 in order of the smallest cell id of their basin (periodic or
+    transient), which is the order in which Algorithm 1's loop over the cells discovers them.
     """
-    succ = np.asarray(successor, dtype=np.int64)
-    r, labels = connected_components(_graph_matrix(succ), directed=True, connection="weak")
-    _, first = np.unique(labels, return_index=True)
+    result = simple_cell_mapping(np.asarray(successor, dtype=np.int64))
+    group, r = result.group.astype(np.int64), result.n_groups
+    first = np.full(r, group.size, dtype=np.int64)
+    np.minimum.at(first, group, np.arange(group.size, dtype=np.int64))
     rank = np.empty(r, dtype=np.int64)
     rank[np.argsort(first)] = np.arange(r)
-    return rank[labels], int(r)
+    return rank[group], int(r)
 
 
 def future_classes(successor, bump) -> np.ndarray:
