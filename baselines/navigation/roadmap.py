@@ -120,16 +120,6 @@ class Plan:
                 run = 0
         return out
 
-    @property
-    def trailing_zeros(self) -> int:
-        """Forward ticks after the last bump."""
-        n = 0
-        for s in reversed(self.symbols):
-            if s != 0:
-                break
-            n += 1
-        return n
-
     def __str__(self) -> str:
         """Runs of 0s and angles separated by spaces, e.g. ``000000 135 135 000000 90``."""
         parts, run = [], 0

@@ -149,7 +149,7 @@ def hits_segment(seg_from: object, seg_to: object, s: object, theta: object) -> 
     """Whether the ray from ``s`` with heading θ meets ``seg_to`` itself (0 ≤ μ ≤ ℓ_j), in front of
     the robot, arriving from ``seg_to``'s free side. Other edges (occlusion) are ignored."""
     vi, ti, ni, _ = _frame(seg_from)
-    vj, tj, nj, lj = _frame(seg_to)
+    vj, tj, _, lj = _frame(seg_to)
     s = np.asarray(s, dtype=np.float64)
     d = _heading(ti, ni, theta)
     p = vi + s[..., None] * ti

@@ -94,10 +94,6 @@ class VisibilityPlan:
     def start(self) -> tuple[int, ...]:
         return self.stages[0]
 
-    @property
-    def min_width(self) -> float:
-        return min((hi - lo for lo, hi in self.intervals), default=math.pi)
-
 
 # -- constant strategies (Alg. 2) ---------------------------------------------------------------
 
