@@ -109,7 +109,8 @@ def cycles_of(dfa):
 
 
 def test_rectangle_6x4_90_one_cycle_of_length_w_plus_h_uncertainty_2():
-    """Rectangle (analytic): 6×4, 4 bins, φ = 90°: DFA 28 states; one knowledge cycle, length W + H = 10, |S| = 2."""
+    """Rectangle (analytic): 6×4, 4 bins, φ = 90°: DFA 28 states; one knowledge cycle, length W + H
+    = 10, |S| = 2."""
     model = rect(6, 4)
     succ, bump, dfa = scm(model, 90)
     assert model.n_cells == 96 and dfa.nfa_size == 97
@@ -123,7 +124,8 @@ def test_rectangle_6x4_90_one_cycle_of_length_w_plus_h_uncertainty_2():
 
 
 def test_rectangle_5x5_90_one_cycle_of_length_w_uncertainty_4():
-    """Rectangle (analytic): a square: DFA 14 states; one cycle of length W = 5 with uncertainty 4."""
+    """Rectangle (analytic): a square: DFA 14 states; one cycle of length W = 5 with uncertainty
+    4."""
     _, _, dfa = scm(rect(5, 5), 90)
     assert dfa.n_states == 14
     assert cycles_of(dfa) == [(5, 4)]
@@ -134,7 +136,8 @@ def test_rectangle_5x5_90_one_cycle_of_length_w_uncertainty_4():
     (5, 5, 9, [(5, 20)]),  # W = H: one cycle of length W with |S| = 4W
 ])
 def test_rectangle_180(width, height, states, cycles):
-    """Rectangle (analytic): φ = 180°: r = W + H groups, no transient cells, DFA 19 (6×4) / 9 (5×5)."""
+    """Rectangle (analytic): φ = 180°: r = W + H groups, no transient cells, DFA 19 (6×4) / 9
+    (5×5)."""
     succ, _, dfa = scm(rect(width, height), 180)
     assert periodic_groups(succ)[1] == width + height
     assert periodic_cells(succ).all()
@@ -143,8 +146,9 @@ def test_rectangle_180(width, height, states, cycles):
 
 
 def test_symmetry_breaking_obstacle_gives_uncertainty_1():
-    """Symmetry breaking (the "min 1" of Table II): 8×6 room, obstacle cells {(3,2), (4,2)}, 4 bins, φ = 90°: r = 1 of period 28; DFA
-    108 states; knowledge cycles (14, 2) and (28, 1) — the "min 1" phenomenon."""
+    """Symmetry breaking (the "min 1" of Table II): 8×6 room, obstacle cells {(3,2), (4,2)}, 4 bins,
+    φ = 90°: r = 1 of period 28; DFA 108 states; knowledge cycles (14, 2) and (28, 1) — the "min 1"
+    phenomenon."""
     succ, _, dfa = scm(rect(8, 6, 4, ((3, 2), (4, 2))), 90)
     assert periodic_groups(succ)[1] == 1 and periodic_cells(succ).sum() == 28
     assert dfa.n_states == 108
@@ -157,8 +161,8 @@ def test_symmetry_breaking_obstacle_gives_uncertainty_1():
     (135, 161, 4, [24, 28, 32, 36]),
 ])
 def test_eight_bins_rectangle(degrees, states, n_cycles, periods):
-    """Empty 6×4 with 8 bins (prototype numbers): φ = 45° → DFA 47, one cycle of |S| = 2; φ = 135° → DFA 161,
-    4 cycles each of |S| = 2 (r = 4, periods 24, 28, 32, 36)."""
+    """Empty 6×4 with 8 bins (prototype numbers): φ = 45° → DFA 47, one cycle of |S| = 2; φ = 135° →
+    DFA 161, 4 cycles each of |S| = 2 (r = 4, periods 24, 28, 32, 36)."""
     succ, _, dfa = scm(rect(6, 4, 8), degrees)
     groups, r = periodic_groups(succ)
     per = periodic_cells(succ)
@@ -213,7 +217,8 @@ def _case(case):
 def test_dfa_structure(case):
     """Sec. IV-C/D: the start state is all cells; out-degree ≤ 2 and both transitions partition S;
     |Q'| ≤ (N+1)²; knowledge cycles are simple cycles of subsets of the periodic cells with
-    constant |S| and out-degree 1; no other SCC is non-trivial; colours per docs/choices.md, "Knowledge-cycle colours and numbering"."""
+    constant |S| and out-degree 1; no other SCC is non-trivial; colours per docs/choices.md,
+    "Knowledge-cycle colours and numbering"."""
     model, degrees = _case(case)
     succ, bump, dfa = scm(model, degrees)
     n = succ.size
@@ -290,9 +295,9 @@ def test_dfa_graph_with_trap_and_run():
 
 @pytest.mark.parametrize("case", STRUCTURE_CASES)
 def test_filter_is_the_exact_istate(case):
-    """Filter = exact I-state (Sec. IV-D): after every observation the filter's set equals the brute-force
-    set of cells consistent with the string and contains the true cell; the closed-world filter
-    never traps, reaches a knowledge cycle within |Q'| steps and stays there."""
+    """Filter = exact I-state (Sec. IV-D): after every observation the filter's set equals the
+    brute-force set of cells consistent with the string and contains the true cell; the closed-world
+    filter never traps, reaches a knowledge cycle within |Q'| steps and stays there."""
     model, degrees = _case(case)
     succ, bump, dfa = scm(model, degrees)
     rng = np.random.default_rng(4)
@@ -346,8 +351,9 @@ def test_closed_world_raises_open_world_traps():
 
 
 def test_open_world_traps_on_strings_from_another_world():
-    """Open world (Def. 9, Problem 2): an F_O built for the 8×6 room (obstacle {(3,2),(4,2)}) traps on every stream generated
-    in a 7×6 room within 200 steps, and never on streams from its own world."""
+    """Open world (Def. 9, Problem 2): an F_O built for the 8×6 room (obstacle {(3,2),(4,2)}) traps
+    on every stream generated in a 7×6 room within 200 steps, and never on streams from its own
+    world."""
     _, _, dfa = scm(rect(8, 6, 4, ((3, 2), (4, 2))), 90)
     own_succ, own_bump, _ = scm(rect(8, 6, 4, ((3, 2), (4, 2))), 90)
     other_succ, other_bump, _ = scm(rect(7, 6), 90)

@@ -175,7 +175,8 @@ def test_scm_sanity_on_random_grid_worlds(seed, n_bins, phi_deg):
 @pytest.mark.parametrize("seed", range(4))
 def test_scm_on_random_functional_graphs(seed):
     """The same properties on arbitrary maps (fixed points and long chains allowed): the
-    definitions of periodic cell (period 1 included), transient cell and periodic group (Defs. 1-4), cross-checked with networkx and with Algorithm 1."""
+    definitions of periodic cell (period 1 included), transient cell and periodic group (Defs. 1-4),
+    cross-checked with networkx and with Algorithm 1."""
     rng = np.random.default_rng(seed)
     n = int(rng.integers(50, 400))
     # few targets give many cycles and deep in-trees; the rest random
@@ -191,8 +192,9 @@ def test_scm_on_random_functional_graphs(seed):
 
 @pytest.mark.parametrize("seed", range(3))
 def test_scm_invariant_to_cell_relabelling(seed):
-    """docs/choices.md, "Algorithm 1's index errors and order independence": results must not depend on the cell iteration order. Relabelling the cells by
-    a permutation σ (C' = σ C σ^-1) permutes periodic flags, steps, periods and groups alike."""
+    """docs/choices.md, "Algorithm 1's index errors and order independence": results must not depend
+    on the cell iteration order. Relabelling the cells by a permutation σ (C' = σ C σ^-1) permutes
+    periodic flags, steps, periods and groups alike."""
     rng = np.random.default_rng(10 + seed)
     model = CellModel(random_grid(rng, 8, 9, 3, 3), n_bins=8)
     succ = model.successor([45, 90, 135][seed] * DEG)[0]
@@ -210,8 +212,9 @@ def test_scm_invariant_to_cell_relabelling(seed):
 
 
 def test_scm_long_chain_is_vectorised():
-    """Scale (the 9 M cells of Sec. V-A need whole-array code): a 300 000-cell chain into a 7-cycle has s up to 300 000; pointer
-    doubling finds every s exactly (a per-level loop would be too slow for the test budget)."""
+    """Scale (the 9 M cells of Sec. V-A need whole-array code): a 300 000-cell chain into a 7-cycle
+    has s up to 300 000; pointer doubling finds every s exactly (a per-level loop would be too slow
+    for the test budget)."""
     n_chain, period = 300_000, 7
     n = n_chain + period
     succ = np.arange(1, n + 1)
@@ -321,7 +324,8 @@ def test_lab_localization_maps(name, phi_deg, r):
     ("lab_navigation", 8, 48, 384), ("lab_fig1", 8, 54, 432), ("lab_complex", 8, 183, 1464),
     ("lab_complex", 360, 183, 65880), ("lab_localization_a", 8, 19, 152)])
 def test_zoo_cell_counts(name, n_bins, n_positions, n_cells):
-    """Alam, Bobadilla & Shell 2017, Sec. V / thesis §3.5: N = N_pos · n_θ: 384 = 48·8, 432 = 54·8, 1464 = 183·8,
+    """Alam, Bobadilla & Shell 2017, Sec. V / thesis §3.5:
+    N = N_pos · n_θ: 384 = 48·8, 432 = 54·8, 1464 = 183·8,
     65880 = 183·360, 152 = 19·8; the SCM covers all N cells."""
     model = CellModel(get(name), n_bins=n_bins)
     assert (model.n_positions, model.n_cells) == (n_positions, n_cells)
@@ -404,9 +408,9 @@ def check_gcm_invariants(res, P: sp.csr_matrix, check_scc: bool = True) -> None:
 
 
 def test_gcm_lab_complex_360_bins():
-    """Alam, Bobadilla & Shell 2017, Sec. V-C, on the coverage setting (lab_complex, 360 bins, φ = 30°, ε = 5°,
-    r = 0.8): the invariants hold, the transient domiciles agree with the support of the
-    absorption probabilities, and the analysis allocates no O(N²) structure (numpy peak < 256
+    """Alam, Bobadilla & Shell 2017, Sec. V-C, on the coverage setting (lab_complex, 360 bins, φ =
+    30°, ε = 5°, r = 0.8): the invariants hold, the transient domiciles agree with the support of
+    the absorption probabilities, and the analysis allocates no O(N²) structure (numpy peak < 256
     MiB, where a dense 65 880² matrix would need 32 GiB)."""
     model = CellModel(get("lab_complex"), n_bins=360)
     P = model.transition_matrix(30 * DEG, 5 * DEG, 0.8)
@@ -424,8 +428,9 @@ def test_gcm_lab_complex_360_bins():
 @pytest.mark.parametrize(("name", "phi_deg"), [("lab_localization_a", 45),
                                                ("lab_localization_b", 135), ("lab_fig1", 90)])
 def test_gcm_groups_are_attracting_components(name, phi_deg):
-    """Alg. 3 (docs/choices.md, "Persistent groups without a transitive closure"): persistent groups are the closed SCCs = nx.attracting_components,
-    and the transient cells are everything else (8 bins, ε = 45°, r = 0.8)."""
+    """Alg. 3 (docs/choices.md, "Persistent groups without a transitive closure"): persistent groups
+    are the closed SCCs = nx.attracting_components, and the transient cells are everything else (8
+    bins, ε = 45°, r = 0.8)."""
     model = CellModel(get(name), n_bins=8)
     P = model.transition_matrix(phi_deg * DEG, 45 * DEG, 0.8)
     res = generalized_cell_mapping(P)
@@ -436,9 +441,9 @@ def test_gcm_groups_are_attracting_components(name, phi_deg):
 
 
 def test_open_scc_is_transient():
-    """Thesis §5.4.3 (docs/choices.md, "Persistent groups without a transitive closure"): a strongly connected set that probability can leave
-    is transient (persistence is closedness, not mutual reachability). Cells 0 <-> 1 form an SCC
-    leaking into the absorbing cell 2."""
+    """Thesis §5.4.3 (docs/choices.md, "Persistent groups without a transitive closure"): a strongly
+    connected set that probability can leave is transient (persistence is closedness, not mutual
+    reachability). Cells 0 <-> 1 form an SCC leaking into the absorbing cell 2."""
     P = sp.csr_matrix(np.array([[0.0, 0.9, 0.1], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
     res = generalized_cell_mapping(P)
     assert res.n_groups == 1 and res.groups[0].tolist() == [2]
@@ -530,10 +535,11 @@ def test_absorption_matches_monte_carlo(seed):
 
 @pytest.mark.parametrize("seed", range(2))
 def test_limiting_distribution_is_the_cesaro_limit(seed):
-    """docs/choices.md, "The limiting distribution starts anywhere": the limiting distribution is the Cesàro limit of p(0) P^n (it exists for the
-    period-3 group, where P^n does not converge): uniform p(0) over all N cells by default,
-    w_g = (|g| + Σ_t a_tg) / N; the alternative modes (uniform over persistent cells, equal weight
-    per group) and a custom p(0) match their own Cesàro limits."""
+    """docs/choices.md, "The limiting distribution starts anywhere": the limiting distribution is
+    the Cesàro limit of p(0) P^n (it exists for the period-3 group, where P^n does not converge):
+    uniform p(0) over all N cells by default, w_g = (|g| + Σ_t a_tg) / N; the alternative modes
+    (uniform over persistent cells, equal weight per group) and a custom p(0) match their own Cesàro
+    limits."""
     P, _ = small_chain(seed)
     res = generalized_cell_mapping(P)
     n = P.shape[0]
@@ -595,7 +601,8 @@ def test_domicile_sets_two_sinks():
     (np.ones((2, 3)) / 3, "square"),
     (np.array([[np.nan, 1.0], [0.0, 1.0]]), "finite")])
 def test_gcm_rejects_non_stochastic(matrix, match):
-    """P must be a square row-stochastic matrix (docs/choices.md, "The chain is a row-vector chain")."""
+    """P must be a square row-stochastic matrix (docs/choices.md, "The chain is a row-vector
+    chain")."""
     with pytest.raises(ConfigError, match=match):
         generalized_cell_mapping(sp.csr_matrix(matrix))
 

@@ -11,12 +11,13 @@ coverage comes closest to b.
 
 * `policy_distributions` — Alg. 3: for every policy φ_i the generalized cell mapping with
   reliability r (the nominal rotation with probability r, each other bin within ±ε with
-  (1 − r) / (2 n_ε); ε in whole bins: "ε counts orientation bins"), its persistent groups and its long-run
-  distribution π_i, zero on transient cells (`bounce_gym.markov.gcm`). With several persistent groups
-  π_i is the Cesàro limit from a uniform start over all cells ("a robot starting from any
-  location": "The limiting distribution starts anywhere"; other starts by ``mode``). The columns of A are the π_i, over the N cells
-  (``space="cells"``, the paper, n = N) or summed over the orientation bins (``space="positions"``,
-  n = N_pos, "Coverage over cells or over positions": the coverage of E shown in the paper's heatmaps and measured by
+  (1 − r) / (2 n_ε); ε in whole bins: "ε counts orientation bins"), its persistent groups and its
+  long-run distribution π_i, zero on transient cells (`bounce_gym.markov.gcm`). With several
+  persistent groups π_i is the Cesàro limit from a uniform start over all cells ("a robot starting
+  from any location": "The limiting distribution starts anywhere"; other starts by ``mode``). The
+  columns of A are the π_i, over the N cells (``space="cells"``, the paper, n = N) or summed over
+  the orientation bins (``space="positions"``, n = N_pos, "Coverage over cells or over positions":
+  the coverage of E shown in the paper's heatmaps and measured by
   `bounce_gym.envs.tasks.CoverageTask`).
 * `optimal_mixture` — Eq. 5: ``min ‖A α − b‖²  s.t.  Σ α = 1, α ≥ 0`` solved **exactly** by
   enumerating the supports of α (m = |Φ| is small: "Solving Eq. 5 exactly"): on each support S the
@@ -32,12 +33,12 @@ coverage comes closest to b.
 * `MixturePolicy` — runs the mixture in a `bounce_gym` env: it switches among the bounce policies
   in epochs of ``epoch`` bumps so that the fraction of **time** (ticks) under φ_i tracks α_i.
 
-**Caveat (docs/choices.md, "The mixture's coverage is the model A α").** The paper models the coverage of the mixture as ``A α``, the convex
-combination of the single policies' long-run distributions. A robot that switches policies runs an
-inhomogeneous chain: each epoch starts where the last one ended (not from "anywhere"), and with
-several persistent groups a single run settles in one group per policy rather than the start-
-anywhere blend. Simulated coverage approaches ``A α`` only with long epochs and many runs; the
-benchmark (``python -m benchmarks.coverage``) reports both.
+**Caveat (docs/choices.md, "The mixture's coverage is the model A α").** The paper models the
+coverage of the mixture as ``A α``, the convex combination of the single policies' long-run
+distributions. A robot that switches policies runs an inhomogeneous chain: each epoch starts where
+the last one ended (not from "anywhere"), and with several persistent groups a single run settles in
+one group per policy rather than the start- anywhere blend. Simulated coverage approaches ``A α``
+only with long epochs and many runs; the benchmark (``python -m benchmarks.coverage``) reports both.
 
 Angles (``angles``, ``eps``) are in **radians**, as everywhere inside the package, and must be whole
 multiples of the model's bin width. Cells are numbered as in `bounce_gym.cells.CellModel`

@@ -9,15 +9,16 @@ m, `JointCellModel.encode` gives the mixed-radix joint index ``Σ_i z_i · N^i``
 "Joint cell numbering").
 
 **Joint map** (Eq. 6 with docs/choices.md, "Bumps rotate in place and take one tick",
-"Diagonal moves and the corner rule" and "Robot–robot conflicts on the grid"): every robot proposes its king-move target
-(``CellModel.targets``); an obstacle target blocks it. With ``collisions=True`` a robot is also
-blocked, iterated to a fixpoint, when its target is another moving robot's target, when two
-robots would swap cells, or when its target is the cell of a robot that stays. Moving into a cell
-that another robot vacates is allowed. Blocked robots stay and rotate CCW by their own φ_i; the
-others move and keep their heading. This is exactly `bounce_gym.dynamics.backends.cell.CellBackend`
-ticked with ``step_mode="tick"``. A robot–robot collision counts once per colliding pair per step.
-``min_sep_cells`` = s > 0 (for cells smaller than the robot) widens "the same cell" to
-"within Chebyshev distance s" in these rules and in the validity of joint cells.
+"Diagonal moves and the corner rule" and "Robot–robot conflicts on the grid"): every robot proposes
+its king-move target (``CellModel.targets``); an obstacle target blocks it. With ``collisions=True``
+a robot is also blocked, iterated to a fixpoint, when its target is another moving robot's target,
+when two robots would swap cells, or when its target is the cell of a robot that stays. Moving into
+a cell that another robot vacates is allowed. Blocked robots stay and rotate CCW by their own φ_i;
+the others move and keep their heading. This is exactly
+`bounce_gym.dynamics.backends.cell.CellBackend` ticked with ``step_mode="tick"``. A robot–robot
+collision counts once per colliding pair per step. ``min_sep_cells`` = s > 0 (for cells smaller than
+the robot) widens "the same cell" to "within Chebyshev distance s" in these rules and in the
+validity of joint cells.
 
 **Coverage** (docs/choices.md, "The neighbourhood of a joint cell" to "What 'steps to full
 coverage' counts"): follow the joint map while the next joint cell is unprocessed; at a
@@ -168,7 +169,7 @@ def plan_coverage(joint_model: JointCellModel, x0, max_steps: int = 10_000,
     visit(b, None)
     for _ in range(max_parts):
         key = keys.one(b)
-        while key not in processed and len(traj) - 1 < max_steps:  # while unprocessed (docs/choices.md)
+        while key not in processed and len(traj) - 1 < max_steps:  # while unprocessed
             processed.add(key)
             nxt, pairs = jm.step(b, return_collisions=True)
             collisions += int(pairs)
@@ -224,5 +225,6 @@ def _best_neighbor(jm, b, mode, processed, keys, covered, lookahead, rng):
 
 
 def random_start(joint_model: JointCellModel, seed: int) -> np.ndarray:
-    """A random initial joint cell (docs/choices.md, "Random initial joint cells"): distinct free cells, uniform among the 8 bins."""
+    """A random initial joint cell (docs/choices.md, "Random initial joint cells"): distinct free
+    cells, uniform among the 8 bins."""
     return joint_model.random_joint(np.random.default_rng(seed), 1)[0]

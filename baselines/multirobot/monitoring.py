@@ -55,7 +55,9 @@ __all__ = ["MODES", "REJECTED", "MonitoringResult", "default_regions", "joint_su
            "persistent_behavior", "region_indices", "summary"]
 
 MODES = ("visit", "cover", "any")
-REJECTED = -2  # the label of every cell of a group rejected by SAMEREGION (docs/choices.md, "Algorithm 2's bookkeeping")
+#: The label of every cell of a group rejected by SAMEREGION (docs/choices.md, "Algorithm 2's
+#: bookkeeping").
+REJECTED = -2
 
 
 @dataclass(eq=False)
@@ -74,8 +76,8 @@ class MonitoringResult:
         accepted: sorted SCM group numbers of the accepted groups (r of them); accepted group g
             is SCM group ``accepted[g]``.
         label: (N1·N2 + 1,) int32, Algorithm 2's final group label of every joint cell, sink
-            included ("Algorithm 2's bookkeeping"): g in 0..r-1 for the periodic and transient cells of accepted group
-            g (P_g ∪ Q_g), `REJECTED` (-2) for every cell of a rejected group.
+            included ("Algorithm 2's bookkeeping"): g in 0..r-1 for the periodic and transient cells
+            of accepted group g (P_g ∪ Q_g), `REJECTED` (-2) for every cell of a rejected group.
         cycles: the accepted groups' joint cycles (P_1..P_r), in the order of C.
         periods: (r,) their periods.
         basins: (r,) the number of transient joint cells leading into each (|Q_1|..|Q_r|).
@@ -216,7 +218,8 @@ def persistent_behavior(
         mode: ``"visit"`` | ``"cover"`` | ``"any"`` (module docstring).
         forbid_swaps: also treat two robots swapping cells in one step as a collision.
         min_sep_cells: collide when the robots' cells are within this Chebyshev distance
-            (docs/choices.md, "Robot–robot conflicts on the grid"; 0 = the same cell only, for cells smaller than the robot diameter use ≥ 1).
+            (docs/choices.md, "Robot–robot conflicts on the grid"; 0 = the same cell only, for cells
+            smaller than the robot diameter use ≥ 1).
 
     Returns:
         A `MonitoringResult`; ``result.r`` is the number of accepted groups and

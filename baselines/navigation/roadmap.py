@@ -5,8 +5,8 @@ robot navigation and coverage using a dynamical system approach" (IEEE IRC 2017;
 3.2), on the deterministic cell model `bounce_gym.cells.CellModel` (ε = 0: the robot rotates
 reliably by the angles of Φ).
 
-**The roadmap is the layered product graph** (docs/choices.md, "The roadmap remembers the current bounce
-angle"). The paper (Sec. IV-A)
+**The roadmap is the layered product graph** (docs/choices.md, "The roadmap remembers the current
+bounce angle"). The paper (Sec. IV-A)
 takes the union of one graph G_i per policy over the same vertex set, which loses which policy is
 active, so "the bounce changes the angle" (weight w2) cannot be known. Here a node is a pair
 (cell z, active angle i), numbered ``v = i·N + z``:

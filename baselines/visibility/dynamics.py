@@ -1,8 +1,8 @@
 """Dynamical properties of bouncing paths: transition maps, contraction and limit cycles.
 
 Nilles, Ren, Becerra & LaValle, "A visibility-based approach to computing non-deterministic
-bouncing strategies" (IJRR 2021), §6 (dynamical properties of paths: Defs. 8–13, Lemmas 2–3, Theorem 1, Prop. 4,
-Cors. 3–4) and §6.1 (limit cycles, Fig. 9), with the model of §3.
+bouncing strategies" (IJRR 2021), §6 (dynamical properties of paths: Defs. 8–13, Lemmas 2–3, Theorem
+1, Prop. 4, Cors. 3–4) and §6.1 (limit cycles, Fig. 9), with the model of §3.
 
 **Frames (§3).** A *segment* is a ``(2, 2)`` array ``[start, end]`` whose free space lies on its
 left, exactly like a directed edge of a `World` (outer ring counter-clockwise, holes clockwise):
@@ -14,10 +14,10 @@ start (the paper's "clockwise endpoint" v_i). `edge_segment` turns a world edge 
 met at ``μ(s, θ) = cross(p − v_j, d) / cross(t_j, d)`` (distance from ``v_j``). It is affine in
 ``s`` with slope ``∂μ/∂s = sin θ / sin(θ − γ) = −C`` (γ = direction of ``t_j`` relative to ``t_i``):
 every transition reverses orientation, and ``C = |sin θ / sin(θ − γ)|`` (Def. 11, unified form:
-docs/choices.md, "Contraction for non-adjacent edges") is independent of the position. `transition`, `slope`, `interval_image`, `contraction`,
-`is_contracting`, `lemma2_threshold`, `contracting_range` and `composite_contraction` (Def. 12)
-implement this; `composite_fixed_point` gives the fixed point ``μ* = A / (1 − (−1)^m C(F))`` of
-any closed edge sequence with per-stage actions.
+docs/choices.md, "Contraction for non-adjacent edges") is independent of the position. `transition`,
+`slope`, `interval_image`, `contraction`, `is_contracting`, `lemma2_threshold`, `contracting_range`
+and `composite_contraction` (Def. 12) implement this; `composite_fixed_point` gives the fixed point
+``μ* = A / (1 − (−1)^m C(F))`` of any closed edge sequence with per-stage actions.
 
 **Fixed rule in convex polygons.** `lemma3_bound` (Lemma 3), `fixed_rule_cycle` (Theorem 1: the
 fixed point ``d_FP`` on ``e_0`` and all contacts of the period-n limit cycle), the closed forms
@@ -424,8 +424,9 @@ def cor3_bound(coefficient: float, length: float, k: int) -> float:
 
 def iterations_to(eps: float, coefficient: float, length: float) -> int:
     """Cor. 4: laps after which the set of possible positions is smaller than ε,
-    ``⌈log(ε/(2ℓ)) / log C⌉``. Conservative (docs/choices.md, "Corollary 4 is conservative"): the set diameter is only ≤ C^k ℓ, so fewer
-    laps often suffice (the WAFR version used ε/ℓ). Returns 0 if ε ≥ 2ℓ already."""
+    ``⌈log(ε/(2ℓ)) / log C⌉``. Conservative (docs/choices.md, "Corollary 4 is conservative"): the
+    set diameter is only ≤ C^k ℓ, so fewer laps often suffice (the WAFR version used ε/ℓ). Returns 0
+    if ε ≥ 2ℓ already."""
     if not 0.0 < coefficient < 1.0:
         raise ValueError(f"Cor. 4 needs a contraction, 0 < C < 1; got C = {coefficient}")
     if eps <= 0 or length <= 0:

@@ -3,10 +3,11 @@
 
 * `entirely_visible` / `visibility_matrix`: Def. 6. Two segments are entirely visible iff the
   convex hull of their union lies in P (the hull is the union of all segments joining them), which
-  also rejects holes inside the hull (docs/choices.md, "Holes inside the convex hull"). Each segment must face the other (closed
-  left side of the other's supporting line); segments on one supporting line are never adjacent.
-  ``closed=True`` (default; docs/choices.md, "Closed visibility"): grazing a vertex or sliding along collinear boundary counts as
-  visible. ``closed=False``: no vertex of P' other than the four end points may touch the hull.
+  also rejects holes inside the hull (docs/choices.md, "Holes inside the convex hull"). Each segment
+  must face the other (closed left side of the other's supporting line); segments on one supporting
+  line are never adjacent. ``closed=True`` (default; docs/choices.md, "Closed visibility"): grazing
+  a vertex or sliding along collinear boundary counts as visible. ``closed=False``: no vertex of P'
+  other than the four end points may touch the hull.
 * `safe_interval`: Prop. 2 with ``atan2`` angles; θ_r = 0 for a shared vertex v_{i+1} = v_j and
   θ_l = π for v_{j+1} = v_i.
 * `bvg`, `safe_graph`: `networkx.DiGraph` over segment ids; G_safe arcs carry ``lo``, ``hi``,
@@ -246,13 +247,14 @@ def bvg(part: Partition, closed: bool = False) -> nx.DiGraph:
     """Bounce visibility graph: the directed edge visibility graph of P' (Def. 5).
 
     Arcs i -> j and j -> i for every pair of segments with some line of sight between them
-    (`weak_visibility_matrix`). The arcs carry no guarantee (docs/choices.md, "The BVG's arcs carry no
-    guarantee"); plan with `safe_graph`,
+    (`weak_visibility_matrix`). The arcs carry no guarantee (docs/choices.md, "The BVG's arcs carry
+    no guarantee"); plan with `safe_graph`,
     whose arcs need entire visibility (Def. 6).
 
     ``closed=False`` (default) is Def. 5 as stated: open segments, sight lines in the interior of
-    P; it reproduces the arc lists of the authors' test polygons. ``closed=True`` also counts sight lines that graze
-    vertices, even when they are isolated (e.g. a single grazing line ending at a corner).
+    P; it reproduces the arc lists of the authors' test polygons. ``closed=True`` also counts sight
+    lines that graze vertices, even when they are isolated (e.g. a single grazing line ending at a
+    corner).
     """
     vis = weak_visibility_matrix(part, closed)
     g = _nodes(part)

@@ -1,8 +1,8 @@
 """Visibility-based boundary partition P' of a polygon (Nilles et al., IJRR 2021, Alg. 1).
 
-Nilles et al. 2021, §4. For every reflex vertex ``r`` and every vertex ``v`` that ``r`` sees, the ray from
-``v`` through ``r`` is continued beyond ``r`` when the line grazes ``r`` (rule (a)); the two
-neighbours of ``r`` are always used, so the extensions of ``r``'s incident edges are shot
+Nilles et al. 2021, §4. For every reflex vertex ``r`` and every vertex ``v`` that ``r`` sees, the
+ray from ``v`` through ``r`` is continued beyond ``r`` when the line grazes ``r`` (rule (a)); the
+two neighbours of ``r`` are always used, so the extensions of ``r``'s incident edges are shot
 (rule (b)). First hits are inserted into ∂P unless they coincide with an existing vertex, and
 coincident hits are merged, both with scale-relative tolerances (rule (c); docs/choices.md,
 "Tolerances relative to the polygon's size"). Reflexness is
@@ -27,8 +27,8 @@ from bounce_gym.worlds.world import World
 
 __all__ = ["Partition", "closed_region", "partition", "visible_pairs"]
 
-#: Merge / vertex-coincidence tolerance for inserted points, times the world's diameter (docs/choices.md,
-#: "Tolerances relative to the polygon's size").
+#: Merge / vertex-coincidence tolerance for inserted points, times the world's diameter
+#: (docs/choices.md, "Tolerances relative to the polygon's size").
 SNAP_REL = 1e-9
 #: Slack of the closed-visibility predicates, times the world's diameter.
 VIS_REL = 1e-9
@@ -137,7 +137,8 @@ def visible_pairs(world: World, a: np.ndarray, b: np.ndarray, closed: bool = Tru
     closed=True: the closed segment lies in the closed free space (grazing a vertex or running
     along the boundary counts). closed=False: additionally no vertex of ``exclude_points``
     (default: the world's vertices) other than the segment's own end points lies on it, i.e.
-    the open segment avoids ∂P (docs/choices.md, "Closed visibility"; valid for segments with end points on ∂P).
+    the open segment avoids ∂P (docs/choices.md, "Closed visibility"; valid for segments with end
+    points on ∂P).
     """
     a = np.asarray(a, dtype=np.float64).reshape(-1, 2)
     b = np.asarray(b, dtype=np.float64).reshape(-1, 2)

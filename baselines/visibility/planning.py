@@ -3,8 +3,8 @@
 * `constant_strategy`: Alg. 2 SafeConstantFixedNavigate / SearchConstantFixedStrats. A BFS over
   states (set of current segments, θ̃) starting from θ̃ = (0, π); each arc intersects θ̃ with its
   safe interval and empty intersections are pruned (§7.1.1). With a start *set* of several segments
-  every segment follows one arc at each stage with the same θ̃ (docs/choices.md, "Start and goal sets split the
-  partition"). Tie-break (docs/choices.md, "Ties among shortest safe plans"):
+  every segment follows one arc at each stage with the same θ̃ (docs/choices.md, "Start and goal
+  sets split the partition"). Tie-break (docs/choices.md, "Ties among shortest safe plans"):
   ``order="shortest"`` (default) takes the widest θ̃ among the shortest feasible paths, which is
   the paper's published answer; ``order="widest"`` takes the widest θ̃ among all paths of at most
   ``max_arcs`` arcs, then the fewest arcs.

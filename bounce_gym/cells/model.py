@@ -1,8 +1,8 @@
 """The discrete cell-to-cell model of the bouncing robot (Alam, Bobadilla & Shell).
 
 State space: free position cells x orientation bins. A position cell is free iff its centre lies in
-the free space (or, for a disk robot, its configuration space; docs/choices.md, "Free cells and the endpoint test"). Bins are centred at
-θ_k = k·Δθ, Δθ = 360° / n_bins, counter-clockwise from East.
+the free space (or, for a disk robot, its configuration space; docs/choices.md, "Free cells and the
+endpoint test"). Bins are centred at θ_k = k·Δθ, Δθ = 360° / n_bins, counter-clockwise from East.
 
 **Numbering** (consistent with the cell ids of thesis §3.5.1, e.g. cell 104 of the 48-position lab
 faces North): orientation-major, East layer first,
@@ -22,11 +22,13 @@ every step" and "Unit steps are king moves, with a symmetric tie rule"):
 * otherwise it stays and rotates counter-clockwise by φ — a bump, observation 1. Cells outside the
   grid count as blocked. The position resets to the cell centre every step.
 
-``corner_rule`` (docs/choices.md, "Diagonal moves and the corner rule"): ``"target_only"`` (default; the localization and navigation
-papers' endpoint test, corner cutting allowed), ``"no_squeeze"`` (a diagonal move is blocked when
-both side cells are blocked), ``"strict"`` (blocked when either side cell is).
+``corner_rule`` (docs/choices.md, "Diagonal moves and the corner rule"): ``"target_only"`` (default;
+the localization and navigation papers' endpoint test, corner cutting allowed), ``"no_squeeze"`` (a
+diagonal move is blocked when both side cells are blocked), ``"strict"`` (blocked when either side
+cell is).
 
-The generalized cell mapping (GCM, thesis §3.3.3; Alam, Bobadilla & Shell 2017, Sec. III-B) replaces the rotation by a distribution: the
+The generalized cell mapping (GCM, thesis §3.3.3; Alam, Bobadilla & Shell 2017, Sec. III-B)
+replaces the rotation by a distribution: the
 nominal bin with probability r and each of the 2·n_ε other bins within ±ε with (1 − r) / (2·n_ε).
 """
 

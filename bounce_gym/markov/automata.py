@@ -251,8 +251,8 @@ class DFA:
 
     @property
     def final(self) -> np.ndarray | None:
-        """F' = {S : S ∩ F ≠ ∅} as a boolean mask over states (kept for completeness: docs/choices.md,
-        "Final states are kept but unused")."""
+        """F' = {S : S ∩ F ≠ ∅} as a boolean mask over states (kept for completeness:
+        docs/choices.md, "Final states are kept but unused")."""
         if self.periodic is None:
             return None
         return np.array([bool(self.periodic[s].any()) for s in self.states])
@@ -287,8 +287,8 @@ class DFA:
 
     @property
     def trap_colour(self) -> int:
-        """Colour of the open-world trap q_t: #cycles + 2 (docs/choices.md, "Knowledge-cycle colours and
-        numbering")."""
+        """Colour of the open-world trap q_t: #cycles + 2 (docs/choices.md, "Knowledge-cycle colours
+        and numbering")."""
         return self.n_cycles + 2
 
     def n_colours(self, open_world: bool = False) -> int:

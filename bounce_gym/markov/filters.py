@@ -38,7 +38,8 @@ class LocalizationFilter:
             trapped); valid before convergence too (docs/choices.md, "Knowledge-cycle colours
             and numbering").
         size: ``len(candidates)``; once in a knowledge cycle, the uncertainty.
-        colour: 1 outside knowledge cycles, 2 … m + 1 in cycle k, m + 2 in the trap (Defs. 8–9; numbering:
+        colour: 1 outside knowledge cycles, 2 … m + 1 in cycle k, m + 2 in the trap (Defs. 8–9;
+        numbering:
             docs/choices.md, "Knowledge-cycle colours and numbering").
         localized: True once in a knowledge cycle (absorbing in the closed world).
         trapped: open world only — the observation string is impossible in this world ("not in
