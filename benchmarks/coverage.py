@@ -6,7 +6,8 @@ asserts nothing.
 * The time to compute A (Alg. 3: three GCMs at 65 880 cells = 183 positions x 360 bins,
   Φ = {30°, 75°, 315°}, ε = 5°, r = 0.8) and α (Eq. 5, exact support enumeration).
 * α next to the paper's Table I (Alam, Bobadilla & Shell, IRC 2017; thesis Table 3.1), over the
-  N cells (the paper) and over the 183 positions (spec 000 A7). ``lab_complex`` is a reconstruction
+  N cells (the paper) and over the 183 positions (docs/choices.md, "Coverage over cells or over
+  positions"). ``lab_complex`` is a reconstruction
   (the paper's geometry is unpublished), so only qualitative agreement is expected.
 * The analytic residuals ‖Aα − b‖² and distances ‖Aα − b‖ (uniform b) of the optimal mixture, of
   every single policy (α = e_i) and of the uniform mixture, in both spaces.
@@ -16,7 +17,8 @@ asserts nothing.
   (the right α for this metric), the α-mixture over cells (the paper's α) and the uniform mixture,
   each mixture run by `MixturePolicy` (time schedule, epochs of ``--epoch`` bumps). "pooled" is
   the distance of the visit histogram summed over the seeds (random starts), closer to the
-  start-anywhere model ``A α`` than a single run (spec A6, A12).
+  start-anywhere model ``A α`` than a single run (docs/choices.md, "The limiting distribution starts
+  anywhere" and "The mixture's coverage is the model A α").
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Multi-robot coverage with bouncing robots (spec 002 §7 E2–E4, §9 items 9–10).
+"""Multi-robot coverage with bouncing robots (Alam & Bobadilla 2020, §5.1, Figs. 7–9).
 
 Run with ``python -m benchmarks.multirobot`` (``--seeds``, ``--max-steps``, ``--neighbors``,
 ``--large-seeds``, ``--timing-seeds``). Prints tables; asserts nothing.

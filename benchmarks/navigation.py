@@ -2,9 +2,9 @@
 
 Run with ``python -m benchmarks.navigation``. Prints one block per map; asserts nothing.
 
-For ``lab_complex`` (183 positions x 8 bins = 1464 cells, the paper's "complex" environment E2)
-and ``lab_navigation`` (48 x 8 = 384 cells, the E1 reconstruction), Φ = {45°, 90°, 135°},
-w1 = 1, w2 = 100 (spec 000 §4-5):
+For ``lab_complex`` (183 positions x 8 bins = 1464 cells, the paper's "complex" environment of Sec.
+V-C) and ``lab_navigation`` (48 x 8 = 384 cells, the reconstruction of the Sec. V-A lab), Φ = {45°,
+90°, 135°}, w1 = 1, w2 = 100 (Alam, Bobadilla & Shell 2017, Secs. IV–V):
 
 * building the layered roadmap (`baselines.navigation.Roadmap`);
 * a single query (Alg. 1: one Dijkstra from all layers of the start, plus decoding), the mean

@@ -2,13 +2,15 @@
 
 Run with ``python -m benchmarks.scm_gcm``. Prints one row per measurement; asserts nothing.
 
-* SCM at the localization paper's simulation scale (spec 001 G13): a 200 x 125 grid world with a
+* SCM at the localization paper's simulation scale (Alam, Bobadilla & Shell
+  2018, Sec. V-A): a 200 x 125 grid world with a
   few rectangular obstacles at 1° bins (360 orientations, about 9 M cells). Reports the time to
   build the successor array (`CellModel` + ``successor``), the time of `simple_cell_mapping`,
   the peak traced memory of the analysis (tracemalloc; numpy reports its buffers to it) and the
   peak resident memory of the whole process (``ru_maxrss``). Targets: <= 60 s, <= 4 GiB.
 * GCM on ``lab_complex`` at 360 bins (65 880 cells), φ = 30°, ε = 5°, r = 0.8: persistent
-  groups, stationary distributions and the limiting distribution (spec 000 A6), from the
+  groups, stationary distributions and the limiting distribution (docs/choices.md, "The limiting
+  distribution starts anywhere"), from the
   transition matrix. Target: <= 2 s. The matrix build and the lazy absorption matrix are timed
   on their own rows.
 """

@@ -1,4 +1,5 @@
-"""Bounce visibility graph timings and the §6 random-polygon reachability experiment (spec 004).
+"""Bounce visibility graph timings and the random-polygon reachability experiment of
+Nilles et al. 2021, §7.3.
 
 Run with ``python -m benchmarks.visibility`` (``--per-cell``, ``--seed``). Prints tables and the
 [BENCH-tolerance] check "every cell's mean unreachable fraction < 0.05" (Figs. 15-16).

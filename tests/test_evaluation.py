@@ -124,8 +124,8 @@ def test_visibility_scenario_runs_the_safe_plan(tmp_path):
 
 def test_patrol_scenario_converges_to_the_limit_cycle(tmp_path):
     """Issue 6: patrolling the heptagon's edges with the fixed rule at θ = 0.1 (Def. 15,
-    C(F) = 5.0864e-6, spec §9.5) — the robot ends on the predicted limit cycle; random angles do
-    not; the limit cycle is plotted."""
+    C(F) = 5.0864e-6, Nilles et al. 2021, Theorem 1) — the robot ends on the predicted limit cycle;
+    random angles do not; the limit cycle is plotted."""
     config = {"name": "patrol", "output": str(tmp_path / "runs"), "experiments": [
         dict(_experiment("visibility-patrol-heptagon"), seeds=[0, 1, 2])]}
     assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0

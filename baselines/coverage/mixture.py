@@ -2,7 +2,7 @@
 
 Alam, Bobadilla & Shell, "Minimalist robot navigation and coverage using a dynamical system
 approach" (IRC 2017), §IV-C Alg. 3 POLICYDISTRIBUTION, Eq. 4–5, Table I; thesis §3.3.3, Alg. 3.3,
-Eq. 3.7–3.8, Table 3.1. Spec ``000_navigation_coverage.md`` §3, §4.3, §5 E4, §7 A6/A7/A8/A12.
+Eq. 3.7–3.8, Table 3.1. Choices where the paper is open: docs/choices.md, cited below by heading.
 
 **Coverage Problem.** Given the environment, a set of bouncing angles Φ, an error range ±ε and a
 target coverage distribution b, find the bouncing-policy distribution α ("time-based switching
@@ -11,15 +11,16 @@ coverage comes closest to b.
 
 * `policy_distributions` — Alg. 3: for every policy φ_i the generalized cell mapping with
   reliability r (the nominal rotation with probability r, each other bin within ±ε with
-  (1 − r) / (2 n_ε); ε in whole bins, spec A8), its persistent groups and its long-run
-  distribution π_i, zero on transient cells (`bounce_gym.markov.gcm`). With several persistent groups
-  π_i is the Cesàro limit from a uniform start over all cells ("a robot starting from any
-  location", spec A6; other starts by ``mode``). The columns of A are the π_i, over the N cells
-  (``space="cells"``, the paper, n = N) or summed over the orientation bins (``space="positions"``,
-  n = N_pos, spec A7: the coverage of E shown in the paper's heatmaps and measured by
+  (1 − r) / (2 n_ε); ε in whole bins: "ε counts orientation bins"), its persistent groups and its
+  long-run distribution π_i, zero on transient cells (`bounce_gym.markov.gcm`). With several
+  persistent groups π_i is the Cesàro limit from a uniform start over all cells ("a robot starting
+  from any location": "The limiting distribution starts anywhere"; other starts by ``mode``). The
+  columns of A are the π_i, over the N cells (``space="cells"``, the paper, n = N) or summed over
+  the orientation bins (``space="positions"``, n = N_pos, "Coverage over cells or over positions":
+  the coverage of E shown in the paper's heatmaps and measured by
   `bounce_gym.envs.tasks.CoverageTask`).
 * `optimal_mixture` — Eq. 5: ``min ‖A α − b‖²  s.t.  Σ α = 1, α ≥ 0`` solved **exactly** by
-  enumerating the supports of α (m = |Φ| is small, spec §4.3 REC): on each support S the
+  enumerating the supports of α (m = |Φ| is small: "Solving Eq. 5 exactly"): on each support S the
   equality-constrained problem ``min ‖A_S x − b‖², 1ᵀx = 1`` is solved through its KKT system
   (null-space method on the QR-compressed problem: no normal equations, so no squared condition
   number; a rank-deficient A_S gets the minimum-norm solution), infeasible (negative) solutions
@@ -32,12 +33,12 @@ coverage comes closest to b.
 * `MixturePolicy` — runs the mixture in a `bounce_gym` env: it switches among the bounce policies
   in epochs of ``epoch`` bumps so that the fraction of **time** (ticks) under φ_i tracks α_i.
 
-**Caveat (spec A12).** The paper models the coverage of the mixture as ``A α``, the convex
-combination of the single policies' long-run distributions. A robot that switches policies runs an
-inhomogeneous chain: each epoch starts where the last one ended (not from "anywhere"), and with
-several persistent groups a single run settles in one group per policy rather than the start-
-anywhere blend. Simulated coverage approaches ``A α`` only with long epochs and many runs; the
-benchmark (``python -m benchmarks.coverage``) reports both.
+**Caveat (docs/choices.md, "The mixture's coverage is the model A α").** The paper models the
+coverage of the mixture as ``A α``, the convex combination of the single policies' long-run
+distributions. A robot that switches policies runs an inhomogeneous chain: each epoch starts where
+the last one ended (not from "anywhere"), and with several persistent groups a single run settles in
+one group per policy rather than the start- anywhere blend. Simulated coverage approaches ``A α``
+only with long epochs and many runs; the benchmark (``python -m benchmarks.coverage``) reports both.
 
 Angles (``angles``, ``eps``) are in **radians**, as everywhere inside the package, and must be whole
 multiples of the model's bin width. Cells are numbered as in `bounce_gym.cells.CellModel`
@@ -97,7 +98,8 @@ def policy_distributions(model: CellModel, angles: Sequence[float], eps: float, 
         eps: the error range ε, radians, a whole number of bins (0: exact rotation).
         r: the probability of the nominal (reliable) rotation.
         space: ``"cells"`` (n = N, the paper's Eq. 5) or ``"positions"`` (n = N_pos: π_i summed
-            over the orientation bins, spec A7).
+            over the orientation bins; docs/choices.md, "Coverage over cells or over
+            positions").
         mode: the start distribution of the Cesàro limit (`bounce_gym.markov.gcm.MODES` or an (N,)
             probability vector); ``"all"`` is the paper's "starting from any location".
 
@@ -190,7 +192,7 @@ class MixtureResult:
 
     @property
     def coverage(self) -> np.ndarray:
-        """(n,) A α, the modelled coverage of the mixture (spec A12)."""
+        """(n,) A α, the modelled coverage of the mixture (Eq. 5)."""
         return self.A @ self.alpha
 
     def residual_of(self, alpha: np.ndarray) -> float:

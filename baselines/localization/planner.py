@@ -118,9 +118,6 @@ class AngleSwitchPlanner:
         """The angle (radians) to rotate by at this bump, given the candidate set ``cells``."""
         return self.angles[self._best(self._bumping(cells), self.depth)[2]]
 
-    def choose_index(self, cells) -> int:
-        return self._best(self._bumping(cells), self.depth)[2]
-
 
 def build_policy_dfa(planner: AngleSwitchPlanner, *, max_states: int | None = None) -> DFA:
     """The closed-loop subset automaton of a robot that rotates by ``planner.choose(S)`` at every

@@ -1,24 +1,27 @@
-"""Multi-robot coverage with bouncing robots: the joint simple cell mapping (spec 002 §2, Eq. 6;
-thesis Eq. 3.9) and Algorithm 1 / thesis Alg. 3.4 MULTIROBOTCOVERAGE with the resolutions of
-spec 002 §8.
+"""Multi-robot coverage with bouncing robots: the joint simple cell mapping (Alam & Bobadilla
+2020, §3.2 and §4.1, Eq. 6; thesis Eq. 3.9) and Algorithm 1 / thesis Alg. 3.4 MULTIROBOTCOVERAGE,
+with the choices of docs/choices.md where the article is open.
 
 **Joint state.** A joint cell is a length-m vector of per-robot cell numbers
 ``z_i = k_i · N_pos + p_i`` of a `bounce_gym.cells.CellModel` (the package's orientation-major
 numbering). Joint cells are never enumerated: batches are ``(batch, m)`` int64 arrays. For small
-m, `JointCellModel.encode` gives the mixed-radix joint index ``Σ_i z_i · N^i`` (spec §8.13, with
-the package's per-robot numbering instead of the spec's ``pos·8 + θ``).
+m, `JointCellModel.encode` gives the mixed-radix joint index ``Σ_i z_i · N^i`` (docs/choices.md,
+"Joint cell numbering").
 
-**Joint map** (Eq. 6 with §8.2–8.4): every robot proposes its king-move target
-(``CellModel.targets``); an obstacle target blocks it. With ``collisions=True`` a robot is also
-blocked, iterated to a fixpoint, when its target is another moving robot's target, when two
-robots would swap cells, or when its target is the cell of a robot that stays. Moving into a cell
-that another robot vacates is allowed. Blocked robots stay and rotate CCW by their own φ_i; the
-others move and keep their heading. This is exactly `bounce_gym.dynamics.backends.cell.CellBackend`
-ticked with ``step_mode="tick"``. A robot–robot collision counts once per colliding pair per step.
-``min_sep_cells`` = s > 0 (§8.4, for cells smaller than the robot) widens "the same cell" to
-"within Chebyshev distance s" in these rules and in the validity of joint cells.
+**Joint map** (Eq. 6 with docs/choices.md, "Bumps rotate in place and take one tick",
+"Diagonal moves and the corner rule" and "Robot–robot conflicts on the grid"): every robot proposes
+its king-move target (``CellModel.targets``); an obstacle target blocks it. With ``collisions=True``
+a robot is also blocked, iterated to a fixpoint, when its target is another moving robot's target,
+when two robots would swap cells, or when its target is the cell of a robot that stays. Moving into
+a cell that another robot vacates is allowed. Blocked robots stay and rotate CCW by their own φ_i;
+the others move and keep their heading. This is exactly
+`bounce_gym.dynamics.backends.cell.CellBackend` ticked with ``step_mode="tick"``. A robot–robot
+collision counts once per colliding pair per step. ``min_sep_cells`` = s > 0 (for cells smaller than
+the robot) widens "the same cell" to "within Chebyshev distance s" in these rules and in the
+validity of joint cells.
 
-**Coverage** (§8.5–8.8): follow the joint map while the next joint cell is unprocessed; at a
+**Coverage** (docs/choices.md, "The neighbourhood of a joint cell" to "What 'steps to full
+coverage' counts"): follow the joint map while the next joint cell is unprocessed; at a
 processed cell, if coverage is incomplete, jump to the best unprocessed neighbour — ±Δθ of one
 robot's heading (``neighbors="rotation"``, 2m) or also ±1 cell in x or y of one robot
 (``"full"``, 6m). Each unprocessed neighbour is simulated (nothing marked) until its sequence
@@ -166,7 +169,7 @@ def plan_coverage(joint_model: JointCellModel, x0, max_steps: int = 10_000,
     visit(b, None)
     for _ in range(max_parts):
         key = keys.one(b)
-        while key not in processed and len(traj) - 1 < max_steps:  # §8.1: while unprocessed
+        while key not in processed and len(traj) - 1 < max_steps:  # while unprocessed
             processed.add(key)
             nxt, pairs = jm.step(b, return_collisions=True)
             collisions += int(pairs)
@@ -222,5 +225,6 @@ def _best_neighbor(jm, b, mode, processed, keys, covered, lookahead, rng):
 
 
 def random_start(joint_model: JointCellModel, seed: int) -> np.ndarray:
-    """A random initial joint cell (§8.10): distinct free cells, uniform among the 8 bins."""
+    """A random initial joint cell (docs/choices.md, "Random initial joint cells"): distinct free
+    cells, uniform among the 8 bins."""
     return joint_model.random_joint(np.random.default_rng(seed), 1)[0]

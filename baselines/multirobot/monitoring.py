@@ -1,22 +1,23 @@
-"""Persistent monitoring with two bouncing robots: Algorithm 2, PERSISTENTBEHAVIOR (spec 002 §5).
+"""Persistent monitoring with two bouncing robots: Algorithm 2, PERSISTENTBEHAVIOR (Alam & Bobadilla
+2020, §4.2).
 
 Alam & Bobadilla's Algorithm 2 enumerates the periodic groups (joint limit cycles) of the simple
 cell mapping of m robots and keeps those that monitor the target regions without a robot-robot
-collision. This module does it for **m = 2** robots, with the resolutions of spec 002 §8.4 and
-§8.11-13:
+collision. This module does it for **m = 2** robots, with the choices of docs/choices.md
+("Robot–robot conflicts on the grid", "Monitoring: regions and the collision sink", "Algorithm 2's
+bookkeeping", "Joint cell numbering"):
 
 * **Dynamics.** Each robot i follows its own cell map C_i (`CellModel.successor` with its own
-  bounce angle φ_i); robots bounce only off the walls and ignore each other (§5, "monitoring
-  dynamics").
+  bounce angle φ_i); robots bounce only off the walls and ignore each other (§4.2).
 * **Joint cells.** ``z = z1 · N2 + z2`` (mixed radix, robot 1 most significant) for
   ``z1, z2`` the single-robot cells, ``N1 = N2 = 8 · n_free`` cells each; ``SINK = N1 · N2`` is one
   extra cell ⊥.
 * **Collisions.** A joint cell whose two robots' position cells are within Chebyshev (king-move)
   distance ``min_sep_cells`` on the grid — 0 (default) = the same cell; 1, 2, … for cells smaller
-  than the robot diameter (§8.4) — and, with ``forbid_swaps=True``, one whose step makes the two
+  than the robot diameter — and, with ``forbid_swaps=True``, one whose step makes the two
   robots swap cells (they would pass through each other) maps to the absorbing sink ⊥ instead of
   its product successor. So every cycle other than ⊥ itself, and every transient trajectory into
-  it, is collision-free by construction (§8.11(b)). A swap moves each robot one king move, so it
+  it, is collision-free by construction. A swap moves each robot one king move, so it
   starts from Chebyshev distance 1 and ``forbid_swaps`` only matters for ``min_sep_cells=0``.
 * **SCM.** The joint successor array is analysed with `bounce_gym.markov.scm.simple_cell_mapping`
   (array-based, so every joint cell is processed once, as in Algorithm 2's outer loop).
@@ -24,17 +25,17 @@ collision. This module does it for **m = 2** robots, with the resolutions of spe
   ``mode="visit"`` (default): robot j's cycle positions intersect F_j; ``"cover"``: they contain
   all of F_j; ``"any"``: every F_j is visited by some robot each period. The sink group is always
   rejected.
-* **Bookkeeping (§8.12).** r counts only the accepted groups, numbered 0..r-1 in the order of
+* **Bookkeeping.** r counts only the accepted groups, numbered 0..r-1 in the order of
   their SCM group numbers. ``MonitoringResult.label`` gives every joint cell one final label:
   the accepted group number for its periodic cells (P_g) *and* its transient cells (Q_g: the
   runs that end in an already-labelled group take that group's number), and ``REJECTED = -2``
   for every cell, periodic or transient, of a rejected group — the sink ⊥ and its basin
   included. ``MonitoringResult.periodic`` tells P from Q, so every joint cell is exactly one of
-  accepted-periodic, accepted-transient or rejected (§9 item 4).
+  accepted-periodic, accepted-transient or rejected.
 
 Because the robots ignore each other, a joint cycle is a pair of individual cycles of periods
 p1, p2 run in lock step: its period is lcm(p1, p2), and one pair of individual cycles gives
-gcd(p1, p2) joint cycles before the collision filter (spec 002 §9 item 5) — collision filtering
+gcd(p1, p2) joint cycles before the collision filter — collision filtering
 can only remove some of them.
 """
 
@@ -54,7 +55,9 @@ __all__ = ["MODES", "REJECTED", "MonitoringResult", "default_regions", "joint_su
            "persistent_behavior", "region_indices", "summary"]
 
 MODES = ("visit", "cover", "any")
-REJECTED = -2  # the label of every cell of a group rejected by SAMEREGION (spec 002 §8.12)
+#: The label of every cell of a group rejected by SAMEREGION (docs/choices.md, "Algorithm 2's
+#: bookkeeping").
+REJECTED = -2
 
 
 @dataclass(eq=False)
@@ -73,8 +76,8 @@ class MonitoringResult:
         accepted: sorted SCM group numbers of the accepted groups (r of them); accepted group g
             is SCM group ``accepted[g]``.
         label: (N1·N2 + 1,) int32, Algorithm 2's final group label of every joint cell, sink
-            included (§8.12): g in 0..r-1 for the periodic and transient cells of accepted group
-            g (P_g ∪ Q_g), `REJECTED` (-2) for every cell of a rejected group.
+            included ("Algorithm 2's bookkeeping"): g in 0..r-1 for the periodic and transient cells
+            of accepted group g (P_g ∪ Q_g), `REJECTED` (-2) for every cell of a rejected group.
         cycles: the accepted groups' joint cycles (P_1..P_r), in the order of C.
         periods: (r,) their periods.
         basins: (r,) the number of transient joint cells leading into each (|Q_1|..|Q_r|).
@@ -106,7 +109,7 @@ class MonitoringResult:
     @property
     def periodic(self) -> np.ndarray:
         """(N1·N2 + 1,) bool, True for periodic joint cells (the SCM's view): with `label`, a
-        cell with ``label >= 0`` is in P_label if periodic and in Q_label otherwise (§8.12)."""
+        cell with ``label >= 0`` is in P_label if periodic and in Q_label otherwise."""
         return self.scm.periodic
 
     def split(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -170,7 +173,8 @@ def default_regions(model: CellModel) -> tuple[np.ndarray, np.ndarray]:
 
 def joint_successor(model: CellModel, phis: Sequence[float], forbid_swaps: bool = False,
                     min_sep_cells: int = 0) -> tuple[np.ndarray, int]:
-    """The joint map of two independent robots with a collision sink, vectorised (§8.11, §8.13).
+    """The joint map of two independent robots with a collision sink, vectorised
+    (docs/choices.md, "Monitoring: regions and the collision sink", "Joint cell numbering").
 
     Returns ``(successor, n_collision_cells)``: ``successor`` has N1·N2 + 1 entries (the last is
     the sink ⊥, which maps to itself); joint cells that collide — position cells within
@@ -214,11 +218,12 @@ def persistent_behavior(
         mode: ``"visit"`` | ``"cover"`` | ``"any"`` (module docstring).
         forbid_swaps: also treat two robots swapping cells in one step as a collision.
         min_sep_cells: collide when the robots' cells are within this Chebyshev distance
-            (§8.4; 0 = the same cell only, for cells smaller than the robot diameter use ≥ 1).
+            (docs/choices.md, "Robot–robot conflicts on the grid"; 0 = the same cell only, for cells
+            smaller than the robot diameter use ≥ 1).
 
     Returns:
         A `MonitoringResult`; ``result.r`` is the number of accepted groups and
-        ``result.label`` Algorithm 2's final label of every joint cell (§8.12).
+        ``result.label`` Algorithm 2's final label of every joint cell.
 
     Raises:
         ConfigError: a bad ``mode``, ``regions``, ``phis`` or ``min_sep_cells``.
@@ -261,7 +266,7 @@ def persistent_behavior(
         ok = (per_group_any(in1[p1] | in1[p2])) & (per_group_any(in2[p1] | in2[p2]))
     ok[res.group[sink]] = False  # SAMEREGION (b): the sink is the only colliding cycle
     accepted = np.flatnonzero(ok)
-    number = np.full(ng, REJECTED, dtype=np.int32)  # SCM group -> Algorithm 2 label (§8.12)
+    number = np.full(ng, REJECTED, dtype=np.int32)  # SCM group -> Algorithm 2 label
     number[accepted] = np.arange(len(accepted), dtype=np.int32)
     transient_counts = np.bincount(res.group[~res.periodic], minlength=ng)
     return MonitoringResult(

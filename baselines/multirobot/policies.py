@@ -1,11 +1,12 @@
-"""The multi-robot planners of Alam & Bobadilla as policies for `MultiBounceEnv` (spec 002).
+"""The multi-robot planners of Alam & Bobadilla as policies for `MultiBounceEnv` (2020, §4).
 
 * `CoveragePlanPolicy` — executes the joint trajectory x̃ of Algorithm 1 (MULTIROBOTCOVERAGE,
   `baselines.multirobot.plan_coverage`): on a joint-map edge every robot bounces with its φ_i; on a
-  neighbour jump (one robot's heading ±Δθ, spec 002 §8.6) the robot gets a clock-timed *turn
-  command* and the others wait one tick (the env's ``turn_angles``). After the plan the robots keep
-  bouncing with φ_i. Edges a turn cannot execute — a random restart, or a position jump of the
-  ``"full"`` neighbourhood — end the plan there (``executable_steps``); the robots bounce on.
+  neighbour jump (one robot's heading ±Δθ; docs/choices.md, "A neighbour jump is a timed turn") the
+  robot gets a clock-timed *turn command* and the others wait one tick (the env's ``turn_angles``).
+  After the plan the robots keep bouncing with φ_i. Edges a turn cannot execute — a random restart,
+  or a position jump of the ``"full"`` neighbourhood — end the plan there (``executable_steps``);
+  the robots bounce on.
 * `MonitoringPlanPolicy` — Algorithm 2 (PERSISTENTBEHAVIOR, `baselines.multirobot.monitoring`): places the two
   robots on an accepted collision-free joint limit cycle (chosen by the seed) and lets them bounce
   with their φ_i forever; the cycle repeats with no robot–robot contact and visits each robot's
@@ -14,8 +15,8 @@
 Both are exact on the ``cell`` backend (the papers' grid model) in ``step_mode="tick"``: the env's
 joint cell after step t is the plan's (tests replay whole plans). On the continuous backends they
 run open loop from the grid plan — one tick is then ``step_length`` of driving, a diagonal king
-move is √2 on the grid (spec 002 §8.3), so the motion drifts from the plan; `evaluate.py` reports
-how much coverage and how many contacts that costs.
+move is √2 on the grid (docs/choices.md, "Diagonal moves and the corner rule"), so the motion drifts
+from the plan; `evaluate.py` reports how much coverage and how many contacts that costs.
 """
 
 from __future__ import annotations
@@ -93,11 +94,11 @@ class CoveragePlanPolicy(MultiPolicy):
                 corner_rule: str = "no_squeeze") -> CoveragePlanPolicy:
         """The planner for a `MultiBounceEnv` (parallel form, discrete actions, tick mode).
 
-        ``phi``: degrees, one for every robot or one per robot (spec 002 §8.9: a fixed φ_i per
-        robot); each must be in that robot's angle set. The env's ``turn_angles`` must hold
-        ±360°/bins for the neighbour jumps. ``max_steps`` defaults to the env's
-        ``max_cycles``. ``cell_bins`` and ``corner_rule`` apply on continuous backends (the cell
-        backend brings its own model).
+        ``phi``: degrees, one for every robot or one per robot (docs/choices.md, "One fixed bounce
+        angle per robot": a fixed φ_i per robot); each must be in that robot's angle set. The env's
+        ``turn_angles`` must hold ±360°/bins for the neighbour jumps. ``max_steps`` defaults to the
+        env's ``max_cycles``. ``cell_bins`` and ``corner_rule`` apply on continuous backends (the
+        cell backend brings its own model).
         """
         env = getattr(env, "unwrapped", env)
         _check_tick_mode(env, "CoveragePlanPolicy")
@@ -127,7 +128,8 @@ class CoveragePlanPolicy(MultiPolicy):
 
     def start_options(self, env, seed: int) -> dict | None:
         """None on the cell backend (the env's random start is a joint cell); on continuous
-        backends a random joint cell's centres and headings (`random_start`, spec 002 §8.10)."""
+        backends a random joint cell's centres and headings (`random_start`; docs/choices.md,
+        "Random initial joint cells")."""
         env = getattr(env, "unwrapped", env)
         if env.options.backend == "cell":
             return None
@@ -228,8 +230,9 @@ class MonitoringPlanPolicy(MultiPolicy):
 
         ``phi``: degrees, one for both robots or a pair (default: each robot's first angle).
         Regions: the task's polygons (`regions_of`). ``forbid_swaps`` defaults to whether the env's
-        robots bounce off each other (a swap on the grid is then a conflict, spec 002 §8.4);
-        ``min_sep_cells`` (the cycles' safety margin, `persistent_behavior`) to the env's.
+        robots bounce off each other (a swap on the grid is then a conflict: docs/choices.md,
+        "Robot–robot conflicts on the grid"); ``min_sep_cells`` (the cycles' safety margin,
+        `persistent_behavior`) to the env's.
         """
         env = getattr(env, "unwrapped", env)
         _check_tick_mode(env, "MonitoringPlanPolicy")

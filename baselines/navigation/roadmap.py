@@ -5,7 +5,8 @@ robot navigation and coverage using a dynamical system approach" (IEEE IRC 2017;
 3.2), on the deterministic cell model `bounce_gym.cells.CellModel` (ε = 0: the robot rotates
 reliably by the angles of Φ).
 
-**The roadmap is the layered product graph** of spec 000 §4.1 [REC] (thesis §3.5 REC). The paper
+**The roadmap is the layered product graph** (docs/choices.md, "The roadmap remembers the current
+bounce angle"). The paper (Sec. IV-A)
 takes the union of one graph G_i per policy over the same vertex set, which loses which policy is
 active, so "the bounce changes the angle" (weight w2) cannot be known. Here a node is a pair
 (cell z, active angle i), numbered ``v = i·N + z``:
@@ -14,7 +15,7 @@ active, so "the bounce changes the angle" (weight w2) cannot be known. Here a no
 * bump edges at a blocked cell: ``(z, i) → (z ⊕ φ_i, i)`` of weight w1 (the angle is kept) and
   ``(z, i) → (z ⊕ φ_k, k)`` of weight w2 for every k ≠ i (the angle changes); ``z ⊕ φ`` is the
   same position with the heading rotated counter-clockwise by φ (a bump rotates in place,
-  spec 000 A1);
+  docs/choices.md, "Bumps rotate in place and take one tick");
 * the first policy is free: a query starts from all layers ``(x_I, i)`` at distance 0 (one
   Dijkstra with several sources and ``min_only=True``, i.e. a super-source) and ends at the best
   layer of ``x_G``.
@@ -119,16 +120,6 @@ class Plan:
                 out.append((s, run))
                 run = 0
         return out
-
-    @property
-    def trailing_zeros(self) -> int:
-        """Forward ticks after the last bump."""
-        n = 0
-        for s in reversed(self.symbols):
-            if s != 0:
-                break
-            n += 1
-        return n
 
     def __str__(self) -> str:
         """Runs of 0s and angles separated by spaces, e.g. ``000000 135 135 000000 90``."""

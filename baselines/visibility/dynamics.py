@@ -1,29 +1,29 @@
 """Dynamical properties of bouncing paths: transition maps, contraction and limit cycles.
 
 Nilles, Ren, Becerra & LaValle, "A visibility-based approach to computing non-deterministic
-bouncing strategies" (IJRR 2021), §5 (dynamical properties of paths). Spec
-``004_bounce_visibility.md`` §1 (frames), §4 (transition map, Def. 9–12, Lemma 2–3, Theorem 1,
-Prop. 4, Cor. 3–4), §8 items 9–10 and the acceptance tests §9.3–9.6, §9.10.
+bouncing strategies" (IJRR 2021), §6 (dynamical properties of paths: Defs. 8–13, Lemmas 2–3, Theorem
+1, Prop. 4, Cors. 3–4) and §6.1 (limit cycles, Fig. 9), with the model of §3.
 
-**Frames (§1).** A *segment* is a ``(2, 2)`` array ``[start, end]`` whose free space lies on its
+**Frames (§3).** A *segment* is a ``(2, 2)`` array ``[start, end]`` whose free space lies on its
 left, exactly like a directed edge of a `World` (outer ring counter-clockwise, holes clockwise):
 ``t = (end − start)/ℓ``, ``n = t`` rotated by +90° (the inward normal), and the action ``θ ∈ (0, π)``
 is the heading ``d(θ) = cos θ·t + sin θ·n``. Positions ``s`` on a segment are distances from its
 start (the paper's "clockwise endpoint" v_i). `edge_segment` turns a world edge into a segment.
 
-**Transition map (§4).** From ``p = v_i + s·t_i`` along ``d(θ)`` the supporting line of ``e_j`` is
+**Transition map (§6).** From ``p = v_i + s·t_i`` along ``d(θ)`` the supporting line of ``e_j`` is
 met at ``μ(s, θ) = cross(p − v_j, d) / cross(t_j, d)`` (distance from ``v_j``). It is affine in
 ``s`` with slope ``∂μ/∂s = sin θ / sin(θ − γ) = −C`` (γ = direction of ``t_j`` relative to ``t_i``):
-every transition reverses orientation, and ``C = |sin θ / sin(θ − γ)|`` (Def. 11, unified form,
-§8.10) is independent of the position. `transition`, `slope`, `interval_image`, `contraction`,
-`is_contracting`, `lemma2_threshold`, `contracting_range` and `composite_contraction` (Def. 12)
-implement this; `composite_fixed_point` gives the fixed point ``μ* = A / (1 − (−1)^m C(F))`` of
-any closed edge sequence with per-stage actions.
+every transition reverses orientation, and ``C = |sin θ / sin(θ − γ)|`` (Def. 11, unified form:
+docs/choices.md, "Contraction for non-adjacent edges") is independent of the position. `transition`,
+`slope`, `interval_image`, `contraction`, `is_contracting`, `lemma2_threshold`, `contracting_range`
+and `composite_contraction` (Def. 12) implement this; `composite_fixed_point` gives the fixed point
+``μ* = A / (1 − (−1)^m C(F))`` of any closed edge sequence with per-stage actions.
 
 **Fixed rule in convex polygons.** `lemma3_bound` (Lemma 3), `fixed_rule_cycle` (Theorem 1: the
 fixed point ``d_FP`` on ``e_0`` and all contacts of the period-n limit cycle), the closed forms
 `regular_ngon_fixed_point` and `rectangle_fixed_point`, `cor3_bound` and `iterations_to`
-(Cor. 4, the paper's conservative ``⌈log(ε/(2ℓ))/log C⌉``, §8.9). `simulate_fixed_rule` runs the
+(Cor. 4, the paper's conservative ``⌈log(ε/(2ℓ))/log C⌉``; docs/choices.md,
+"Corollary 4 is conservative"). `simulate_fixed_rule` runs the
 exact point-robot fixed rule with `World.first_hit`, to check the analytic results.
 """
 
@@ -108,7 +108,8 @@ def relative_direction(seg_i: object, seg_j: object) -> float:
 def transition_side(seg_i: object, seg_j: object, tol: float = 1e-12) -> str:
     """``"right"`` (γ ∈ (0, π): e_j is reached by turning toward the counter-clockwise-next side,
     small θ, as for the next edge of a convex polygon), ``"left"`` (γ ∈ (−π, 0)) or
-    ``"parallel"`` (γ ∈ {0, π}: Def. 11's classification is undefined, §8.10)."""
+    ``"parallel"`` (γ ∈ {0, π}: Def. 11's classification is undefined;
+    docs/choices.md, "Contraction for non-adjacent edges")."""
     gamma = relative_direction(seg_i, seg_j)
     if abs(math.sin(gamma)) <= tol:
         return "parallel"
@@ -129,7 +130,7 @@ def interior_angle(seg_i: object, seg_j: object) -> float:
 # -- the transition map -------------------------------------------------------------------------
 
 def transition(seg_from: object, seg_to: object, s: object, theta: object) -> np.ndarray:
-    """The exact segment-to-segment map μ(s, θ) (§4), broadcast over ``s`` and ``theta``.
+    """The exact segment-to-segment map μ(s, θ) (§6), broadcast over ``s`` and ``theta``.
 
     ``s`` is the distance from the start of ``seg_from``; the result is the distance from the
     start of ``seg_to`` at which the ray of heading θ meets the *supporting line* of ``seg_to``.
@@ -149,7 +150,7 @@ def hits_segment(seg_from: object, seg_to: object, s: object, theta: object) -> 
     """Whether the ray from ``s`` with heading θ meets ``seg_to`` itself (0 ≤ μ ≤ ℓ_j), in front of
     the robot, arriving from ``seg_to``'s free side. Other edges (occlusion) are ignored."""
     vi, ti, ni, _ = _frame(seg_from)
-    vj, tj, nj, lj = _frame(seg_to)
+    vj, tj, _, lj = _frame(seg_to)
     s = np.asarray(s, dtype=np.float64)
     d = _heading(ti, ni, theta)
     p = vi + s[..., None] * ti
@@ -170,7 +171,7 @@ def slope(seg_from: object, seg_to: object, theta: object) -> np.ndarray:
 
 def interval_image(seg_from: object, seg_to: object, s_range: object,
                    theta_range: object) -> tuple[float, float]:
-    """Image of the box ``[s_lo, s_hi] × [θ_lo, θ_hi]`` on ``seg_to`` (the "cone" of §4).
+    """Image of the box ``[s_lo, s_hi] × [θ_lo, θ_hi]`` on ``seg_to`` (the "cone" of §6).
 
     μ is affine and decreasing in s and increasing in θ for valid hits, so the image is
     ``[μ(s_hi, θ_lo), μ(s_lo, θ_hi)]``; it is computed as the min/max over the four corners,
@@ -188,7 +189,8 @@ def interval_image(seg_from: object, seg_to: object, s_range: object,
 # -- contraction (Def. 10–12, Lemma 2) ----------------------------------------------------------
 
 def contraction(seg_i: object, seg_j: object, theta: object) -> np.ndarray:
-    """Def. 11 in the unified form C = |sin θ / sin(θ − γ)| (§4, §8.10); parallel facing edges
+    """Def. 11 in the unified form C = |sin θ / sin(θ − γ)| (§6; docs/choices.md,
+    "Contraction for non-adjacent edges"); parallel facing edges
     give C = 1. Broadcast over θ."""
     return np.abs(slope(seg_i, seg_j, theta))
 
@@ -241,7 +243,7 @@ def composite_contraction(segments: object, thetas: object) -> float:
 
 @dataclass(frozen=True)
 class CompositeCycle:
-    """Fixed point of a closed edge sequence (§4 "composite cycle").
+    """Fixed point of a closed edge sequence (generalises Theorem 1, §6.1).
 
     Attributes:
         positions: (m,) contact positions μ_k on ``segments[k]`` (distance from its start).
@@ -422,8 +424,9 @@ def cor3_bound(coefficient: float, length: float, k: int) -> float:
 
 def iterations_to(eps: float, coefficient: float, length: float) -> int:
     """Cor. 4: laps after which the set of possible positions is smaller than ε,
-    ``⌈log(ε/(2ℓ)) / log C⌉``. Conservative (§8.9): the set diameter is only ≤ C^k ℓ, so fewer
-    laps often suffice (the WAFR version used ε/ℓ). Returns 0 if ε ≥ 2ℓ already."""
+    ``⌈log(ε/(2ℓ)) / log C⌉``. Conservative (docs/choices.md, "Corollary 4 is conservative"): the
+    set diameter is only ≤ C^k ℓ, so fewer laps often suffice (the WAFR version used ε/ℓ). Returns 0
+    if ε ≥ 2ℓ already."""
     if not 0.0 < coefficient < 1.0:
         raise ValueError(f"Cor. 4 needs a contraction, 0 < C < 1; got C = {coefficient}")
     if eps <= 0 or length <= 0:

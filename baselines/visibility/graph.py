@@ -1,16 +1,19 @@
-"""Bounce visibility graph (BVG), maximal safe intervals (Prop. 2) and G_safe (spec 004 §3, §5).
+"""Bounce visibility graph (BVG), maximal safe intervals (Prop. 2) and G_safe (Nilles et al. 2021,
+§5 and §7).
 
 * `entirely_visible` / `visibility_matrix`: Def. 6. Two segments are entirely visible iff the
   convex hull of their union lies in P (the hull is the union of all segments joining them), which
-  also rejects holes inside the hull (§3 [R], §8.11). Each segment must face the other (closed
-  left side of the other's supporting line); segments on one supporting line are never adjacent.
-  ``closed=True`` (default, §8.1): grazing a vertex or sliding along collinear boundary counts as
-  visible. ``closed=False``: no vertex of P' other than the four end points may touch the hull.
+  also rejects holes inside the hull (docs/choices.md, "Holes inside the convex hull"). Each segment
+  must face the other (closed left side of the other's supporting line); segments on one supporting
+  line are never adjacent. ``closed=True`` (default; docs/choices.md, "Closed visibility"): grazing
+  a vertex or sliding along collinear boundary counts as visible. ``closed=False``: no vertex of P'
+  other than the four end points may touch the hull.
 * `safe_interval`: Prop. 2 with ``atan2`` angles; θ_r = 0 for a shared vertex v_{i+1} = v_j and
   θ_l = π for v_{j+1} = v_i.
 * `bvg`, `safe_graph`: `networkx.DiGraph` over segment ids; G_safe arcs carry ``lo``, ``hi``,
-  ``width`` and drop intervals narrower than ``w_min`` (§3 [R], §8.3).
-* `reachability`: the §5 analysis (Prop. 5 unreachable nodes, SCCs, WCCs, sinks).
+  ``width`` and drop intervals narrower than ``w_min`` (docs/choices.md, "Tiny safe intervals are
+  dropped").
+* `reachability`: the §7.3–7.4 analysis (Prop. 5 unreachable nodes, SCCs, WCCs, sinks).
 """
 
 from __future__ import annotations
@@ -244,12 +247,14 @@ def bvg(part: Partition, closed: bool = False) -> nx.DiGraph:
     """Bounce visibility graph: the directed edge visibility graph of P' (Def. 5).
 
     Arcs i -> j and j -> i for every pair of segments with some line of sight between them
-    (`weak_visibility_matrix`). The arcs carry no guarantee (§3 [R]); plan with `safe_graph`,
+    (`weak_visibility_matrix`). The arcs carry no guarantee (docs/choices.md, "The BVG's arcs carry
+    no guarantee"); plan with `safe_graph`,
     whose arcs need entire visibility (Def. 6).
 
     ``closed=False`` (default) is Def. 5 as stated: open segments, sight lines in the interior of
-    P; it reproduces the §9.7 arc lists. ``closed=True`` also counts sight lines that graze
-    vertices, even when they are isolated (e.g. a single grazing line ending at a corner).
+    P; it reproduces the arc lists of the authors' test polygons. ``closed=True`` also counts sight
+    lines that graze vertices, even when they are isolated (e.g. a single grazing line ending at a
+    corner).
     """
     vis = weak_visibility_matrix(part, closed)
     g = _nodes(part)
@@ -262,7 +267,8 @@ def safe_graph(part: Partition, w_min: float = W_MIN, closed: bool | None = None
     """G_safe: BVG arcs with a non-empty safe interval of width >= ``w_min``.
 
     Arc attributes: ``lo`` = θ_r, ``hi`` = θ_l, ``width`` = θ_l − θ_r (radians). Intervals are
-    stored closed; their end rays hit vertices, so sample strictly inside (§8.4).
+    stored closed; their end rays hit vertices, so sample strictly inside (docs/choices.md,
+    "Sample strictly inside a safe interval").
     """
     vis = visibility_matrix(part, closed)
     i, j = np.nonzero(vis)
@@ -280,7 +286,7 @@ def safe_graph(part: Partition, w_min: float = W_MIN, closed: bool | None = None
 
 @dataclass(frozen=True)
 class Reachability:
-    """§5 / Prop. 5 analysis of a G_safe.
+    """§7.3–7.4 / Prop. 5 analysis of a G_safe.
 
     Attributes:
         unreachable: nodes with in-degree 0 (no safe action reaches them from another segment).
@@ -308,7 +314,7 @@ class Reachability:
 
 
 def reachability(g: nx.DiGraph, part: Partition) -> Reachability:
-    """Unreachable nodes, their perimeter fraction, SCCs, WCCs and sinks of G_safe (§5)."""
+    """Unreachable nodes, their perimeter fraction, SCCs, WCCs and sinks of G_safe (§7.3–7.4)."""
     unreachable = sorted(k for k, d in g.in_degree() if d == 0)
     frac = float(part.length[unreachable].sum() / part.perimeter) if unreachable else 0.0
     sccs = sorted(nx.strongly_connected_components(g), key=lambda c: (-len(c), min(c)))

@@ -1,10 +1,11 @@
 """Visibility-based boundary partition P' of a polygon (Nilles et al., IJRR 2021, Alg. 1).
 
-Spec 004 §2. For every reflex vertex ``r`` and every vertex ``v`` that ``r`` sees, the ray from
-``v`` through ``r`` is continued beyond ``r`` when the line grazes ``r`` (rule (a)); the two
-neighbours of ``r`` are always used, so the extensions of ``r``'s incident edges are shot
+Nilles et al. 2021, §4. For every reflex vertex ``r`` and every vertex ``v`` that ``r`` sees, the
+ray from ``v`` through ``r`` is continued beyond ``r`` when the line grazes ``r`` (rule (a)); the
+two neighbours of ``r`` are always used, so the extensions of ``r``'s incident edges are shot
 (rule (b)). First hits are inserted into ∂P unless they coincide with an existing vertex, and
-coincident hits are merged, both with scale-relative tolerances (rule (c), §8.2). Reflexness is
+coincident hits are merged, both with scale-relative tolerances (rule (c); docs/choices.md,
+"Tolerances relative to the polygon's size"). Reflexness is
 taken with respect to free space, which with the World's ring orientation (outer CCW, holes CW)
 is the same cross-product test on every ring (rule (d)). Inserted vertices shoot nothing.
 
@@ -26,7 +27,8 @@ from bounce_gym.worlds.world import World
 
 __all__ = ["Partition", "closed_region", "partition", "visible_pairs"]
 
-#: Merge / vertex-coincidence tolerance for inserted points, times the world's diameter (§8.2).
+#: Merge / vertex-coincidence tolerance for inserted points, times the world's diameter
+#: (docs/choices.md, "Tolerances relative to the polygon's size").
 SNAP_REL = 1e-9
 #: Slack of the closed-visibility predicates, times the world's diameter.
 VIS_REL = 1e-9
@@ -48,7 +50,8 @@ class Partition:
         reflex: (m,) vertex ``k`` is a reflex vertex of P.
         inserted: (m,) vertex ``k`` was inserted by Algorithm 1 (interior angle π).
         succ, pred: (m,) index of the next / previous segment on the same ring.
-        closed: the visibility semantics used (True: closed, grazing counts; §8.1).
+        closed: the visibility semantics used (True: closed, grazing counts; docs/choices.md,
+            "Closed visibility").
         tol: absolute length tolerance used for snapping and the predicates.
     """
 
@@ -134,7 +137,8 @@ def visible_pairs(world: World, a: np.ndarray, b: np.ndarray, closed: bool = Tru
     closed=True: the closed segment lies in the closed free space (grazing a vertex or running
     along the boundary counts). closed=False: additionally no vertex of ``exclude_points``
     (default: the world's vertices) other than the segment's own end points lies on it, i.e.
-    the open segment avoids ∂P (spec 004 §8.1; valid for segments with end points on ∂P).
+    the open segment avoids ∂P (docs/choices.md, "Closed visibility"; valid for segments with end
+    points on ∂P).
     """
     a = np.asarray(a, dtype=np.float64).reshape(-1, 2)
     b = np.asarray(b, dtype=np.float64).reshape(-1, 2)
@@ -232,11 +236,13 @@ def event_points(world: World, closed: bool = True) -> tuple[np.ndarray, np.ndar
 
 
 def partition(world: World, closed: bool = True) -> Partition:
-    """Algorithm 1 (PartitionPoly): the boundary partition P' of ``world`` (spec 004 §2).
+    """Algorithm 1 (PartitionPoly): the boundary partition P' of ``world`` (Nilles et al.
+    2021, §4).
 
     Args:
         world: the polygon (holes allowed).
-        closed: visibility semantics for "v is visible from r" (True: grazing counts, §8.1).
+        closed: visibility semantics for "v is visible from r" (True: grazing counts;
+            docs/choices.md, "Closed visibility").
     """
     snap = SNAP_REL * world.diameter
     edges, points = event_points(world, closed)

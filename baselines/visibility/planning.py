@@ -1,9 +1,10 @@
-"""Safe planning and patrolling over G_safe (spec 004 §5, §8 items 3–7).
+"""Safe planning and patrolling over G_safe (Nilles et al. 2021, §7.1–7.2).
 
 * `constant_strategy`: Alg. 2 SafeConstantFixedNavigate / SearchConstantFixedStrats. A BFS over
   states (set of current segments, θ̃) starting from θ̃ = (0, π); each arc intersects θ̃ with its
-  safe interval and empty intersections are pruned (§5). With a start *set* of several segments
-  every segment follows one arc at each stage with the same θ̃ ([R]). Tie-break (§5 [R], §8.7):
+  safe interval and empty intersections are pruned (§7.1.1). With a start *set* of several segments
+  every segment follows one arc at each stage with the same θ̃ (docs/choices.md, "Start and goal
+  sets split the partition"). Tie-break (docs/choices.md, "Ties among shortest safe plans"):
   ``order="shortest"`` (default) takes the widest θ̃ among the shortest feasible paths, which is
   the paper's published answer; ``order="widest"`` takes the widest θ̃ among all paths of at most
   ``max_arcs`` arcs, then the fewest arcs.
@@ -11,13 +12,15 @@
   (the paper's answer) or by the widest minimum interval (``tie="widest"``); every stage uses its own arc's interval (no intersection across stages).
 * `bottleneck_plan`: among paths of at most ``max_arcs`` arcs, the largest minimum interval width
   (then the fewest arcs).
-* `split_at`: refine P' at the end points of S and G (§8.6).
-* `patrol`: Def. 15 with the §5 [R] pseudocode (colour = original edge).
+* `split_at`: refine P' at the end points of S and G (docs/choices.md, "Start and goal sets split
+  the partition").
+* `patrol`: Def. 15 (§7.2) searched as in docs/choices.md, "Patrolling search" (colour = original
+  edge).
 * `PlanPolicy`: executes a `VisibilityPlan` in `BounceEnv` (fixed rule, continuous actions).
 * `monte_carlo`: success rate of a plan under exact ray casting (`World.first_hit`).
 
 Intervals are stored closed but their end rays hit vertices, so every sampler draws strictly
-inside them (§8.4).
+inside them (docs/choices.md, "Sample strictly inside a safe interval").
 """
 
 from __future__ import annotations
@@ -93,10 +96,6 @@ class VisibilityPlan:
     @property
     def start(self) -> tuple[int, ...]:
         return self.stages[0]
-
-    @property
-    def min_width(self) -> float:
-        return min((hi - lo for lo, hi in self.intervals), default=math.pi)
 
 
 # -- constant strategies (Alg. 2) ---------------------------------------------------------------
@@ -183,12 +182,12 @@ def _plan_from_path(g: nx.DiGraph, path: Sequence[int], kind: str,
 
 def fewest_bounce_plan(g: nx.DiGraph, start: int, goal: int | Iterable[int],
                        tie: str = "first") -> VisibilityPlan | None:
-    """Unweighted shortest path from ``start`` to any goal segment in G_safe (§5). None if the
+    """Unweighted shortest path from ``start`` to any goal segment in G_safe (§7.1). None if the
     goal is unreachable.
 
     ``tie`` chooses among the shortest paths: ``"first"`` (default) the lexicographically
     smallest node sequence (BFS with ascending successors), which reproduces the paper's
-    published fewest-transition plan (two_rooms e0→e16 = 0→17→6→16, §6); ``"widest"`` the path
+    published fewest-transition plan (two_rooms e0→e16 = 0→17→6→16, §7.1.2); ``"widest"`` the path
     with the widest minimum interval (on two_rooms that is the bottleneck plan 0→18→9→16).
     """
     if tie not in ("first", "widest"):
@@ -242,10 +241,11 @@ def bottleneck_plan(g: nx.DiGraph, start: int, goal: int | Iterable[int],
     return _plan_from_path(g, best[2], "bottleneck", goal_set)
 
 
-# -- refinement of P' (§8.6) --------------------------------------------------------------------
+# -- refinement of P' (docs/choices.md, "Start and goal sets split the partition") ----------
 
 def split_at(part: Partition, points: object) -> Partition:
-    """P' refined at ``points`` (each on ∂P, e.g. the end points of S and G; §5 [R], §8.6).
+    """P' refined at ``points`` (each on ∂P, e.g. the end points of S and G;
+    docs/choices.md, "Start and goal sets split the partition").
 
     Sub-segments of an entirely visible pair stay entirely visible, so Prop. 2 still applies to
     the refined partition. Points within the partition's snapping tolerance of an existing vertex
@@ -351,7 +351,7 @@ def patrol(g: nx.DiGraph, part: Partition, edge_sequence: Sequence[int], max_len
            start: int | None = None, theta: float | None = None, strict: bool = False,
            margin: float = 0.05, select: str = "coefficient") -> PatrolPlan | None:
     """Def. 15: a contracting cycle of G_safe visiting the original edges ``edge_sequence`` in
-    cyclic order (§5 [R] pseudocode).
+    cyclic order (docs/choices.md, "Patrolling search").
 
     Args:
         g, part: G_safe and its partition (node colour = ``part.edge``).

@@ -1,4 +1,5 @@
-"""Robot–robot conflicts on the cell grid (thesis Eq. 3.9; the rules of spec 002 §8.4).
+"""Robot–robot conflicts on the cell grid (thesis Eq. 3.9; the rules are a choice
+where Alam & Bobadilla 2020 is silent: docs/choices.md, "Robot–robot conflicts on the grid").
 
 Each robot proposes its target cell (−1 if an obstacle blocks it). A robot that wants to move is
 also blocked when its target is another moving robot's target, when two robots would swap cells,
@@ -6,7 +7,7 @@ or when its target is the cell of a robot that stays — iterated to a fixpoint.
 that another robot is vacating is allowed. Vectorised over a batch of joint states; shared by the
 ``cell`` backend of the environments and the joint cell model of the multi-robot planners.
 
-**Minimum separation** (§8.4's ``min_sep_cells`` s, for cells smaller than the robot diameter):
+**Minimum separation** (``min_sep_cells`` s, for cells smaller than the robot diameter):
 "the same cell" becomes "within Chebyshev distance s" (`too_close`) — a move is blocked when its
 target is that close to another mover's target or to a stayer's cell; s = 0 is the rule above.
 """

@@ -1,14 +1,17 @@
 """The discrete cell-to-cell model of the bouncing robot (Alam, Bobadilla & Shell).
 
 State space: free position cells x orientation bins. A position cell is free iff its centre lies in
-the free space (or, for a disk robot, its configuration space; spec 001 G4). Bins are centred at
-θ_k = k·Δθ, Δθ = 360° / n_bins, counter-clockwise from East.
+the free space (or, for a disk robot, its configuration space; docs/choices.md, "Free cells and the
+endpoint test"). Bins are centred at θ_k = k·Δθ, Δθ = 360° / n_bins, counter-clockwise from East.
 
-**Numbering** (thesis §1.2, spec 000 §5): orientation-major, East layer first,
+**Numbering** (consistent with the cell ids of thesis §3.5.1, e.g. cell 104 of the 48-position lab
+faces North): orientation-major, East layer first,
 ``z = k · N_pos + p`` with ``p`` the row-major index of the position cell counted from the
 bottom-left (y up). Indices are 0-based inside the package; the papers' 1-based ids are ``z + 1``.
 
-**Next cell** (Eq. 2.4 / Eq. 4 with the resolutions of spec 001 G1, G2, G5):
+**Next cell** (thesis Eq. 2.4 / Alam, Bobadilla & Shell 2018, Eq. 4, with the choices of
+docs/choices.md "Bumps rotate in place and take one tick", "The state resets to the cell centre
+every step" and "Unit steps are king moves, with a symmetric tie rule"):
 
 * from the centre of the cell, step (cos θ, sin θ): on a unit grid this always lands in one of the
   8 neighbours (a king move); per axis the offset is +1 if the component is ≥ 0.5 − 1e-9, −1 if it
@@ -17,13 +20,15 @@ bottom-left (y up). Indices are 0-based inside the package; the papers' 1-based 
 * if the target cell is free (and, by ``corner_rule``, the move does not squeeze between blocked
   cells) the robot moves there keeping its bin — observation 0;
 * otherwise it stays and rotates counter-clockwise by φ — a bump, observation 1. Cells outside the
-  grid count as blocked. The position resets to the cell centre every step (spec 001 G2).
+  grid count as blocked. The position resets to the cell centre every step.
 
-``corner_rule`` (spec 002 §8.3): ``"target_only"`` (default; the localization and navigation
-papers' endpoint test, corner cutting allowed), ``"no_squeeze"`` (a diagonal move is blocked when
-both side cells are blocked), ``"strict"`` (blocked when either side cell is).
+``corner_rule`` (docs/choices.md, "Diagonal moves and the corner rule"): ``"target_only"`` (default;
+the localization and navigation papers' endpoint test, corner cutting allowed), ``"no_squeeze"`` (a
+diagonal move is blocked when both side cells are blocked), ``"strict"`` (blocked when either side
+cell is).
 
-The generalized cell mapping (GCM, thesis §3.4.3) replaces the rotation by a distribution: the
+The generalized cell mapping (GCM, thesis §3.3.3; Alam, Bobadilla & Shell 2017, Sec. III-B)
+replaces the rotation by a distribution: the
 nominal bin with probability r and each of the 2·n_ε other bins within ±ε with (1 − r) / (2·n_ε).
 """
 

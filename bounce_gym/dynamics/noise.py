@@ -6,7 +6,7 @@ error on the outgoing action u — the quantity both papers put the noise on.
 
 * `Exact` — no error (the papers' noise-free simple cell mapping).
 * `Reliable(r, eps)` — no error with probability r, otherwise U(−ε, ε): the generalized cell
-  mapping model of Alam et al. (navigation/coverage paper §2, thesis §3.4.3).
+  mapping model of Alam et al. (Alam, Bobadilla & Shell 2017, Sec. III-B; thesis §3.3.3).
 * `Interval(lo, hi)` — U(lo, hi): Nilles' nondeterministic rule, where any action in an interval
   may be executed (IJRR 2021, Defs. 2–3); ``Interval(-eps, eps)`` is "u ± ε".
 

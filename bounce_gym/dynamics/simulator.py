@@ -1,6 +1,7 @@
 """`BounceDynamics`: m bouncing robots in a world — bounce rule, noise and a motion backend.
 
-The tick (the papers' clock unit, thesis Eq. 2.4 with the bump-in-place resolution of spec 001 G1):
+The tick (the papers' clock unit, thesis Eq. 2.4; bumps rotate in place, a choice where the papers
+are open: docs/choices.md, "Bumps rotate in place and take one tick"):
 every robot does one of two things per tick,
 
 * a robot that is **blocked** (touching a wall or robot it faces) spends the tick rotating by its
@@ -157,7 +158,8 @@ class BounceDynamics:
         return 1 + self.backend.drive(state, np.inf, until_first_block=True)
 
     def turn(self, turns: np.ndarray) -> np.ndarray:
-        """A *command tick*: the clock-timed turn of spec 002 §8.6 (Algorithm 1's neighbour jump).
+        """A *command tick*: a clock-timed turn (Algorithm 1's neighbour jump, Alam & Bobadilla
+        2020, §4.1; docs/choices.md, "A neighbour jump is a timed turn").
 
         Robots with a finite entry in ``turns`` (m,) rotate in place by it (radians,
         counter-clockwise positive; the noise model perturbs the executed heading as for a

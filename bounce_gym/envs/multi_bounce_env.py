@@ -20,7 +20,8 @@ robot that bumps; once every blocked robot has chosen, the world runs until the 
 **Turn commands** (parallel form, discrete actions): with ``turn_angles=[45, -45]`` each robot
 has ``len(turn_angles)`` extra actions after its angles — index ``len(Φ_i) + j`` is a
 clock-timed turn in place by ``turn_angles[j]`` degrees (CCW positive), the one-robot ±Δθ
-"neighbour jump" of Alam & Bobadilla's Algorithm 1 (spec 002 §8.6). If any robot picks a turn,
+"neighbour jump" of Alam & Bobadilla's Algorithm 1 (2020, §4.1; docs/choices.md, "A neighbour jump
+is a timed turn"). If any robot picks a turn,
 the step is one *command tick*: the robots that picked a turn turn, every other robot waits in
 place (`bounce_gym.dynamics.BounceDynamics.turn`); no bump happens and every clock advances by
 one. Otherwise the step is an ordinary one.
@@ -40,8 +41,8 @@ AEC: each robot is truncated after ``max_cycles`` decisions of its own.
 Those of `BounceEnv` (``angles`` and ``angle_range`` may also be given per robot as a list or a
 ``{"robot_i": ...}`` dict), plus ``n_robots``, ``robot_collisions`` (``"bounce"`` | ``"ignore"``),
 ``turn_angles`` (degrees; parallel form only), ``min_sep_cells`` (``cell`` backend: robots
-within this Chebyshev distance collide, 0 = the same cell; spec 002 §8.4) and ``max_cycles``.
-Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
+within this Chebyshev distance collide, 0 = the same cell; docs/choices.md, "Robot–robot conflicts
+on the grid") and ``max_cycles``. Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
 
 ## Version History
 

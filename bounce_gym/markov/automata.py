@@ -7,10 +7,9 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from bounce_gym.errors import BounceGymError, ConfigError
+from bounce_gym.markov.scm import simple_cell_mapping
 
 TRAP = -1
 """State index of the implicit trap state (Def. 9); `DFA.delta` holds it for missing transitions."""
@@ -58,36 +57,29 @@ def _check_scm(successor, bump) -> tuple[np.ndarray, np.ndarray]:
     return succ.astype(np.int64, copy=False), obs
 
 
-def _graph_matrix(succ: np.ndarray) -> coo_matrix:
-    n = succ.size
-    return coo_matrix((np.ones(n, dtype=np.int8), (np.arange(n), succ)), shape=(n, n))
-
-
 def periodic_cells(successor) -> np.ndarray:
     """Boolean mask of the periodic cells (Def. 1: ``z = C^m(z)`` for some m ≥ 1).
 
-    The SCM graph is functional, so the periodic cells are exactly the cells on its cycles: the
-    strongly connected components with more than one cell, plus fixed points.
+    The cells on the cycles of the functional graph, as found by `simple_cell_mapping`.
     """
-    succ = np.asarray(successor, dtype=np.int64)
-    _, labels = connected_components(_graph_matrix(succ), directed=True, connection="strong")
-    counts = np.bincount(labels)
-    return (counts[labels] > 1) | (succ == np.arange(succ.size))
+    return simple_cell_mapping(np.asarray(successor, dtype=np.int64)).periodic
 
 
 def periodic_groups(successor) -> tuple[np.ndarray, int]:
     """Group number of every cell and the number r of periodic groups (Def. 3, Def. 4).
 
     Each weakly connected component of the functional graph holds exactly one periodic group (its
-    cycle) and that group's transient trajectories. Groups are numbered 0 … r − 1 in order of
-    their smallest cell id, which is the order Algorithm 1 discovers them in (spec G3).
+    cycle) and that group's transient trajectories; `simple_cell_mapping` finds them. Here groups
+    are renumbered 0 … r − 1 in order of the smallest cell id of their basin (periodic or
+    transient), which is the order in which Algorithm 1's loop over the cells discovers them.
     """
-    succ = np.asarray(successor, dtype=np.int64)
-    r, labels = connected_components(_graph_matrix(succ), directed=True, connection="weak")
-    _, first = np.unique(labels, return_index=True)
+    result = simple_cell_mapping(np.asarray(successor, dtype=np.int64))
+    group, r = result.group.astype(np.int64), result.n_groups
+    first = np.full(r, group.size, dtype=np.int64)
+    np.minimum.at(first, group, np.arange(group.size, dtype=np.int64))
     rank = np.empty(r, dtype=np.int64)
     rank[np.argsort(first)] = np.arange(r)
-    return rank[labels], int(r)
+    return rank[group], int(r)
 
 
 def future_classes(successor, bump) -> np.ndarray:
@@ -115,7 +107,8 @@ def istate_graph(successor, bump, group: int | None = None) -> nx.DiGraph:
     """The I-state graph with 0/1 edge labels (Def. 5; BUILD-STATEGRAPH of Algorithm 1).
 
     Vertices are cells (node attributes ``periodic`` and ``group``), edges ``(z, C(z))`` with the
-    attribute ``label`` = 1 for a bump tick, 0 for a forward tick (G7). Without ``group`` the graph
+    attribute ``label`` = 1 for a bump tick, 0 for a forward tick (docs/choices.md,
+    "Observation 1 means the orientation bin changed"). Without ``group`` the graph
     holds all N cells (the disjoint union of the groups' graphs, ``|G.V| = N``); with ``group = j``
     only periodic group j (numbered as in `periodic_groups`) and its transient trajectories.
     """
@@ -202,14 +195,16 @@ class DFA:
     """The deterministic I-state automaton A' of Def. 7 with its knowledge cycles and colours.
 
     Attributes:
-        states: the states as sorted cell-id arrays; state 0 is the start state (all N cells, G8).
+        states: the states as sorted cell-id arrays; state 0 is the start state (all N cells;
+            docs/choices.md, "DFA size: the start state is all cells, the trap is not counted").
         delta: (n_states, 2) next state on 0 and on 1; `TRAP` (−1) where the transition is missing.
         n_cells: N.
         periodic: periodic cells of the SCM (None for a closed-loop `build_policy_dfa`).
         cycles: the knowledge cycles, each the state indices in transition order starting at the
             state holding the cycle's smallest cell id; numbered by (smallest cell id, first state).
         cycle_of: knowledge cycle index of every state, −1 outside the cycles.
-        colour: colour of every state (G9): 1 outside the cycles, 2 + cycle index inside.
+        colour: colour of every state (docs/choices.md, "Knowledge-cycle colours and
+            numbering"): 1 outside the cycles, 2 + cycle index inside.
         bump_angle: for `build_policy_dfa`, the angle (radians) used on a 1 in every state
             (NaN where a 1 is impossible); None for a fixed-angle DFA.
         bump_angle_index: the same as an index into the planner's angles (−1 where impossible).
@@ -228,7 +223,7 @@ class DFA:
 
     start = 0
 
-    # -- sizes and bookkeeping (G8) --
+    # -- sizes and bookkeeping (docs/choices.md, "DFA size: ...") --
     @property
     def n_states(self) -> int:
         """|Q'| without the implicit trap (the count reported next to Table I)."""
@@ -241,7 +236,7 @@ class DFA:
 
     @property
     def n_states_with_trap(self) -> int:
-        """|Q'| counting the trap state q_t when some transition leads to it (G8)."""
+        """|Q'| counting the trap state q_t when some transition leads to it (Def. 9)."""
         return self.n_states + int(self.has_trap)
 
     @property
@@ -256,7 +251,8 @@ class DFA:
 
     @property
     def final(self) -> np.ndarray | None:
-        """F' = {S : S ∩ F ≠ ∅} as a boolean mask over states (kept for completeness, G10)."""
+        """F' = {S : S ∩ F ≠ ∅} as a boolean mask over states (kept for completeness:
+        docs/choices.md, "Final states are kept but unused")."""
         if self.periodic is None:
             return None
         return np.array([bool(self.periodic[s].any()) for s in self.states])
@@ -265,7 +261,7 @@ class DFA:
     def out_degree(self) -> np.ndarray:
         return (self.delta != TRAP).sum(axis=1)
 
-    # -- knowledge cycles and colours (G9) --
+    # -- knowledge cycles and colours (Defs. 8-9; docs/choices.md) --
     @property
     def n_cycles(self) -> int:
         return len(self.cycles)
@@ -291,7 +287,8 @@ class DFA:
 
     @property
     def trap_colour(self) -> int:
-        """Colour of the open-world trap q_t: #cycles + 2 (G9)."""
+        """Colour of the open-world trap q_t: #cycles + 2 (docs/choices.md, "Knowledge-cycle colours
+        and numbering")."""
         return self.n_cycles + 2
 
     def n_colours(self, open_world: bool = False) -> int:
@@ -353,7 +350,8 @@ class DFA:
 
 def _subset_construction(n_cells: int, image: Callable[[np.ndarray, int], np.ndarray],
                          max_states: int | None):
-    """Lazy (reachable-only) subset construction from the set of all cells (spec §4 pseudo-code).
+    """Lazy (reachable-only) subset construction from the set of all cells (Alam, Bobadilla &
+    Shell 2018, Sec. IV-C, Def. 7).
 
     ``image(S, a)`` returns the sorted, duplicate-free successor set of S on symbol a.
     """
@@ -389,7 +387,8 @@ def _read_only(arrays: Iterable[np.ndarray]) -> tuple[np.ndarray, ...]:
 
 
 def _knowledge_cycles(states: tuple[np.ndarray, ...], delta: np.ndarray):
-    """Knowledge cycles = SCCs of the DFA graph with > 1 state or a self-loop (spec §4).
+    """Knowledge cycles = SCCs of the DFA graph with > 1 state or a self-loop (Alam, Bobadilla &
+    Shell 2018, Sec. IV-D).
 
     Every such SCC is a simple cycle: sizes never grow along an edge, so they are constant in an
     SCC, and a state whose two transitions are both defined loses cells on each of them.

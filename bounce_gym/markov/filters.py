@@ -35,9 +35,12 @@ class LocalizationFilter:
     Attributes (read-only properties):
         state: current DFA state index (`TRAP` once trapped).
         candidates: the cells consistent with every observation so far (sorted ids; empty when
-            trapped); valid before convergence too (G9).
+            trapped); valid before convergence too (docs/choices.md, "Knowledge-cycle colours
+            and numbering").
         size: ``len(candidates)``; once in a knowledge cycle, the uncertainty.
-        colour: 1 outside knowledge cycles, 2 … m + 1 in cycle k, m + 2 in the trap (G9).
+        colour: 1 outside knowledge cycles, 2 … m + 1 in cycle k, m + 2 in the trap (Defs. 8–9;
+        numbering:
+            docs/choices.md, "Knowledge-cycle colours and numbering").
         localized: True once in a knowledge cycle (absorbing in the closed world).
         trapped: open world only — the observation string is impossible in this world ("not in
             E"). A closed-world filter raises `ImpossibleObservationError` instead and keeps its
@@ -72,7 +75,8 @@ class LocalizationFilter:
                   corner_rule: str = "target_only") -> LocalizationFilter:
         """The filter of a world (or zoo name) discretised as in `bounce_gym.cells.CellModel`.
 
-        ``phi`` is the bounce angle in radians (a multiple of 360° / ``n_bins``, G6).
+        ``phi`` is the bounce angle in radians (a multiple of 360° / ``n_bins``;
+        docs/choices.md, "Orientation bins and bounce angles").
         """
         if isinstance(world, str):
             world = get_world(world)
@@ -151,7 +155,8 @@ class LocalizationFilter:
 
 
 class WorldIdentifier:
-    """Which of several candidate worlds can the robot be in? (Sec. IV-D, spec §3)
+    """Which of several candidate worlds can the robot be in? (Alam, Bobadilla & Shell 2018,
+    Sec. III-C Problem 2 and Sec. IV-D)
 
     One open-world filter (Def. 9) per world runs in parallel on the same observation stream; a
     world is ruled out as soon as its filter is trapped. `identified` names the world once it is

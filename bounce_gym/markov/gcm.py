@@ -4,7 +4,8 @@ The GCM of the bouncing robot with unreliable rotation (Alam, Bobadilla & Shell,
 navigation and coverage using a dynamical system approach", IRC 2017, Alg. 3
 POLICYDISTRIBUTION; thesis §3.3.3 and Alg. 3.3, §5 Alg. 5.1) is a finite Markov chain on the
 cells. ``P`` is **row-stochastic**: ``P[i, j] = Pr(i -> j)`` and distributions are row vectors,
-``p(n+1) = p(n) P`` (spec 000 §2 REC; the papers' ``p(n+1) = 𝒫 p(n)`` with the same p_ij).
+``p(n+1) = p(n) P`` (the papers' ``p(n+1) = 𝒫 p(n)`` with the same p_ij; docs/choices.md, "The chain
+is a row-vector chain").
 
 Definitions (Hsu; thesis Defs. 3.3.1-3.3.3 and §5.4):
 
@@ -16,17 +17,18 @@ Definitions (Hsu; thesis Defs. 3.3.1-3.3.3 and §5.4):
   leaves it) and in which every cell communicates with every other: an irreducible sub-chain.
   These are the strongly connected components with no outgoing edge (sinks of the condensation),
   **not** every strongly connected component (the papers' "reachable from all other vertices"
-  test holds for every SCC; spec 000 §4.3 / A11, spec 003b §2.5);
+  test holds for every SCC; Alam, Bobadilla & Shell 2017, Sec. IV-C, thesis §5.4.3; docs/choices.md,
+  "Persistent groups without a transitive closure");
 * **domicile** of a transient cell: a persistent group it leads to; single- and
   multiple-domicile cells (thesis §5.4);
 * **absorption probabilities** ``a = (I - Q)^-1 R`` (transient block Q, R summed per group) and
   **expected absorption times** ``t = (I - Q)^-1 1`` (Isaacson & Madsen; thesis Thm 5.4.3).
 
-Limiting distribution (spec 000 A6, thesis §3.7 REC). A chain with several persistent groups, or a
-periodic one, has no plain limit of p(0) P^n, so the coverage is the **Cesàro limit**
-``π = lim (1/n) Σ_{k<n} p(0) P^k = Σ_g w_g π_g`` where π_g is the stationary distribution of group g
-(π_g P_g = π_g, Σ π_g = 1; unique because P_g is irreducible, periodic or not) and
-``w_g = p(0)(g) + p(0)_T a[:, g]`` is the probability of ending in g. Modes for p(0):
+Limiting distribution (docs/choices.md, "The limiting distribution starts anywhere"). A chain with
+several persistent groups, or a periodic one, has no plain limit of p(0) P^n, so the coverage is the
+**Cesàro limit** ``π = lim (1/n) Σ_{k<n} p(0) P^k = Σ_g w_g π_g`` where π_g is the stationary
+distribution of group g (π_g P_g = π_g, Σ π_g = 1; unique because P_g is irreducible, periodic or
+not) and ``w_g = p(0)(g) + p(0)_T a[:, g]`` is the probability of ending in g. Modes for p(0):
 
 * ``"all"`` (default): uniform over all N cells, "starting from any location":
   ``w_g = (|g| + Σ_{t∈T} a_{t,g}) / N``;
@@ -246,7 +248,8 @@ def generalized_cell_mapping(P, mode: str | np.ndarray = "all") -> GCMResult:
     Args:
         P: (N, N) row-stochastic matrix (scipy sparse, or a dense array for small cases).
         mode: initial distribution of ``weights`` / ``limiting``: ``"all"`` (uniform over all
-            cells, spec 000 A6), ``"persistent"``, ``"group"``, or an (N,) probability vector.
+            cells, docs/choices.md, "The limiting distribution starts anywhere"), ``"persistent"``,
+            ``"group"``, or an (N,) probability vector.
 
     Raises:
         ConfigError: P is not square, has negative or non-finite entries, or a row that does not

@@ -2,7 +2,8 @@
 
 This is Algorithm 1, MODIFIEDSIMPLECELLMAPPING, of Alam, Bobadilla & Shell, "Space-efficient
 filters for mobile robot localization from discrete limit cycles" (IEEE RA-L 2018; thesis
-Algorithm 2.1), with the errata of spec 001 §2 / G3 fixed and the cell loop replaced by whole-array
+Algorithm 2.1), with its index errors fixed (docs/choices.md, "Algorithm 1's index errors and order
+independence") and the cell loop replaced by whole-array
 operations, so that the paper's simulation scale (200 x 125 positions x 360 bins, about 9 M cells)
 is analysed in seconds.
 
@@ -19,7 +20,8 @@ e(i+1) = C(e(i)) given by ``successor[z] = C(z)``:
 
 In Hsu's SCM every cell has exactly one domicile, its group ``group[z]``.
 
-How the errata are resolved (spec 001 G3, thesis §3.1):
+How the index errors are resolved (docs/choices.md, "Algorithm 1's index errors and order
+independence"):
 
 * the walk of lines 7-12 uses its own cursor, never the loop variable ``i``;
 * ``d``, undefined in the paper, is the position in the walk where the cycle closes, so the
@@ -41,7 +43,8 @@ depends on the order in which cells are visited:
   terminal: a cell d steps before the smallest cell sits at position K - d of the cycle.
 
 Groups are numbered 0..r-1 by increasing smallest periodic cell, and each cycle is listed in the
-order of C starting at its smallest cell (the deterministic numbering of spec 001 G9).
+order of C starting at its smallest cell (a deterministic numbering; the paper fixes none).
+
 """
 
 from __future__ import annotations
@@ -74,7 +77,8 @@ class SCMResult:
         cycles: r arrays; ``cycles[g]`` lists the periodic cells of group g in the order of C,
             starting at its smallest cell, so ``successor[cycles[g][j]] == cycles[g][j + 1]``.
         periods: (r,) the period K of each group (``len(cycles[g])``).
-        max_transient: max_z s_z, the longest transient trajectory (spec 001 G14).
+        max_transient: max_z s_z, the longest transient trajectory (Sec. V-A;
+            docs/choices.md, "Longest transient trajectory").
         bump: (N,) bool or None, the observation of each step (True = bump, label 1) when known.
     """
 

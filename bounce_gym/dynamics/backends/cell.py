@@ -7,8 +7,9 @@ bump (the controller rotates it by whole bins). With one robot and exact noise, 
 exactly the simple cell mapping C of `CellModel.successor`, so analytic plans and filters execute
 exactly; with `Reliable` noise the bump rows follow the GCM matrix.
 
-Several robots: the grid conflict rules of `bounce_gym.cells.conflicts` (thesis Eq. 3.9, spec 002
-§8.4), the same function the multi-robot planners use, with its ``min_sep_cells`` option.
+Several robots: the grid conflict rules of `bounce_gym.cells.conflicts` (thesis Eq. 3.9 and
+docs/choices.md, "Robot–robot conflicts on the grid"), the same function the multi-robot planners
+use, with its ``min_sep_cells`` option.
 """
 
 from __future__ import annotations

@@ -311,10 +311,6 @@ class Renderer:
             self._draw_labels(pg, frame, layers.labels)
         return np.ascontiguousarray(pg.surfarray.array3d(frame).transpose(1, 0, 2))
 
-    def draw_state(self, state, radius: float | np.ndarray, layers: RenderLayers | None = None):
-        """`draw` for a `bounce_gym.dynamics.state.RobotState`."""
-        return self.draw(state.position, state.heading, radius, layers, state.blocked)
-
     def _clear_overlay(self):
         self._overlay.fill((0, 0, 0, 0))
         return self._overlay

@@ -10,7 +10,7 @@ drives straight, so its path is the segment ``start → end``; tasks integrate o
   w2 = 100).
 * `CoverageTask` — match a target distribution over cells (uniform by default): reward for newly
   covered cells and for reducing the L2 distance between the visit histogram (time spent per cell)
-  and the target (thesis §3.4.3, Eq. 3.8's objective).
+  and the target (thesis §3.4.3, Eq. 3.8's objective; Alam, Bobadilla & Shell 2017, Eq. 5).
 * `LocalizationTask` — the robot starts at an unknown pose; a localization filter plugged in
   through ``filter_factory`` reports how much the robot can know.
 * `MonitoringTask` (multi-robot) — each robot keeps to its own region; robot–robot contacts cost.

@@ -15,7 +15,8 @@ deg = np.radians
 
 
 def test_king_moves_and_the_tie_rule():
-    """Spec 000 §8.1 (Eq. 3 steps) and the symmetric tie rule of spec 001 G5 at 30°, 60°, …"""
+    """Eq. 3 steps (Alam, Bobadilla & Shell 2017) and the symmetric tie rule at 30°, 60°, …
+    (docs/choices.md, "Unit steps are king moves, with a symmetric tie rule")."""
     dcol, drow = king_offset(deg([0, 45, 90, 30, 60, 120, 150, 210, 240, 300, 330]))
     assert list(zip(dcol.tolist(), drow.tolist(), strict=True)) == [
         (1, 0), (1, 1), (0, 1), (1, 1), (1, 1), (-1, 1), (-1, 1), (-1, -1), (-1, -1), (1, -1),
@@ -23,7 +24,7 @@ def test_king_moves_and_the_tie_rule():
 
 
 def test_numbering_is_orientation_major_east_layer_first():
-    """Thesis §1.2: in the 48-cell lab, cell 104 (1-based) faces North at position 8."""
+    """Thesis §3.5.1: in the 48-cell lab, cell 104 (1-based) faces North at position 8."""
     model = CellModel(worlds.get("lab_navigation"), n_bins=8)
     assert (model.n_positions, model.n_cells) == (48, 384)
     position, bin_ = model.decode(104 - 1)
@@ -77,7 +78,8 @@ def test_reliable_noise_follows_the_gcm_rows():
 
 
 def test_multi_robot_grid_rules():
-    """Spec 002 §8.4: same-target, swap and occupied-by-a-stayer conflicts block robots."""
+    """docs/choices.md, "Robot–robot conflicts on the grid": same-target, swap and
+    occupied-by-a-stayer conflicts block robots."""
     corridor = World([(0, 0), (8, 0), (8, 1), (0, 1)])
     env = MultiBounceEnv(world=corridor, n_robots=2, backend="cell", robot_radius=0.0,
                          angles=[180], step_mode="tick")

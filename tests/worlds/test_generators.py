@@ -63,7 +63,7 @@ def test_star_zero_noise_is_regular():
 
 def test_star_high_irregularity_is_rejected_and_redrawn():
     # The published grid's corner (irr = 0.4 > 2*pi/20, spikiness 0.5) self-intersects often
-    # (spec 004 section 6); every returned polygon must still be a valid World.
+    # (Nilles et al. 2021, section 7.3); every returned polygon must still be a valid World.
     for seed in range(20):
         world = random_star_polygon(rng(seed), irregularity=0.4, spikiness=0.5)
         assert len(world.outer) == 20

@@ -1,7 +1,8 @@
 """Simple and generalized cell mapping analyses (issue #4): `bounce_gym.markov.scm`, `bounce_gym.markov.gcm`.
 
-Sources: spec 001 (localization filters) §2 and §8; spec 003a (thesis Ch. 1-3) §1.3, §3.1, §3.7,
-§7; spec 000 (navigation and coverage) §2, §4.3, §7 A6/A11, §8; spec 003b §2.5 (GCM groups).
+Sources: Alam, Bobadilla & Shell 2018, Sec. III-B and IV-A (Defs. 1-4, Algorithm 1); Alam, Bobadilla
+& Shell 2017, Sec. III-B and IV-C (GCM, Alg. 3); thesis Defs. 2.3.1-2.3.4, §3.3.3 and §5.4 (GCM
+groups and domiciles); choices where the papers are open: docs/choices.md.
 Coordinates are (column, row) with the origin bottom-left; bins count counter-clockwise from East.
 """
 
@@ -35,7 +36,8 @@ def cell(model: CellModel, col: int, row: int, k: int) -> int:
 
 
 def algorithm1(succ: np.ndarray, order) -> tuple[np.ndarray, np.ndarray, int]:
-    """The paper's sequential MODIFIEDSIMPLECELLMAPPING with the errata of spec 001 §2 fixed
+    """The paper's sequential MODIFIEDSIMPLECELLMAPPING with its index errors fixed
+    (docs/choices.md, "Algorithm 1's index errors and order independence")
     (separate cursor, d = first index of z in the walk, line 27 into T_{g_z}), visiting the cells
     in ``order``. Returns (group 0-based, s, r)."""
     n = len(succ)
@@ -78,7 +80,7 @@ def functional_graph(succ: np.ndarray) -> nx.DiGraph:
 
 
 def check_scm_invariants(res, succ: np.ndarray) -> None:
-    """The SCM sanity properties of spec 001 §8.1 / thesis §7.1 on any functional graph."""
+    """The SCM sanity properties (Defs. 1-4, Algorithm 1) on any functional graph."""
     n = len(succ)
     z = np.arange(n)
     assert res.n_cells == n and res.group.shape == res.steps.shape == res.periodic.shape == (n,)
@@ -146,7 +148,7 @@ def check_against_algorithm1(res, succ: np.ndarray, rng: np.random.Generator) ->
                          [(0, 4, 90), (1, 4, 270), (2, 8, 45), (3, 8, 135), (4, 8, 90),
                           (5, 8, 225), (6, 12, 150)])
 def test_scm_sanity_on_random_grid_worlds(seed, n_bins, phi_deg):
-    """Spec 001 §8.1 / thesis §7.1: one successor per cell and no self-map; label 0 <=> same bin
+    """Eq. 4 and BUILD-STATEGRAPH: one successor per cell and no self-map; label 0 <=> same bin
     and a position change, label 1 <=> same position and θ+ϕ; P/T partition Z; s=0 <=> periodic;
     s_{c(z)} = s_z - 1; C^K(z) = z (K minimal); r = networkx's number of weakly connected
     components; the periodic sets = nx.attracting_components; s and the groups equal those of the
@@ -173,8 +175,8 @@ def test_scm_sanity_on_random_grid_worlds(seed, n_bins, phi_deg):
 @pytest.mark.parametrize("seed", range(4))
 def test_scm_on_random_functional_graphs(seed):
     """The same properties on arbitrary maps (fixed points and long chains allowed): the
-    definitions of periodic cell (period 1 included), transient cell and periodic group of spec
-    001 §2, cross-checked with networkx and with Algorithm 1."""
+    definitions of periodic cell (period 1 included), transient cell and periodic group (Defs. 1-4),
+    cross-checked with networkx and with Algorithm 1."""
     rng = np.random.default_rng(seed)
     n = int(rng.integers(50, 400))
     # few targets give many cycles and deep in-trees; the rest random
@@ -190,8 +192,9 @@ def test_scm_on_random_functional_graphs(seed):
 
 @pytest.mark.parametrize("seed", range(3))
 def test_scm_invariant_to_cell_relabelling(seed):
-    """Spec 001 G3: results must not depend on the cell iteration order. Relabelling the cells by
-    a permutation σ (C' = σ C σ^-1) permutes periodic flags, steps, periods and groups alike."""
+    """docs/choices.md, "Algorithm 1's index errors and order independence": results must not depend
+    on the cell iteration order. Relabelling the cells by a permutation σ (C' = σ C σ^-1) permutes
+    periodic flags, steps, periods and groups alike."""
     rng = np.random.default_rng(10 + seed)
     model = CellModel(random_grid(rng, 8, 9, 3, 3), n_bins=8)
     succ = model.successor([45, 90, 135][seed] * DEG)[0]
@@ -209,8 +212,9 @@ def test_scm_invariant_to_cell_relabelling(seed):
 
 
 def test_scm_long_chain_is_vectorised():
-    """Spec 001 G13 (scale): a 300 000-cell chain into a 7-cycle has s up to 300 000; pointer
-    doubling finds every s exactly (a per-level loop would be too slow for the test budget)."""
+    """Scale (the 9 M cells of Sec. V-A need whole-array code): a 300 000-cell chain into a 7-cycle
+    has s up to 300 000; pointer doubling finds every s exactly (a per-level loop would be too slow
+    for the test budget)."""
     n_chain, period = 300_000, 7
     n = n_chain + period
     succ = np.arange(1, n + 1)
@@ -236,7 +240,7 @@ def test_scm_rejects_bad_successor(bad):
 
 @pytest.mark.parametrize(("width", "height"), [(6, 4), (5, 5), (3, 7)])
 def test_rectangle_90_is_the_ccw_perimeter_loop(width, height):
-    """Spec 001 §8.2 (analytic): W×H rectangle, 4 bins, ϕ = 90°: r = 1, the periodic group is the
+    """Analytic case: W×H rectangle, 4 bins, ϕ = 90°: r = 1, the periodic group is the
     CCW perimeter loop of period 2(W+H), observed from (0,0,E) as (0^{W-1} 1 0^{H-1} 1)^2.
     (proto) 6×4: N = 96, N_p = 20, max s = 6."""
     model = rect(width, height, 4)
@@ -263,7 +267,7 @@ def test_rectangle_90_is_the_ccw_perimeter_loop(width, height):
 
 @pytest.mark.parametrize(("width", "height"), [(6, 4), (5, 5)])
 def test_rectangle_180_rows_and_columns(width, height):
-    """Spec 001 §8.3: 4 bins, ϕ = 180°: r = W + H, no transient cell; row groups (E/W) have
+    """Analytic case: 4 bins, ϕ = 180°: r = W + H, no transient cell; row groups (E/W) have
     period 2W and column groups (N/S) period 2H."""
     model = rect(width, height, 4)
     res = scm(model, 180 * DEG)
@@ -284,7 +288,7 @@ def test_rectangle_180_rows_and_columns(width, height):
 
 
 def test_symmetry_breaking_room():
-    """Spec 001 §8.4: 8×6 room with obstacle cells {(3,2),(4,2)}, 4 bins, ϕ = 90°: r = 1,
+    """Symmetry breaking: 8×6 room with obstacle cells {(3,2),(4,2)}, 4 bins, ϕ = 90°: r = 1,
     period 28."""
     free = np.ones((6, 8), dtype=bool)
     free[2, 3] = free[2, 4] = False
@@ -294,7 +298,7 @@ def test_symmetry_breaking_room():
 
 @pytest.mark.parametrize(("phi_deg", "periods"), [(45, [24]), (135, [24, 28, 32, 36])])
 def test_eight_bins_empty_6x4(phi_deg, periods):
-    """Spec 001 §8.5 (proto): empty 6×4, 8 bins: ϕ = 45° gives r = 1 of period 24; ϕ = 135°
+    """Prototype numbers: empty 6×4, 8 bins: ϕ = 45° gives r = 1 of period 24; ϕ = 135°
     gives r = 4 with periods {24, 28, 32, 36}."""
     res = scm(rect(6, 4, 8), phi_deg * DEG)
     assert res.n_groups == len(periods)
@@ -306,7 +310,7 @@ def test_eight_bins_empty_6x4(phi_deg, periods):
     ("lab_localization_a", 135, 1), ("lab_localization_b", 45, 1)])
 def test_lab_localization_maps(name, phi_deg, r):
     """Paper Tables I/II structure on the reconstructed 19-cell lab maps (zoo descriptions; the
-    layouts are reconstructions, so only the structure is claimed, spec 001 G12): N = 19 x 8 =
+    layouts are reconstructions, so only the structure is claimed, docs/choices.md): N = 19 x 8 =
     152 cells, an NFA of N + 1 = 153 states; map a has r = 1 at 45°, map b has r = 2 at 135°
     (and the reconstructions give r = 1 at the other angle)."""
     model = CellModel(get(name), n_bins=8)
@@ -320,7 +324,8 @@ def test_lab_localization_maps(name, phi_deg, r):
     ("lab_navigation", 8, 48, 384), ("lab_fig1", 8, 54, 432), ("lab_complex", 8, 183, 1464),
     ("lab_complex", 360, 183, 65880), ("lab_localization_a", 8, 19, 152)])
 def test_zoo_cell_counts(name, n_bins, n_positions, n_cells):
-    """Spec 000 §8.13 / thesis §7.16: N = N_pos · n_θ: 384 = 48·8, 432 = 54·8, 1464 = 183·8,
+    """Alam, Bobadilla & Shell 2017, Sec. V / thesis §3.5:
+    N = N_pos · n_θ: 384 = 48·8, 432 = 54·8, 1464 = 183·8,
     65880 = 183·360, 152 = 19·8; the SCM covers all N cells."""
     model = CellModel(get(name), n_bins=n_bins)
     assert (model.n_positions, model.n_cells) == (n_positions, n_cells)
@@ -330,7 +335,7 @@ def test_zoo_cell_counts(name, n_bins, n_positions, n_cells):
 
 # -- GCM ----------------------------------------------------------------------------------------
 def test_boundary_cycle_5x4():
-    """Spec 000 §8.5: empty 5×4 rectangle, 8 bins, Φ = {90°}, ε = 0: exactly 3 persistent groups
+    """Derived case: empty 5×4 rectangle, 8 bins, Φ = {90°}, ε = 0: exactly 3 persistent groups
     of sizes 18, 10, 10; the axis-aligned one is the CCW boundary cycle of 2W+2H = 18 cells with
     uniform stationary distribution 1/18; every axis-aligned cell is transient into it or on it."""
     model = rect(5, 4, 8)
@@ -351,7 +356,8 @@ def test_boundary_cycle_5x4():
 
 
 def test_gcm_rows_one_degree_bins():
-    """Spec 000 §8.9 / thesis §1.5: rows sum to 1; with ε = 5°, 1° bins and r = 0.8 a bump row
+    """Alam, Bobadilla & Shell 2017, Sec. III-B / thesis §3.3.3 (docs/choices.md, "ε counts
+    orientation bins"): rows sum to 1; with ε = 5°, 1° bins and r = 0.8 a bump row
     has 0.8 on the nominal bin and 0.02 on each of the 10 others; forward rows a single 1."""
     model = rect(6, 4, 360)
     P = model.transition_matrix(30 * DEG, 5 * DEG, 0.8)
@@ -374,7 +380,7 @@ def test_gcm_rows_one_degree_bins():
 
 
 def check_gcm_invariants(res, P: sp.csr_matrix, check_scc: bool = True) -> None:
-    """Spec 000 §8.10 / thesis §7.12 / spec 003b §13: persistent groups closed and strongly
+    """Thesis Defs. 3.3.1-3.3.3: persistent groups closed and strongly
     connected, every transient cell reaches one, π_g >= 0, Σ π_g = 1, π = 0 on transient cells,
     π_g P = π_g; the limiting distribution is a stationary probability vector."""
     n = P.shape[0]
@@ -402,9 +408,9 @@ def check_gcm_invariants(res, P: sp.csr_matrix, check_scc: bool = True) -> None:
 
 
 def test_gcm_lab_complex_360_bins():
-    """Spec 000 §8.10 and §8.14 on the coverage setting (lab_complex, 360 bins, φ = 30°, ε = 5°,
-    r = 0.8): the invariants hold, the transient domiciles agree with the support of the
-    absorption probabilities, and the analysis allocates no O(N²) structure (numpy peak < 256
+    """Alam, Bobadilla & Shell 2017, Sec. V-C, on the coverage setting (lab_complex, 360 bins, φ =
+    30°, ε = 5°, r = 0.8): the invariants hold, the transient domiciles agree with the support of
+    the absorption probabilities, and the analysis allocates no O(N²) structure (numpy peak < 256
     MiB, where a dense 65 880² matrix would need 32 GiB)."""
     model = CellModel(get("lab_complex"), n_bins=360)
     P = model.transition_matrix(30 * DEG, 5 * DEG, 0.8)
@@ -422,8 +428,9 @@ def test_gcm_lab_complex_360_bins():
 @pytest.mark.parametrize(("name", "phi_deg"), [("lab_localization_a", 45),
                                                ("lab_localization_b", 135), ("lab_fig1", 90)])
 def test_gcm_groups_are_attracting_components(name, phi_deg):
-    """Spec 000 A11 / §4.3: persistent groups are the closed SCCs = nx.attracting_components,
-    and the transient cells are everything else (8 bins, ε = 45°, r = 0.8)."""
+    """Alg. 3 (docs/choices.md, "Persistent groups without a transitive closure"): persistent groups
+    are the closed SCCs = nx.attracting_components, and the transient cells are everything else (8
+    bins, ε = 45°, r = 0.8)."""
     model = CellModel(get(name), n_bins=8)
     P = model.transition_matrix(phi_deg * DEG, 45 * DEG, 0.8)
     res = generalized_cell_mapping(P)
@@ -434,9 +441,9 @@ def test_gcm_groups_are_attracting_components(name, phi_deg):
 
 
 def test_open_scc_is_transient():
-    """Thesis §3.7 / spec 003b §2.5 bug fix: a strongly connected set that probability can leave
-    is transient (persistence is closedness, not mutual reachability). Cells 0 <-> 1 form an SCC
-    leaking into the absorbing cell 2."""
+    """Thesis §5.4.3 (docs/choices.md, "Persistent groups without a transitive closure"): a strongly
+    connected set that probability can leave is transient (persistence is closedness, not mutual
+    reachability). Cells 0 <-> 1 form an SCC leaking into the absorbing cell 2."""
     P = sp.csr_matrix(np.array([[0.0, 0.9, 0.1], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
     res = generalized_cell_mapping(P)
     assert res.n_groups == 1 and res.groups[0].tolist() == [2]
@@ -451,7 +458,7 @@ def test_open_scc_is_transient():
     ("lab_localization_a", 8, 45), ("lab_localization_b", 8, 135), ("lab_navigation", 8, 90),
     ("lab_complex", 8, 135), ("lab_fig1", 4, 90)])
 def test_gcm_eps0_reduces_to_scm(name, n_bins, phi_deg):
-    """Spec 000 §8.11 / thesis §7.12: with ε = 0 and r = 1 the GCM is the SCM: persistent groups
+    """Thesis §3.3.3: with ε = 0 and r = 1 the GCM is the SCM: persistent groups
     = periodic groups (same numbering by smallest cell), π uniform 1/K on each, transient cells =
     SCM transient cells, absorption 0/1 into the SCM group, and the expected absorption time
     equals the SCM's steps to the cycle."""
@@ -507,7 +514,7 @@ def simulate(P: sp.csr_matrix, starts: np.ndarray, persistent: np.ndarray,
 
 @pytest.mark.parametrize("seed", range(3))
 def test_absorption_matches_monte_carlo(seed):
-    """Spec 000 A6 / thesis §1.5 REC / spec 003b §13: absorption probabilities (I - Q)^-1 R 1_g
+    """Thesis §5.4 (Isaacson & Madsen): absorption probabilities (I - Q)^-1 R 1_g
     have rows summing to 1 and agree with a Monte-Carlo estimate (20 000 walks per transient cell,
     |error| < 0.02, about 5σ); the expected absorption times (I - Q)^-1 1 agree within 5%."""
     P, groups = small_chain(seed)
@@ -528,10 +535,11 @@ def test_absorption_matches_monte_carlo(seed):
 
 @pytest.mark.parametrize("seed", range(2))
 def test_limiting_distribution_is_the_cesaro_limit(seed):
-    """Spec 000 A6: the limiting distribution is the Cesàro limit of p(0) P^n (it exists for the
-    period-3 group, where P^n does not converge): uniform p(0) over all N cells by default,
-    w_g = (|g| + Σ_t a_tg) / N; the alternative modes (uniform over persistent cells, equal weight
-    per group) and a custom p(0) match their own Cesàro limits."""
+    """docs/choices.md, "The limiting distribution starts anywhere": the limiting distribution is
+    the Cesàro limit of p(0) P^n (it exists for the period-3 group, where P^n does not converge):
+    uniform p(0) over all N cells by default, w_g = (|g| + Σ_t a_tg) / N; the alternative modes
+    (uniform over persistent cells, equal weight per group) and a custom p(0) match their own Cesàro
+    limits."""
     P, _ = small_chain(seed)
     res = generalized_cell_mapping(P)
     n = P.shape[0]
@@ -565,7 +573,7 @@ def test_limiting_distribution_is_the_cesaro_limit(seed):
 
 
 def test_domicile_sets_two_sinks():
-    """Spec 003b §2.5 / §13 ('two_sink'): 2 persistent groups and transient domicile sets
+    """Thesis §5.4 (a small 'two_sink' chain): 2 persistent groups and transient domicile sets
     {{0}, {1}, {0, 1}}; single-domicile cells are absorbed with probability 1, the boundary cell
     splits as its one-step probabilities say."""
     P = np.zeros((6, 6))
@@ -593,7 +601,8 @@ def test_domicile_sets_two_sinks():
     (np.ones((2, 3)) / 3, "square"),
     (np.array([[np.nan, 1.0], [0.0, 1.0]]), "finite")])
 def test_gcm_rejects_non_stochastic(matrix, match):
-    """P must be a square row-stochastic matrix (spec 000 §2 REC)."""
+    """P must be a square row-stochastic matrix (docs/choices.md, "The chain is a row-vector
+    chain")."""
     with pytest.raises(ConfigError, match=match):
         generalized_cell_mapping(sp.csr_matrix(matrix))
 

@@ -1,8 +1,8 @@
 """Coverage by mixing bouncing policies (issue 5): `baselines.coverage`.
 
-Sources: spec 000 (navigation and coverage) §3 Coverage Problem, §4.3 Alg. 3 / Eq. 4–5, §5 E4
-(Table I), §7 A6/A7/A8/A12, §8 tests 9–12 (test 12: the α solver); spec 003a (thesis Ch. 1–3)
-§3.7 (Eq. 3.7–3.8), §4.4 (Table 3.1), §7 test 13 (constrained LS), §8 "Coverage env".
+Sources: Alam, Bobadilla & Shell 2017, Sec. III-C (Coverage Problem), Sec. IV-C (Alg. 3, Eq. 4–5)
+and Sec. V-C (Table I); thesis §3.4.3 (Eq. 3.7–3.8) and §3.5.3 (Table 3.1); choices where the
+paper is open: docs/choices.md.
 The Table I geometry is unpublished: ``lab_complex`` is a reconstruction with the paper's 183 free
 positions, so only structural and qualitative properties are asserted; the numbers are printed
 (``pytest -s``).
@@ -33,7 +33,8 @@ from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import get, world_from_grid
 
-#: Table I / Table 3.1 (spec 000 §5 E4, spec 003a §4.4): Φ, ε, r and the paper's α.
+#: Table I / Table 3.1 (Alam, Bobadilla & Shell 2017, Sec. V-C; thesis §3.5.3): Φ, ε, r and the
+#: paper's α.
 PHI_DEG = (30.0, 75.0, 315.0)
 EPS_DEG, RELIABILITY = 5.0, 0.8
 PAPER_ALPHA = np.array([0.22138172, 0.28005791, 0.49856037])
@@ -76,7 +77,8 @@ def slsqp_reference(A: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def check_valid(res, m: int) -> None:
-    """Spec 000 §8.12 / 003a §7.13: α >= 0, Σ α = 1, and the KKT certificate holds."""
+    """Eq. 5 (docs/choices.md, "Solving Eq. 5 exactly"): α >= 0, Σ α = 1, and the KKT certificate
+    holds."""
     assert res.alpha.shape == (m,)
     assert np.all(res.alpha >= 0)
     assert res.alpha.sum() == pytest.approx(1.0, abs=1e-12)
@@ -86,7 +88,7 @@ def check_valid(res, m: int) -> None:
     assert res.residual == pytest.approx(mixture_residual(res.A, res.b, res.alpha), rel=1e-12)
 
 
-# -- the solver (spec 000 §8.12, 003a §7.13) ------------------------------------------------------
+# -- the solver (docs/choices.md, "Solving Eq. 5 exactly") ----------------------------------------
 @pytest.mark.parametrize("n, m", [(5, 2), (40, 3), (7, 7), (30, 5), (4, 6), (200, 8)])
 def test_solution_is_feasible_and_beats_vertices_and_random_mixtures(n, m):
     rng = np.random.default_rng(100 * n + m)
@@ -206,7 +208,7 @@ def test_bad_method_and_too_many_policies_raise():
     np.testing.assert_allclose(res.alpha, np.ones(m) / m, atol=1e-6)
 
 
-# -- Alg. 3 and the targets (spec 000 §4.3, §8.10, A7) -----------------------------------------
+# -- Alg. 3 and the targets (Sec. IV-C; docs/choices.md, "Coverage over cells or over positions")
 def test_policy_distributions_are_limiting_distributions():
     model = CellModel(world_from_grid(np.ones((4, 5), dtype=bool)), n_bins=8)
     angles = np.radians([90.0, 135.0])
@@ -245,9 +247,9 @@ def test_targets_and_grids(lab):
         target_vector(lab, -np.ones(183), "positions")
 
 
-# -- Table I on the lab_complex reconstruction (spec 000 §5 E4, 003a §4.4) ----------------------
+# -- Table I on the lab_complex reconstruction (Sec. V-C; thesis §3.5.3) ------------------------
 def test_table1_setting(lab, table1):
-    assert lab.n_positions == 183 and lab.n_cells == 65880  # spec 000 §8.13
+    assert lab.n_positions == 183 and lab.n_cells == 65880  # Sec. V-C
     A = table1["cells"]
     assert np.all(A >= 0)
     np.testing.assert_allclose(A.sum(axis=0), 1.0, atol=1e-9)
@@ -263,8 +265,8 @@ def test_table1_setting(lab, table1):
         print(f"{phi:>5g}° {PAPER_ALPHA[i]:>10.8f} {res.alpha[i]:>13.8f} {pos.alpha[i]:>17.8f}")
     print(f"residual ‖Aα−b‖² cells {res.residual:.6g} (vertices "
           f"{np.array2string(res.vertex_residuals, precision=6)}), positions {pos.residual:.6g}")
-    assert PAPER_ALPHA.sum() == pytest.approx(1.0, abs=1e-8)  # spec 003a §7.16
-    # the spec's qualitative benchmark holds on the reconstruction: α is largest for 315° ...
+    assert PAPER_ALPHA.sum() == pytest.approx(1.0, abs=1e-8)  # Table I's α sums to 1
+    # the qualitative picture of Table I holds on the reconstruction: α is largest for 315° ...
     assert int(np.argmax(res.alpha)) == 2
     # ... and so does the paper's whole ordering 315° > 75° > 30° (over cells, as in the paper)
     assert res.alpha[2] > res.alpha[1] > res.alpha[0] > 0
@@ -276,7 +278,7 @@ def test_table1_setting(lab, table1):
     assert pos.dual[0] > 0
 
 
-# -- the mixture in the env (spec 000 A12, 003a §8 "Coverage env") -------------------------------
+# -- the mixture in the env (docs/choices.md, "The mixture's coverage is the model A α") --------
 def fake_env(n_actions: int = 3) -> SimpleNamespace:
     return SimpleNamespace(action_space=SimpleNamespace(n=n_actions))
 

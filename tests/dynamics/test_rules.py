@@ -1,4 +1,5 @@
-"""Bounce rules and noise models: the worked examples of spec 004 §9.1 and basic invariants."""
+"""Bounce rules and noise models: worked examples of Nilles et al. 2021, §3 (Def. 1,
+Fig. 2) and basic invariants."""
 
 import numpy as np
 import pytest
@@ -10,20 +11,20 @@ deg = np.radians
 
 
 def test_specular_worked_example():
-    # spec 004 §9.1: specular, α = 5π/6 gives u = π/6
+    # Def. 1: specular, α = 5π/6 gives u = π/6
     assert rules.specular_u(np.array([5 * np.pi / 6]), 0.0)[0] == pytest.approx(np.pi / 6)
 
 
 @pytest.mark.parametrize(("alpha", "u"), [(150, 60), (10, 100), (60, 150)])
 def test_nilles_relative_worked_examples(alpha, u):
-    # spec 004 §9.1 / Fig. 2c: θ = π/2; α = 10° needs three rotations
+    # Def. 1 / Fig. 2c: θ = π/2; α = 10° needs three rotations
     got = rules.nilles_relative_u(np.array([deg(alpha)]), np.array([np.pi / 2]))
     assert got[0] == pytest.approx(deg(u))
 
 
 @pytest.mark.parametrize(("alpha", "u"), [(150, 40), (60, 140)])
 def test_monotonic_worked_examples(alpha, u):
-    # spec 004 §9.1: θ = 40°
+    # Def. 1: θ = 40°
     got = rules.monotonic_u(np.array([deg(alpha)]), np.array([deg(40)]))
     assert got[0] == pytest.approx(deg(u))
 

@@ -1,4 +1,5 @@
-"""The joint cell map and multi-robot coverage (spec 002 §2 Eq. 6, §4 Algorithm 1, §8, §9)."""
+"""The joint cell map and multi-robot coverage (Alam & Bobadilla 2020, §3.2 and §4.1:
+Eq. 6, Algorithm 1; choices where the article is open: docs/choices.md)."""
 
 import math
 
@@ -207,7 +208,7 @@ def test_full_neighbourhood_jumps_change_one_robot_by_one_unit(grid10):
 
 
 def test_trend_more_robots_cover_grid_10x10_faster(grid10):
-    """Spec 002 §9 item 9 (paper Fig. 7b, layouts unpublished): 20 seeds, φ = 135°, mean steps
+    """§5.1, Fig. 7b (layouts unpublished): 20 seeds, φ = 135°, mean steps
     to full coverage with m = 2 exceed those with m = 5 and are of the order of 10³."""
     mean = {}
     for m in (2, 5):
@@ -221,7 +222,7 @@ def test_trend_more_robots_cover_grid_10x10_faster(grid10):
 
 
 def test_ten_robots_cover_grid_20x12():
-    """Spec 002 §9 item 10 (paper Fig. 9: 98 %): m = 10, φ = 135° reach ≥ 95 % coverage."""
+    """§5.1, Fig. 9 (98 %): m = 10, φ = 135° reach ≥ 95 % coverage."""
     model = CellModel(worlds.get("grid_20x12"), corner_rule="no_squeeze")
     jm = JointCellModel(model, [135] * 10)
     for seed in range(3):
@@ -231,7 +232,7 @@ def test_ten_robots_cover_grid_20x12():
 
 @pytest.mark.parametrize("phi, size", [(45, 8), (135, 8), (90, 4), (180, 2)])
 def test_orientation_orbit_sizes(phi, size):
-    """Spec 002 §9 item 2: a robot that can never move (a one-cell world) only rotates by φ; its
+    """Derived case: a robot that can never move (a one-cell world) only rotates by φ; its
     orbit over the 8 headings has 8 / gcd(φ/45°, 8) cells."""
     model = _model(["."])
     jm = JointCellModel(model, [phi])
@@ -257,7 +258,8 @@ def test_min_sep_zero_is_the_same_cell_rule(grid10):
 
 @pytest.mark.parametrize("sep", [1, 2])
 def test_min_sep_cells_keeps_robots_apart(grid10, sep):
-    """Spec 002 §8.4 option: robots never come within Chebyshev distance min_sep_cells."""
+    """docs/choices.md, "Robot–robot conflicts on the grid", option: robots never come within
+    Chebyshev distance min_sep_cells."""
     jm = JointCellModel(grid10, [135] * 4, min_sep_cells=sep)
     x = jm.random_joint(np.random.default_rng(0), 32)
     rc = grid10.position_rc

@@ -1,8 +1,8 @@
 """Navigation (issue #5): the layered roadmap, minimum plans, all plans and their execution.
 
-Sources: spec 000 (navigation and coverage) §3, §4.1, §4.2, §5 (E1), §7 A1/A2/A9/A10 and the
-acceptance tests §8.1-8.2, 8.4, 8.6-8.8, 8.13-8.14; spec 003a (thesis Ch. 1-3) §3.5-3.6 and §7
-tests 9-11. Cells are 0-based here (``z = k·N_pos + p``); the papers' ids are ``z + 1``.
+Sources: Alam, Bobadilla & Shell 2017, Sec. III-C (Problems 1-2), Sec. IV-A/B (Algs. 1-2) and
+Sec. V-A/B; thesis §3.4.1-3.4.2 and §3.5.1-3.5.2; choices where the paper is open:
+docs/choices.md. Cells are 0-based here (``z = k·N_pos + p``); the papers' ids are ``z + 1``.
 Coordinates are (column, row), origin bottom-left; bins count counter-clockwise from East.
 """
 
@@ -71,8 +71,9 @@ def out_edges(roadmap: Roadmap, node: int) -> list[tuple[int, float, int, int]]:
 
 
 def test_eq3_steps_and_the_blocked_step_are_roadmap_edges():
-    """Spec 000 §8.1: from an open centroid θ = 0 → (c+1, r), 45° → (c+1, r+1), 90° → (c, r+1),
-    as forward edges (symbol 0) that keep the bin. §8.2 / A1: at the East wall facing East with
+    """Eq. 3: from an open centroid θ = 0 → (c+1, r), 45° → (c+1, r+1), 90° → (c, r+1),
+    as forward edges (symbol 0) that keep the bin. A bump (docs/choices.md, "Bumps rotate in place
+    and take one tick"): at the East wall facing East with
     φ = 90° the robot stays and faces North; the plan's symbol is 90."""
     model = rect(5, 4)
     rm = Roadmap(model, [90])
@@ -87,7 +88,8 @@ def test_eq3_steps_and_the_blocked_step_are_roadmap_edges():
 
 
 def test_layered_out_degrees(lab):
-    """Spec 000 §8.4: a bump cell has out-degree |Φ| in every layer, one w1 edge that keeps the
+    """The layered roadmap (docs/choices.md, "The roadmap remembers the current bounce angle"):
+    a bump cell has out-degree |Φ| in every layer, one w1 edge that keeps the
     layer and |Φ| − 1 w2 edges into the other layers; a forward cell has out-degree 1 (w1,
     same layer, same bin)."""
     rm = Roadmap(lab, PHI)
@@ -117,7 +119,7 @@ def test_layered_out_degrees(lab):
 
 
 def test_counts(lab):
-    """Spec 000 §8.13: N = N_pos · n_θ for the navigation maps (384 = 48·8, 1464 = 183·8)."""
+    """Sec. V / thesis §3.5: N = N_pos · n_θ for the navigation maps (384 = 48·8, 1464 = 183·8)."""
     assert (lab.n_positions, lab.n_cells) == (48, 384)
     complex_ = CellModel(get("lab_complex"), n_bins=8)
     assert (complex_.n_positions, complex_.n_cells) == (183, 1464)
@@ -141,7 +143,7 @@ def test_roadmap_validation(lab):
 # -- single queries ---------------------------------------------------------------------------
 
 def test_small_plan_in_the_empty_rectangle():
-    """Spec 000 §8.6: empty 5×4, Φ = {90°}, (0,0,E) → (4,3,W): ``0 0 0 0 90 0 0 0 90``,
+    """Derived case: empty 5×4, Φ = {90°}, (0,0,E) → (4,3,W): ``0 0 0 0 90 0 0 0 90``,
     weight 9: four steps East, turn North at the wall, three steps up, turn West."""
     model = rect(5, 4)
     rm = Roadmap(model, [90])
@@ -153,7 +155,7 @@ def test_small_plan_in_the_empty_rectangle():
 
 
 def test_e1_reconstruction_plans(lab):
-    """Spec 000 §5 E1 / §8.7 on ``lab_navigation`` (the 14×7 reconstruction), Φ = {45°, 90°,
+    """Sec. V-A (plans ỹ1, ỹ2) on ``lab_navigation`` (the 14×7 reconstruction), Φ = {45°, 90°,
     135°}, w1 = 1, w2 = 100, paper ids 1-based:
 
     * plan(104 → 9) is exactly ỹ2 = ``000000 135 135 000000 135 135 000000 90``, weight 122
@@ -229,7 +231,7 @@ def replay(model: CellModel, plan, phi_deg) -> int:
 
 
 def test_all_plans_replay_on_the_cell_model(small):
-    """Spec 000 §8.8 / thesis §7.9: every M[i][j] replayed on the deterministic cell model from i
+    """Alg. 2 (Sec. IV-B): every M[i][j] replayed on the deterministic cell model from i
     ends at j; a 0 only where the move is unblocked, an angle only where blocked;
     L[i][j] = −1 ⇔ M[i][j] = None; L[i][i] = 0; L equals the weight recomputed from the
     string (w1 per tick, w2 − w1 more per change of angle)."""
@@ -250,11 +252,11 @@ def test_all_plans_replay_on_the_cell_model(small):
             bumps = plan.bumps
             changes = sum(a != b for a, b in zip(bumps[:-1], bumps[1:], strict=True))
             assert ap.L[i, j] == plan.ticks + 99 * changes == plan.weight
-    assert n < reachable < n * n  # some pairs have no plan (spec 000 §5 E3), most do
+    assert n < reachable < n * n  # some pairs have no plan (Sec. V-B), most do
 
 
 def test_all_pairs_match_an_independent_networkx_roadmap(small):
-    """Thesis §7.10-7.11: the weights equal a brute-force Dijkstra on a layered graph built
+    """Alg. 1 (Sec. IV-A): the weights equal a brute-force Dijkstra on a layered graph built
     separately with networkx from `CellModel.successor`; unreachable pairs (L = −1) are exactly
     the pairs with no path in it; single queries agree with the all-pairs result."""
     model, rm, ap = small
@@ -284,7 +286,8 @@ def test_all_pairs_match_an_independent_networkx_roadmap(small):
 
 
 def test_all_pairs_runs_exactly_n_dijkstras(monkeypatch, lab):
-    """Spec 000 §8.14 / §4.2 [REC]: Alg. 2 makes exactly N single-source Dijkstra calls (one per
+    """Alg. 2 on the layered graph (docs/choices.md, "The roadmap remembers the current bounce
+    angle") makes exactly N single-source Dijkstra calls (one per
     start cell, all its layers as sources), not N² pair queries."""
     calls = []
     real = roadmap.dijkstra
@@ -320,9 +323,9 @@ def test_distinct_angle_counts_match_the_decoded_plans(small):
     assert hist["none"] == int(np.sum(ap.L < 0))
 
 
-def test_e1_histogram_is_close_to_the_spec_reconstruction(lab):
-    """Spec 000 §5 E3: on the E1 reconstruction the spec's script found {0: 568, 1: 36547,
-    2: 25698, 3: 5770} with 78 489 unreachable ordered pairs. Which angles a plan uses can
+def test_fig7_histogram_on_the_reconstruction(lab):
+    """Sec. V-B, Fig. 7: on our lab_navigation reconstruction an independent script found {0: 568,
+    1: 36547, 2: 25698, 3: 5770} with 78 489 unreachable ordered pairs. Which angles a plan uses can
     depend on Dijkstra's tie-breaking between equal-weight paths, so only the reachability
     and the 0-angle count are exact; 1 > 2 > 3 (the paper's Fig. 7 has 1 > 3 > 2)."""
     hist = Roadmap(lab, PHI).all_pairs().histogram()
@@ -380,7 +383,7 @@ def check_execution(env, model, plan) -> None:
 
 
 def test_e1_plans_execute_in_the_cell_env(lab):
-    """ỹ2 and ỹ1 (spec 000 §8.7) replayed in `BounceEnv` (cell backend, bounce steps): they
+    """ỹ2 and ỹ1 (Sec. V-A) replayed in `BounceEnv` (cell backend, bounce steps): they
     reach the goal with the plan's tick count and return −116 + 100 and −29 + 100."""
     env = nav_env()
     model = env.core.dynamics.backend.model

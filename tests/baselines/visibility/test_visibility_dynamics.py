@@ -1,4 +1,5 @@
-"""Dynamics of bouncing paths (spec 004 §4; acceptance tests §9.3, §9.4, §9.5, §9.6, §9.10)."""
+"""Dynamics of bouncing paths (Nilles et al. 2021, §6 and §6.1: Defs. 8–13, Lemmas 2–3, Theorem 1,
+Prop. 4, Cor. 4). Reference numbers not printed in the paper were computed independently."""
 
 from __future__ import annotations
 
@@ -32,10 +33,10 @@ def converged_contacts(world: World, theta: float, starts, n_bounces: int, perio
     return trace.edges[:, -period:], trace.positions[:, -period:], trace.points[:, -period:]
 
 
-# -- §9.3 contraction ---------------------------------------------------------------------------
+# -- contraction (Def. 11, Lemma 2) ---------------------------------------------------------------
 
 def test_square_adjacent_right_transition_is_tan_theta():
-    """§9.3: square, adjacent right transition: C = tan θ, contracting iff θ < π/4."""
+    """Def. 11 / Lemma 2: square, adjacent right transition: C = tan θ, contracting iff θ < π/4."""
     bottom, right = [(0, 0), (1, 0)], [(1, 0), (1, 1)]
     theta = np.linspace(0.05, math.pi / 2 - 0.05, 41)
     np.testing.assert_allclose(vd.contraction(bottom, right, theta), np.tan(theta), rtol=1e-12)
@@ -49,7 +50,7 @@ def test_square_adjacent_right_transition_is_tan_theta():
 
 
 def test_adjacent_left_transition_at_right_angle():
-    """§9.3: adjacent left transition with φ = π/2 contracts iff θ > 3π/4 (Lemma 2)."""
+    """Def. 11 / Lemma 2: adjacent left transition with φ = π/2 contracts iff θ > 3π/4 (Lemma 2)."""
     bottom, left = [(0, 0), (1, 0)], [(0, 1), (0, 0)]
     assert vd.transition_side(bottom, left) == "left"
     phi = vd.interior_angle(bottom, left)
@@ -75,7 +76,8 @@ def test_lemma2_threshold_on_general_angles():
 
 
 def test_opposite_sides_of_rectangle_are_isometric():
-    """§9.3: opposite sides of a rectangle: C = 1 for every θ, and the map is a reflection."""
+    """Def. 11 / Lemma 2: opposite sides of a rectangle: C = 1 for every θ, and the map is a
+    reflection."""
     bottom, top = [(0, 0), (2, 0)], [(2, 1), (0, 1)]
     theta = np.linspace(0.5, 2.6, 30)
     np.testing.assert_allclose(vd.contraction(bottom, top, theta), 1.0, rtol=1e-12)
@@ -95,8 +97,8 @@ def random_valid_pair(rng):
 
 
 def test_slope_is_minus_c_by_finite_differences():
-    """§9.3: every valid transition has ∂μ/∂s = −C < 0 (finite differences on random pairs), is
-    increasing in θ, and the image of a box is [μ(s_hi, θ_lo), μ(s_lo, θ_hi)]."""
+    """Def. 11 / Lemma 2: every valid transition has ∂μ/∂s = −C < 0 (finite differences on random
+    pairs), is increasing in θ, and the image of a box is [μ(s_hi, θ_lo), μ(s_lo, θ_hi)]."""
     rng = np.random.default_rng(4)
     for _ in range(200):
         seg_i, seg_j, s, theta = random_valid_pair(rng)
@@ -123,7 +125,7 @@ def test_slope_is_minus_c_by_finite_differences():
 
 
 def test_composite_contraction_is_the_product_and_the_set_ratio():
-    """§9.3 / Def. 12: C(F) is the product of the factors and the ratio by which a set of
+    """Def. 12: C(F) is the product of the factors and the ratio by which a set of
     positions shrinks along the composed path (checked on random valid chains)."""
     rng = np.random.default_rng(7)
     for _ in range(50):
@@ -145,11 +147,11 @@ def test_composite_contraction_is_the_product_and_the_set_ratio():
         assert (end[1] - end[0]) > 0  # two reversals preserve orientation
 
 
-# -- §9.4 Lemma 3 -------------------------------------------------------------------------------
+# -- Lemma 3 (§6.1) -------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("n", [3, 4, 5, 6, 7, 10])
 def test_lemma3_regular_ngon(n):
-    """§9.4: regular n-gon: bound π/n with both terms equal."""
+    """Lemma 3: regular n-gon: bound π/n with both terms equal."""
     b = vd.lemma3_bound(regular(n, radius=1.0))
     assert b.bound == pytest.approx(math.pi / n, abs=1e-12)
     assert b.visibility == pytest.approx(math.pi / n, abs=1e-12)
@@ -157,7 +159,8 @@ def test_lemma3_regular_ngon(n):
 
 
 def test_lemma3_rectangle_and_heptagon():
-    """§9.4: 2×1 rectangle 0.463648 = atan(1/2); the 7-gon terms 0.2090640 and 0.1726225."""
+    """Lemma 3, 2×1 rectangle and Fig. 9's 7-gon: 0.463648 = atan(1/2); the 7-gon terms 0.2090640
+    and 0.1726225."""
     r = vd.lemma3_bound(World([(0, 0), (2, 0), (2, 1), (0, 1)]))
     assert r.bound == pytest.approx(0.463648, abs=1e-6)
     assert r.bound == pytest.approx(math.atan(0.5), abs=1e-12)
@@ -174,7 +177,7 @@ def test_lemma3_rejects_nonconvex():
         vd.lemma3_bound(get("l_shape"))
 
 
-# -- §9.5 Theorem 1 -----------------------------------------------------------------------------
+# -- Theorem 1 (§6.1) -----------------------------------------------------------------------------
 
 THEOREM1_TABLE = [
     # (world, θ, d_FP, ΠC or None)
@@ -202,8 +205,9 @@ def table_world(name: str) -> World:
 
 @pytest.mark.parametrize(("name", "theta", "d_fp", "prod"), THEOREM1_TABLE)
 def test_theorem1_table_and_simulation(name, theta, d_fp, prod):
-    """§9.5: d_FP (and ΠC) of the table, the composite fixed point agrees, and every random start
-    of the exact simulation converges to d_FP and to every forward-projected contact to 1e-6."""
+    """Theorem 1: d_FP (and ΠC) of the table, the composite fixed point agrees, and every random
+    start of the exact simulation converges to d_FP and to every forward-projected contact to
+    1e-6."""
     world = table_world(name)
     cyc = vd.fixed_rule_cycle(world, theta)
     assert cyc.valid and cyc.stable
@@ -230,7 +234,8 @@ def test_theorem1_table_and_simulation(name, theta, d_fp, prod):
 
 
 def test_theorem1_special_cases():
-    """§4: the regular n-gon closed form ℓC/(1+C) and the rectangle (Hc − Wc²)/(1 − c²)."""
+    """Theorem 1 special cases (§6.1): the regular n-gon closed form ℓC/(1+C) and the rectangle (Hc
+    − Wc²)/(1 − c²)."""
     for n, theta in [(3, math.pi / 6), (4, math.pi / 8), (5, 0.5), (6, math.pi / 12), (9, 0.2)]:
         w = regular(n, side=1.0)
         assert vd.fixed_rule_cycle(w, theta).d_fp == pytest.approx(
@@ -275,11 +280,12 @@ def test_theorem1_flags_invalid_and_unstable_cycles():
     np.testing.assert_allclose(trace.positions[0], [*steep.positions, steep.d_fp], atol=1e-9)
 
 
-# -- §9.6 Corollary 4 ---------------------------------------------------------------------------
+# -- Corollary 4 (§6.2) ---------------------------------------------------------------------------
 
 def test_corollary4_square():
-    """§9.6: square θ = π/8, ℓ = 1, ε = 1e-3: k = ⌈2.156⌉ = 3 (conservative); two laps already
-    shrink the whole edge to a diameter of 8.7e-4 (simulated)."""
+    """Corollary 4 (docs/choices.md, "Corollary 4 is conservative"): square θ = π/8, ℓ = 1, ε =
+    1e-3: k = ⌈2.156⌉ = 3 (conservative); two laps already shrink the whole edge to a diameter of
+    8.7e-4 (simulated)."""
     world = unit_square()
     cyc = vd.fixed_rule_cycle(world, math.pi / 8)
     ratio = math.log(1e-3 / 2) / math.log(cyc.product)
@@ -299,10 +305,10 @@ def test_corollary4_square():
         assert np.all(err <= vd.cor3_bound(cyc.product, 1.0, k) + 1e-12)
 
 
-# -- §9.10 Prop. 4 ------------------------------------------------------------------------------
+# -- Prop. 4 (§6.1) -------------------------------------------------------------------------------
 
 def test_prop4_l_shape_converges_to_one_four_cycle():
-    """§9.10: L-shape, θ = 0.2: 20 random starts converge to one 4-cycle in the lower arm with
+    """Prop. 4: L-shape, θ = 0.2: 20 random starts converge to one 4-cycle in the lower arm with
     contacts (22.9099, 0), (600, 116.9820), (577.0901, 230), (0, 113.0180) (rectangle formula)."""
     world = get("l_shape")
     expected = np.array([(22.9099, 0), (600, 116.9820), (577.0901, 230), (0, 113.0180)])

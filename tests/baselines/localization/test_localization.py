@@ -1,7 +1,8 @@
 """Combinatorial localization filters (baselines.localization, issue 4).
 
-References: spec ``001_localization_filters.md`` (§4 Def. 5–9 and Prop. 1, §5 Tables I/II, §7 G8/G9,
-§8 acceptance tests) and ``003a_thesis_ch1-3.md`` (§3.2–3.4, §4.2 Tables 2.1/2.2, §7 tests 3–8).
+References: Alam, Bobadilla & Shell 2018 (Sec. IV, Defs. 5–9 and Prop. 1; Sec. V, Tables I/II) and
+thesis §2.4–2.5 (Tables 2.1/2.2); choices where the paper is open: docs/choices.md. Room examples
+with exact DFA sizes are derived by hand or by an independent prototype, not taken from the paper.
 Coordinates of obstacle cells are (column, row) with the origin bottom-left.
 """
 
@@ -90,7 +91,8 @@ LAB_CASES = [  # (map, φ°, paper Table I DFA states, paper Table II (min, max)
     ("lab_localization_b", 45, 147, (1, 2)),
     ("lab_localization_b", 135, 202, (1, 1)),
 ]
-# Our reconstructions (maps published only as photographs, spec G12): DFA states without / with
+# Our reconstructions (maps published only as photographs; docs/choices.md,
+# "The lab maps are reconstructions"): DFA states without / with
 # the trap, knowledge cycles as (length, uncertainty), periodic groups r.
 RECONSTRUCTED = {
     ("lab_localization_a", 45): (138, 139, {(20, 1), (5, 4), (20, 3)}, 1),
@@ -100,14 +102,15 @@ RECONSTRUCTED = {
 }
 
 
-# -- spec 001 §8.2–8.5: reference DFAs ------------------------------------------------------------
+# -- derived reference DFAs of small rooms --------------------------------------------------------
 
 def cycles_of(dfa):
     return sorted(zip(dfa.cycle_lengths, dfa.uncertainties, strict=True))
 
 
 def test_rectangle_6x4_90_one_cycle_of_length_w_plus_h_uncertainty_2():
-    """§8.2: 6×4, 4 bins, φ = 90°: DFA 28 states; one knowledge cycle, length W + H = 10, |S| = 2."""
+    """Rectangle (analytic): 6×4, 4 bins, φ = 90°: DFA 28 states; one knowledge cycle, length W + H
+    = 10, |S| = 2."""
     model = rect(6, 4)
     succ, bump, dfa = scm(model, 90)
     assert model.n_cells == 96 and dfa.nfa_size == 97
@@ -121,7 +124,8 @@ def test_rectangle_6x4_90_one_cycle_of_length_w_plus_h_uncertainty_2():
 
 
 def test_rectangle_5x5_90_one_cycle_of_length_w_uncertainty_4():
-    """§8.2: a square: DFA 14 states; one cycle of length W = 5 with uncertainty 4."""
+    """Rectangle (analytic): a square: DFA 14 states; one cycle of length W = 5 with uncertainty
+    4."""
     _, _, dfa = scm(rect(5, 5), 90)
     assert dfa.n_states == 14
     assert cycles_of(dfa) == [(5, 4)]
@@ -132,7 +136,8 @@ def test_rectangle_5x5_90_one_cycle_of_length_w_uncertainty_4():
     (5, 5, 9, [(5, 20)]),  # W = H: one cycle of length W with |S| = 4W
 ])
 def test_rectangle_180(width, height, states, cycles):
-    """§8.3: φ = 180°: r = W + H groups, no transient cells, DFA 19 (6×4) / 9 (5×5)."""
+    """Rectangle (analytic): φ = 180°: r = W + H groups, no transient cells, DFA 19 (6×4) / 9
+    (5×5)."""
     succ, _, dfa = scm(rect(width, height), 180)
     assert periodic_groups(succ)[1] == width + height
     assert periodic_cells(succ).all()
@@ -141,8 +146,9 @@ def test_rectangle_180(width, height, states, cycles):
 
 
 def test_symmetry_breaking_obstacle_gives_uncertainty_1():
-    """§8.4: 8×6 room, obstacle cells {(3,2), (4,2)}, 4 bins, φ = 90°: r = 1 of period 28; DFA
-    108 states; knowledge cycles (14, 2) and (28, 1) — the "min 1" phenomenon."""
+    """Symmetry breaking (the "min 1" of Table II): 8×6 room, obstacle cells {(3,2), (4,2)}, 4 bins,
+    φ = 90°: r = 1 of period 28; DFA 108 states; knowledge cycles (14, 2) and (28, 1) — the "min 1"
+    phenomenon."""
     succ, _, dfa = scm(rect(8, 6, 4, ((3, 2), (4, 2))), 90)
     assert periodic_groups(succ)[1] == 1 and periodic_cells(succ).sum() == 28
     assert dfa.n_states == 108
@@ -155,8 +161,8 @@ def test_symmetry_breaking_obstacle_gives_uncertainty_1():
     (135, 161, 4, [24, 28, 32, 36]),
 ])
 def test_eight_bins_rectangle(degrees, states, n_cycles, periods):
-    """§8.5: empty 6×4 with 8 bins: φ = 45° → DFA 47, one cycle of |S| = 2; φ = 135° → DFA 161,
-    4 cycles each of |S| = 2 (r = 4, periods 24, 28, 32, 36)."""
+    """Empty 6×4 with 8 bins (prototype numbers): φ = 45° → DFA 47, one cycle of |S| = 2; φ = 135° →
+    DFA 161, 4 cycles each of |S| = 2 (r = 4, periods 24, 28, 32, 36)."""
     succ, _, dfa = scm(rect(6, 4, 8), degrees)
     groups, r = periodic_groups(succ)
     per = periodic_cells(succ)
@@ -168,7 +174,7 @@ def test_eight_bins_rectangle(degrees, states, n_cycles, periods):
 # -- Def. 5, Def. 6: I-state graphs and the nondeterministic automaton ----------------------------
 
 def test_istate_graphs_and_nfa():
-    """Def. 5/6 (thesis §7 test 3): |Q| = N + 1, one labelled out-edge per cell, F = periodic
+    """Def. 5/6 (Sec. IV-B): |Q| = N + 1, one labelled out-edge per cell, F = periodic
     cells; the I-state graphs partition the cells, one per periodic group, labels = bumps."""
     succ, bump, _ = scm(lab("lab_localization_b"), 135)
     n = succ.size
@@ -209,9 +215,10 @@ def _case(case):
 
 @pytest.mark.parametrize("case", STRUCTURE_CASES)
 def test_dfa_structure(case):
-    """§4 / §8.7: the start state is all cells; out-degree ≤ 2 and both transitions partition S;
+    """Sec. IV-C/D: the start state is all cells; out-degree ≤ 2 and both transitions partition S;
     |Q'| ≤ (N+1)²; knowledge cycles are simple cycles of subsets of the periodic cells with
-    constant |S| and out-degree 1; no other SCC is non-trivial; colours per G9."""
+    constant |S| and out-degree 1; no other SCC is non-trivial; colours per docs/choices.md,
+    "Knowledge-cycle colours and numbering"."""
     model, degrees = _case(case)
     succ, bump, dfa = scm(model, degrees)
     n = succ.size
@@ -241,7 +248,7 @@ def test_dfa_structure(case):
     in_cycle = dfa.cycle_of >= 0
     assert (dfa.colour[~in_cycle] == 1).all()
     assert dfa.trap_colour == dfa.n_cycles + 2
-    # cycles are numbered by their smallest cell id (G9)
+    # cycles are numbered by their smallest cell id (docs/choices.md)
     firsts = [min(int(dfa.states[s][0]) for s in c) for c in dfa.cycles]
     assert firsts == sorted(firsts)
     # every other SCC of the DFA graph is trivial, and the final states F' are S ∩ V_P ≠ ∅
@@ -257,7 +264,7 @@ def test_dfa_structure(case):
 
 
 def test_self_loop_pocket_is_a_knowledge_cycle():
-    """§4: a pocket where the robot only rotates (1, 1, 1, …) is a self-loop knowledge cycle,
+    """Sec. IV-D: a pocket where the robot only rotates (1, 1, 1, …) is a self-loop knowledge cycle,
     which a "length ≥ 2 cycles" search would miss."""
     # a single free cell: every tick bumps and rotates by 90°; the four bins are symmetric
     succ, bump = CellModel(room(1, 1), n_bins=4).successor(DEG(90))
@@ -288,9 +295,9 @@ def test_dfa_graph_with_trap_and_run():
 
 @pytest.mark.parametrize("case", STRUCTURE_CASES)
 def test_filter_is_the_exact_istate(case):
-    """§8.6 (thesis §7 tests 4–5): after every observation the filter's set equals the brute-force
-    set of cells consistent with the string and contains the true cell; the closed-world filter
-    never traps, reaches a knowledge cycle within |Q'| steps and stays there."""
+    """Filter = exact I-state (Sec. IV-D): after every observation the filter's set equals the
+    brute-force set of cells consistent with the string and contains the true cell; the closed-world
+    filter never traps, reaches a knowledge cycle within |Q'| steps and stays there."""
     model, degrees = _case(case)
     succ, bump, dfa = scm(model, degrees)
     rng = np.random.default_rng(4)
@@ -317,7 +324,7 @@ def test_filter_is_the_exact_istate(case):
 
 
 def test_closed_world_raises_open_world_traps():
-    """Def. 8 vs Def. 9 (G9): an impossible string raises in the closed world (the filter keeps its
+    """Def. 8 vs Def. 9: an impossible string raises in the closed world (the filter keeps its
     state) and sends the open-world filter to the absorbing trap with colour m + 2."""
     _, _, dfa = scm(rect(6, 4), 90)
     impossible = [0] * 6  # no straight run of 6 forward ticks in a 6-wide room
@@ -344,8 +351,9 @@ def test_closed_world_raises_open_world_traps():
 
 
 def test_open_world_traps_on_strings_from_another_world():
-    """§8.8: an F_O built for the 8×6 room (obstacle {(3,2),(4,2)}) traps on every stream generated
-    in a 7×6 room within 200 steps, and never on streams from its own world."""
+    """Open world (Def. 9, Problem 2): an F_O built for the 8×6 room (obstacle {(3,2),(4,2)}) traps
+    on every stream generated in a 7×6 room within 200 steps, and never on streams from its own
+    world."""
     _, _, dfa = scm(rect(8, 6, 4, ((3, 2), (4, 2))), 90)
     own_succ, own_bump, _ = scm(rect(8, 6, 4, ((3, 2), (4, 2))), 90)
     other_succ, other_bump, _ = scm(rect(7, 6), 90)
@@ -361,7 +369,7 @@ def test_open_world_traps_on_strings_from_another_world():
 
 
 def test_identification_among_worlds():
-    """§3 (Sec. IV-D): one F_O per world in parallel; the true world stays, the others are ruled
+    """Sec. IV-D: one F_O per world in parallel; the true world stays, the others are ruled
     out; a world outside the set rules out all of them."""
     rooms = {"8x6_obstacle": room(8, 6, ((3, 2), (4, 2))), "7x6": room(7, 6), "8x5": room(8, 5)}
     ident = WorldIdentifier.for_worlds(rooms, DEG(90), n_bins=4)
@@ -405,7 +413,7 @@ def test_identifier_rejects_closed_world_filters():
 ])
 @pytest.mark.parametrize(("bins", "degrees"), [(4, 90), (4, 180), (8, 45), (8, 135)])
 def test_localization_modulo_symmetry(sizes, factor, bins, degrees):
-    """Thesis §7 test 7: every knowledge-cycle uncertainty in an empty square room is a multiple
+    """Derived check: every knowledge-cycle uncertainty in an empty square room is a multiple
     of 4, in a 2:1 rectangle of 2. (In fact every DFA state is a union of symmetry orbits: the
     rotation also turns the heading bin, so no cell is fixed by it.)"""
     for width, height in sizes:
@@ -414,14 +422,14 @@ def test_localization_modulo_symmetry(sizes, factor, bins, degrees):
         assert (dfa.sizes % factor == 0).all()
 
 
-# -- spec 001 §5: the lab maps vs Tables I and II ------------------------------------------------
+# -- Alam, Bobadilla & Shell 2018, Sec. V-B: the lab maps vs Tables I and II --------------------
 
 @pytest.mark.parametrize(("name", "degrees", "paper_states", "paper_limits"), LAB_CASES)
 def test_lab_maps_against_tables_1_and_2(name, degrees, paper_states, paper_limits):
     """Tables I/II (thesis Tables 2.1/2.2): NFA 153 states exactly; DFA 124–202 states, minimum
     uncertainty 1 ("strongest possible localization"), maximum 1–4; r = 1 for Fig. 8 at 45° and
     r = 2 for Fig. 9 at 135°. The lab maps are reconstructions of maps published only as
-    photographs (spec G12), so the DFA sizes are ranges, not equalities:
+    photographs (docs/choices.md), so the DFA sizes are ranges, not equalities:
 
     ======================  ===  ==========  ================  =============  ==============
     map                     φ    paper DFA   ours (with trap)  paper min/max  ours min/max
@@ -449,7 +457,7 @@ def test_lab_maps_against_tables_1_and_2(name, degrees, paper_states, paper_limi
 
 def test_lab_a_45_has_three_knowledge_cycles_and_five_colours():
     """Sec. V-B (Fig. 11): lab map 1 at 45° has 3 knowledge cycles with uncertainties 1, 3, 4; the
-    closed-world filter uses 4 colours, the open-world one 5 (§8.9)."""
+    closed-world filter uses 4 colours, the open-world one 5 (Defs. 8–9)."""
     _, _, dfa = scm(lab("lab_localization_a"), 45)
     assert sorted(dfa.uncertainties) == [1, 3, 4]
     assert dfa.n_colours() == 4 and dfa.n_colours(open_world=True) == 5

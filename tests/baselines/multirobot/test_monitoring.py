@@ -1,4 +1,5 @@
-"""Persistent monitoring (spec 002 §5 Algorithm 2, §8.4, §8.11-13, §9 items 4, 5 and 11)."""
+"""Persistent monitoring (Alam & Bobadilla 2020, §4.2, Algorithm 2; choices where the article
+is open: docs/choices.md)."""
 
 from __future__ import annotations
 
@@ -77,8 +78,8 @@ def test_basins_lead_into_their_group(result):
 
 
 def test_labels_partition_joint_cells(result):
-    """Spec §9 item 4 / §8.12: every joint cell, the sink included, ends up exactly one of
-    accepted-periodic (P_g), accepted-transient (Q_g) or rejected."""
+    """docs/choices.md, "Algorithm 2's bookkeeping": every joint cell, the sink included, ends up
+    exactly one of accepted-periodic (P_g), accepted-transient (Q_g) or rejected."""
     label, periodic = result.label, result.periodic
     n_joint = result.model.n_cells ** 2 + 1
     assert label.shape == periodic.shape == (n_joint,)
@@ -127,7 +128,7 @@ def test_sink_is_absorbing(model):
 
 
 def test_product_structure_without_collisions(model):
-    """Spec §9 item 5: individual periods p1, p2 give gcd(p1, p2) joint groups of period
+    """Derived property: individual periods p1, p2 give gcd(p1, p2) joint groups of period
     lcm(p1, p2) without the collision filter; the filter only removes groups."""
     phi1, phi2 = math.radians(90), math.radians(45)
     s1, s2 = model.successor(phi1)[0], model.successor(phi2)[0]
@@ -151,7 +152,8 @@ def test_swaps_forbidden_is_stricter(model):
 
 
 def test_min_sep_zero_is_same_cell(model):
-    """§8.4: ``min_sep_cells=0`` is the same-cell rule (the identity matrix) and the default."""
+    """docs/choices.md, "Robot–robot conflicts on the grid": ``min_sep_cells=0`` is the same-cell
+    rule (the identity matrix) and the default."""
     assert np.array_equal(too_close(model.position_rc, 0), np.eye(model.n_positions, dtype=bool))
     phi = math.radians(90)
     for swaps in (False, True):

@@ -1,4 +1,4 @@
-"""Partition P', BVG, safe intervals and G_safe (spec 004 §2, §3, §5, §6, §9)."""
+"""Partition P', BVG, safe intervals and G_safe (Nilles et al. 2021, §4, §5, §7)."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ PI = math.pi
 
 
 def _adjacency(text: str) -> set[tuple[int, int]]:
-    """Parse the spec's ``0→3,4; 1→2..5`` arc lists."""
+    """Parse arc lists written as ``0→3,4; 1→2..5``."""
     arcs = set()
     for item in text.split(";"):
         src, dst = item.strip().split("→")
@@ -41,7 +41,7 @@ def _rotated_world(world: World, matrix: np.ndarray, shift=(0.0, 0.0)) -> World:
     return World(world.outer @ matrix.T + np.asarray(shift), [h @ matrix.T for h in world.holes])
 
 
-# -- §9.2: Prop. 2 safe intervals ------------------------------------------------------------
+# -- Prop. 2 safe intervals (§5) ------------------------------------------------------------------
 @pytest.mark.parametrize(
     ("seg_i", "seg_j", "expected"),
     [
@@ -70,7 +70,7 @@ def test_prop2_shared_vertex_special_cases_and_wmin():
     assert safe_interval(((1, 1), (-1, 1)), ((-2, -2), (2, -2)))[1] == pytest.approx(1.8925, 1e-4)
 
 
-# -- §9.7: partitions and BVG arc lists -------------------------------------------------------
+# -- partitions and BVG arc lists of the authors' test polygons -----------------------------------
 def test_convex_pentagon_partition_is_identity_and_bvg_complete():
     world = worlds.get("regular_5")
     part = partition(world)
@@ -120,7 +120,7 @@ def test_l_shape_partition():
     assert part.n == 10
 
 
-# -- §6 Fig. 10 (simple_bit) and Figs. 11-13 (two rooms) --------------------------------------
+# -- §7.1.2 Fig. 10 (simple_bit) and Figs. 11-13 (two rooms) --------------------------------------
 SIMPLE_BIT = [(250, 250), (24.1935, 88.7097), (-100, 0), (-250, 250), (-250, 60),
               (-250, -107.1429), (-250, -250), (-5.1020, -158.1633), (150, -100), (250, -250),
               (250, -140), (250, -62.5)]
@@ -151,7 +151,7 @@ def test_simple_bit_fig10(simple_bit):
                       "7→0,4,5,11; 8→0,9; 9→0,8; 10→0,1,8; 11→0,8")
     assert len(arcs) == 31
     assert set(g.edges) == arcs
-    # Prop. 5 / §9.11: node 10 (v10 v11) has no incoming safe arc, and both ends are not convex
+    # Prop. 5 (§7.3): node 10 (v10 v11) has no incoming safe arc, and both ends are not convex
     reach = reachability(g, part)
     assert reach.unreachable == [10]
     assert part.inserted[10] and part.inserted[11]
@@ -163,7 +163,7 @@ def test_two_rooms_partition_and_statistics(two_rooms):
     np.testing.assert_allclose(part.start, TWO_ROOMS, atol=1e-9)
     assert g.number_of_edges() == 126
     reach = reachability(g, part)
-    assert reach.unreachable == [7, 14]  # §9.11, closed visibility
+    assert reach.unreachable == [7, 14]  # Prop. 5, closed visibility
     assert reach.n_sccs == 3
     assert reach.n_wccs == 1
 
@@ -176,7 +176,7 @@ def _path_interval(g, path):
 
 def test_two_rooms_published_intervals(two_rooms):
     _, g = two_rooms
-    # constant strategy e5 -> e4 along 5→6→12→16→4, and the narrower BFS alternative (§6)
+    # constant strategy e5 -> e4 along 5→6→12→16→4, and the narrower BFS alternative (§7.1.2)
     assert _path_interval(g, [5, 6, 12, 16, 4]) == pytest.approx((0.0363, 0.1767), abs=1e-4)
     assert _path_interval(g, [5, 6, 11, 16, 4]) == pytest.approx((0.0, 0.0214), abs=1e-4)
     # fewest transitions e0 -> e16 (the paper prints rounded-down values: 1e-4 tolerance)
@@ -188,7 +188,7 @@ def test_two_rooms_published_intervals(two_rooms):
     assert g.edges[0, 17]["width"] == pytest.approx(0.0202, abs=1e-4)
 
 
-# -- §9.9: Prop. 3 on random simple polygons --------------------------------------------------
+# -- Prop. 3 (§5) on random simple polygons -------------------------------------------------------
 @pytest.mark.parametrize("seed", range(6))
 def test_prop3_two_safe_actions_on_random_polygons(seed):
     rng = np.random.default_rng(seed)
@@ -209,7 +209,7 @@ def test_intervals_out_of_a_node_are_disjoint(two_rooms):
             assert lo >= hi - 1e-9
 
 
-# -- §9.12: safety is real -----------------------------------------------------------------
+# -- Def. 7: safety is real -----------------------------------------------------------------------
 @pytest.mark.parametrize("name", ["two_rooms", "simple_bit"])
 def test_safe_arcs_hold_under_ray_casting(name, two_rooms, simple_bit):
     part, g = two_rooms if name == "two_rooms" else simple_bit
@@ -234,7 +234,7 @@ def test_safe_arcs_hold_under_ray_casting(name, two_rooms, simple_bit):
     assert len(wrong) == 0, [(int(src[k]), int(dst[k]), int(landed[k])) for k in wrong[:5]]
 
 
-# -- geometric invariance ----------------------------------------------------------------------
+# -- geometric invariance -------------------------------------------------------------------------
 def _arc_data(g):
     return {(a, b): (d["lo"], d["hi"], d["width"]) for a, b, d in g.edges(data=True)}
 
@@ -279,7 +279,7 @@ def test_mirror_maps_graph_to_mirrored_graph(name):
     assert {(index[a], index[b]) for a, b in bvg(part).edges} == set(bvg(mpart).edges)
 
 
-# -- holes (§2 rule (d), §3 [R], §8.11) --------------------------------------------------------
+# -- holes (§4; docs/choices.md, "Holes inside the convex hull") ----------------------------------
 def test_square_with_hole():
     world = World([(0, 0), (10, 0), (10, 10), (0, 10)],
                   holes=[[(4, 4), (6, 4), (6, 6), (4, 6)]])

@@ -42,7 +42,8 @@ def test_rectangle_loop_with_relative_90():
 
 
 def test_corner_gives_consecutive_bumps_in_tick_mode():
-    """Heading into a corner at 45° with φ = 90°: the first turn still faces a wall (thesis §1.1)."""
+    """Heading into a corner at 45° with φ = 90°: the first turn still faces a wall (thesis
+    §2.3.1)."""
     dyn = BounceDynamics(BOX)
     dyn.reset(np.random.default_rng(0), position=[[9.5, 7.5]], heading=[deg(45)])
     bumps = "".join(str(int(dyn.tick(deg(90))[0])) for _ in range(12))

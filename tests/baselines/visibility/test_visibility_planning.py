@@ -1,5 +1,5 @@
-"""Safe planning, patrolling, plan execution and figures (spec 004 §5, §6, §8.3–8.7, §9.8, §9.10,
-§9.12)."""
+"""Safe planning, patrolling, plan execution and figures (Nilles et al. 2021, §7.1–7.2
+and §7.1.2; choices in docs/choices.md)."""
 
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ def _check_intervals(got, expected, tol):
 
 
 def _assert_safe(world, part, plan, g, n=300, seed=0):
-    """§9.12: every stage's arc is in G_safe, the stage interval lies in the arc's interval, and
+    """Def. 7: every stage's arc is in G_safe, the stage interval lies in the arc's interval, and
     rays from random points with random angles in it hit the next segment."""
     rng = np.random.default_rng(seed)
     for k, (lo, hi) in enumerate(plan.intervals):
@@ -55,10 +55,11 @@ def _assert_safe(world, part, plan, g, n=300, seed=0):
             assert np.all(seg == v)
 
 
-# -- §6 published two-room numbers -------------------------------------------------------------
+# -- §7.1.2 published two-room numbers ------------------------------------------------------------
 
 def test_constant_strategy_e5_e4(two_rooms):
-    """§6 / §9.8: θ̃ = (0.0363, 0.1767) along 5→6→12→16→4 (widest tie-break, §5 [R])."""
+    """§7.1.2: θ̃ = (0.0363, 0.1767) along 5→6→12→16→4 (widest tie-break: docs/choices.md, "Ties
+    among shortest safe plans")."""
     world, part, g = two_rooms
     for order in ("shortest", "widest"):
         plan = P.constant_strategy(g, 5, 4, max_arcs=4, order=order)
@@ -71,11 +72,11 @@ def test_constant_strategy_e5_e4(two_rooms):
     # too few arcs: no constant strategy
     assert P.constant_strategy(g, 5, 4, max_arcs=2) is None
     _assert_safe(world, part, plan, g)
-    assert P.monte_carlo(world, part, plan, n=2000, seed=1) == 1.0  # §6: 2000/2000
+    assert P.monte_carlo(world, part, plan, n=2000, seed=1) == 1.0  # §7.1.2: 2000/2000
 
 
 def test_fewest_transitions_e0_e16(two_rooms):
-    """§6: 0→17→6→16 with (0.3217, 0.3419), (2.4668, 2.6949), (1.0382, 1.3940); the paper
+    """§7.1.2: 0→17→6→16 with (0.3217, 0.3419), (2.4668, 2.6949), (1.0382, 1.3940); the paper
     rounds, so tolerance 1e-3; Monte-Carlo 3000/3000."""
     world, part, g = two_rooms
     plan = P.fewest_bounce_plan(g, 0, 16)
@@ -88,7 +89,7 @@ def test_fewest_transitions_e0_e16(two_rooms):
 
 
 def test_bottleneck_e0_e16(two_rooms):
-    """§6: bottleneck variant 0→18→9→16, minimum width 0.1343."""
+    """§7.1.2: bottleneck variant 0→18→9→16, minimum width 0.1343."""
     world, part, g = two_rooms
     plan = P.bottleneck_plan(g, 0, 16, max_arcs=3)
     assert plan.path == [0, 18, 9, 16]
@@ -100,7 +101,7 @@ def test_bottleneck_e0_e16(two_rooms):
 
 
 def test_unreachable_goal_returns_none(two_rooms):
-    """Prop. 5: nodes 7 and 14 of two_rooms have in-degree 0 (§9.11)."""
+    """Prop. 5: nodes 7 and 14 of two_rooms have in-degree 0 (§7.3)."""
     _, _, g = two_rooms
     assert P.fewest_bounce_plan(g, 0, 7) is None
     assert P.bottleneck_plan(g, 0, 14, max_arcs=6) is None
@@ -108,8 +109,8 @@ def test_unreachable_goal_returns_none(two_rooms):
 
 
 def test_split_and_start_set(two_rooms):
-    """§5 [R] / §8.6: refine P' at S's end points; a start set spanning several segments runs
-    the BFS over (set of segments, θ̃)."""
+    """docs/choices.md, "Start and goal sets split the partition": refine P' at S's end points; a
+    start set spanning several segments runs the BFS over (set of segments, θ̃)."""
     world, part, _ = two_rooms
     mid = 0.5 * (part.start[5] + part.end[5])
     fine = P.split_at(part, [mid, part.start[5]])  # the vertex is ignored
@@ -126,7 +127,7 @@ def test_split_and_start_set(two_rooms):
     assert P.monte_carlo(world, fine, plan, n=1000, seed=4) == 1.0
 
 
-# -- patrolling (Def. 15) -----------------------------------------------------------------------
+# -- patrolling (Def. 15) -------------------------------------------------------------------------
 
 def test_patrol_convex_polygon():
     world = worlds.get("heptagon")
@@ -153,7 +154,7 @@ def test_patrol_convex_polygon():
 
 
 def test_patrol_l_shape_lower_arm():
-    """§9.10: θ = 0.2 gives the 4-cycle of the lower 600×230 arm with contacts (22.9099, 0),
+    """Prop. 4: θ = 0.2 gives the 4-cycle of the lower 600×230 arm with contacts (22.9099, 0),
     (600, 116.9820), (577.0901, 230), (0, 113.0180)."""
     world = worlds.get("l_shape")
     part = partition(world)
@@ -166,7 +167,7 @@ def test_patrol_l_shape_lower_arm():
     assert np.allclose(np.roll(got, -k, axis=0), expected, atol=1e-4)
 
 
-# -- execution in the environment ---------------------------------------------------------------
+# -- execution in the environment -----------------------------------------------------------------
 
 def _run_policy(plan, part, g=None, episodes=100, seed=0):
     env = BounceEnv(world="two_rooms", bounce_rule="fixed", action_type="continuous",
@@ -219,7 +220,7 @@ def test_plan_policy_rejects_out_of_range(two_rooms):
     env.close()
 
 
-# -- figures -------------------------------------------------------------------------------------
+# -- figures --------------------------------------------------------------------------------------
 
 def test_plots_written(two_rooms, tmp_path):
     world, part, g = two_rooms

@@ -52,14 +52,14 @@ FREE_CELLS = [
     # N = 152 = 19 positions x 8 orientations in both labs (Figs. 8 and 9 / 2.8 and 2.9).
     ("lab_localization_a", 19),
     ("lab_localization_b", 19),
-    # Navigation & coverage paper, E1 (Fig. 2 / thesis Fig. 3.5): N = 384 = 48 x 8.
+    # Alam, Bobadilla & Shell 2017, Sec. V-A (Fig. 2 / thesis Fig. 3.5): N = 384 = 48 x 8.
     ("lab_navigation", 48),
-    # Same paper, E3 (Fig. 1 / thesis Fig. 3.10): N = 432 = 54 x 8.
+    # Same paper, Sec. V-B (Fig. 1 / thesis Fig. 3.10): N = 432 = 54 x 8.
     ("lab_fig1", 54),
-    # Same paper, E2 (Fig. 6 / thesis Fig. 3.9): N = 1464 = 183 x 8 (and 65880 = 183 x 360).
+    # Same paper, Sec. V-C (Fig. 6 / thesis Fig. 3.9): N = 1464 = 183 x 8 (and 65880 = 183 x 360).
     ("lab_complex", 183),
-    # Thesis ch. 4 patrolling (spec 003b sec. 1.11): 15 x 15 grid with n = 188 free cells (E4)
-    # and an 18 x 16 grid with 253 free cells (E5).
+    # Thesis ch. 4 patrolling (section 4.5): 15 x 15 grid with n = 188 free cells (Figs. 4.7-4.8)
+    # and an 18 x 16 grid with 253 free cells (Figs. 4.10-4.13).
     ("patrol_15x15", 188),
     ("patrol_18x16", 253),
 ]
@@ -76,7 +76,7 @@ GRID_SHAPES = [  # (rows, cols) of World.occupancy(1.0)
     ("grid_20x12", (12, 20)),  # 20 columns x 12 rows
     ("patrol_15x15", (15, 15)),
     ("patrol_18x16", (16, 18)),  # 18 columns x 16 rows
-    ("lab_navigation", (7, 14)),  # spec 000 E1: 14 columns x 7 rows
+    ("lab_navigation", (7, 14)),  # our reconstruction: 14 columns x 7 rows
 ]
 
 
@@ -95,7 +95,8 @@ def test_coverage_grids_have_obstacles(name):
 
 
 def test_grid_20x12_has_more_obstacles():
-    # spec 002 sec. 7 E4: the 20 x 12 map has "more obstacles" than the others.
+    # Alam & Bobadilla 2020, section 5.1 (Fig. 9a): the 20 x 12 map has "more obstacles" than the
+    # others.
     blocked = {n: (~get(n).occupancy(1.0)).sum() / get(n).occupancy(1.0).size
                for n in ("grid_10x10", "grid_15x15", "grid_20x12")}
     assert len(get("grid_20x12").holes) > len(get("grid_15x15").holes)
@@ -109,8 +110,9 @@ def test_grid_maps_are_exact_grid_worlds(name):
     assert world_from_grid(free) == world  # 4-connected, no diagonal pinch, corner at origin
 
 
-def test_lab_navigation_is_spec_000_reconstruction():
-    # spec 000 sec. 5 E1: 14 x 7; blocked = columns 1-6 x rows 1-5 and columns 8-12 x rows 0-3.
+def test_lab_navigation_is_our_reconstruction():
+    # docs/choices.md, "The lab maps are reconstructions": 14 x 7; blocked = columns 1-6 x rows 1-5
+    # and columns 8-12 x rows 0-3.
     free = get("lab_navigation").occupancy(1.0)
     expected = np.ones((7, 14), dtype=bool)
     expected[1:6, 1:7] = False
@@ -152,7 +154,7 @@ def test_localization_labs_are_frozen(name, rows):
     assert to_ascii(get(name).occupancy(1.0)) == rows
 
 
-# -- spec 004 polygons: exact coordinates in the published vertex order ------------------------
+# -- Nilles et al. 2021 polygons: exact coordinates in the published vertex order --------------
 SPEC_004 = {
     "simple_nonconv": [(250, 250), (0, 100), (-250, 250), (-250, -250), (250, -250)],
     "pinched_square": [(250, 250), (-250, 250), (-100, 150), (-250, -250), (250, -250),
@@ -169,13 +171,13 @@ SPEC_004 = {
 
 
 @pytest.mark.parametrize("name", sorted(SPEC_004))
-def test_spec_004_coordinates(name):
+def test_nilles_coordinates(name):
     world = get(name)
     assert world.outer.tolist() == [list(map(float, v)) for v in SPEC_004[name]]
     assert world.holes == ()
 
 
-def test_spec_004_vertex_counts_and_reflex_vertices():
+def test_nilles_vertex_counts_and_reflex_vertices():
     counts = {n: len(get(n).outer) for n in SPEC_004}
     assert counts == {"simple_nonconv": 5, "pinched_square": 6, "simple_bit": 6, "two_rooms": 11,
                       "heptagon": 7, "l_shape": 6, "square": 4, "rectangle": 4}
