@@ -30,6 +30,16 @@ class Episode:
         return {}
 
 
+class LastInfo(Episode):
+    """An episode whose metrics are read from its last ``info`` alone."""
+
+    def __init__(self, read) -> None:
+        self.read = read
+
+    def metrics(self, info: dict) -> dict:
+        return self.read(info)
+
+
 class Family:
     """An experiment family: recognised by the env's task (and parallel or not), with the task's
     planner, per-episode metrics, table columns and plots.
@@ -89,8 +99,9 @@ class Family:
 
 
 class SingleRobotFamily(Family):
-    """A Gymnasium (one robot) task whose planner chooses angles of Φ by index: on an env with
-    continuous actions there is no planner to run."""
+    """A Gymnasium (one robot) task whose metrics are read from the episode's last ``info``
+    (`metrics`) and whose planner chooses angles of Φ by index: on an env with continuous actions
+    there is no planner to run."""
 
     def planner(self, env, experiment, setup):
         if env.unwrapped.options.action_type != "discrete":
@@ -100,12 +111,8 @@ class SingleRobotFamily(Family):
     def make_planner(self, env) -> Policy:
         return super().planner(env, {}, None)
 
-
-class LastInfo(Episode):
-    """An episode whose metrics are read from its last ``info`` alone."""
-
-    def __init__(self, read) -> None:
-        self.read = read
+    def episode(self, env, policy, setup):
+        return LastInfo(self.metrics)
 
     def metrics(self, info: dict) -> dict:
-        return self.read(info)
+        return {}

@@ -11,13 +11,8 @@ import math
 
 import numpy as np
 
-from experiments.families.base import LastInfo, SingleRobotFamily
+from experiments.families.base import SingleRobotFamily
 from experiments.plots.figures import pyplot, save_figure
-
-
-def _metrics(info: dict) -> dict:
-    return {"coverage": info["coverage"], "distance": info["distance"],
-            "tv_distance": info["tv_distance"]}
 
 
 class Coverage(SingleRobotFamily):
@@ -29,8 +24,9 @@ class Coverage(SingleRobotFamily):
 
         return MixturePolicy.for_env(env)
 
-    def episode(self, env, policy, setup):
-        return LastInfo(_metrics)
+    def metrics(self, info):
+        return {"coverage": info["coverage"], "distance": info["distance"],
+                "tv_distance": info["tv_distance"]}
 
     def collect(self, data, env, policy, setup):
         task = env.unwrapped.task

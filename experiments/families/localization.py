@@ -6,12 +6,7 @@ Per episode: ``success`` (localized) and ``candidates`` (left at the end).
 
 from __future__ import annotations
 
-from experiments.families.base import LastInfo, SingleRobotFamily
-
-
-def _metrics(info: dict) -> dict:
-    return {"success": bool(info.get("localized", False)),
-            "candidates": int(info.get("candidates", -1))}
+from experiments.families.base import SingleRobotFamily
 
 
 class Localization(SingleRobotFamily):
@@ -23,8 +18,9 @@ class Localization(SingleRobotFamily):
 
         return AngleSwitchPolicy.for_env(env)
 
-    def episode(self, env, policy, setup):
-        return LastInfo(_metrics)
+    def metrics(self, info):
+        return {"success": bool(info.get("localized", False)),
+                "candidates": int(info.get("candidates", -1))}
 
 
 FAMILY = Localization()

@@ -7,14 +7,7 @@ Per episode: ``success``, ``ticks_to_goal`` (successful episodes only) and, for 
 
 from __future__ import annotations
 
-from experiments.families.base import LastInfo, SingleRobotFamily
-
-
-def _metrics(info: dict) -> dict:
-    out = {"success": bool(info.get("is_success", False))}
-    if "ticks_to_goal" in info:
-        out["ticks_to_goal"] = info["ticks_to_goal"]
-    return out
+from experiments.families.base import SingleRobotFamily
 
 
 class Navigation(SingleRobotFamily):
@@ -28,8 +21,11 @@ class Navigation(SingleRobotFamily):
 
         return NavigationPlanner()
 
-    def episode(self, env, policy, setup):
-        return LastInfo(_metrics)
+    def metrics(self, info):
+        out = {"success": bool(info.get("is_success", False))}
+        if "ticks_to_goal" in info:
+            out["ticks_to_goal"] = info["ticks_to_goal"]
+        return out
 
 
 FAMILY = Navigation()
