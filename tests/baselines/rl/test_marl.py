@@ -1,4 +1,4 @@
-"""The PettingZoo-parallel → SB3 VecEnv adapter for parameter sharing (ecosystem_anchors §B9)."""
+"""The PettingZoo-parallel → SB3 VecEnv adapter for parameter sharing."""
 
 from __future__ import annotations
 
