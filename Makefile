@@ -18,8 +18,8 @@ $(STAMP): pyproject.toml constraints.txt
 test: $(STAMP)
 	SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy $(BIN)/python -m pytest -q $(PYTEST_ARGS)
 
-# The main job: evaluate.py on its built-in default config (`make demo DEMO="-m bounce_gym.demo"`
-# runs the short simulator demo instead).
+# The main job: evaluate.py on the default config, configs/eval_default.yaml
+# (`make demo DEMO="-m bounce_gym.demo"` runs the short simulator demo instead).
 demo: $(STAMP)
 	$(BIN)/python $(DEMO)
 

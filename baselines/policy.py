@@ -1,13 +1,15 @@
 """Reference policies run in the environments: the common interface and the simple baselines.
 
 A policy maps what the robot senses (the observation) plus the env's ``info`` to an action, one
-step at a time: ``act(observation, info) -> action``. ``reset(env)`` is called after every
-``env.reset`` (with the env, so a planner can read the episode's start, goal or options).
-Planners (`baselines.navigation`, `baselines.coverage`, `baselines.localization`) implement the
-same interface, so `evaluate.py` can run every policy on the same worlds and seeds.
+step at a time: ``act(observation, info) -> action``. Per episode the call order is
+``options = start_options(env, seed)``; ``env.reset(seed=seed, options=options)``; ``reset(env)``;
+then ``act`` every step. Planners (`baselines.navigation`, `baselines.coverage`,
+`baselines.localization`) implement the same interface, so the experiment runner can run every
+policy on the same worlds and seeds.
 
-`MultiPolicy` is the same for a PettingZoo parallel env (`bounce_gym.envs.MultiBounceEnv`): one
-call decides the action of every live robot, ``act(observations, infos) -> {agent: action}``.
+In a PettingZoo parallel env (`bounce_gym.envs.MultiBounceEnv`) one call decides the action of
+every live robot: ``act(observations, infos) -> {agent: action}`` (`MultiPolicy`). The simple
+baselines here, `RandomAnglePolicy` and `FixedAnglePolicy`, work in both kinds of env.
 """
 
 from __future__ import annotations
@@ -17,55 +19,14 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 
+def is_parallel_env(env) -> bool:
+    """Whether ``env`` is a PettingZoo parallel env (agents keyed by name) rather than a
+    Gymnasium env."""
+    return hasattr(env, "possible_agents")
+
+
 class Policy(ABC):
-    """Base class: ``reset`` is optional, ``act`` is required."""
-
-    name = "policy"
-
-    def reset(self, env) -> None:  # noqa: B027  (optional hook, a no-op by default)
-        """Start of an episode (after ``env.reset``)."""
-
-    @abstractmethod
-    def act(self, observation: np.ndarray, info: dict):
-        """The action for this step."""
-
-
-class RandomAnglePolicy(Policy):
-    """A uniformly random bounce angle at every step: an index into Φ (discrete actions) or a
-    uniform a ∈ [-1, 1] (continuous actions)."""
-
-    name = "random"
-
-    def __init__(self, seed: int | None = None) -> None:
-        self.rng = np.random.default_rng(seed)
-        self.n = 0
-
-    def reset(self, env) -> None:
-        self.n = getattr(env.action_space, "n", 0)  # 0: continuous
-
-    def act(self, observation, info):
-        if self.n:
-            return int(self.rng.integers(self.n))
-        return self.rng.uniform(-1.0, 1.0, 1).astype(np.float32)
-
-
-class FixedAnglePolicy(Policy):
-    """Always the same bounce angle: the papers' single bounce policy φ_i."""
-
-    def __init__(self, index: int, degrees: float) -> None:
-        self.index = int(index)
-        self.name = f"fixed {degrees:g}°"
-
-    def act(self, observation, info):
-        return self.index
-
-
-class MultiPolicy(ABC):
-    """A policy for a PettingZoo parallel env: every step, one action per live agent.
-
-    Call order per episode: ``options = start_options(env, seed)``; ``env.reset(seed=seed,
-    options=options)``; ``reset(env)``; then ``act`` every step.
-    """
+    """Base class: ``start_options`` and ``reset`` are optional, ``act`` is required."""
 
     name = "policy"
 
@@ -78,5 +39,66 @@ class MultiPolicy(ABC):
         """Start of an episode (after ``env.reset``)."""
 
     @abstractmethod
+    def act(self, observation, info):
+        """The action for this step."""
+
+
+class MultiPolicy(Policy):
+    """A policy for a PettingZoo parallel env: every step, one action per live agent."""
+
+    @abstractmethod
     def act(self, observations: dict, infos: dict) -> dict:
         """``{agent: action}`` for every live agent."""
+
+
+class RandomAnglePolicy(Policy):
+    """A uniformly random bounce angle at every step.
+
+    Gymnasium env: an index into Φ (discrete actions) or a uniform a ∈ [-1, 1] (continuous
+    actions). Parallel env: each live robot a uniformly random index of its own Φ_i (turn
+    commands, the indices past Φ_i, are never chosen).
+
+    The stream is seeded once with ``seed`` and runs on across episodes; with
+    ``reseed_each_episode`` it restarts from every episode's seed instead, so an episode does not
+    depend on the ones run before it.
+    """
+
+    name = "random"
+
+    def __init__(self, seed: int | None = None, reseed_each_episode: bool = False) -> None:
+        self.rng = np.random.default_rng(seed)
+        self.reseed_each_episode = reseed_each_episode
+        self.n: int | dict[str, int] = 0
+
+    def start_options(self, env, seed: int) -> None:
+        if self.reseed_each_episode:
+            self.rng = np.random.default_rng(seed)
+        return None
+
+    def reset(self, env) -> None:
+        if is_parallel_env(env):
+            inner = env.unwrapped
+            self.n = {a: len(inner.options.angles[i]) for a, i in inner.agent_index.items()}
+        else:
+            self.n = getattr(env.action_space, "n", 0)  # 0: continuous
+
+    def act(self, observation, info):
+        if isinstance(self.n, dict):
+            return {a: int(self.rng.integers(self.n[a])) for a in observation}
+        if self.n:
+            return int(self.rng.integers(self.n))
+        return self.rng.uniform(-1.0, 1.0, 1).astype(np.float32)
+
+
+class FixedAnglePolicy(Policy):
+    """Always the same bounce angle, index ``index`` of Φ (of every robot's Φ_i in a parallel
+    env): the papers' single bounce policy φ_i."""
+
+    def __init__(self, index: int, degrees: float) -> None:
+        self.index = int(index)
+        self.name = f"fixed {degrees:g}°"
+
+    def act(self, observation, info):
+        if isinstance(observation, dict):
+            return dict.fromkeys(observation, self.index)
+        return self.index

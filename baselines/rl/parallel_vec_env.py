@@ -4,7 +4,7 @@
 (observation, action, reward, done, info) belongs to agent ``possible_agents[i]``. SB3 then trains
 *one* policy on the experience of all robots — the robots share the network's parameters and each
 acts on its own observation (decentralised execution with a centralised, shared learner). This is
-what SuperSuit's ``pettingzoo_env_to_vec_env_v1`` does (spec ecosystem_anchors §B9); this adapter
+what SuperSuit's ``pettingzoo_env_to_vec_env_v1`` does; this adapter
 replaces it without the dependency. It needs every agent to have the same observation and action
 space. With ``MultiBounceEnv`` robots observe only their own contact/clock (plus task features), so
 a shared policy cannot tell robots apart unless the observation says who is who.

@@ -19,11 +19,11 @@ Training resumes from the checkpoint of the same name when ``resume: true``.
 
 **Several robots.** With a PettingZoo id (``bounce_gym/MultiBounceCoverage-v0``, …) the robots
 share one policy (parameter sharing): the parallel env becomes one SB3 VecEnv with a slot per
-robot (`baselines.rl.parallel_vec_env.ParallelToVecEnv`, wrapped in ``VecMonitor``), so ``n_envs`` must stay 1
-and ``algo`` must be ``ppo``; ``env_kwargs`` may set ``max_cycles`` (the episode length; see
-``configs/train_multirobot_coverage.yaml``). `experiments.multi_evaluation` runs the saved model
-as one shared policy for every robot; ``rl_models: <name>`` lets several evaluation experiments
-(e.g. m = 2..5) use it.
+robot (`baselines.rl.parallel_vec_env.ParallelToVecEnv`, wrapped in ``VecMonitor``), so
+``n_envs`` must stay 1 and ``algo`` must be ``ppo``; ``env_kwargs`` may set ``max_cycles`` (the
+episode length; see ``configs/train_multirobot_coverage.yaml``). The evaluation runs the saved
+model as one policy for every robot (`baselines.rl.policies.SharedSB3Policy`); ``rl_models:
+<name>`` lets several evaluation experiments (e.g. m = 2..5) use it.
 """
 
 from __future__ import annotations
@@ -36,8 +36,8 @@ from pathlib import Path
 import gymnasium as gym
 
 import bounce_gym  # noqa: F401  (registers the environments)
+from bounce_gym.envs.registration import PETTINGZOO_ENVS, is_pettingzoo_id
 from bounce_gym.errors import ConfigError
-from experiments.multi_evaluation import MULTI_ENV_IDS, is_multi
 
 ALGOS = ("ppo", "dqn", "recurrentppo")
 MULTI_ALGOS = ("ppo",)
@@ -63,10 +63,10 @@ def validate_train_config(config: object) -> dict:
     config = copy.deepcopy(dict(config))
     if config["algo"] not in ALGOS:
         raise ConfigError(f"config.algo: expected one of {ALGOS}, got {config['algo']!r}")
-    multi = is_multi(config["env"])
+    multi = is_pettingzoo_id(config["env"])
     if not multi and config["env"] not in gym.registry:
         raise ConfigError(f"config.env: unknown environment id {config['env']!r}; multi-robot "
-                          f"ids are {list(MULTI_ENV_IDS)}")
+                          f"ids are {list(PETTINGZOO_ENVS)}")
     if multi and config["algo"] not in MULTI_ALGOS:
         raise ConfigError(f"config.algo: a multi-robot env trains one shared policy with one of "
                           f"{MULTI_ALGOS}, got {config['algo']!r}")
@@ -87,7 +87,7 @@ def validate_train_config(config: object) -> dict:
 def make_train_env(config: Mapping):
     """The VecEnv to train on: SB3's ``make_vec_env`` copies, or for a PettingZoo id the
     parameter-sharing adapter (one slot per robot) under ``VecMonitor``."""
-    if is_multi(config["env"]):
+    if is_pettingzoo_id(config["env"]):
         import pettingzoo
         from stable_baselines3.common.vec_env import VecMonitor
 

@@ -139,6 +139,11 @@ class _MultiBase:
         self.np_random = None
         self.np_random_seed = None
 
+    @property
+    def task(self):
+        """The task (coverage, monitoring or free) shared by every robot."""
+        return self.core.task
+
     def observation_space(self, agent: str) -> spaces.Space:
         """The same (shared) space object on every call, as PettingZoo's API test requires."""
         return self._obs_space

@@ -37,6 +37,13 @@ PETTINGZOO_ENVS = {
     "bounce_gym/MultiBounceCoverage-v0": {"world": "grid_15x15", "task": "coverage"},
     "bounce_gym/MultiBounceMonitoring-v0": {"world": "grid_20x12", "task": "monitoring"},
 }
+
+
+def is_pettingzoo_id(env_id: str) -> bool:
+    """Whether ``env_id`` is one of the multi-robot PettingZoo ids (not a Gymnasium id)."""
+    return env_id in PETTINGZOO_ENVS
+
+
 _ENTRY = {
     "parallel": "bounce_gym.envs.multi_bounce_v0:parallel_env",
     "aec": "bounce_gym.envs.multi_bounce_v0:env",

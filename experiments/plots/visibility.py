@@ -1,6 +1,7 @@
-"""Figures for the bounce visibility graph (spec 004 §6): the partition P', G_safe, the cone of
-trajectories of a plan and a limit cycle. Every function renders with matplotlib (Agg), writes
-the PNG atomically (`experiments.report.atomic_write`) and returns its path."""
+"""Figures for the bounce visibility graph of Nilles et al. (2021): the partition P', G_safe,
+the cone of trajectories of a plan and a limit cycle. Every function renders with matplotlib
+(Agg), writes the PNG atomically (`experiments.plots.figures.save_figure`) and returns its
+path."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import networkx as nx  # noqa: E402
 import numpy as np  # noqa: E402
 
 from baselines.visibility.partition import Partition  # noqa: E402
-from experiments.report import save_figure  # noqa: E402
+from experiments.plots.figures import save_figure  # noqa: E402
 
 __all__ = ["plot_limit_cycle", "plot_partition", "plot_plan_cone", "plot_safe_graph"]
 

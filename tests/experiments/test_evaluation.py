@@ -1,6 +1,7 @@
 """evaluate.py and train.py: configurations, outputs, and the RL round trip."""
 
 import json
+import subprocess
 import sys
 from pathlib import Path
 
@@ -9,9 +10,11 @@ import yaml
 
 from baselines.rl.train import validate_train_config
 from bounce_gym.errors import ConfigError
-from experiments.evaluation import DEFAULT_CONFIG, run, summarise, validate_config
+from experiments.config import load_config, validate_config
+from experiments.report import summarise
+from experiments.runner import run
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 sys.path.insert(0, str(ROOT))
 
 import evaluate  # noqa: E402
@@ -19,7 +22,7 @@ import train  # noqa: E402
 
 
 def _experiment(name: str) -> dict:
-    return next(e for e in DEFAULT_CONFIG["experiments"] if e["name"] == name)
+    return next(e for e in load_config()["experiments"] if e["name"] == name)
 
 
 def _write(path: Path, data: dict) -> Path:
@@ -51,9 +54,9 @@ def test_bad_evaluation_configs_raise(config, message):
         validate_config(config)
 
 
-def test_default_config_and_the_shipped_copy_agree():
-    assert validate_config(yaml.safe_load((ROOT / "configs/eval_default.yaml").read_text())) == \
-        validate_config(DEFAULT_CONFIG)
+def test_the_default_config_is_the_shipped_yaml():
+    assert load_config() == yaml.safe_load((ROOT / "configs/eval_default.yaml").read_text())
+    assert validate_config(load_config())["name"] == "default"
 
 
 @pytest.mark.parametrize(
@@ -148,3 +151,34 @@ def test_bad_visibility_blocks_raise(block, message):
     exp = dict(_experiment("visibility-two-rooms"), visibility=block, seeds=[0])
     with pytest.raises(ConfigError, match=message):
         run({"experiments": [exp]}, progress=False)
+
+
+def _tiny_config(tmp_path: Path) -> Path:
+    config = {"name": "tiny", "output": str(tmp_path / "runs"), "experiments": [
+        dict(_experiment("localization-lab"), seeds=[0], policies=["random"], max_steps=20)]}
+    return _write(tmp_path / "tiny.yaml", config)
+
+
+@pytest.mark.parametrize("command", [["evaluate.py"], ["-m", "experiments.cli", "evaluate"]])
+def test_evaluate_commands_run_a_config_and_report_bad_ones(tmp_path, command):
+    """`python evaluate.py` and `bounce-gym evaluate` (here `python -m experiments.cli`): the
+    same run folder, and a bad configuration is one ``error:`` line with status 2."""
+    run_it = [sys.executable, *[str(ROOT / c) if c.endswith(".py") else c for c in command]]
+    done = subprocess.run([*run_it, str(_tiny_config(tmp_path)), "--no-progress"], cwd=ROOT,
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert "localization-lab" in done.stdout and "random" in done.stdout
+    (folder,) = (tmp_path / "runs").iterdir()
+    assert (folder / "episodes.csv").read_text().count("\n") == 2
+    bad = subprocess.run([*run_it, str(tmp_path / "missing.yaml")], cwd=ROOT,
+                         capture_output=True, text=True, check=False)
+    assert bad.returncode == 2
+    assert bad.stderr.splitlines() == [f"error: config: file '{tmp_path / 'missing.yaml'}' "
+                                       "does not exist"]
+
+
+def test_train_command_reports_a_bad_config(tmp_path):
+    bad = subprocess.run([sys.executable, "-m", "experiments.cli", "train",
+                          str(_write(tmp_path / "t.yaml", {"name": "x"}))], cwd=ROOT,
+                         capture_output=True, text=True, check=False)
+    assert bad.returncode == 2 and bad.stderr.startswith("error: config: missing key")

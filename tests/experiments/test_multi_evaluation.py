@@ -1,4 +1,5 @@
-"""evaluate.py / train.py with the multi-robot PettingZoo envs (experiments.multi_evaluation)."""
+"""evaluate.py / train.py with the multi-robot PettingZoo envs (experiments.runner with the
+multi-robot families)."""
 
 import json
 import math
@@ -9,19 +10,16 @@ import numpy as np
 import pytest
 import yaml
 
+from baselines.policy import FixedAnglePolicy, RandomAnglePolicy
 from baselines.rl.train import validate_train_config
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
 from bounce_gym.errors import ConfigError
-from experiments.evaluation import EpisodeResult, run, summarise, validate_config
-from experiments.multi_evaluation import (
-    FixedBouncePolicy,
-    RandomBouncePolicy,
-    make_multi_env,
-    run_multi_episode,
-)
-from experiments.report import format_table
+from experiments.config import validate_config
+from experiments.families import multirobot_coverage
+from experiments.report import format_table, summarise
+from experiments.runner import EpisodeResult, make_env, run, run_episode
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 sys.path.insert(0, str(ROOT))
 
 import evaluate  # noqa: E402
@@ -135,8 +133,7 @@ def test_random_and_fixed_rows_on_a_small_coverage_experiment():
 
 def test_random_bouncing_never_sends_a_turn_command():
     env = MultiBounceEnv(**GRID, n_robots=3, task="coverage")
-    policy = RandomBouncePolicy()
-    policy.start_options(env, 0)
+    policy = RandomAnglePolicy(seed=0)
     obs, infos = env.reset(seed=0)
     policy.reset(env)
     chosen = {a for _ in range(300) for a in policy.act(obs, infos).values()}
@@ -147,7 +144,7 @@ def test_steps_to_full_matches_a_hand_run_episode():
     exp = coverage_exp(m=3, seeds=[4], policies=["fixed"])
     rows, _ = run({"experiments": [exp]}, progress=False)
     row = next(r for r in rows if r.policy == "fixed 135°")
-    env = make_multi_env(validate_config({"experiments": [exp]})["experiments"][0])
+    env = make_env(validate_config({"experiments": [exp]})["experiments"][0])
     env.reset(seed=4)
     first, contacts = None, 0
     for step in range(1, 3001):
@@ -165,13 +162,14 @@ def test_summary_gives_mean_std_and_the_count_of_covered_episodes():
     rows = [EpisodeResult("e", "p", s, steps, steps, 0.0,
                           {"robots": 3, "steps_to_full": full, "coverage": cov})
             for s, (steps, full, cov) in enumerate([(10, 10, 1.0), (30, 30, 1.0), (50, None, 0.5)])]
-    (entry,) = summarise(rows)
+    families = {"e": multirobot_coverage.FAMILY}
+    (entry,) = summarise(rows, families)
     assert entry["robots"] == 3 and isinstance(entry["robots"], int)
     assert entry["steps_to_full"] == 20.0 and entry["steps_to_full_std"] == 10.0
     assert entry["coverage"] == pytest.approx(2.5 / 3)
     assert entry["coverage_std"] == pytest.approx(np.std([1.0, 1.0, 0.5]))
     assert entry["full"] == 2 and entry["episodes"] == 3
-    table = format_table([entry])
+    table = format_table([entry], families)
     assert "multi-robot coverage" in table and "20.0 ± 10.0" in table and "2/3" in table
 
 
@@ -260,15 +258,17 @@ def test_evaluate_cli_prints_multi_tables_with_std(tmp_path, capsys):
 
 
 def test_fixed_policy_names_and_actions():
-    policy = FixedBouncePolicy(2, 135.0)
+    policy = FixedAnglePolicy(2, 135.0)
     assert policy.name == "fixed 135°"
     assert policy.act({"robot_0": None, "robot_1": None}, {}) == {"robot_0": 2, "robot_1": 2}
 
 
 def test_an_episode_capped_before_full_coverage():
     env = MultiBounceEnv(**GRID, n_robots=2, task="coverage", max_cycles=50)
-    summary, path = run_multi_episode(env, FixedBouncePolicy(0, 45.0), seed=0, max_steps=50,
-                                      record=True)
-    assert summary["metrics"]["steps_to_full"] is None and summary["steps"] == 50
-    assert summary["metrics"]["coverage"] < 1.0
+    episode = multirobot_coverage.CoverageEpisode(env)
+    summary, path = run_episode(env, FixedAnglePolicy(0, 45.0), seed=0, max_steps=50,
+                                episode=episode, record=True)
+    metrics = episode.metrics(summary["info"])
+    assert metrics["steps_to_full"] is None and summary["steps"] == 50
+    assert metrics["coverage"] < 1.0
     assert path.shape == (51, 2, 2)

@@ -1,0 +1,103 @@
+"""The ``bounce-gym`` command: evaluate planners, baselines and trained agents; train agents.
+
+    bounce-gym evaluate [config.yaml] [--no-progress]
+    bounce-gym train config.yaml [--timesteps N] [--resume] [--no-progress]
+
+``evaluate`` prints a table (per experiment and policy) and writes ``episodes.csv``,
+``results.json`` and plots into ``<output>/<name>-<timestamp>/``; without a configuration it runs
+the default one (``eval_default.yaml``; format: `experiments.config`). ``train`` saves the model
+as ``models/<name>/<algo>_seed<seed>.zip``, where ``evaluate`` finds it (format:
+`baselines.rl.train`). A bad configuration is one line ``error: ...`` on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import yaml
+
+from bounce_gym.errors import ConfigError
+
+
+def evaluate(config_path: str | None, progress: bool = True) -> int:
+    """Run an evaluation configuration, print the tables and write the run folder."""
+    from experiments.config import load_config, validate_config
+    from experiments.report import (
+        families_of,
+        format_table,
+        summarise,
+        write_plots,
+        write_results,
+    )
+    from experiments.runner import run
+
+    config = validate_config(load_config(config_path))
+    rows, plots = run(config, progress=progress)
+    families = families_of(plots)
+    summary = summarise(rows, families)
+    print(format_table(summary, families))
+    folder = Path(config["output"]) / f"{config['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
+    write_results(folder, [r.row() for r in rows], summary, config)
+    written = write_plots(folder, plots, summary)
+    print(f"\nwrote {folder}/episodes.csv, results.json and {len(written)} plots")
+    return 0
+
+
+def train(config_path: str, timesteps: int | None = None, resume: bool = False,
+          progress: bool = True) -> int:
+    """Train (or resume) the agent of a training configuration and report where it is saved."""
+    from baselines.rl.train import train as train_agent
+
+    path = Path(config_path)
+    if not path.is_file():
+        raise ConfigError(f"config: file {config_path!r} does not exist")
+    try:
+        config = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"config: {path} is not valid YAML: {exc}") from None
+    if isinstance(config, dict) and timesteps is not None:
+        config["total_timesteps"] = timesteps
+    if isinstance(config, dict) and resume:
+        config["resume"] = True
+    print(f"saved {train_agent(config, progress=progress)}")
+    return 0
+
+
+def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("config", nargs="?", help="YAML configuration (default: eval_default.yaml)")
+    parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    return parser
+
+
+def train_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("config", help="YAML training configuration")
+    parser.add_argument("--timesteps", type=int, help="override total_timesteps")
+    parser.add_argument("--resume", action="store_true", help="continue from the saved model")
+    parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    return parser
+
+
+def dispatch(args: argparse.Namespace) -> int:
+    """Run the parsed command; a `ConfigError` becomes ``error: ...`` on stderr and status 2."""
+    try:
+        if args.command == "evaluate":
+            return evaluate(args.config, progress=not args.no_progress)
+        return train(args.config, args.timesteps, args.resume, progress=not args.no_progress)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="bounce-gym", description=__doc__.splitlines()[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    evaluate_parser(commands.add_parser("evaluate", help="evaluate policies side by side"))
+    train_parser(commands.add_parser("train", help="train a Stable-Baselines3 agent"))
+    return dispatch(parser.parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""One module per experiment family (`experiments.registry` lists them)."""

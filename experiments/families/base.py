@@ -1,0 +1,118 @@
+"""The interface of an experiment family (`experiments.registry`) and of the object that
+follows one episode."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from baselines.policy import Policy, is_parallel_env
+from bounce_gym.errors import ConfigError
+
+
+class Episode:
+    """Follows one episode for its family: the start options, when it ends, the metrics."""
+
+    def start_options(self, seed: int) -> dict | None:
+        """Reset options the experiment imposes on every policy (``None``: the policy's own)."""
+        return None
+
+    def start(self, info: dict) -> bool:
+        """After ``env.reset`` (``info``: robot 0's); whether the episode is already over."""
+        return False
+
+    def step(self, info: dict) -> bool:
+        """After every step; whether the episode is over."""
+        return False
+
+    def metrics(self, info: dict) -> dict:
+        """The family's columns of the episode's row (``info``: the last step's)."""
+        return {}
+
+
+class LastInfo(Episode):
+    """An episode whose metrics are read from its last ``info`` alone."""
+
+    def __init__(self, read) -> None:
+        self.read = read
+
+    def metrics(self, info: dict) -> dict:
+        return self.read(info)
+
+
+class Family:
+    """An experiment family: recognised by the env's task (and parallel or not), with the task's
+    planner, per-episode metrics, table columns and plots.
+
+    ``table`` is the heading of the printed table its rows go to (families with the same heading
+    share one table, columns merged in registry order); ``spread`` are the columns printed as
+    mean ± std; ``counts`` those printed as ``count/episodes``. ``planner_attributes`` are the
+    planner's predictions copied into its rows when set.
+    """
+
+    name = "family"
+    task = "free"
+    parallel = False
+    table = ""
+    columns: tuple[str, ...] = ("experiment", "policy", "episodes", "return", "ticks")
+    spread: frozenset[str] = frozenset()
+    counts: frozenset[str] = frozenset()
+    planner_attributes: tuple[str, ...] = ()
+
+    def recognises(self, experiment: Mapping, env) -> bool:
+        return (is_parallel_env(env) == self.parallel and "visibility" not in experiment
+                and env.unwrapped.task.name == self.task)
+
+    def prepare(self, env, experiment: Mapping) -> object:
+        """Per-experiment set-up on a fresh env, handed to `planner` and `episode`."""
+        return None
+
+    def planner(self, env, experiment: Mapping, setup: object) -> Policy | None:
+        """The task's analytic planner (``None``: none applies to this env)."""
+        raise ConfigError(f"policies: no reference planner for task {self.task!r}")
+
+    def episode(self, env, policy: Policy, setup: object) -> Episode:
+        return Episode()
+
+    def row_metrics(self, episode: Episode, info: dict, policy: Policy) -> dict:
+        """The episode's metrics, then the planner's predictions."""
+        out = episode.metrics(info)
+        for key in self.planner_attributes:
+            value = getattr(policy, key, None)
+            if value is not None:
+                out[key] = value
+        return out
+
+    def collect(self, data: dict, env, policy: Policy, setup: object) -> None:
+        """Plot data after a first-seed episode (``data`` holds world, paths, family)."""
+
+    def summarise(self, entry: dict, rows: list[dict]) -> None:
+        """Extra summary columns of one (experiment, policy) from its episode rows."""
+
+    def plots(self, folder: Path, name: str, data: dict) -> list[Path]:
+        """The family's plots of one experiment."""
+        return []
+
+    def summary_plots(self, folder: Path, plots: Mapping, summary: list[dict]) -> list[Path]:
+        """Plots across the family's experiments (called once per family that ran)."""
+        return []
+
+
+class SingleRobotFamily(Family):
+    """A Gymnasium (one robot) task whose metrics are read from the episode's last ``info``
+    (`metrics`) and whose planner chooses angles of Φ by index: on an env with continuous actions
+    there is no planner to run."""
+
+    def planner(self, env, experiment, setup):
+        if env.unwrapped.options.action_type != "discrete":
+            return None
+        return self.make_planner(env)
+
+    def make_planner(self, env) -> Policy:
+        return super().planner(env, {}, None)
+
+    def episode(self, env, policy, setup):
+        return LastInfo(self.metrics)
+
+    def metrics(self, info: dict) -> dict:
+        return {}
