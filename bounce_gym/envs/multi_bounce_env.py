@@ -20,7 +20,7 @@ robot that bumps; once every blocked robot has chosen, the world runs until the 
 **Turn commands** (parallel form, discrete actions): with ``turn_angles=[45, -45]`` each robot
 has ``len(turn_angles)`` extra actions after its angles — index ``len(Φ_i) + j`` is a
 clock-timed turn in place by ``turn_angles[j]`` degrees (CCW positive), the one-robot ±Δθ
-"neighbour jump" of Alam & Bobadilla's Algorithm 1 (spec 002 §8.6). If any robot picks a turn,
+"neighbour jump" of Alam & Bobadilla's Algorithm 1. If any robot picks a turn,
 the step is one *command tick*: the robots that picked a turn turn, every other robot waits in
 place (`bounce_gym.dynamics.BounceDynamics.turn`); no bump happens and every clock advances by
 one. Otherwise the step is an ordinary one.
