@@ -36,8 +36,8 @@ from pathlib import Path
 import gymnasium as gym
 
 import bounce_gym  # noqa: F401  (registers the environments)
+from bounce_gym.envs.registration import PETTINGZOO_ENVS
 from bounce_gym.errors import ConfigError
-from experiments.multi_evaluation import MULTI_ENV_IDS, is_multi
 
 ALGOS = ("ppo", "dqn", "recurrentppo")
 MULTI_ALGOS = ("ppo",)
@@ -63,10 +63,10 @@ def validate_train_config(config: object) -> dict:
     config = copy.deepcopy(dict(config))
     if config["algo"] not in ALGOS:
         raise ConfigError(f"config.algo: expected one of {ALGOS}, got {config['algo']!r}")
-    multi = is_multi(config["env"])
+    multi = config["env"] in PETTINGZOO_ENVS
     if not multi and config["env"] not in gym.registry:
         raise ConfigError(f"config.env: unknown environment id {config['env']!r}; multi-robot "
-                          f"ids are {list(MULTI_ENV_IDS)}")
+                          f"ids are {list(PETTINGZOO_ENVS)}")
     if multi and config["algo"] not in MULTI_ALGOS:
         raise ConfigError(f"config.algo: a multi-robot env trains one shared policy with one of "
                           f"{MULTI_ALGOS}, got {config['algo']!r}")
@@ -87,7 +87,7 @@ def validate_train_config(config: object) -> dict:
 def make_train_env(config: Mapping):
     """The VecEnv to train on: SB3's ``make_vec_env`` copies, or for a PettingZoo id the
     parameter-sharing adapter (one slot per robot) under ``VecMonitor``."""
-    if is_multi(config["env"]):
+    if config["env"] in PETTINGZOO_ENVS:
         import pettingzoo
         from stable_baselines3.common.vec_env import VecMonitor
 
