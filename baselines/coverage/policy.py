@@ -73,17 +73,14 @@ class MixturePolicy(Policy):
         """The optimal mixture for a `BounceEnv` (Φ, noise, world and discretisation from its
         options). ``target``: None takes the env's coverage target when it is on the model's grid
         (else uniform); otherwise as in `target_vector`. α is exact for the ``cell`` backend
-        (its ``cell_bins``) and an approximation on the continuous ones (modelled with 1° bins). ``kwargs`` go to the constructor.
-        The result of Eq. 5 is kept in ``policy.mixture``."""
-        from bounce_gym.cells import CellModel
+        (its ``cell_bins``) and an approximation on the continuous ones (the env's
+        ``cell_model`` with 1° bins). ``kwargs`` go to the constructor. The result of Eq. 5 is
+        kept in ``policy.mixture``."""
         from bounce_gym.dynamics.noise import Exact, Reliable
 
         base = env.unwrapped
         options = base.options
-        model = CellModel(options.world, cell_size=options.step_length,
-                          n_bins=options.backend_options.get("n_bins", 360),
-                          robot_radius=options.robot_radius,
-                          corner_rule=options.backend_options.get("corner_rule", "target_only"))
+        model = base.cell_model(n_bins=360)  # the cell backend brings its own bins
         noise = options.noise
         if isinstance(noise, Reliable):
             r, eps = noise.r, noise.eps

@@ -32,13 +32,9 @@ class AngleSwitchPolicy(Policy):
 
     @classmethod
     def for_env(cls, env, depth: int = 1) -> AngleSwitchPolicy:
-        """The policy for a `BounceEnv` (angles and discretisation taken from its options)."""
-        options = env.unwrapped.options
-        model = CellModel(options.world, cell_size=options.step_length,
-                          n_bins=options.backend_options.get("n_bins", 8),
-                          robot_radius=options.robot_radius,
-                          corner_rule=options.backend_options.get("corner_rule", "target_only"))
-        return cls(model, options.angles[0], depth=depth)
+        """The policy for a `BounceEnv`: its angles, on its cell model (``env.cell_model()``)."""
+        base = env.unwrapped
+        return cls(base.cell_model(), base.options.angles[0], depth=depth)
 
     def act(self, observation, info: dict) -> int:
         self.observe(info)

@@ -31,17 +31,7 @@ from baselines.policy import MultiPolicy
 from bounce_gym.cells import CellModel, JointCellModel
 from bounce_gym.errors import ConfigError
 
-__all__ = ["CoveragePlanPolicy", "MonitoringPlanPolicy", "cell_model_of", "regions_of"]
-
-
-def cell_model_of(env, cell_bins: int = 8, corner_rule: str = "no_squeeze") -> CellModel:
-    """The env's cell model: the ``cell`` backend's own, else one built at cell size
-    ``step_length`` for its robot radius with ``cell_bins`` and ``corner_rule``."""
-    backend = env.core.dynamics.backend
-    if getattr(backend, "model", None) is not None:
-        return backend.model
-    opts = env.options
-    return CellModel(opts.world, opts.step_length, cell_bins, opts.robot_radius, corner_rule)
+__all__ = ["CoveragePlanPolicy", "MonitoringPlanPolicy", "regions_of"]
 
 
 def _angle_index(env, robot: int, phi_deg: float) -> int:
@@ -95,14 +85,14 @@ class CoveragePlanPolicy(MultiPolicy):
         """The planner for a `MultiBounceEnv` (parallel form, discrete actions, tick mode).
 
         ``phi``: degrees, one for every robot or one per robot (docs/choices.md, "One fixed bounce
-        angle per robot": a fixed φ_i per robot); each must be in that robot's angle set. The env's
-        ``turn_angles`` must hold ±360°/bins for the neighbour jumps. ``max_steps`` defaults to the
-        env's ``max_cycles``. ``cell_bins`` and ``corner_rule`` apply on continuous backends (the
-        cell backend brings its own model).
+        angle per robot"); each must be in that robot's angle set. The env's ``turn_angles`` must
+        hold ±360°/bins for the neighbour jumps. ``max_steps`` defaults to the env's
+        ``max_cycles``. The plan is made on ``env.cell_model(cell_bins, corner_rule)``: the cell
+        backend's own model, or on continuous backends one with these bins and corner rule.
         """
         env = getattr(env, "unwrapped", env)
         _check_tick_mode(env, "CoveragePlanPolicy")
-        model = cell_model_of(env, cell_bins, corner_rule)
+        model = env.cell_model(cell_bins, corner_rule)
         m = env.options.n_robots
         try:
             phis = [float(p) for p in np.broadcast_to(np.asarray(phi, dtype=float), (m,))]
@@ -110,7 +100,7 @@ class CoveragePlanPolicy(MultiPolicy):
             raise ConfigError(f"phi: expected one angle or {m} (one per robot), got {phi!r}") \
                 from None
         jm = JointCellModel(model, phis, collisions=env.options.robot_collisions == "bounce",
-                            min_sep_cells=env.options.backend_options.get("min_sep_cells", 0))
+                            min_sep_cells=env.options.min_sep_cells)
         phi_index = [_angle_index(env, i, p) for i, p in enumerate(phis)]
         width = 360.0 / model.n_bins
         turns = np.degrees(env.options.turn_angles)
@@ -139,7 +129,7 @@ class CoveragePlanPolicy(MultiPolicy):
 
     def reset(self, env) -> None:
         env = getattr(env, "unwrapped", env)
-        state = env.core.state
+        state = env.robot_state
         start = self.joint_model.from_poses(state.position, np.degrees(state.heading))
         self.result = plan_coverage(self.joint_model, start, max_steps=self.max_steps,
                                     neighbors=self.neighbors, lookahead=self.lookahead,
@@ -191,7 +181,7 @@ def regions_of(env, model: CellModel) -> list[np.ndarray]:
     (or on the boundary of) robot i's polygon."""
     import shapely
 
-    task = env.core.task
+    task = env.task
     if getattr(task, "name", None) != "monitoring":
         raise ConfigError("MonitoringPlanPolicy: the env's task must be 'monitoring'")
     out = []
@@ -243,11 +233,11 @@ class MonitoringPlanPolicy(MultiPolicy):
             phis = [math.degrees(float(env.options.angles[i][0])) for i in range(2)]
         else:
             phis = [float(p) for p in np.broadcast_to(np.asarray(phi, dtype=float), (2,))]
-        model = cell_model_of(env, cell_bins, corner_rule)
+        model = env.cell_model(cell_bins, corner_rule)
         if forbid_swaps is None:
             forbid_swaps = env.options.robot_collisions == "bounce"
         if min_sep_cells is None:
-            min_sep_cells = env.options.backend_options.get("min_sep_cells", 0)
+            min_sep_cells = env.options.min_sep_cells
         result = persistent_behavior(model, [math.radians(p) for p in phis], regions_of(env, model),
                                      mode=mode, forbid_swaps=forbid_swaps,
                                      min_sep_cells=min_sep_cells)

@@ -8,7 +8,6 @@ import numpy as np
 
 from baselines.navigation.roadmap import Plan, Roadmap, goal_cells
 from baselines.policy import Policy
-from bounce_gym.cells import CellModel
 from bounce_gym.errors import ConfigError
 
 # -- policies ---------------------------------------------------------------------------------
@@ -107,9 +106,9 @@ class NavigationPlanner(Policy):
     (``env.task.start`` / ``env.task.goal``), maps the start to its cell and the goal to the
     cells of the task's goal region (centres within ``goal_radius`` of the goal point, bins
     within ``heading_tolerance``; see `goal_cells`), and plans on the layered roadmap with the
-    task's weights w1, w2 (so the plan minimises the env's cost). The cell model is the env's own
-    with ``backend="cell"``; for the other backends an equivalent model is built (cell size =
-    step length, ``cell_bins``, C-space of the robot radius) and the plan is replayed open-loop.
+    task's weights w1, w2 (so the plan minimises the env's cost). The cell model is the env's
+    (``env.cell_model()``): the cell backend's own, or on the other backends the model at cell
+    size = step length with the env's ``cell_bins``, where the plan is replayed open-loop.
 
     The robot follows the plan by counting ticks, as the papers' robot does. Where the plan runs
     out before the episode ends (the goal was passed during the reset drive: a plan without
@@ -148,24 +147,12 @@ class NavigationPlanner(Policy):
 
     # -- model --------------------------------------------------------------------------------
     def _roadmap(self, env) -> Roadmap:
-        options, task = env.options, env.task
-        backend = env.core.dynamics.backend
+        task, model = env.task, env.cell_model()
         w1 = task.w1 if self.w1 is None else self.w1
         w2 = task.w2 if self.w2 is None else self.w2
         angles = tuple(np.round(_env_angles_deg(env), 9).tolist())
-        if options.backend == "cell":
-            model_key = ("cell", id(backend.model))
-        else:
-            cell_opts = options.backend_options
-            model_key = (id(options.world), options.step_length, options.robot_radius,
-                         cell_opts.get("n_bins", 8), cell_opts.get("corner_rule", "target_only"))
-        key = (model_key, angles, w1, w2)
+        key = (id(model), angles, w1, w2)  # the roadmap keeps the model alive: ids stay unique
         if key != self._cache_key:
-            if options.backend == "cell":
-                model = backend.model
-            else:
-                model = CellModel(options.world, options.step_length, model_key[3],
-                                  options.robot_radius, model_key[4])
             self.roadmap = Roadmap(model, angles, w1, w2)
             self._cache_key = key
         return self.roadmap

@@ -2,22 +2,19 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
 from bounce_gym.envs.actions import action_space, to_angle
-from bounce_gym.envs.core import BounceCore
-from bounce_gym.envs.options import parse_options
-from bounce_gym.envs.tasks import make_task
-from bounce_gym.errors import ConfigError
+from bounce_gym.envs.base import EnvBase
 
 SINGLE_ROBOT_TASKS = ("free", "navigation", "coverage", "localization")
+#: arguments of `bounce_gym.envs.options` that the single-robot env does not take
+MULTI_ROBOT_ONLY = ("n_robots", "robot_collisions", "turn_angles", "min_sep_cells")
 
 
-class BounceEnv(gym.Env):
+class BounceEnv(EnvBase, gym.Env):
     """A robot with only a contact sensor and a clock, bouncing around a polygon world.
 
     ## Description
@@ -62,79 +59,21 @@ class BounceEnv(gym.Env):
 
     ## Arguments
 
-    * ``world``: zoo name (`bounce_gym.worlds.names()`), map-file path, or `World`.
-    * ``task``: ``"free"``, ``"navigation"``, ``"coverage"``, ``"localization"`` or a `Task`;
-      ``task_kwargs``: keyword arguments of the task class (see `bounce_gym.envs.tasks`).
-    * ``backend``: ``"kinematic"`` (exact, continuous), ``"pymunk"`` (physics engine) or
-      ``"cell"`` (the papers' discrete cell-to-cell model: cell size = ``step_length``,
-      ``cell_bins`` orientation bins, ``corner_rule``; relative rule and discrete actions whose
-      angles are whole bins; one tick = one cell step or one rotation).
-    * ``bounce_rule``: ``"relative"`` (Alam), ``"fixed"``, ``"specular"``, ``"monotonic"``,
-      ``"nilles_relative"`` (Nilles).
-    * ``angles``: the set Φ, in degrees (default 45, 90, 135).
-    * ``angle_range``: (low, high) degrees for continuous actions (default: min/max of Φ).
-    * ``noise``: None, ``{"type": "reliable", "r": 0.8, "eps_deg": 5}`` or
-      ``{"type": "interval", "lo_deg": -5, "hi_deg": 5}``.
-    * ``robot_radius`` (default 0, a point), ``step_length`` (default 1: one cell per tick).
-    * ``step_mode``: ``"bounce"`` (one step = the bump, then driving to the next contact) or
-      ``"tick"`` (one step = one tick).
-    * ``action_type``: ``"discrete"`` or ``"continuous"``.
-    * ``history``: number of (segment ticks, angle) pairs in the observation (default 0).
-    * ``privileged``: add the true pose to the observation (default False).
-    * ``cell_bins``, ``corner_rule``: the cell backend's orientation bins (default 8) and diagonal
-      rule (default ``"target_only"``, see `bounce_gym.cells.model`).
-    * ``render_mode``: None, ``"human"`` or ``"rgb_array"``.
+    The keyword arguments of `bounce_gym.envs.options` (world, task, backend, bounce rule, Φ,
+    noise, …; the multi-robot ones excepted), defaults there: ``two_rooms``, a point robot, the
+    ``free`` task, Φ = {45°, 90°, 135°}. Plus ``render_mode``: None, ``"human"`` or
+    ``"rgb_array"``. Planners get the env's discrete model from `cell_model` (on
+    ``env.unwrapped``).
 
     ## Version History
 
     * v0: initial release.
     """
 
-    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
-
-    def __init__(
-        self,
-        world: object = "two_rooms",
-        task: object = "free",
-        task_kwargs: Mapping | None = None,
-        backend: str = "kinematic",
-        bounce_rule: str = "relative",
-        angles: object = (45.0, 90.0, 135.0),
-        angle_range: object = None,
-        noise: object = None,
-        robot_radius: float = 0.0,
-        step_length: float = 1.0,
-        step_mode: str = "bounce",
-        action_type: str = "discrete",
-        history: int = 0,
-        privileged: bool = False,
-        cell_bins: int = 8,
-        corner_rule: str = "target_only",
-        render_mode: str | None = None,
-    ) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ConfigError(f"render_mode: expected None or one of "
-                              f"{self.metadata['render_modes']}, got {render_mode!r}")
-        self.options = parse_options(
-            world=world, n_robots=1, backend=backend, bounce_rule=bounce_rule, angles=angles,
-            angle_range=angle_range, noise=noise, robot_radius=robot_radius,
-            step_length=step_length, step_mode=step_mode, action_type=action_type,
-            history=history, privileged=privileged, robot_collisions="ignore",
-            cell_bins=cell_bins, corner_rule=corner_rule,
-        )
-        self.core = BounceCore(self.options, make_task(task, task_kwargs, SINGLE_ROBOT_TASKS))
-        self.render_mode = render_mode
+    def __init__(self, render_mode: str | None = None, **options: object) -> None:
+        self._build(options, render_mode, SINGLE_ROBOT_TASKS, fixed=MULTI_ROBOT_ONLY)
         self.action_space = action_space(self.options.action_type, len(self.options.angles[0]))
         self.observation_space = spaces.Box(self.core.obs_low, self.core.obs_high, dtype=np.float32)
-        self._renderer = None
-
-    @property
-    def world(self):
-        return self.options.world
-
-    @property
-    def task(self):
-        return self.core.task
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
@@ -152,32 +91,6 @@ class BounceEnv(gym.Env):
         if self.render_mode == "human":
             self.render()
         return obs[0], float(rewards[0]), bool(terminated[0]), False, _single(info)
-
-    def render(self):
-        if self.render_mode is None:
-            gym.logger.warn("render() called with render_mode=None; pass render_mode to the env")
-            return None
-        from bounce_gym.envs.render.view import draw_core
-
-        if self._renderer is None:
-            from bounce_gym.envs.render.renderer import Renderer
-
-            self._renderer = Renderer(self.world)
-        frame = draw_core(self._renderer, self.core)
-        if self.render_mode == "human":
-            self._renderer.show(frame, self.metadata["render_fps"])
-            return None
-        return frame
-
-    def close(self):
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __getstate__(self):
-        state = self.__dict__.copy()
-        state["_renderer"] = None  # pygame objects are rebuilt on the next render()
-        return state
 
 
 def _single(info: dict) -> dict:

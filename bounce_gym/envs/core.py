@@ -22,6 +22,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from bounce_gym.cells import CellModel
 from bounce_gym.dynamics import BounceDynamics
 from bounce_gym.envs.options import EnvOptions
 from bounce_gym.envs.tasks.base import StepEvents, Task, pose_option
@@ -36,12 +37,13 @@ class BounceCore:
     def __init__(self, options: EnvOptions, task: Task) -> None:
         self.options = options
         self.task = task
-        task.configure(options)
         self.dynamics = BounceDynamics(
             options.world, options.n_robots, backend=options.backend, rule=options.bounce_rule,
             noise=options.noise, radius=options.robot_radius, step_length=options.step_length,
             robot_collisions=options.robot_collisions, backend_options=options.backend_options,
         )
+        self._cell_models: dict[tuple[int, str], CellModel] = {}
+        task.configure(self)
         k = options.history
         low = [0.0, 0.0] + [0.0] * (2 * k)
         high = [1.0, 1.0] + [1.0] * (2 * k)
@@ -64,6 +66,24 @@ class BounceCore:
     @property
     def state(self):
         return self.dynamics.state
+
+    def cell_model(self, n_bins: int | None = None, corner_rule: str | None = None) -> CellModel:
+        """The discrete model of the robot's motion that planners and tasks work on.
+
+        On the ``cell`` backend it is the backend's own `CellModel` — the model the robot steps,
+        so it is returned whatever the arguments say. On the continuous backends it is a model
+        at cell size = ``step_length`` for the robot radius with ``n_bins`` orientation bins and
+        ``corner_rule`` (None: the env's ``cell_bins`` and ``corner_rule``), built on the first
+        call and cached; planners that discretise more finely than the env pass their own bins.
+        """
+        if self.options.backend == "cell":
+            return self.dynamics.backend.model
+        key = (self.options.cell_bins if n_bins is None else n_bins,
+               self.options.corner_rule if corner_rule is None else corner_rule)
+        if key not in self._cell_models:
+            self._cell_models[key] = CellModel(self.options.world, self.options.step_length,
+                                               key[0], self.options.robot_radius, key[1])
+        return self._cell_models[key]
 
     # -- episode ----------------------------------------------------------------------------
     def reset(self, rng: np.random.Generator, options: Mapping | None,

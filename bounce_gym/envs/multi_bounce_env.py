@@ -38,11 +38,12 @@ AEC: each robot is truncated after ``max_cycles`` decisions of its own.
 
 ## Arguments
 
-Those of `BounceEnv` (``angles`` and ``angle_range`` may also be given per robot as a list or a
-``{"robot_i": ...}`` dict), plus ``n_robots``, ``robot_collisions`` (``"bounce"`` | ``"ignore"``),
-``turn_angles`` (degrees; parallel form only), ``min_sep_cells`` (``cell`` backend: robots
-within this Chebyshev distance collide, 0 = the same cell; docs/choices.md, "Robot–robot conflicts
-on the grid") and ``max_cycles``. Defaults: ``grid_15x15``, 4 robots of radius 0.3, collisions on.
+The keyword arguments of `bounce_gym.envs.options` — those of `BounceEnv` plus ``n_robots``,
+``robot_collisions``, ``turn_angles`` and ``min_sep_cells`` (``cell`` backend: robots within
+this Chebyshev distance collide, 0 = the same cell; docs/choices.md, "Robot–robot conflicts on
+the grid") — with the defaults ``grid_15x15``, 4 robots of radius 0.3 and collisions on; plus
+``max_cycles`` (default 500) and ``render_mode``. Planners get the env's discrete model from
+``env.unwrapped.cell_model()``.
 
 ## Version History
 
@@ -59,67 +60,29 @@ from gymnasium.utils import seeding
 from pettingzoo import AECEnv, ParallelEnv
 
 from bounce_gym.envs.actions import action_space, to_angle
-from bounce_gym.envs.core import BounceCore
-from bounce_gym.envs.options import parse_options
-from bounce_gym.envs.tasks import make_task
+from bounce_gym.envs.base import EnvBase
 from bounce_gym.errors import ActionError, ConfigError
 
 MULTI_ROBOT_TASKS = ("free", "coverage", "monitoring")
-METADATA = {
-    "render_modes": ["human", "rgb_array"],
-    "name": "multi_bounce_v0",
-    "is_parallelizable": True,
-    "render_fps": 10,
-}
 
 
-class _MultiBase:
-    """Construction, spaces, rendering and pickling shared by both forms."""
+#: the multi-robot envs' own defaults of the arguments of `bounce_gym.envs.options`
+MULTI_ROBOT_DEFAULTS = {"world": "grid_15x15", "n_robots": 4, "robot_radius": 0.3,
+                        "robot_collisions": "bounce"}
 
-    metadata = METADATA
 
-    def __init__(
-        self,
-        world: object = "grid_15x15",
-        n_robots: int = 4,
-        task: object = "free",
-        task_kwargs: Mapping | None = None,
-        backend: str = "kinematic",
-        bounce_rule: str = "relative",
-        angles: object = (45.0, 90.0, 135.0),
-        angle_range: object = None,
-        noise: object = None,
-        robot_radius: float = 0.3,
-        step_length: float = 1.0,
-        step_mode: str = "bounce",
-        action_type: str = "discrete",
-        history: int = 0,
-        privileged: bool = False,
-        cell_bins: int = 8,
-        corner_rule: str = "target_only",
-        robot_collisions: str = "bounce",
-        turn_angles: object = (),
-        min_sep_cells: int = 0,
-        max_cycles: int = 500,
-        render_mode: str | None = None,
-    ) -> None:
-        if render_mode is not None and render_mode not in METADATA["render_modes"]:
-            raise ConfigError(f"render_mode: expected None or one of {METADATA['render_modes']}, "
-                              f"got {render_mode!r}")
+class _MultiBase(EnvBase):
+    """Construction, spaces and per-agent bookkeeping shared by both forms."""
+
+    metadata = {**EnvBase.metadata, "name": "multi_bounce_v0", "is_parallelizable": True}
+
+    def __init__(self, max_cycles: int = 500, render_mode: str | None = None,
+                 **options: object) -> None:
         if isinstance(max_cycles, bool) or not isinstance(max_cycles, int | np.integer) \
                 or max_cycles < 1:
             raise ConfigError(f"max_cycles: expected an integer >= 1, got {max_cycles!r}")
-        self.options = parse_options(
-            world=world, n_robots=n_robots, backend=backend, bounce_rule=bounce_rule,
-            angles=angles, angle_range=angle_range, noise=noise, robot_radius=robot_radius,
-            step_length=step_length, step_mode=step_mode, action_type=action_type,
-            history=history, privileged=privileged, robot_collisions=robot_collisions,
-            cell_bins=cell_bins, corner_rule=corner_rule, turn_angles=turn_angles,
-            min_sep_cells=min_sep_cells,
-        )
-        self.core = BounceCore(self.options, make_task(task, task_kwargs, MULTI_ROBOT_TASKS))
+        self._build(options, render_mode, MULTI_ROBOT_TASKS, defaults=MULTI_ROBOT_DEFAULTS)
         self.max_cycles = int(max_cycles)
-        self.render_mode = render_mode
         self.possible_agents = [f"robot_{i}" for i in range(self.options.n_robots)]
         self.agent_index = {a: i for i, a in enumerate(self.possible_agents)}
         self._obs_space = spaces.Box(self.core.obs_low, self.core.obs_high, dtype=np.float32)
@@ -135,14 +98,8 @@ class _MultiBase:
             np.tile([0.0, 0.0, -1.0, -1.0], m).astype(np.float32),
             np.ones(4 * m, dtype=np.float32), dtype=np.float32,
         )
-        self._renderer = None
         self.np_random = None
         self.np_random_seed = None
-
-    @property
-    def task(self):
-        """The task (coverage, monitoring or free) shared by every robot."""
-        return self.core.task
 
     def observation_space(self, agent: str) -> spaces.Space:
         """The same (shared) space object on every call, as PettingZoo's API test requires."""
@@ -180,33 +137,6 @@ class _MultiBase:
         pos = (st.position - (xmin, ymin)) / (xmax - xmin, ymax - ymin)
         flat = np.concatenate((pos, st.direction), axis=1).ravel().astype(np.float32)
         return np.clip(flat, self.state_space.low, self.state_space.high)
-
-    def render(self):
-        if self.render_mode is None:
-            from gymnasium import logger
-
-            logger.warn("render() called with render_mode=None; pass render_mode to the env")
-            return None
-        from bounce_gym.envs.render.renderer import Renderer
-        from bounce_gym.envs.render.view import draw_core
-
-        if self._renderer is None:
-            self._renderer = Renderer(self.options.world)
-        frame = draw_core(self._renderer, self.core)
-        if self.render_mode == "human":
-            self._renderer.show(frame, METADATA["render_fps"])
-            return None
-        return frame
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __getstate__(self):
-        state = self.__dict__.copy()
-        state["_renderer"] = None
-        return state
 
 
 class MultiBounceEnv(_MultiBase, ParallelEnv):
@@ -269,8 +199,8 @@ class MultiBounceAEC(_MultiBase, AECEnv):
     robot that bumps keeps its last angle. Requires ``step_mode="bounce"``.
     """
 
-    def __init__(self, *args, **kwargs) -> None:
-        super().__init__(*args, **kwargs)
+    def __init__(self, **kwargs) -> None:
+        super().__init__(**kwargs)
         if self.options.step_mode != "bounce":
             raise ConfigError("step_mode: the AEC form is event-driven and needs 'bounce'; use "
                               "the parallel form for tick stepping")

@@ -1,7 +1,44 @@
-"""Constructor arguments shared by the single- and multi-robot environments, validated once.
+"""The environments' constructor arguments: one table, one parser, one place for their docs.
 
-Angles enter in **degrees** here (this is the configuration edge of the package) and are stored in
-radians. Every bad value raises `ConfigError` naming the argument and what is allowed.
+`BounceEnv` and the multi-robot envs (`MultiBounceEnv`, `MultiBounceAEC`) take the same keyword
+arguments, listed with their defaults in `ARGUMENTS`; each env passes `parse_options` a small
+dict of its own defaults and the arguments it does not take. Angles enter in **degrees** here
+(this is the configuration edge of the package) and are stored in radians. An unknown argument
+raises `TypeError` naming it; every bad value raises `ConfigError` naming the argument and what is
+allowed.
+
+Arguments (defaults of the single-robot env; the multi-robot envs start from ``grid_15x15``,
+4 robots of radius 0.3 and ``robot_collisions="bounce"``):
+
+* ``world``: zoo name (`bounce_gym.worlds.names()`), map-file path, or `World`.
+* ``task``: a task name or a `Task` (see `bounce_gym.envs.tasks`; single robot: ``"free"``,
+  ``"navigation"``, ``"coverage"``, ``"localization"``; multi-robot: ``"free"``, ``"coverage"``,
+  ``"monitoring"``); ``task_kwargs``: keyword arguments of the task class.
+* ``backend``: ``"kinematic"`` (exact, continuous), ``"pymunk"`` (physics engine) or ``"cell"``
+  (the papers' discrete cell-to-cell model: cell size = ``step_length``, ``cell_bins``
+  orientation bins, ``corner_rule``; relative rule and discrete actions whose angles are whole
+  bins; one tick = one cell step or one rotation).
+* ``bounce_rule``: ``"relative"`` (Alam), ``"fixed"``, ``"specular"``, ``"monotonic"``,
+  ``"nilles_relative"`` (Nilles).
+* ``angles``: the set Φ, in degrees (default 45, 90, 135); multi-robot: also one set per robot,
+  as a list of sets or a ``{"robot_i": ...}`` dict.
+* ``angle_range``: (low, high) degrees for continuous actions (default: min/max of Φ); per robot
+  like ``angles``.
+* ``noise``: None, ``{"type": "reliable", "r": 0.8, "eps_deg": 5}`` or
+  ``{"type": "interval", "lo_deg": -5, "hi_deg": 5}``.
+* ``robot_radius`` (default 0, a point), ``step_length`` (default 1: one cell per tick).
+* ``step_mode``: ``"bounce"`` (one step = the bump, then driving to the next contact) or
+  ``"tick"`` (one step = one tick).
+* ``action_type``: ``"discrete"`` or ``"continuous"``.
+* ``history``: number of (segment ticks, angle) pairs in the observation (default 0).
+* ``privileged``: add the true pose to the observation (default False).
+* ``cell_bins``, ``corner_rule``: orientation bins (default 8) and diagonal rule (default
+  ``"target_only"``, see `bounce_gym.cells.model`) of the env's cell model — the cell backend's
+  grid, and the model the env hands planners on every backend (``env.cell_model()``).
+* multi-robot only: ``n_robots``; ``robot_collisions`` (``"bounce"`` | ``"ignore"``);
+  ``turn_angles`` (degrees; extra discrete actions that turn a robot in place, parallel form
+  only); ``min_sep_cells`` (``cell`` backend: robots within this Chebyshev distance collide,
+  0 = the same cell).
 """
 
 from __future__ import annotations
@@ -28,11 +65,38 @@ STEP_MODES = ("bounce", "tick")
 ACTION_TYPES = ("discrete", "continuous")
 
 
+#: Every constructor argument of the environments, with the single-robot env's defaults.
+ARGUMENTS: dict[str, object] = {
+    "world": "two_rooms",
+    "task": "free",
+    "task_kwargs": None,
+    "backend": "kinematic",
+    "bounce_rule": "relative",
+    "angles": (45.0, 90.0, 135.0),
+    "angle_range": None,
+    "noise": None,
+    "robot_radius": 0.0,
+    "step_length": 1.0,
+    "step_mode": "bounce",
+    "action_type": "discrete",
+    "history": 0,
+    "privileged": False,
+    "cell_bins": 8,
+    "corner_rule": "target_only",
+    "n_robots": 1,
+    "robot_collisions": "ignore",
+    "turn_angles": (),
+    "min_sep_cells": 0,
+}
+
+
 @dataclass(frozen=True)
 class EnvOptions:
     """Validated, normalised environment arguments (angles in radians)."""
 
     world: World
+    task: object  # as given: a task name or a `Task`, built by the env
+    task_kwargs: Mapping | None
     n_robots: int
     backend: str
     bounce_rule: str
@@ -46,13 +110,23 @@ class EnvOptions:
     history: int
     privileged: bool
     robot_collisions: str
-    backend_options: dict  # extra arguments of the backend (cell: n_bins, corner_rule)
+    cell_bins: int
+    corner_rule: str
+    min_sep_cells: int = 0
     turn_angles: np.ndarray = field(default_factory=lambda: np.zeros(0))  # turn commands (multi)
 
     @cached_property
     def max_clock(self) -> int:
         """An upper bound on the clock: the longest straight drive, in ticks, plus one."""
         return math.ceil(self.world.diameter / self.step_length) + 1
+
+    @property
+    def backend_options(self) -> dict:
+        """Extra arguments of the motion backend (the cell backend's grid; none otherwise)."""
+        if self.backend != "cell":
+            return {}
+        extra = {"min_sep_cells": self.min_sep_cells} if self.min_sep_cells else {}
+        return {"n_bins": self.cell_bins, "corner_rule": self.corner_rule, **extra}
 
 
 def resolve_world(world: object) -> World:
@@ -142,72 +216,73 @@ def _angle_range(field: str, value: object, rule: str, angles: np.ndarray) -> tu
     return math.radians(lo), math.radians(hi)
 
 
-def parse_options(
-    *,
-    world: object,
-    n_robots: int,
-    backend: str,
-    bounce_rule: str,
-    angles: object,
-    angle_range: object,
-    noise: object,
-    robot_radius: float,
-    step_length: float,
-    step_mode: str,
-    action_type: str,
-    history: int,
-    privileged: bool,
-    robot_collisions: str,
-    cell_bins: int = 8,
-    corner_rule: str = "target_only",
-    turn_angles: object = (),
-    min_sep_cells: int = 0,
-) -> EnvOptions:
-    """Validate the constructor arguments of `BounceEnv` / `MultiBounceEnv`."""
-    backend = _choice("backend", backend, BACKENDS)
-    bounce_rule = _choice("bounce_rule", bounce_rule, sorted(RULES))
+def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Sequence[str] = (),
+                  who: str = "the environment") -> EnvOptions:
+    """Validate an environment's keyword arguments.
+
+    ``defaults`` replaces some of the defaults of `ARGUMENTS`; the arguments named in ``fixed``
+    keep their default and may not be given (the single-robot env fixes ``n_robots`` and the
+    other multi-robot arguments). ``who`` names the env in the error for an unknown argument.
+    """
+    values = {**ARGUMENTS, **(defaults or {})}
+    for name in kwargs:
+        if name not in values or name in fixed:
+            raise TypeError(f"{who}() got an unexpected keyword argument {name!r}")
+    values.update(kwargs)
+    backend = _choice("backend", values["backend"], BACKENDS)
+    bounce_rule = _choice("bounce_rule", values["bounce_rule"], sorted(RULES))
+    n_robots = values["n_robots"]
     if isinstance(n_robots, bool) or not isinstance(n_robots, int | np.integer) or n_robots < 1:
         raise ConfigError(f"n_robots: expected an integer >= 1, got {n_robots!r}")
+    n_robots = int(n_robots)
+    history = values["history"]
     if isinstance(history, bool) or not isinstance(history, int | np.integer) or history < 0:
         raise ConfigError(f"history: expected an integer >= 0, got {history!r}")
+    privileged = values["privileged"]
     if not isinstance(privileged, bool):
         raise ConfigError(f"privileged: expected True or False, got {privileged!r}")
-    sets = _per_robot("angles", angles, int(n_robots))
-    angle_sets = tuple(_angle_set("angles", s, bounce_rule) for s in sets)
+    angle_sets = tuple(_angle_set("angles", s, bounce_rule)
+                       for s in _per_robot("angles", values["angles"], n_robots))
+    angle_range = values["angle_range"]
     ranges = tuple(
         _angle_range("angle_range", r, bounce_rule, a)
-        for r, a in zip(_per_robot("angle_range", angle_range, int(n_robots)) if
-                        angle_range is not None else [None] * int(n_robots), angle_sets,
-                        strict=True)
+        for r, a in zip(_per_robot("angle_range", angle_range, n_robots) if
+                        angle_range is not None else [None] * n_robots, angle_sets, strict=True)
     )
-    noise_model = make_noise(noise)
-    backend_options: dict = {}
+    noise_model = make_noise(values["noise"])
+    cell_bins = _bins(values["cell_bins"])
+    corner_rule = _choice("corner_rule", values["corner_rule"], CORNER_RULES)
+    action_type = values["action_type"]
+    min_sep_cells = values["min_sep_cells"]
     if backend == "cell":
-        backend_options = _cell_options(bounce_rule, angle_sets, action_type, noise_model,
-                                        cell_bins, corner_rule)
-        if min_sep_cells != 0:
-            backend_options["min_sep_cells"] = min_sep_cells  # the backend validates it
+        _check_cell_backend(bounce_rule, angle_sets, action_type, noise_model, cell_bins)
     elif min_sep_cells != 0:
         raise ConfigError(f"min_sep_cells: only the cell backend has it (continuous robots "
                           f"collide by robot_radius), got {min_sep_cells!r} with backend "
                           f"{backend!r}")
-    turns = _turn_angles(turn_angles, action_type, backend_options.get("n_bins"))
+    turns = _turn_angles(values["turn_angles"], action_type,
+                         cell_bins if backend == "cell" else None)
     return EnvOptions(
-        world=resolve_world(world),
-        n_robots=int(n_robots),
+        world=resolve_world(values["world"]),
+        task=values["task"],
+        task_kwargs=values["task_kwargs"],
+        n_robots=n_robots,
         backend=backend,
         bounce_rule=bounce_rule,
         angles=angle_sets,
         angle_range=ranges,
         noise=noise_model,
-        robot_radius=_number("robot_radius", robot_radius, minimum=0.0),
-        step_length=_number("step_length", step_length, minimum=0.0, strict=True),
-        step_mode=_choice("step_mode", step_mode, STEP_MODES),
+        robot_radius=_number("robot_radius", values["robot_radius"], minimum=0.0),
+        step_length=_number("step_length", values["step_length"], minimum=0.0, strict=True),
+        step_mode=_choice("step_mode", values["step_mode"], STEP_MODES),
         action_type=_choice("action_type", action_type, ACTION_TYPES),
         history=int(history),
         privileged=privileged,
-        robot_collisions=_choice("robot_collisions", robot_collisions, ROBOT_COLLISIONS),
-        backend_options=backend_options,
+        robot_collisions=_choice("robot_collisions", values["robot_collisions"],
+                                 ROBOT_COLLISIONS),
+        cell_bins=cell_bins,
+        corner_rule=corner_rule,
+        min_sep_cells=min_sep_cells,  # the cell backend validates it
         turn_angles=turns,
     )
 
@@ -233,13 +308,16 @@ def _turn_angles(value: object, action_type: str, n_bins: int | None) -> np.ndar
     return np.radians(np.array(degrees, dtype=np.float64))
 
 
-def _cell_options(rule: str, angle_sets, action_type: str, noise: NoiseModel, n_bins: object,
-                  corner_rule: object) -> dict:
-    """The cell backend steps whole orientation bins with Alam's relative rule."""
+def _bins(n_bins: object) -> int:
     if isinstance(n_bins, bool) or not isinstance(n_bins, int | np.integer) or n_bins < 1 \
             or 360 % n_bins:
         raise ConfigError(f"cell_bins: expected a divisor of 360 (e.g. 4, 8, 360), got {n_bins!r}")
-    _choice("corner_rule", corner_rule, CORNER_RULES)
+    return int(n_bins)
+
+
+def _check_cell_backend(rule: str, angle_sets, action_type: str, noise: NoiseModel,
+                        n_bins: int) -> None:
+    """The cell backend steps whole orientation bins with Alam's relative rule."""
     if rule != "relative":
         raise ConfigError(f"bounce_rule: the cell backend supports 'relative' only, got {rule!r}")
     if action_type != "discrete":
@@ -252,4 +330,3 @@ def _cell_options(rule: str, angle_sets, action_type: str, noise: NoiseModel, n_
             raise ConfigError(f"angles: {np.degrees(angles).tolist()} degrees are not whole "
                               f"multiples of the {width:g}° bins of the cell backend")
     noise.sample_bins(1, np.random.default_rng(0), math.radians(width))  # raises if not whole
-    return {"n_bins": int(n_bins), "corner_rule": corner_rule}

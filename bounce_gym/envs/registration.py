@@ -28,7 +28,7 @@ GYM_ENVS = {
     "bounce_gym/BounceLocalization-v0": (
         {"world": "lab_localization_a", "task": "localization", "angles": (45.0,),
          "backend": "cell",
-         "task_kwargs": {"filter_factory": "bounce_gym.envs.tasks.localization_filter:task_filter"}}, 200),
+         "task_kwargs": {"filter_factory": "combinatorial"}}, 200),
 }
 
 

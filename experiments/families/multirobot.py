@@ -24,7 +24,7 @@ class TeamEpisode(Episode):
 
     def step(self, info):
         # info names each robot's contact partner, not whether the robot is blocked now
-        state = self.inner.core.state
+        state = self.inner.robot_state
         self.contacts += int(np.sum(state.blocked & (state.contact_robot >= 0)))
         self.steps += 1
         return False

@@ -12,7 +12,8 @@ drives straight, so its path is the segment ``start → end``; tasks integrate o
   covered cells and for reducing the L2 distance between the visit histogram (time spent per cell)
   and the target (thesis §3.4.3, Eq. 3.8's objective; Alam, Bobadilla & Shell 2017, Eq. 5).
 * `LocalizationTask` — the robot starts at an unknown pose; a localization filter plugged in
-  through ``filter_factory`` reports how much the robot can know.
+  through ``filter_factory`` (``"combinatorial"``: the built-in one, on the env's cell model)
+  reports how much the robot can know.
 * `MonitoringTask` (multi-robot) — each robot keeps to its own region; robot–robot contacts cost.
 """
 

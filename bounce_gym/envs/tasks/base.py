@@ -33,9 +33,10 @@ class Task:
     #: keys this task accepts in ``reset(options=...)``
     option_keys: frozenset[str] = frozenset()
 
-    def configure(self, options) -> None:
-        """Bind to the environment's validated `EnvOptions` (world, robots, step length)."""
-        self.options = options
+    def configure(self, core) -> None:
+        """Bind to the environment's `BounceCore`: its validated `EnvOptions` (``core.options``:
+        world, robots, step length) and its discrete model (``core.cell_model()``)."""
+        self.options = core.options
 
     @property
     def observation_size(self) -> int:

@@ -33,8 +33,9 @@ class CoverageTask(Task):
             raise ConfigError(f"cell_size: expected a number > 0, got {cell_size}")
         self.coverage_weight, self.distance_weight = float(coverage_weight), float(distance_weight)
 
-    def configure(self, options) -> None:
-        super().configure(options)
+    def configure(self, core) -> None:
+        super().configure(core)
+        options = self.options
         self.cell_size = float(self.cell_size_arg or options.step_length)
         self.free = options.world.occupancy(self.cell_size, options.robot_radius)
         if not self.free.any():

@@ -10,19 +10,23 @@ import numpy as np
 
 from bounce_gym.envs.tasks.base import Task
 from bounce_gym.errors import ConfigError
+from bounce_gym.markov.filters import ActiveLocalizationFilter, LocalizationFilter
+
+#: The ``filter_factory`` that selects the built-in filter (`combinatorial_filter`).
+COMBINATORIAL = "combinatorial"
 
 
 class LocalizationTask(Task):
     """Global localization: the robot starts at an unknown pose and senses only bumps and time.
 
     Args:
-        filter_factory: ``f(options) -> filter`` (or the import path ``"module:function"`` of
-            one) building a localization filter for the env's validated `EnvOptions`. A filter
-            has ``reset()``, ``update(symbol, angle)`` — symbol 1 for a bump tick (``angle`` the
-            bounce angle used, radians), 0 for a forward tick — and the attributes ``size``
-            (candidate configurations) and ``localized`` (in a knowledge cycle: localized up to
-            the world's symmetry); optionally ``colour`` and ``trapped``. The combinatorial
-            filters of Alam et al. plug in as ``"bounce_gym.envs.tasks.localization_filter:task_filter"``.
+        filter_factory: ``"combinatorial"`` for the built-in filter (`combinatorial_filter`), or
+            ``f(options) -> filter`` (or the import path ``"module:function"`` of one) building
+            a localization filter for the env's validated `EnvOptions`; None runs without one.
+            A filter has ``reset()``, ``update(symbol, angle)`` — symbol 1 for a bump tick
+            (``angle`` the bounce angle used, radians), 0 for a forward tick — and the
+            attributes ``size`` (candidate configurations) and ``localized`` (in a knowledge
+            cycle: localized up to the world's symmetry); optionally ``colour`` and ``trapped``.
         terminate_when_localized: end the episode once the filter reports ``localized``.
 
     The task feeds the filter the tick stream: the forward ticks of the drive that ``reset`` made
@@ -36,16 +40,21 @@ class LocalizationTask(Task):
 
     def __init__(self, filter_factory: Callable | str | None = None,
                  terminate_when_localized: bool = True) -> None:
-        if isinstance(filter_factory, str):
+        if isinstance(filter_factory, str) and filter_factory != COMBINATORIAL:
             filter_factory = _import(filter_factory, "filter_factory")
-        if filter_factory is not None and not callable(filter_factory):
-            raise ConfigError("filter_factory: expected a callable or 'module:function'")
+        if filter_factory is not None and not callable(filter_factory) \
+                and filter_factory != COMBINATORIAL:
+            raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, a callable or "
+                              "'module:function'")
         self.filter_factory = filter_factory
         self.terminate_when_localized = bool(terminate_when_localized)
 
-    def configure(self, options) -> None:
-        super().configure(options)
-        self.filter = self.filter_factory(options) if self.filter_factory else None
+    def configure(self, core) -> None:
+        super().configure(core)
+        if self.filter_factory == COMBINATORIAL:
+            self.filter = combinatorial_filter(core)
+        else:
+            self.filter = self.filter_factory(self.options) if self.filter_factory else None
 
     def reset(self, state, rng, options):
         self.history: list[tuple[int, int, float | None]] = []
@@ -78,6 +87,28 @@ class LocalizationTask(Task):
             reward = math.log2(before) - math.log2(max(self.filter.size, 1))
             done = self.terminate_when_localized and bool(self.filter.localized)
         return np.array([reward]), np.array([done]), self._info()
+
+
+def combinatorial_filter(core) -> LocalizationFilter | ActiveLocalizationFilter:
+    """The combinatorial filter of Alam, Bobadilla & Shell (2018) on the env's cell model.
+
+    ``core`` is the env's `BounceCore`; the filter runs on ``core.cell_model()`` (cell size =
+    ``step_length``, the env's ``cell_bins`` and ``corner_rule``, the robot's radius). One
+    bounce angle gives the O(1) filter of the angle's DFA (thesis Ch. 2, Def. 8/9); several give
+    the active filter over the angle set. The filter is closed-world only on the noise-free
+    ``cell`` backend, where the robot steps the model exactly; elsewhere it is open-world and
+    reports ``trapped`` once the robot's observations leave the model.
+    """
+    options = core.options
+    if options.action_type != "discrete":
+        raise ConfigError("localization filter: needs discrete actions (each bounce angle must "
+                          "be a whole orientation bin of the cell model)")
+    model = core.cell_model()
+    exact = options.backend == "cell" and type(options.noise).__name__ == "Exact"
+    angles = options.angles[0]
+    if len(angles) == 1:
+        return LocalizationFilter.from_model(model, float(angles[0]), open_world=not exact)
+    return ActiveLocalizationFilter(model, angles, open_world=not exact)
 
 
 def _import(path: str, field: str):

@@ -35,8 +35,9 @@ class MonitoringTask(Task):
         self.regions_arg = regions
         self.contact_penalty = float(contact_penalty)
 
-    def configure(self, options) -> None:
-        super().configure(options)
+    def configure(self, core) -> None:
+        super().configure(core)
+        options = self.options
         world, m = options.world, options.n_robots
         if self.regions_arg is None:
             xmin, ymin, xmax, ymax = world.bounds

@@ -7,7 +7,6 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from bounce_gym.cells import CellModel
 from bounce_gym.envs.tasks.base import StepEvents, Task, _normalised, pose_option, tick_length
 from bounce_gym.errors import ConfigError
 
@@ -54,18 +53,15 @@ class NavigationTask(Task):
         self.w1, self.w2, self.goal_bonus = float(w1), float(w2), float(goal_bonus)
         self.observe_task = bool(observe_task)
 
-    def configure(self, options) -> None:
-        super().configure(options)
+    def configure(self, core) -> None:
+        super().configure(core)
+        options = self.options
         if options.n_robots != 1:
             raise ConfigError("task 'navigation' is a single-robot task (n_robots must be 1)")
         self.goal_radius = float(self.goal_radius_arg or options.step_length)
         # on the cell backend, random starts and goals are cells (centre and bin heading): the
         # papers' x_I and x_G
-        self._cells = None
-        if options.backend == "cell":
-            self._cells = CellModel(options.world, options.step_length,
-                                    options.backend_options["n_bins"], options.robot_radius,
-                                    options.backend_options["corner_rule"])
+        self._cells = core.cell_model() if options.backend == "cell" else None
         for key, pose in self._fixed.items():
             if pose is not None:
                 position = pose_option(self._fixed, key, 1)[0]

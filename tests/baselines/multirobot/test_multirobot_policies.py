@@ -16,7 +16,6 @@ from baselines.multirobot.monitoring import persistent_behavior
 from baselines.multirobot.policies import (
     CoveragePlanPolicy,
     MonitoringPlanPolicy,
-    cell_model_of,
     regions_of,
 )
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
@@ -35,7 +34,7 @@ def _run(env, policy, seed, plan_only=False):
     obs, infos = env.reset(seed=seed, options=policy.start_options(env, seed))
     policy.reset(env)
     steps = policy.executable_steps if plan_only else env.max_cycles
-    model = cell_model_of(env)
+    model = env.cell_model()
     state = env.core.state
     cells, coverage = [model.cell_of(state.position, state.heading)], []
     while env.agents and len(coverage) < steps:
@@ -133,7 +132,7 @@ def test_monitoring_cycle_replays_collision_free_and_visits_regions(phi):
     env = MultiBounceEnv(**MONITOR)
     policy = MonitoringPlanPolicy.for_env(env, phi=phi)
     assert policy.r > 0
-    model = cell_model_of(env)
+    model = env.cell_model()
     regions = regions_of(env, model)
     for seed in range(3):
         cells, _, infos = _run(env, policy, seed)
@@ -150,7 +149,7 @@ def test_monitoring_cycle_replays_collision_free_and_visits_regions(phi):
 def test_monitoring_contacts_are_zero_on_the_cycle_and_groups_match_algorithm_2():
     env = MultiBounceEnv(**{**MONITOR, "robot_collisions": "bounce"})
     policy = MonitoringPlanPolicy.for_env(env, phi=90)
-    model = cell_model_of(env)
+    model = env.cell_model()
     direct = persistent_behavior(model, [math.radians(90)] * 2, regions_of(env, model),
                                  forbid_swaps=True)
     assert policy.r == direct.r > 0
@@ -167,10 +166,10 @@ def test_monitoring_cycles_with_a_safety_margin_keep_it():
     env = MultiBounceEnv(**MONITOR)
     policy = MonitoringPlanPolicy.for_env(env, phi=90, min_sep_cells=1)
     assert 0 < policy.r < MonitoringPlanPolicy.for_env(env, phi=90).r
-    rc = cell_model_of(env).position_rc
+    rc = env.cell_model().position_rc
     for seed in range(3):
         cells, _, _ = _run(env, policy, seed)
-        pos = rc[cells % cell_model_of(env).n_positions]
+        pos = rc[cells % env.cell_model().n_positions]
         assert np.abs(pos[:, 0] - pos[:, 1]).max(axis=1).min() > 1
 
 

@@ -386,7 +386,7 @@ def test_e1_plans_execute_in_the_cell_env(lab):
     """ỹ2 and ỹ1 (Sec. V-A) replayed in `BounceEnv` (cell backend, bounce steps): they
     reach the goal with the plan's tick count and return −116 + 100 and −29 + 100."""
     env = nav_env()
-    model = env.core.dynamics.backend.model
+    model = env.cell_model()
     rm = Roadmap(model, PHI)
     y2, y1 = rm.plan(103, 8), rm.plan(8, 0)
     check_execution(env, model, y2)
@@ -400,7 +400,7 @@ def test_sampled_plans_execute_in_the_cell_env(lab):
     drive, which the task does not check) of a seeded sample of lab_navigation pairs executes
     exactly in the env (see `check_execution`)."""
     env = nav_env()
-    model = env.core.dynamics.backend.model
+    model = env.cell_model()
     ap = Roadmap(model, PHI).all_pairs()
     rng = np.random.default_rng(0)
     done = 0
@@ -441,7 +441,7 @@ def test_navigation_planner_reads_the_episode_and_replans_past_the_reset_drive(l
     is passed during the env's reset drive; the planner replans from the cell it tracks on the
     model and still reaches it."""
     env = nav_env()
-    model = env.core.dynamics.backend.model
+    model = env.cell_model()
     planner = NavigationPlanner()
     y2 = Roadmap(model, PHI).plan(103, 8)
     out = run_plan(env, model, y2, policy=planner)

@@ -1,11 +1,6 @@
 """`BounceEnv`: the Gymnasium and SB3 checkers, the de-facto third-party suite (determinism,
 pickling, render modes), memory over many resets, argument errors and the tasks' behaviour."""
 
-import os
-
-os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
-os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
-
 import contextlib
 import gc
 import math

@@ -1,11 +1,7 @@
 """The multi-robot PettingZoo environment: the official test kit plus our own checks."""
 
-import os
 import pickle
 import warnings
-
-os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
-os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
 import numpy as np
 import pettingzoo

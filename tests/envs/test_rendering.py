@@ -1,11 +1,6 @@
 """Rendering: headless frames, layers, the human window, pickling and GIF export."""
-# ruff: noqa: E402  (the SDL drivers must be chosen before pygame is imported)
 
 import os
-
-os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
-os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
-
 import pickle
 import subprocess
 import sys

@@ -1,0 +1,85 @@
+"""What the single- and multi-robot environments share: construction from the one options table,
+the discrete model they hand planners, rendering, closing and pickling."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+from gymnasium import logger
+
+from bounce_gym.cells import CellModel
+from bounce_gym.envs.core import BounceCore
+from bounce_gym.envs.options import parse_options
+from bounce_gym.envs.tasks import make_task
+from bounce_gym.errors import ConfigError
+
+RENDER_MODES = ["human", "rgb_array"]
+
+
+class EnvBase:
+    """Mixin of `BounceEnv` and the multi-robot envs; it comes before the Gymnasium or
+    PettingZoo base class so that its ``render``, ``close`` and ``metadata`` win."""
+
+    metadata = {"render_modes": RENDER_MODES, "render_fps": 10}
+
+    def _build(self, kwargs: Mapping, render_mode: str | None, tasks: Sequence[str],
+               defaults: Mapping | None = None, fixed: Sequence[str] = ()) -> None:
+        """Validate ``render_mode`` and the keyword arguments (`parse_options` with this env's
+        ``defaults`` and ``fixed`` arguments), then build the core with the task."""
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ConfigError(f"render_mode: expected None or one of {RENDER_MODES}, "
+                              f"got {render_mode!r}")
+        self.options = parse_options(kwargs, defaults, fixed, who=type(self).__name__)
+        self.core = BounceCore(self.options,
+                               make_task(self.options.task, self.options.task_kwargs, tasks))
+        self.render_mode = render_mode
+        self._renderer = None
+
+    @property
+    def world(self):
+        """The env's `World`."""
+        return self.options.world
+
+    @property
+    def task(self):
+        """The task that owns reward and termination (shared by every robot)."""
+        return self.core.task
+
+    @property
+    def robot_state(self):
+        """The true `RobotState` of every robot (poses, contacts, clocks), for planners and
+        evaluation; the robots themselves sense only what the observation holds. Read it, do
+        not write it."""
+        return self.core.state
+
+    def cell_model(self, n_bins: int | None = None, corner_rule: str | None = None) -> CellModel:
+        """The discrete cell-to-cell model of this env, for planners (see
+        `BounceCore.cell_model`): the cell backend's own model, else one built once at cell
+        size = ``step_length`` for the robot radius with ``n_bins`` orientation bins and
+        ``corner_rule`` (default: the env's ``cell_bins`` and ``corner_rule``)."""
+        return self.core.cell_model(n_bins, corner_rule)
+
+    def render(self):
+        if self.render_mode is None:
+            logger.warn("render() called with render_mode=None; pass render_mode to the env")
+            return None
+        from bounce_gym.envs.render.renderer import Renderer
+        from bounce_gym.envs.render.view import draw_core
+
+        if self._renderer is None:
+            self._renderer = Renderer(self.world)
+        frame = draw_core(self._renderer, self.core)
+        if self.render_mode == "human":
+            self._renderer.show(frame, self.metadata["render_fps"])
+            return None
+        return frame
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_renderer"] = None  # pygame objects are rebuilt on the next render()
+        return state
