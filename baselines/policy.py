@@ -25,6 +25,12 @@ def is_parallel_env(env) -> bool:
     return hasattr(env, "possible_agents")
 
 
+def episode_rng(own_seed: int | None, episode_seed: int) -> np.random.Generator:
+    """The random stream a sampling policy restarts with at every episode: from its own seed if
+    it has one, else from the episode's, so an episode never depends on the ones before it."""
+    return np.random.default_rng(episode_seed if own_seed is None else own_seed)
+
+
 class Policy(ABC):
     """Base class: ``start_options`` and ``reset`` are optional, ``act`` is required."""
 
@@ -58,21 +64,20 @@ class RandomAnglePolicy(Policy):
     actions). Parallel env: each live robot a uniformly random index of its own Φ_i (turn
     commands, the indices past Φ_i, are never chosen).
 
-    The stream is seeded once with ``seed`` and runs on across episodes; with
-    ``reseed_each_episode`` it restarts from every episode's seed instead, so an episode does not
-    depend on the ones run before it.
+    The random stream restarts at every episode (`start_options`): from ``seed`` if one is
+    given, else from the episode's seed. Either way an episode does not depend on the episodes
+    run before it.
     """
 
     name = "random"
 
-    def __init__(self, seed: int | None = None, reseed_each_episode: bool = False) -> None:
+    def __init__(self, seed: int | None = None) -> None:
+        self.seed = seed
         self.rng = np.random.default_rng(seed)
-        self.reseed_each_episode = reseed_each_episode
         self.n: int | dict[str, int] = 0
 
     def start_options(self, env, seed: int) -> None:
-        if self.reseed_each_episode:
-            self.rng = np.random.default_rng(seed)
+        self.rng = episode_rng(self.seed, seed)
         return None
 
     def reset(self, env) -> None:

@@ -1,8 +1,9 @@
 """Running experiments: one episode loop and one experiment loop for Gymnasium envs (one robot)
 and PettingZoo parallel envs (several robots).
 
-Every seed of an experiment gets a fresh env and fresh policies (so an episode never depends on
-the ones before it); each policy then runs one episode on it. The experiment's family
+An experiment builds its env and its policies once; every seed then runs one episode of each
+policy (the env is reset with the seed, and each policy restarts its own random stream in
+`start_options`, so an episode never depends on the ones before it). The experiment's family
 (`experiments.registry`) supplies the planner, follows the episode for its metrics and collects
 the first seed's plot data. Results are one `EpisodeResult` per (experiment, policy, seed):
 steps, ticks, the return (summed over robots) and the family's metrics.
@@ -55,9 +56,9 @@ def make_env(experiment: Mapping):
     return gym.make(experiment["env"], **experiment["env_kwargs"])
 
 
-def policies_for(experiment: Mapping, env, family: Family, setup: object, seed: int,
+def policies_for(experiment: Mapping, env, family: Family, setup: object,
                  models_dir: Path) -> list[Policy]:
-    """The experiment's policies that apply to its env, built for one seed.
+    """The experiment's policies that apply to its env.
 
     The random policy of a single-robot experiment draws from the stream of seed 0 in every
     episode; with several robots it draws from the episode's seed.
@@ -76,7 +77,7 @@ def policies_for(experiment: Mapping, env, family: Family, setup: object, seed: 
             planner = family.planner(env, experiment, setup)
             out += [planner] if planner is not None else []
         elif kind == "random":
-            out.append(RandomAnglePolicy(seed=seed if parallel else 0))
+            out.append(RandomAnglePolicy(seed=None if parallel else 0))
         elif kind == "fixed" and discrete:
             n = min(len(phi) for phi in options.angles)
             out += [FixedAnglePolicy(i, math.degrees(options.angles[0][i])) for i in range(n)]
@@ -141,13 +142,13 @@ def run_experiment(experiment: Mapping, models_dir: Path, on_seed: Callable[[], 
     (a progress bar).
     """
     rows: list[EpisodeResult] = []
-    data: dict = {"paths": {}}
+    env = make_env(experiment)
+    family = family_for(experiment, env)
+    setup = family.prepare(env, experiment)
+    policies = policies_for(experiment, env, family, setup, models_dir)
+    data: dict = {"paths": {}, "world": env.unwrapped.options.world, "family": family}
     for k, seed in enumerate(experiment["seeds"]):
-        env = make_env(experiment)
-        family = family_for(experiment, env)
-        setup = family.prepare(env, experiment)
-        data.update(world=env.unwrapped.options.world, family=family)
-        for policy in policies_for(experiment, env, family, setup, seed, models_dir):
+        for policy in policies:
             episode = family.episode(env, policy, setup)
             summary, path = run_episode(env, policy, seed, experiment["max_steps"], episode,
                                         record=k == 0)
@@ -157,8 +158,8 @@ def run_experiment(experiment: Mapping, models_dir: Path, on_seed: Callable[[], 
             if k == 0:
                 data["paths"][policy.name] = path
                 family.collect(data, env, policy, setup)
-        env.close()
         on_seed()
+    env.close()
     return rows, data
 
 

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import networkx as nx
 import numpy as np
 
-from baselines.policy import Policy
+from baselines.policy import Policy, episode_rng
 from baselines.visibility.dynamics import CompositeCycle, composite_fixed_point, contraction
 from baselines.visibility.partition import Partition, assemble
 
@@ -459,6 +459,11 @@ class PlanPolicy(Policy):
         self.replans = 0
         self.range = (0.0, math.pi)
 
+    def start_options(self, env, seed: int) -> None:
+        """Restart the random stream of θ (`baselines.policy.episode_rng`)."""
+        self.rng = episode_rng(self.seed, seed)
+        return None
+
     def reset(self, env) -> None:
         opts = env.unwrapped.options
         if opts.bounce_rule != "fixed" or opts.action_type != "continuous":
@@ -570,6 +575,11 @@ class PatrolPolicy(Policy):
     def __post_init__(self) -> None:
         self.rng = np.random.default_rng(self.seed)
         self.range = (0.0, math.pi)
+
+    def start_options(self, env, seed: int) -> None:
+        """Restart the random stream of θ (`baselines.policy.episode_rng`)."""
+        self.rng = episode_rng(self.seed, seed)
+        return None
 
     def reset(self, env) -> None:
         opts = env.unwrapped.options
