@@ -105,19 +105,34 @@ def relative(heading: np.ndarray, normal: np.ndarray, phi: np.ndarray) -> np.nda
     return wrap(np.asarray(heading, dtype=np.float64) + phi)
 
 
-def _boundary_rule(b: Callable[[np.ndarray, np.ndarray], np.ndarray]):
-    def rule(heading: np.ndarray, normal: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        return heading_from_u(b(incoming_alpha(heading, normal), theta), normal)
+class BoundaryRule:
+    """Heading map of a boundary-relative rule ``b(α, θ)``: measure α, apply b, turn u back into
+    a world heading.
 
-    rule.__name__ = b.__name__.removesuffix("_u")
-    rule.__doc__ = f"Heading map of the boundary-relative rule: {b.__doc__.splitlines()[0]}"
-    return rule
+    A small class rather than a closure so that rules, and the dynamics and envs holding them,
+    can be pickled (process pools, Gymnasium's ``AsyncVectorEnv``, SB3's ``SubprocVecEnv``);
+    the instances below pickle by reference to their module-level names.
+    """
+
+    def __init__(self, b: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> None:
+        self.b = b
+        self.__name__ = b.__name__.removesuffix("_u")
+        self.__doc__ = f"Heading map of the boundary-relative rule: {b.__doc__.splitlines()[0]}"
+
+    def __call__(self, heading: np.ndarray, normal: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        return heading_from_u(self.b(incoming_alpha(heading, normal), theta), normal)
+
+    def __reduce__(self) -> str:
+        return self.__name__  # pickled by reference to the module-level rule of that name
+
+    def __repr__(self) -> str:
+        return f"BoundaryRule({self.b.__name__})"
 
 
-fixed = _boundary_rule(fixed_u)
-specular = _boundary_rule(specular_u)
-monotonic = _boundary_rule(monotonic_u)
-nilles_relative = _boundary_rule(nilles_relative_u)
+fixed = BoundaryRule(fixed_u)
+specular = BoundaryRule(specular_u)
+monotonic = BoundaryRule(monotonic_u)
+nilles_relative = BoundaryRule(nilles_relative_u)
 
 #: Rule name -> heading map ``(heading, normal, parameter) -> new heading``.
 RULES: dict[str, Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]] = {
