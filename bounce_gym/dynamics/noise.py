@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bounce_gym.errors import ConfigError
+from bounce_gym.validate import number
 
 
 @dataclass(frozen=True)
@@ -45,9 +46,11 @@ class Reliable:
     eps: float
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.r) and 0.0 <= self.r <= 1.0):
+        object.__setattr__(self, "r", number("noise.r", self.r))
+        object.__setattr__(self, "eps", number("noise.eps", self.eps))
+        if not 0.0 <= self.r <= 1.0:
             raise ConfigError(f"noise: reliability r must be in [0, 1], got {self.r!r}")
-        if not (np.isfinite(self.eps) and 0.0 <= self.eps < np.pi):
+        if not 0.0 <= self.eps < np.pi:
             raise ConfigError(f"noise: eps must be in [0, π) radians, got {self.eps!r}")
 
     def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -73,7 +76,9 @@ class Interval:
     hi: float
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.lo) and np.isfinite(self.hi) and self.lo <= self.hi):
+        object.__setattr__(self, "lo", number("noise.lo", self.lo))
+        object.__setattr__(self, "hi", number("noise.hi", self.hi))
+        if not self.lo <= self.hi:
             raise ConfigError(
                 f"noise: interval needs finite lo <= hi, got lo={self.lo!r}, hi={self.hi!r}"
             )
@@ -121,13 +126,18 @@ def make_noise(spec: object) -> NoiseModel:
             )
         values = {}
         for key in fields[kind]:
+            if key == "r":  # a probability: no degrees form
+                if "r" in spec:
+                    values["r"] = number("noise.r", spec.pop("r"))
+                continue
             if key in spec and f"{key}_deg" in spec:
                 raise ConfigError(f"noise: give {key!r} or {key + '_deg'!r}, not both")
             if f"{key}_deg" in spec:
-                values[key] = float(np.radians(spec.pop(f"{key}_deg")))
+                values[key] = float(np.radians(number(f"noise.{key}_deg",
+                                                      spec.pop(f"{key}_deg"))))
             elif key in spec:
-                values[key] = float(spec.pop(key))
-            elif key != "r":
+                values[key] = number(f"noise.{key}", spec.pop(key))
+            else:
                 raise ConfigError(f"noise: {kind} needs {key!r} (radians) or {key + '_deg'!r}")
         if kind == "reliable" and "r" not in values:
             raise ConfigError("noise: reliable needs 'r' (probability of the nominal angle)")

@@ -38,8 +38,9 @@ def to_angle(action: object, action_type: str, angles: np.ndarray,
             raise ActionError(f"{who}: index {index} is out of range [0, {len(angles)})")
         return float(angles[index])
     raw = np.asarray(action)
-    if raw.dtype == object or raw.dtype == bool or not np.issubdtype(raw.dtype, np.number):
-        raise ActionError(f"{who}: expected a number in [-1, 1], got {action!r}")
+    if raw.dtype.kind not in "iuf":  # not bools, strings, objects, nor complex (no part dropped)
+        raise ActionError(f"{who}: expected a number in [-1, 1] (real: not a bool, string or "
+                          f"complex), got {action!r} (dtype {raw.dtype})")
     value = raw.astype(np.float64)
     if value.shape not in ((), (1,)):
         raise ActionError(f"{who}: expected shape (1,), got shape {value.shape}")

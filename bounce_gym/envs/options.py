@@ -58,6 +58,7 @@ from bounce_gym.dynamics.backends.base import ROBOT_COLLISIONS
 from bounce_gym.dynamics.noise import NoiseModel, make_noise
 from bounce_gym.dynamics.rules import RULES, check_parameters
 from bounce_gym.errors import ConfigError, InvalidWorldError
+from bounce_gym.validate import number as _number
 from bounce_gym.worlds import World
 
 BACKENDS = ("kinematic", "pymunk", "cell")
@@ -152,19 +153,6 @@ def _choice(field: str, value: object, allowed: Sequence[str]) -> str:
     if value not in allowed:
         raise ConfigError(f"{field}: expected one of {list(allowed)}, got {value!r}")
     return value  # type: ignore[return-value]
-
-
-def _number(field: str, value: object, *, minimum: float | None = None,
-            strict: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-        raise ConfigError(f"{field}: expected a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ConfigError(f"{field}: expected a finite number, got {value!r}")
-    if minimum is not None and (value <= minimum if strict else value < minimum):
-        raise ConfigError(f"{field}: expected a number {'>' if strict else '>='} {minimum}, "
-                          f"got {value!r}")
-    return value
 
 
 def _angle_set(field: str, values: object, rule: str) -> np.ndarray:

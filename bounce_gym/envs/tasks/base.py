@@ -10,6 +10,7 @@ import numpy as np
 from bounce_gym.cells import king_offset
 from bounce_gym.dynamics.state import RobotState
 from bounce_gym.errors import ConfigError
+from bounce_gym.validate import numbers
 
 
 @dataclass
@@ -78,15 +79,15 @@ def pose_option(options: Mapping, key: str, m: int) -> tuple[np.ndarray, np.ndar
     if not isinstance(value, Mapping) or set(value) - {"position", "heading"}:
         raise ConfigError(f"options[{key!r}]: expected a dict with 'position' and 'heading' "
                           f"(radians), got {value!r}")
-    try:
-        pos = np.asarray(value["position"], dtype=np.float64).reshape(m, 2)
-        head = np.asarray(value["heading"], dtype=np.float64).reshape(m)
-    except (KeyError, ValueError, TypeError):
+    if set(value) != {"position", "heading"}:
         raise ConfigError(f"options[{key!r}]: needs 'position' ({m} x (x, y)) and 'heading' "
-                          f"({m} angles, radians)") from None
-    if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(head))):
-        raise ConfigError(f"options[{key!r}]: position and heading must be finite")
-    return pos, head
+                          f"({m} angles, radians)")
+    pos = numbers(f"options[{key!r}]['position']", value["position"])
+    head = numbers(f"options[{key!r}]['heading']", value["heading"])
+    if pos.size != 2 * m or head.size != m:
+        raise ConfigError(f"options[{key!r}]: needs 'position' ({m} x (x, y)) and 'heading' "
+                          f"({m} angles, radians)")
+    return pos.reshape(m, 2), head.reshape(m)
 
 
 def tick_length(options, heading: np.ndarray) -> np.ndarray:

@@ -6,6 +6,7 @@ import numpy as np
 
 from bounce_gym.envs.tasks.base import Task, path_samples, tick_length
 from bounce_gym.errors import ConfigError
+from bounce_gym.validate import number, numbers
 
 
 class CoverageTask(Task):
@@ -28,10 +29,10 @@ class CoverageTask(Task):
     def __init__(self, target: object = None, cell_size: float | None = None,
                  coverage_weight: float = 1.0, distance_weight: float = 1.0) -> None:
         self.target_arg = target
-        self.cell_size_arg = cell_size
-        if cell_size is not None and not cell_size > 0:
-            raise ConfigError(f"cell_size: expected a number > 0, got {cell_size}")
-        self.coverage_weight, self.distance_weight = float(coverage_weight), float(distance_weight)
+        self.cell_size_arg = cell_size if cell_size is None else number(
+            "cell_size", cell_size, minimum=0.0, strict=True)
+        self.coverage_weight = number("coverage_weight", coverage_weight)
+        self.distance_weight = number("distance_weight", distance_weight)
 
     def configure(self, core) -> None:
         super().configure(core)
@@ -50,11 +51,11 @@ class CoverageTask(Task):
                 spec = np.load(spec)
             except (OSError, ValueError) as exc:
                 raise ConfigError(f"coverage target: cannot read {spec!r}: {exc}") from None
-        target = np.asarray(spec, dtype=np.float64)
+        target = numbers("coverage target", spec)
         if target.shape != self.free.shape:
             raise ConfigError(f"coverage target: expected shape {self.free.shape} (rows, cols of "
                               f"the cell grid), got {target.shape}")
-        if not np.all(np.isfinite(target)) or np.any(target < 0) or target.sum() <= 0:
+        if np.any(target < 0) or target.sum() <= 0:
             raise ConfigError("coverage target: values must be finite, >= 0, with a positive sum")
         if np.any(target[~self.free] > 0):
             raise ConfigError("coverage target: puts mass on blocked cells")

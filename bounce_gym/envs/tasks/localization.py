@@ -11,6 +11,7 @@ import numpy as np
 from bounce_gym.envs.tasks.base import Task
 from bounce_gym.errors import ConfigError
 from bounce_gym.markov.filters import ActiveLocalizationFilter, LocalizationFilter
+from bounce_gym.validate import flag
 
 #: The ``filter_factory`` that selects the built-in filter (`combinatorial_filter`).
 COMBINATORIAL = "combinatorial"
@@ -47,7 +48,7 @@ class LocalizationTask(Task):
             raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, a callable or "
                               "'module:function'")
         self.filter_factory = filter_factory
-        self.terminate_when_localized = bool(terminate_when_localized)
+        self.terminate_when_localized = flag("terminate_when_localized", terminate_when_localized)
 
     def configure(self, core) -> None:
         super().configure(core)

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import shapely
 from shapely.geometry import Polygon, box
 
 from bounce_gym.envs.tasks.base import Task, path_samples, tick_length
 from bounce_gym.errors import ConfigError
+from bounce_gym.validate import number, numbers
 
 
 class MonitoringTask(Task):
@@ -32,8 +35,13 @@ class MonitoringTask(Task):
     name = "monitoring"
 
     def __init__(self, regions: list | None = None, contact_penalty: float = 1.0) -> None:
+        if regions is not None:
+            if isinstance(regions, str | bytes) or not isinstance(regions, Sequence | np.ndarray):
+                raise ConfigError(f"regions: expected a list of polygons (lists of (x, y) "
+                                  f"points), got {regions!r}")
+            regions = [_ring(f"regions[{k}]", ring) for k, ring in enumerate(regions)]
         self.regions_arg = regions
-        self.contact_penalty = float(contact_penalty)
+        self.contact_penalty = number("contact_penalty", contact_penalty)
 
     def configure(self, core) -> None:
         super().configure(core)
@@ -50,10 +58,7 @@ class MonitoringTask(Task):
                                   f"got {len(self.regions_arg)}")
             polys = []
             for k, ring in enumerate(self.regions_arg):
-                try:
-                    poly = Polygon(ring)
-                except (ValueError, TypeError):
-                    raise ConfigError(f"regions[{k}]: expected a list of (x, y) points") from None
+                poly = Polygon(ring)
                 if not poly.is_valid or poly.area <= 0:
                     raise ConfigError(f"regions[{k}]: not a valid polygon")
                 polys.append(poly)
@@ -103,3 +108,9 @@ class MonitoringTask(Task):
         return {"regions": rings}
 
 
+def _ring(field: str, ring: object) -> np.ndarray:
+    """A polygon's points as an (n, 2) array of finite numbers, n >= 3."""
+    points = numbers(field, ring)
+    if points.ndim != 2 or points.shape[1] != 2 or len(points) < 3:
+        raise ConfigError(f"{field}: expected a list of at least 3 (x, y) points, got {ring!r}")
+    return points

@@ -9,6 +9,7 @@ import numpy as np
 
 from bounce_gym.envs.tasks.base import StepEvents, Task, _normalised, pose_option, tick_length
 from bounce_gym.errors import ConfigError
+from bounce_gym.validate import flag, number
 
 
 class NavigationTask(Task):
@@ -42,16 +43,20 @@ class NavigationTask(Task):
         for key in ("start", "goal"):
             if self._fixed[key] is not None:
                 pose_option(self._fixed, key, 1)
-        if not 0 < heading_tolerance_deg <= 180:
+        heading_tolerance_deg = number("heading_tolerance_deg", heading_tolerance_deg,
+                                       minimum=0.0, strict=True)
+        if heading_tolerance_deg > 180:
             raise ConfigError(f"heading_tolerance_deg: expected (0, 180], got {heading_tolerance_deg}")
-        if goal_radius is not None and not goal_radius > 0:
-            raise ConfigError(f"goal_radius: expected a number > 0, got {goal_radius}")
+        if goal_radius is not None:
+            goal_radius = number("goal_radius", goal_radius, minimum=0.0, strict=True)
+        w1, w2 = number("w1", w1), number("w2", w2)
         if not (w1 >= 0 and w2 >= w1):
             raise ConfigError(f"w1, w2: expected 0 <= w1 <= w2, got w1={w1}, w2={w2}")
         self.goal_radius_arg = goal_radius
         self.heading_tolerance = math.radians(heading_tolerance_deg)
-        self.w1, self.w2, self.goal_bonus = float(w1), float(w2), float(goal_bonus)
-        self.observe_task = bool(observe_task)
+        self.w1, self.w2 = w1, w2
+        self.goal_bonus = number("goal_bonus", goal_bonus)
+        self.observe_task = flag("observe_task", observe_task)
 
     def configure(self, core) -> None:
         super().configure(core)

@@ -1,0 +1,58 @@
+"""Checks of user-given numbers and flags, shared by every layer that reads configuration.
+
+The envs' options, the noise models and the tasks all take numbers from users. A value is
+accepted only if it already is one: a bool is not a number (``True`` would silently become 1), a
+string is not a number (``"0.5"`` is rejected, not parsed), and a complex value is not a real
+number (its imaginary part would be dropped). Every rejection is a `ConfigError` naming the field
+and what is allowed. The module imports only `bounce_gym.errors`, so any layer may use it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bounce_gym.errors import ConfigError
+
+
+def _is_number(value: object) -> bool:
+    return not isinstance(value, bool) and isinstance(value, int | float | np.integer | np.floating)
+
+
+def number(field: str, value: object, *, minimum: float | None = None,
+           strict: bool = False) -> float:
+    """``value`` as a finite float, if it is a real number (int or float, Python or numpy, not
+    bool) at least ``minimum`` (greater than it if ``strict``)."""
+    if not _is_number(value):
+        raise ConfigError(f"{field}: expected a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ConfigError(f"{field}: expected a finite number, got {value!r}")
+    if minimum is not None and (value <= minimum if strict else value < minimum):
+        raise ConfigError(f"{field}: expected a number {'>' if strict else '>='} {minimum}, "
+                          f"got {value!r}")
+    return value
+
+
+def numbers(field: str, value: object) -> np.ndarray:
+    """``value`` (a number, a nested sequence of numbers or a real array) as a finite float64
+    array. Every entry must be a number as `number` means it: a bool, string or complex value
+    anywhere (``[True, 1.5]``, ``["1", 2]``), or a ragged nesting, is rejected, not converted."""
+    array = value if isinstance(value, np.ndarray) else np.asarray(value, dtype=object)
+    if array.dtype == object and all(_is_number(x) for x in array.flat):
+        array = array.astype(np.float64)
+    if array.dtype.kind not in "iuf":
+        raise ConfigError(f"{field}: expected real numbers (not bools, strings or complex) "
+                          f"in a regular nesting, got {value!r}")
+    array = array.astype(np.float64)
+    if not np.all(np.isfinite(array)):
+        raise ConfigError(f"{field}: expected finite numbers, got {value!r}")
+    return array
+
+
+def flag(field: str, value: object) -> bool:
+    """``value`` if it is ``True`` or ``False`` (numpy bools included); nothing else is a flag."""
+    if not isinstance(value, bool | np.bool_):
+        raise ConfigError(f"{field}: expected True or False, got {value!r}")
+    return bool(value)
