@@ -48,13 +48,12 @@ class AngleSwitchPolicy(Policy):
 
     def observe(self, info: dict) -> None:
         """Feed the filter the ticks the env reported since the previous call."""
-        history = info["observations"]
-        if not history:  # a new episode: the drive to the first contact, if any
+        if info["observation_count"] == 0:  # a new episode: the drive to the first contact
             self.filter.reset()
             for _ in range(int(info["clock"])):
                 self.filter.update(0)
         else:
-            bumps, _, angle = history[-1]
+            bumps, _, angle = info["observation"]
             for _ in range(bumps):
                 self.filter.update(1, angle)
             for _ in range(int(info["step_ticks"]) - bumps):

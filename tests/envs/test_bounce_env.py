@@ -626,22 +626,37 @@ def test_localization_without_filter_reports_observations(step_mode):
     env = gym.make("bounce_gym/BounceLocalization-v0", step_mode=step_mode,
                    task_kwargs={"filter_factory": None}).unwrapped
     _, info = env.reset(seed=3)
-    assert info["observations"] == [] and "candidates" not in info
+    assert info["observation"] is None and info["observation_count"] == 0
+    assert "candidates" not in info
     phi = math.radians(45.0)
+    sensed = []
     for t in range(1, 31):
         _, reward, terminated, _, info = env.step(0)
         assert reward == 0.0 and not terminated
-        assert len(info["observations"]) == t
-        bumps, clock, angle = info["observations"][-1]
+        assert info["observation_count"] == t
+        bumps, clock, angle = info["observation"]
+        sensed.append(bumps)
         assert clock == info["clock"]
         if bumps:
             assert angle == phi
         else:
             assert step_mode == "tick" and angle is None
-    if step_mode == "bounce":
-        assert all(entry[0] == 1 for entry in info["observations"])
-    else:
-        assert {entry[0] for entry in info["observations"]} == {0, 1}
+    assert set(sensed) == ({1} if step_mode == "bounce" else {0, 1})
+    _, info = env.reset(seed=4)
+    assert info["observation"] is None and info["observation_count"] == 0
+
+
+def test_localization_info_does_not_grow_with_the_episode():
+    """info holds the last step's observation, not the history: its size stays put."""
+    env = BounceEnv(world="lab_localization_a", angles=(45.0,), backend="cell",
+                    task="localization")
+    env.reset(seed=0)
+    sizes = []
+    for t in range(1, 3001):
+        _, _, _, _, info = env.step(0)
+        if t in (10, 3000):
+            sizes.append(len(pickle.dumps(info)))
+    assert sizes[1] <= sizes[0] + 8  # a few bytes for larger counters, not one entry per step
 
 
 class HalvingFilter:
@@ -679,12 +694,13 @@ def test_localization_with_filter_rewards_log2_drop(step_mode):
     assert len(filters) == 1 and filters[0].options.world.name == "lab_localization_a"
     _, info = env.reset(seed=1)
     assert (info["candidates"], info["localized"]) == (12, False)
-    sizes, rewards = [12], []
+    sizes, rewards, bumps = [12], [], 0
     terminated = False
     while not terminated:
         _, reward, terminated, truncated, info = env.step(0)
         rewards.append(reward)
         sizes.append(info["candidates"])
+        bumps += info["observation"][0]
         assert len(rewards) < 500 and not truncated
     assert sizes[-1] == 1 and info["localized"] is True
     assert list(dict.fromkeys(sizes)) == [12, 6, 3, 1]
@@ -695,7 +711,7 @@ def test_localization_with_filter_rewards_log2_drop(step_mode):
     # one symbol per tick since reset (incl. the drive to the first contact in bounce mode);
     # bumps carry the angle used, forward ticks none
     assert len(updates) == info["ticks"]
-    assert sum(symbol for symbol, _ in updates) == sum(n for n, _, _ in info["observations"])
+    assert sum(symbol for symbol, _ in updates) == bumps
     assert all(a == pytest.approx(math.radians(45.0)) for symbol, a in updates if symbol == 1)
     assert all(a is None for symbol, a in updates if symbol == 0)
     if step_mode == "bounce":

@@ -32,8 +32,10 @@ class LocalizationTask(Task):
 
     The task feeds the filter the tick stream: the forward ticks of the drive that ``reset`` made
     (bounce mode), then per step its bump tick first and its forward ticks after. Without a
-    filter it reports the sensed history (``info["observations"]``: (bump ticks, clock, angle or
-    None) per step) and gives no reward. With one, ``info`` carries ``candidates``,
+    filter it gives no reward. Either way ``info`` carries what the robot sensed in the step just
+    taken, ``info["observation"]`` = (bump ticks, clock, angle or None), None after ``reset``,
+    and ``info["observation_count"]``, the steps taken since ``reset``; a user who wants the whole
+    history collects it (the task keeps none, so a long episode costs the same per step). With one, ``info`` carries ``candidates``,
     ``localized`` (and ``colour``, ``trapped``) and the reward is the drop in log2(candidates).
     """
 
@@ -58,7 +60,8 @@ class LocalizationTask(Task):
             self.filter = self.filter_factory(self.options) if self.filter_factory else None
 
     def reset(self, state, rng, options):
-        self.history: list[tuple[int, int, float | None]] = []
+        self.observation: tuple[int, int, float | None] | None = None
+        self.observation_count = 0
         if self.filter is not None:
             self.filter.reset()
             for _ in range(int(state.clock[0])):  # the drive to the first contact (bounce mode)
@@ -66,7 +69,7 @@ class LocalizationTask(Task):
         return self._info()
 
     def _info(self) -> dict:
-        info = {"observations": list(self.history)}
+        info = {"observation": self.observation, "observation_count": self.observation_count}
         if self.filter is not None:
             info.update(candidates=int(self.filter.size), localized=bool(self.filter.localized))
             for extra in ("colour", "trapped"):
@@ -77,7 +80,8 @@ class LocalizationTask(Task):
     def step(self, state, events):
         bumps = int(events.bumps[0])
         angle = None if math.isnan(events.angles[0]) else float(events.angles[0])
-        self.history.append((bumps, int(state.clock[0]), angle))
+        self.observation = (bumps, int(state.clock[0]), angle)
+        self.observation_count += 1
         reward, done = 0.0, False
         if self.filter is not None:
             before = max(self.filter.size, 1)
