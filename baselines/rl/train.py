@@ -142,13 +142,7 @@ def check_hyperparams(algo_class, hyperparams: Mapping) -> None:
 
 def train(config: Mapping, progress: bool = True) -> Path:
     """Train (or resume) an agent and save it where `evaluate.py` finds it; returns the path."""
-    from gymnasium import spaces
-    from sb3_contrib import RecurrentPPO
-    from stable_baselines3 import DQN, PPO
-
-    config = validate_train_config(config)
-    algo_class = {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[config["algo"]]
-    check_hyperparams(algo_class, config["hyperparams"])
+    config = validate_train_config(config)  # the quick checks first, before importing torch
     out = model_path(config)
     check_writable("config.models", out.parent)
     if config["resume"] and not out.is_file():
@@ -157,6 +151,12 @@ def train(config: Mapping, progress: bool = True) -> Path:
     if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError("config.tensorboard: needs the tensorboard package "
                           "(pip install tensorboard), or set tensorboard: false")
+    from gymnasium import spaces
+    from sb3_contrib import RecurrentPPO
+    from stable_baselines3 import DQN, PPO
+
+    algo_class = {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[config["algo"]]
+    check_hyperparams(algo_class, config["hyperparams"])
     env = make_train_env(config)
     if config["algo"] == "dqn" and not isinstance(env.action_space, spaces.Discrete):
         raise ConfigError(f"config.algo: dqn needs discrete actions, but the env's are "
