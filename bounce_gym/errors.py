@@ -6,6 +6,9 @@ fails loudly at the point it enters the package instead of producing a silently 
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
+
 
 class BounceGymError(ValueError):
     """Base class of every input error raised by bounce_gym."""
@@ -25,3 +28,22 @@ class ConfigError(BounceGymError):
 
 class ActionError(BounceGymError):
     """An action passed to ``step`` has the wrong type, shape or value."""
+
+
+@contextlib.contextmanager
+def config_errors(field: str) -> Iterator[None]:
+    """Report a bad environment construction as a `ConfigError` whose message starts with
+    ``field`` (where the arguments came from, e.g. ``config.env_kwargs``).
+
+    Translated are this package's own errors (a bad map, world or option) and the `TypeError`
+    of an unknown or missing keyword argument (how the envs and tasks refuse an argument they
+    do not take); any other exception is a bug and passes through unchanged.
+    """
+    try:
+        yield
+    except BounceGymError as exc:
+        raise ConfigError(f"{field}: {exc}") from None
+    except TypeError as exc:
+        if "keyword argument" not in str(exc):
+            raise
+        raise ConfigError(f"{field}: {exc}") from None

@@ -2,12 +2,16 @@
 
     bounce-gym evaluate [config.yaml] [--no-progress]
     bounce-gym train config.yaml [--timesteps N] [--resume] [--no-progress]
+    bounce-gym trust models/<name>/<algo>_seed<N>.zip ...
 
 ``evaluate`` prints a table (per experiment and policy) and writes ``episodes.csv``,
 ``results.json`` and plots into ``<output>/<name>-<timestamp>/``; without a configuration it runs
 the default one (``eval_default.yaml``; format: `experiments.config`). ``train`` saves the model
 as ``models/<name>/<algo>_seed<seed>.zip``, where ``evaluate`` finds it (format:
-`baselines.rl.train`). A bad configuration is one line ``error: ...`` on stderr and exit status 2.
+`baselines.rl.train`), listed in ``models/<name>/manifest.json``; ``evaluate`` loads only listed
+model files, and ``trust`` lists one obtained elsewhere (`baselines.rl.model_files`). A mistake
+in a configuration, an env argument or a model file is one line ``error: ...`` on stderr and
+exit status 2, reported before any long work starts.
 """
 
 from __future__ import annotations
@@ -17,13 +21,12 @@ import sys
 import time
 from pathlib import Path
 
-import yaml
-
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import BounceGymError
 
 
 def evaluate(config_path: str | None, progress: bool = True) -> int:
     """Run an evaluation configuration, print the tables and write the run folder."""
+    from baselines.files import check_writable
     from experiments.config import load_config, validate_config
     from experiments.report import (
         families_of,
@@ -35,6 +38,7 @@ def evaluate(config_path: str | None, progress: bool = True) -> int:
     from experiments.runner import run
 
     config = validate_config(load_config(config_path))
+    check_writable("config.output", Path(config["output"]))
     rows, plots = run(config, progress=progress)
     families = families_of(plots)
     summary = summarise(rows, families)
@@ -50,19 +54,23 @@ def train(config_path: str, timesteps: int | None = None, resume: bool = False,
           progress: bool = True) -> int:
     """Train (or resume) the agent of a training configuration and report where it is saved."""
     from baselines.rl.train import train as train_agent
+    from experiments.config import load_config
 
-    path = Path(config_path)
-    if not path.is_file():
-        raise ConfigError(f"config: file {config_path!r} does not exist")
-    try:
-        config = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"config: {path} is not valid YAML: {exc}") from None
+    config = load_config(config_path)
     if isinstance(config, dict) and timesteps is not None:
         config["total_timesteps"] = timesteps
     if isinstance(config, dict) and resume:
         config["resume"] = True
     print(f"saved {train_agent(config, progress=progress)}")
+    return 0
+
+
+def trust(paths: list[str]) -> int:
+    """List model files in their folders' manifests, so that ``evaluate`` loads them."""
+    from baselines.rl.model_files import trust as trust_file
+
+    for path in paths:
+        print(f"trusted {path} (sha256 {trust_file(Path(path))})")
     return 0
 
 
@@ -80,13 +88,21 @@ def train_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     return parser
 
 
+def trust_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("models", nargs="+", help="model files (<algo>_seed<N>.zip) to trust")
+    return parser
+
+
 def dispatch(args: argparse.Namespace) -> int:
-    """Run the parsed command; a `ConfigError` becomes ``error: ...`` on stderr and status 2."""
+    """Run the parsed command; an input error of this package (`BounceGymError`: a bad
+    configuration, env argument or model file) becomes ``error: ...`` on stderr and status 2."""
     try:
         if args.command == "evaluate":
             return evaluate(args.config, progress=not args.no_progress)
+        if args.command == "trust":
+            return trust(args.models)
         return train(args.config, args.timesteps, args.resume, progress=not args.no_progress)
-    except ConfigError as exc:
+    except BounceGymError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
 
@@ -96,6 +112,7 @@ def main(argv: list[str] | None = None) -> int:
     commands = parser.add_subparsers(dest="command", required=True)
     evaluate_parser(commands.add_parser("evaluate", help="evaluate policies side by side"))
     train_parser(commands.add_parser("train", help="train a Stable-Baselines3 agent"))
+    trust_parser(commands.add_parser("trust", help="let evaluate load these model files"))
     return dispatch(parser.parse_args(argv))
 
 

@@ -32,6 +32,7 @@ import gymnasium as gym
 import yaml
 
 import bounce_gym  # noqa: F401  (registers the environments)
+from baselines.rl.model_files import check_folder_name
 from bounce_gym.envs.registration import PETTINGZOO_ENVS, is_pettingzoo_id
 from bounce_gym.errors import ConfigError
 
@@ -60,8 +61,11 @@ def load_config(path: str | Path | None = None) -> dict:
                           "exist")
     try:
         return yaml.safe_load(file.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"config: {file} is not valid YAML: {exc}") from None
+    except yaml.YAMLError as exc:  # one line: what is wrong and where
+        mark = getattr(exc, "problem_mark", None)
+        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ConfigError(f"config: {file} is not valid YAML: {problem}{at}") from None
 
 
 def validate_config(config: object) -> dict:
@@ -98,12 +102,14 @@ def validate_config(config: object) -> dict:
         elif "planner_kwargs" in exp:
             raise ConfigError(f"{where}.planner_kwargs: only for multi-robot experiments "
                               f"(env one of {list(PETTINGZOO_ENVS)})")
-        if "rl_models" in exp and (Path(exp["rl_models"]).name != exp["rl_models"]
-                                   or exp["rl_models"] in ("", ".", "..")):
-            raise ConfigError(f"{where}.rl_models: expected the name of a folder in models/, "
-                              f"got {exp['rl_models']!r}")
-        if not all(isinstance(s, int) and not isinstance(s, bool) for s in exp["seeds"]):
-            raise ConfigError(f"{where}.seeds: expected a list of integers, got {exp['seeds']!r}")
+        if "rl_models" in exp:
+            check_folder_name(f"{where}.rl_models", exp["rl_models"])
+        elif "rl" in exp["policies"]:
+            check_folder_name(f"{where}.name (the folder of its rl models)", exp["name"])
+        if not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0
+                   for s in exp["seeds"]):
+            raise ConfigError(f"{where}.seeds: expected a list of integers >= 0, got "
+                              f"{exp['seeds']!r}")
         if exp["max_steps"] < 1:
             raise ConfigError(f"{where}.max_steps: expected an integer >= 1")
         unknown = [p for p in exp["policies"] if p not in POLICY_KINDS]

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from baselines.files import atomic_write
 from experiments.families.base import Family
-from experiments.files import atomic_write
 from experiments.plots.trajectories import plot_trajectories
 from experiments.registry import FAMILIES
 from experiments.runner import EpisodeResult

@@ -21,7 +21,7 @@ import numpy as np
 
 from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
 from bounce_gym.envs.registration import is_pettingzoo_id
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import ConfigError, config_errors
 from experiments.config import validate_config
 from experiments.families.base import Episode, Family
 from experiments.registry import family_for
@@ -45,15 +45,16 @@ class EpisodeResult:
                 **self.metrics}
 
 
-def make_env(experiment: Mapping):
+def make_env(experiment: Mapping, where: str = "env_kwargs"):
     """The experiment's env: ``gym.make``, or for a PettingZoo id the parallel env with
-    ``max_cycles = max_steps``."""
-    if is_pettingzoo_id(experiment["env"]):
-        import pettingzoo
+    ``max_cycles = max_steps``. Bad ``env_kwargs`` raise `ConfigError` naming ``where``."""
+    with config_errors(where):
+        if is_pettingzoo_id(experiment["env"]):
+            import pettingzoo
 
-        return pettingzoo.make("parallel", experiment["env"], max_cycles=experiment["max_steps"],
-                               **experiment["env_kwargs"])
-    return gym.make(experiment["env"], **experiment["env_kwargs"])
+            return pettingzoo.make("parallel", experiment["env"],
+                                   max_cycles=experiment["max_steps"], **experiment["env_kwargs"])
+        return gym.make(experiment["env"], **experiment["env_kwargs"])
 
 
 def policies_for(experiment: Mapping, env, family: Family, setup: object,
@@ -83,7 +84,7 @@ def policies_for(experiment: Mapping, env, family: Family, setup: object,
             out += [FixedAnglePolicy(i, math.degrees(options.angles[0][i])) for i in range(n)]
         elif kind == "rl":
             folder = models_dir / experiment.get("rl_models", experiment["name"])
-            out += sb3_policies(folder, parallel)
+            out += sb3_policies(folder, env)
     return out
 
 
@@ -133,19 +134,39 @@ def _positions(env, infos: dict) -> np.ndarray:
     return np.array(infos["position"], dtype=float).reshape(1, 2)
 
 
-def run_experiment(experiment: Mapping, models_dir: Path, on_seed: Callable[[], None]
+@dataclass
+class Prepared:
+    """A validated experiment with its env, family, the family's setup and its policies."""
+
+    experiment: Mapping
+    env: object
+    family: Family
+    setup: object
+    policies: list[Policy]
+
+
+def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Prepared:
+    """Build a validated experiment's env, planner setup and policies (loading its models), so
+    that every mistake in it is reported before any episode runs; ``where`` names the
+    experiment in errors."""
+    env = make_env(experiment, f"{where}.env_kwargs")
+    family = family_for(experiment, env)
+    setup = family.prepare(env, experiment)
+    return Prepared(experiment, env, family, setup,
+                    policies_for(experiment, env, family, setup, models_dir))
+
+
+def run_experiment(prepared: Prepared, on_seed: Callable[[], None]
                    ) -> tuple[list[EpisodeResult], dict]:
-    """Every policy on every seed of a validated experiment.
+    """Every policy on every seed of a prepared experiment (`prepare_experiment`).
 
     Returns the rows and the plot data: ``world``, ``family``, each policy's first-seed
     positions (``paths``) and what the family collects. ``on_seed`` is called after each seed
     (a progress bar).
     """
     rows: list[EpisodeResult] = []
-    env = make_env(experiment)
-    family = family_for(experiment, env)
-    setup = family.prepare(env, experiment)
-    policies = policies_for(experiment, env, family, setup, models_dir)
+    experiment, env, family = prepared.experiment, prepared.env, prepared.family
+    setup, policies = prepared.setup, prepared.policies
     data: dict = {"paths": {}, "world": env.unwrapped.options.world, "family": family}
     for k, seed in enumerate(experiment["seeds"]):
         for policy in policies:
@@ -164,7 +185,8 @@ def run_experiment(experiment: Mapping, models_dir: Path, on_seed: Callable[[], 
 
 
 def run(config: Mapping, progress: bool = True) -> tuple[list[EpisodeResult], dict]:
-    """Run every experiment of a configuration (validated here).
+    """Run every experiment of a configuration (validated here). Every experiment is prepared
+    (`prepare_experiment`) before the first one runs.
 
     Returns the result rows and, per experiment name, its plot data (see `run_experiment`).
     """
@@ -175,8 +197,10 @@ def run(config: Mapping, progress: bool = True) -> tuple[list[EpisodeResult], di
     rows: list[EpisodeResult] = []
     plots: dict = {}
     total = sum(len(exp["seeds"]) for exp in config["experiments"])
+    prepared = [prepare_experiment(exp, models, f"config.experiments[{k}]")
+                for k, exp in enumerate(config["experiments"])]
     with tqdm(total=total, desc="evaluating", disable=not progress, unit="seed") as bar:
-        for exp in config["experiments"]:
-            episodes, plots[exp["name"]] = run_experiment(exp, models, bar.update)
+        for one in prepared:
+            episodes, plots[one.experiment["name"]] = run_experiment(one, bar.update)
             rows += episodes
     return rows, plots

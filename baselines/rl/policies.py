@@ -1,7 +1,8 @@
 """Trained Stable-Baselines3 models as policies (`baselines.policy.Policy`).
 
 `sb3_policies` loads every model file of a folder (as `baselines.rl.train` saves them,
-``<algo>_seed<seed>.zip``) as the policy that fits the env:
+``<algo>_seed<seed>.zip``; only trusted files, `baselines.rl.model_files`) as the policy that
+fits the env:
 
 * Gymnasium env — `SB3Policy`: the model's deterministic action (PPO, DQN or RecurrentPPO, with
   the recurrent state carried through the episode);
@@ -15,31 +16,25 @@ from pathlib import Path
 
 import numpy as np
 
-from baselines.policy import MultiPolicy, Policy
+from baselines.policy import MultiPolicy, Policy, is_parallel_env
+from baselines.rl.model_files import load_model, model_files
 from bounce_gym.errors import ConfigError
 
 
-def sb3_policies(folder: Path, parallel: bool) -> list[Policy]:
-    """One policy per model file in ``folder`` (none if it does not exist): `SharedSB3Policy`
-    for a parallel env, `SB3Policy` otherwise."""
-    kind = SharedSB3Policy if parallel else SB3Policy
-    return [kind(path) for path in sorted(folder.glob("*.zip"))] if folder.is_dir() else []
+def sb3_policies(folder: Path, env) -> list[Policy]:
+    """One policy per saved model in ``folder`` (none if it does not exist) for ``env``:
+    `SharedSB3Policy` for a parallel env, `SB3Policy` otherwise. Each model is checked (trusted,
+    loadable, trained for the env's spaces) here, before any episode runs."""
+    kind = SharedSB3Policy if is_parallel_env(env) else SB3Policy
+    return [kind(path, env) for path in model_files(folder)]
 
 
 class SB3Policy(Policy):
     """A trained Stable-Baselines3 model as a policy (deterministic actions)."""
 
-    def __init__(self, path: Path) -> None:
-        from sb3_contrib import RecurrentPPO
-        from stable_baselines3 import DQN, PPO
-
-        algos = {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}
-        algo = path.stem.split("_")[0].lower()
-        if algo not in algos:
-            raise ConfigError(f"model {path}: name must start with one of {sorted(algos)}")
-        self.model = algos[algo].load(path, device="cpu")
+    def __init__(self, path: Path, env) -> None:
+        self.model = load_model(path, env.observation_space, env.action_space)
         self.name = f"rl {path.stem}"
-        self.recurrent = algo == "recurrentppo"
 
     def reset(self, env) -> None:
         import gymnasium as gym
@@ -67,29 +62,17 @@ class SharedSB3Policy(MultiPolicy):
     the sampled policy covers everything).
     """
 
-    def __init__(self, path: Path) -> None:
-        from stable_baselines3 import PPO
-
-        if not path.stem.lower().startswith("ppo"):
+    def __init__(self, path: Path, env) -> None:
+        if not path.name.startswith("ppo_"):
             raise ConfigError(f"model {path}: a multi-robot shared policy must be a PPO model "
-                              "(file name ppo_*.zip, as train.py saves it)")
-        self.model = PPO.load(path, device="cpu")
-        self.path = path
+                              "(file name ppo_seed<N>.zip, as train.py saves it)")
+        agent = env.possible_agents[0]
+        self.model = load_model(path, env.observation_space(agent), env.action_space(agent))
         self.name = f"rl {path.stem}"
 
     def start_options(self, env, seed: int) -> None:
         self.rng = np.random.default_rng(seed)
         return None
-
-    def reset(self, env) -> None:
-        agent = env.possible_agents[0]
-        obs_space, act_space = env.observation_space(agent), env.action_space(agent)
-        if self.model.observation_space != obs_space or self.model.action_space != act_space:
-            raise ConfigError(
-                f"rl_models: {self.path} was trained for observations "
-                f"{self.model.observation_space} and actions {self.model.action_space}, but this "
-                f"experiment's robots have {obs_space} and {act_space} (train with the same "
-                "env_kwargs)")
 
     def act(self, observations, infos):
         import torch

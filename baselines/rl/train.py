@@ -15,7 +15,12 @@ A training configuration (YAML, see ``configs/train_*.yaml``)::
     tensorboard: false
     models: models                   # saved as models/<name>/<algo>_seed<seed>.zip
 
-Training resumes from the checkpoint of the same name when ``resume: true``.
+Training resumes from the saved model of the same name when ``resume: true`` (an error if there
+is none). Every file it writes — checkpoints (``checkpoints/<algo>_seed<seed>_<N>_steps.zip``)
+and the final model — is written atomically and listed with its sha256 in its folder's
+``manifest.json`` (`baselines.rl.model_files`): a crash at any instant leaves complete files only.
+Mistakes (a bad key, env argument or hyperparameter, a ``name`` that is not one folder name, a
+models folder that cannot be written) raise `ConfigError` before training starts.
 
 **Several robots.** With a PettingZoo id (``bounce_gym/MultiBounceCoverage-v0``, …) the robots
 share one policy (parameter sharing): the parallel env becomes one SB3 VecEnv with a slot per
@@ -36,8 +41,10 @@ from pathlib import Path
 import gymnasium as gym
 
 import bounce_gym  # noqa: F401  (registers the environments)
+from baselines.files import check_writable
+from baselines.rl.model_files import check_folder_name, load_model, save_model
 from bounce_gym.envs.registration import PETTINGZOO_ENVS, is_pettingzoo_id
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import ConfigError, config_errors
 
 ALGOS = ("ppo", "dqn", "recurrentppo")
 MULTI_ALGOS = ("ppo",)
@@ -71,13 +78,16 @@ def validate_train_config(config: object) -> dict:
         raise ConfigError(f"config.algo: a multi-robot env trains one shared policy with one of "
                           f"{MULTI_ALGOS}, got {config['algo']!r}")
     if config["total_timesteps"] < 1:
-        raise ConfigError("config.total_timesteps: expected an integer >= 1")
+        raise ConfigError(f"config.total_timesteps: expected an integer >= 1, got "
+                          f"{config['total_timesteps']}")
+    check_folder_name("config.name", config["name"])
     defaults = {"env_kwargs": {}, "seed": 0, "n_envs": 1 if multi else 4, "hyperparams": {},
                 "checkpoint_every": 0, "tensorboard": False, "models": "models", "resume": False}
     for key, value in defaults.items():
         config.setdefault(key, value)
-    if config["n_envs"] < 1:
-        raise ConfigError("config.n_envs: expected an integer >= 1")
+    for key, least in (("n_envs", 1), ("seed", 0), ("checkpoint_every", 0)):
+        if config[key] < least:
+            raise ConfigError(f"config.{key}: expected an integer >= {least}, got {config[key]}")
     if multi and config["n_envs"] != 1:
         raise ConfigError("config.n_envs: a multi-robot env is one VecEnv with a slot per robot; "
                           "n_envs must be 1")
@@ -86,7 +96,13 @@ def validate_train_config(config: object) -> dict:
 
 def make_train_env(config: Mapping):
     """The VecEnv to train on: SB3's ``make_vec_env`` copies, or for a PettingZoo id the
-    parameter-sharing adapter (one slot per robot) under ``VecMonitor``."""
+    parameter-sharing adapter (one slot per robot) under ``VecMonitor``. Bad ``env_kwargs``
+    raise `ConfigError`."""
+    with config_errors("config.env_kwargs"):
+        return _make_train_env(config)
+
+
+def _make_train_env(config: Mapping):
     if is_pettingzoo_id(config["env"]):
         import pettingzoo
         from stable_baselines3.common.vec_env import VecMonitor
@@ -106,41 +122,80 @@ def model_path(config: Mapping) -> Path:
     return Path(config["models"]) / config["name"] / f"{config['algo']}_seed{config['seed']}.zip"
 
 
+def check_hyperparams(algo_class, hyperparams: Mapping) -> None:
+    """Each hyperparameter must be an argument of the algorithm, and a number where its default
+    is one (SB3 itself checks the values of some, e.g. ``n_steps``, when the model is built)."""
+    import inspect
+
+    arguments = inspect.signature(algo_class).parameters
+    for key, value in hyperparams.items():
+        if key not in arguments or key in ("policy", "env", "device", "seed", "verbose",
+                                           "tensorboard_log"):
+            raise ConfigError(f"config.hyperparams.{key}: not a hyperparameter of "
+                              f"{algo_class.__name__}")
+        default = arguments[key].default
+        number = (int, float)
+        if isinstance(default, number) and not isinstance(default, bool) and (
+                not isinstance(value, number) or isinstance(value, bool)):
+            raise ConfigError(f"config.hyperparams.{key}: expected a number, got {value!r}")
+
+
 def train(config: Mapping, progress: bool = True) -> Path:
     """Train (or resume) an agent and save it where `evaluate.py` finds it; returns the path."""
-    from sb3_contrib import RecurrentPPO
-    from stable_baselines3 import DQN, PPO
-    from stable_baselines3.common.callbacks import CheckpointCallback
-
-    config = validate_train_config(config)
-    algo_class = {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[config["algo"]]
-    env = make_train_env(config)
+    config = validate_train_config(config)  # the quick checks first, before importing torch
     out = model_path(config)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    log_dir = str(out.parent / "tensorboard") if config["tensorboard"] else None
-    if log_dir is not None and importlib.util.find_spec("tensorboard") is None:
+    check_writable("config.models", out.parent)
+    if config["resume"] and not out.is_file():
+        raise ConfigError(f"config.resume: no saved model {out} to resume from; train without "
+                          "--resume first")
+    if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError("config.tensorboard: needs the tensorboard package "
                           "(pip install tensorboard), or set tensorboard: false")
-    if config["resume"] and out.is_file():
-        model = algo_class.load(out, env=env, device="cpu")
+    from gymnasium import spaces
+    from sb3_contrib import RecurrentPPO
+    from stable_baselines3 import DQN, PPO
+
+    algo_class = {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[config["algo"]]
+    check_hyperparams(algo_class, config["hyperparams"])
+    env = make_train_env(config)
+    if config["algo"] == "dqn" and not isinstance(env.action_space, spaces.Discrete):
+        raise ConfigError(f"config.algo: dqn needs discrete actions, but the env's are "
+                          f"{env.action_space} (set env_kwargs.action_type: discrete, or use "
+                          "ppo or recurrentppo)")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    log_dir = str(out.parent / "tensorboard") if config["tensorboard"] else None
+    if config["resume"]:
+        model = load_model(out, env.observation_space, env.action_space, env=env)
         reset = False
     else:
         policy = "MlpLstmPolicy" if config["algo"] == "recurrentppo" else "MlpPolicy"
         try:
             model = algo_class(policy, env, seed=config["seed"], device="cpu", verbose=0,
                                tensorboard_log=log_dir, **config["hyperparams"])
-        except TypeError as exc:
+        except (AssertionError, TypeError, ValueError) as exc:  # SB3's checks of the values
             raise ConfigError(f"config.hyperparams: {exc}") from None
         reset = True
     callbacks = []
     if config["checkpoint_every"]:
-        callbacks.append(CheckpointCallback(max(config["checkpoint_every"] // env.num_envs, 1),
-                                            str(out.parent / "checkpoints"),
-                                            name_prefix=out.stem))
+        callbacks.append(atomic_checkpoint(max(config["checkpoint_every"] // env.num_envs, 1),
+                                           out.parent / "checkpoints", out.stem))
     model.learn(config["total_timesteps"], callback=callbacks or None, progress_bar=progress,
                 reset_num_timesteps=reset)
-    tmp = out.with_name(out.stem + ".partial.zip")
-    model.save(tmp)
-    tmp.replace(out)  # atomic: evaluate.py never loads a half-written model
+    save_model(model, out)
     env.close()
     return out
+
+
+def atomic_checkpoint(every: int, folder: Path, prefix: str):
+    """A callback saving the model every ``every`` calls as
+    ``<folder>/<prefix>_<timesteps>_steps.zip`` with `save_model` (atomic, listed in the
+    manifest), where SB3's ``CheckpointCallback`` writes the zip in place."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class _AtomicCheckpoint(BaseCallback):
+        def _on_step(self) -> bool:
+            if self.n_calls % every == 0:
+                save_model(self.model, folder / f"{prefix}_{self.num_timesteps}_steps.zip")
+            return True
+
+    return _AtomicCheckpoint()

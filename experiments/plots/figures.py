@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.files import atomic_write
+from baselines.files import atomic_write
 
 
 def pyplot():

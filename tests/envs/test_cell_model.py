@@ -141,3 +141,17 @@ def test_a_bad_filter_factory_names_the_argument():
         BounceEnv(task="localization", task_kwargs={"filter_factory": "no_such_module:f"})
     with pytest.raises(ConfigError, match="filter_factory"):
         BounceEnv(task="localization", task_kwargs={"filter_factory": 3})
+
+
+def test_a_filter_factory_string_never_imports_or_calls_code(capsys):
+    """A configuration file is data: ``"module:function"`` strings are refused, not run."""
+    with pytest.raises(ConfigError, match="filter_factory: expected 'combinatorial', None or "
+                                          r"\(from Python\) a callable, got 'builtins:print'"):
+        BounceEnv(task="localization", task_kwargs={"filter_factory": "builtins:print"})
+    assert capsys.readouterr().out == ""
+
+
+@pytest.mark.parametrize("result", [None, 3, object()])
+def test_a_filter_factory_must_return_a_filter(result):
+    with pytest.raises(ConfigError, match="filter_factory: .* not a localization filter"):
+        BounceEnv(task="localization", task_kwargs={"filter_factory": lambda options: result})

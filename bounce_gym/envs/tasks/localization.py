@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
 import math
 from collections.abc import Callable
 
@@ -15,18 +14,21 @@ from bounce_gym.validate import flag
 
 #: The ``filter_factory`` that selects the built-in filter (`combinatorial_filter`).
 COMBINATORIAL = "combinatorial"
+#: The methods a filter must have (``size`` and ``localized`` may appear only after ``reset``).
+_FILTER_METHODS = ("reset", "update")
 
 
 class LocalizationTask(Task):
     """Global localization: the robot starts at an unknown pose and senses only bumps and time.
 
     Args:
-        filter_factory: ``"combinatorial"`` for the built-in filter (`combinatorial_filter`), or
-            ``f(options) -> filter`` (or the import path ``"module:function"`` of one) building
-            a localization filter for the env's validated `EnvOptions`; None runs without one.
-            A filter has ``reset()``, ``update(symbol, angle)`` — symbol 1 for a bump tick
-            (``angle`` the bounce angle used, radians), 0 for a forward tick — and the
-            attributes ``size`` (candidate configurations) and ``localized`` (in a knowledge
+        filter_factory: ``"combinatorial"`` for the built-in filter (`combinatorial_filter`),
+            or, from Python, a callable ``f(options) -> filter`` building a localization filter
+            for the env's validated `EnvOptions`; None runs without one. No other string is
+            accepted: an env's arguments often come from a configuration file, which is data
+            and may not name code to import and run. A filter has ``reset()``,
+            ``update(symbol, angle)`` — symbol 1 for a bump tick (``angle`` the bounce angle
+            used, radians), 0 for a forward tick — and the attributes ``size`` (candidate configurations) and ``localized`` (in a knowledge
             cycle: localized up to the world's symmetry); optionally ``colour`` and ``trapped``.
         terminate_when_localized: end the episode once the filter reports ``localized``.
 
@@ -43,12 +45,10 @@ class LocalizationTask(Task):
 
     def __init__(self, filter_factory: Callable | str | None = None,
                  terminate_when_localized: bool = True) -> None:
-        if isinstance(filter_factory, str) and filter_factory != COMBINATORIAL:
-            filter_factory = _import(filter_factory, "filter_factory")
-        if filter_factory is not None and not callable(filter_factory) \
-                and filter_factory != COMBINATORIAL:
-            raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, a callable or "
-                              "'module:function'")
+        if filter_factory is not None and filter_factory != COMBINATORIAL \
+                and (isinstance(filter_factory, str) or not callable(filter_factory)):
+            raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, None or (from "
+                              f"Python) a callable, got {filter_factory!r}")
         self.filter_factory = filter_factory
         self.terminate_when_localized = flag("terminate_when_localized", terminate_when_localized)
 
@@ -56,8 +56,15 @@ class LocalizationTask(Task):
         super().configure(core)
         if self.filter_factory == COMBINATORIAL:
             self.filter = combinatorial_filter(core)
+        elif self.filter_factory is None:
+            self.filter = None
         else:
-            self.filter = self.filter_factory(self.options) if self.filter_factory else None
+            self.filter = self.filter_factory(self.options)
+            missing = [m for m in _FILTER_METHODS if not callable(getattr(self.filter, m, None))]
+            if missing:
+                raise ConfigError(f"filter_factory: {self.filter_factory!r} returned "
+                                  f"{self.filter!r}, not a localization filter (it lacks "
+                                  f"{missing}; pass filter_factory=None to run without one)")
 
     def reset(self, state, rng, options):
         self.observation: tuple[int, int, float | None] | None = None
@@ -114,13 +121,4 @@ def combinatorial_filter(core) -> LocalizationFilter | ActiveLocalizationFilter:
     if len(angles) == 1:
         return LocalizationFilter.from_model(model, float(angles[0]), open_world=not exact)
     return ActiveLocalizationFilter(model, angles, open_world=not exact)
-
-
-def _import(path: str, field: str):
-    module, _, attr = path.partition(":")
-    try:
-        return getattr(importlib.import_module(module), attr)
-    except (ImportError, AttributeError, ValueError):
-        raise ConfigError(f"{field}: cannot import {path!r} (expected 'module:function')") from None
-
 

@@ -1,0 +1,63 @@
+"""Writing files so that readers never see one half-written, and checking early that a folder
+can be written at all."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import BinaryIO
+
+from bounce_gym.errors import ConfigError
+
+
+@contextlib.contextmanager
+def atomic_file(path: Path) -> Iterator[BinaryIO]:
+    """A binary file (opened for writing and reading) that becomes ``path`` only once the
+    ``with`` block has finished: written to a hidden temporary file in the same folder
+    (``.<name>.<random>.tmp``), flushed to disk, then renamed over ``path``. A crash at any
+    instant leaves either the old ``path`` or the new one, never a partial file under its name;
+    an exception in the block removes the temporary file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w+b") as fh:
+            yield fh
+            fh.flush()
+            os.fsync(fh.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes files private; results are not
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    with contextlib.suppress(OSError):  # make the rename itself durable where the OS allows
+        folder = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(folder)
+        finally:
+            os.close(folder)
+
+
+def atomic_write(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through `atomic_file`."""
+    with atomic_file(path) as fh:
+        fh.write(data)
+
+
+def check_writable(field: str, folder: Path) -> None:
+    """Raise `ConfigError` naming ``field`` unless ``folder`` is, or can be created as, a
+    folder this process may write into; nothing is created."""
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise ConfigError(f"{field}: cannot write into {str(folder)!r}: {str(existing)!r} is not "
+                          "a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        what = "folder" if existing == folder else f"folder {str(existing)!r}"
+        raise ConfigError(f"{field}: cannot write into {str(folder)!r}: the {what} is not "
+                          "writable")

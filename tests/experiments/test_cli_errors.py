@@ -1,0 +1,124 @@
+"""Every user mistake in `bounce-gym evaluate|train` is one line ``error: <field>: ...`` on
+stderr and exit status 2, reported before any long work."""
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).parents[2]
+sys.path.insert(0, str(ROOT))
+
+from experiments.cli import main  # noqa: E402
+
+NAV = {"world": "square", "backend": "cell", "angles": [90, 135]}
+
+
+def _write(path: Path, data) -> Path:
+    path.write_text(data if isinstance(data, str) else yaml.safe_dump(data), encoding="utf-8")
+    return path
+
+
+def _one_error(capsys, argv: list[str]) -> str:
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), captured.err
+    assert captured.out == ""  # nothing ran, no table was printed
+    return lines[0]
+
+
+def _experiment(**overrides) -> dict:
+    return {"name": "a", "env": "bounce_gym/BounceNavigation-v0", "env_kwargs": NAV,
+            "seeds": [0], "max_steps": 5, "policies": ["random"], **overrides}
+
+
+@pytest.mark.parametrize(("experiment", "message"), [
+    (_experiment(env_kwargs={"colour": 1}),
+     "config.experiments[1].env_kwargs: BounceEnv() got an unexpected keyword argument 'colour'"),
+    (_experiment(env_kwargs={"task_kwargs": {"colour": 1}}),
+     "config.experiments[1].env_kwargs: "),
+    (_experiment(env_kwargs={"world": "MAP"}),
+     "config.experiments[1].env_kwargs: "),
+    (_experiment(seeds=[-1]), "config.experiments[1].seeds: expected a list of integers >= 0"),
+    (_experiment(policies=["rl"], name="../x"),
+     "config.experiments[1].name (the folder of its rl models): expected the name of a folder"),
+    (_experiment(policies=["rl"], rl_models="../x"),
+     "config.experiments[1].rl_models: expected the name of a folder"),
+])
+def test_evaluate_reports_a_bad_experiment_before_running_any(tmp_path, capsys, experiment,
+                                                              message):
+    bad_map = _write(tmp_path / "bad.json", json.dumps({"polygon": [[0, 0], [1, 0]]}))
+    if experiment["env_kwargs"].get("world") == "MAP":
+        experiment["env_kwargs"] = {"world": str(bad_map)}
+    config = {"output": str(tmp_path / "runs"),
+              "experiments": [_experiment(name="fine"), experiment]}
+    line = _one_error(capsys, ["evaluate", str(_write(tmp_path / "c.yaml", config)),
+                               "--no-progress"])
+    assert line.startswith(f"error: {message}")
+    assert not (tmp_path / "runs").exists()
+
+
+def test_evaluate_checks_the_output_folder_before_running(tmp_path, capsys):
+    (tmp_path / "file").write_text("not a folder")
+    config = {"output": str(tmp_path / "file" / "x"), "experiments": [_experiment()]}
+    line = _one_error(capsys, ["evaluate", str(_write(tmp_path / "c.yaml", config))])
+    assert line == (f"error: config.output: cannot write into '{tmp_path / 'file' / 'x'}': "
+                    f"'{tmp_path / 'file'}' is not a folder")
+
+
+@pytest.mark.skipif(sys.platform == "win32" or __import__("os").geteuid() == 0,
+                    reason="root writes into read-only folders")
+def test_evaluate_refuses_a_read_only_output_folder(tmp_path, capsys):
+    (tmp_path / "ro").mkdir(mode=0o500)
+    config = {"output": str(tmp_path / "ro" / "runs"), "experiments": [_experiment()]}
+    line = _one_error(capsys, ["evaluate", str(_write(tmp_path / "c.yaml", config))])
+    assert line.startswith("error: config.output: cannot write into") and "not writable" in line
+
+
+def test_evaluate_refuses_an_untrusted_model_before_running(tmp_path, capsys):
+    (tmp_path / "models" / "a").mkdir(parents=True)
+    (tmp_path / "models" / "a" / "ppo_seed0.zip").write_bytes(b"PK")
+    config = {"output": str(tmp_path / "runs"), "models": str(tmp_path / "models"),
+              "experiments": [_experiment(policies=["random", "rl"])]}
+    line = _one_error(capsys, ["evaluate", str(_write(tmp_path / "c.yaml", config))])
+    assert "ppo_seed0.zip: is not listed in" in line and "bounce-gym trust" in line
+
+
+def _train(**overrides) -> dict:
+    return {"name": "nav", "env": "bounce_gym/BounceNavigation-v0", "env_kwargs": NAV,
+            "algo": "ppo", "total_timesteps": 64, "n_envs": 1,
+            "hyperparams": {"n_steps": 32, "batch_size": 32}, **overrides}
+
+
+@pytest.mark.parametrize(("config", "extra", "message"), [
+    (None, [], "config: file '"),
+    ("name: [unclosed", [], "config: t.yaml is not valid YAML: expected ',' or ']', but got "
+                            "'<stream end>' at line 1, column 16"),
+    (_train(colour=1), [], "config: unknown keys ['colour']"),
+    (_train(total_timesteps="many"), [], "config.total_timesteps: expected int, got str"),
+    (_train(total_timesteps=0), [], "config.total_timesteps: expected an integer >= 1, got 0"),
+    (_train(), ["--timesteps", "-5"], "config.total_timesteps: expected an integer >= 1, got -5"),
+    (_train(seed=-1), [], "config.seed: expected an integer >= 0, got -1"),
+    (_train(name="../../x"), [], "config.name: expected the name of a folder in models/"),
+    (_train(env_kwargs={"colour": 1}), [], "config.env_kwargs: BounceEnv() got an unexpected"),
+    (_train(hyperparams={"n_steps": 0}), [], "config.hyperparams: `n_steps * n_envs` must be"),
+    (_train(hyperparams={"learning_rate": "abc"}), [],
+     "config.hyperparams.learning_rate: expected a number, got 'abc'"),
+    (_train(hyperparams={"colour": 1}), [], "config.hyperparams.colour: not a hyperparameter"),
+    (_train(algo="dqn", env_kwargs={"action_type": "continuous"}, hyperparams={}), [],
+     "config.algo: dqn needs discrete actions"),
+    (_train(), ["--resume"], "config.resume: no saved model"),
+    (_train(models="FILE/x"), [], "config.models: cannot write into"),
+])
+def test_train_reports_each_mistake_in_one_line(tmp_path, capsys, monkeypatch, config, extra,
+                                                message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "FILE").write_text("not a folder")
+    if config is not None:
+        _write(tmp_path / "t.yaml", config)
+    line = _one_error(capsys, ["train", "t.yaml", "--no-progress", *extra])
+    assert line.startswith(f"error: {message}")
+    assert not list(tmp_path.glob("**/*.zip"))
