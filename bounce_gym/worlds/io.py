@@ -380,8 +380,9 @@ def _no_constant(name: str) -> float:
     raise MapFormatError(f"non-standard JSON number {name}; coordinates must be finite numbers")
 
 
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """YAML safe loader that rejects duplicate mapping keys instead of keeping the last one."""
+class _UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+    """YAML safe loader (libyaml's C parser when PyYAML has it) that rejects duplicate mapping
+    keys instead of keeping the last one."""
 
 
 def _construct_unique_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode, deep: bool = False):
