@@ -30,7 +30,8 @@ Arguments (defaults of the single-robot env; the multi-robot envs start from ``g
 * ``step_mode``: ``"bounce"`` (one step = the bump, then driving to the next contact) or
   ``"tick"`` (one step = one tick).
 * ``action_type``: ``"discrete"`` or ``"continuous"``.
-* ``history``: number of (segment ticks, angle) pairs in the observation (default 0).
+* ``history``: number of (segment ticks, angle) pairs in the observation (default 0, at most
+  `MAX_HISTORY` = 10 000: far more bounces than any episode of the papers' experiments has).
 * ``privileged``: add the true pose to the observation (default False).
 * ``cell_bins``, ``corner_rule``: orientation bins (default 8) and diagonal rule (default
   ``"target_only"``, see `bounce_gym.cells.model`) of the env's cell model — the cell backend's
@@ -61,6 +62,8 @@ from bounce_gym.errors import ConfigError, InvalidWorldError
 from bounce_gym.worlds import World
 
 BACKENDS = ("kinematic", "pymunk", "cell")
+#: Largest ``history`` (observation length grows by 2 per entry).
+MAX_HISTORY = 10_000
 STEP_MODES = ("bounce", "tick")
 ACTION_TYPES = ("discrete", "continuous")
 
@@ -236,8 +239,9 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
         raise ConfigError(f"n_robots: expected an integer >= 1, got {n_robots!r}")
     n_robots = int(n_robots)
     history = values["history"]
-    if isinstance(history, bool) or not isinstance(history, int | np.integer) or history < 0:
-        raise ConfigError(f"history: expected an integer >= 0, got {history!r}")
+    if isinstance(history, bool) or not isinstance(history, int | np.integer) \
+            or not 0 <= history <= MAX_HISTORY:
+        raise ConfigError(f"history: expected an integer in [0, {MAX_HISTORY}], got {history!r}")
     privileged = values["privileged"]
     if not isinstance(privileged, bool):
         raise ConfigError(f"privileged: expected True or False, got {privileged!r}")
