@@ -199,6 +199,19 @@ def _per_robot(field: str, value: object, n_robots: int) -> list[object]:
     return [value] * n_robots
 
 
+def _once_each(check, *per_robot: Sequence) -> tuple:
+    """``check`` applied to every robot's entries, once per distinct combination of objects: a
+    shared value repeats one object, so many robots cost one check."""
+    done: dict[tuple[int, ...], object] = {}
+    out = []
+    for entries in zip(*per_robot, strict=True):
+        key = tuple(map(id, entries))
+        if key not in done:
+            done[key] = check(*entries)
+        out.append(done[key])
+    return tuple(out)
+
+
 def _default_range(rule: str, angles: np.ndarray) -> tuple[float, float]:
     if len(angles) > 1:
         return float(angles.min()), float(angles.max())
@@ -245,13 +258,14 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
     privileged = values["privileged"]
     if not isinstance(privileged, bool):
         raise ConfigError(f"privileged: expected True or False, got {privileged!r}")
-    angle_sets = tuple(_angle_set("angles", s, bounce_rule)
-                       for s in _per_robot("angles", values["angles"], n_robots))
+    angle_sets = _once_each(lambda s: _angle_set("angles", s, bounce_rule),
+                            _per_robot("angles", values["angles"], n_robots))
     angle_range = values["angle_range"]
-    ranges = tuple(
-        _angle_range("angle_range", r, bounce_rule, a)
-        for r, a in zip(_per_robot("angle_range", angle_range, n_robots) if
-                        angle_range is not None else [None] * n_robots, angle_sets, strict=True)
+    ranges = _once_each(
+        lambda r, a: _angle_range("angle_range", r, bounce_rule, a),
+        _per_robot("angle_range", angle_range, n_robots) if angle_range is not None
+        else [None] * n_robots,
+        angle_sets,
     )
     noise_model = make_noise(values["noise"])
     cell_bins = _bins(values["cell_bins"])
