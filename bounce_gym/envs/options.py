@@ -30,7 +30,8 @@ Arguments (defaults of the single-robot env; the multi-robot envs start from ``g
 * ``step_mode``: ``"bounce"`` (one step = the bump, then driving to the next contact) or
   ``"tick"`` (one step = one tick).
 * ``action_type``: ``"discrete"`` or ``"continuous"``.
-* ``history``: number of (segment ticks, angle) pairs in the observation (default 0).
+* ``history``: number of (segment ticks, angle) pairs in the observation (default 0, at most
+  `MAX_HISTORY` = 10 000: far more bounces than any episode of the papers' experiments has).
 * ``privileged``: add the true pose to the observation (default False).
 * ``cell_bins``, ``corner_rule``: orientation bins (default 8) and diagonal rule (default
   ``"target_only"``, see `bounce_gym.cells.model`) of the env's cell model — the cell backend's
@@ -62,6 +63,8 @@ from bounce_gym.validate import number as _number
 from bounce_gym.worlds import World
 
 BACKENDS = ("kinematic", "pymunk", "cell")
+#: Largest ``history`` (observation length grows by 2 per entry).
+MAX_HISTORY = 10_000
 STEP_MODES = ("bounce", "tick")
 ACTION_TYPES = ("discrete", "continuous")
 
@@ -184,6 +187,19 @@ def _per_robot(field: str, value: object, n_robots: int) -> list[object]:
     return [value] * n_robots
 
 
+def _once_each(check, *per_robot: Sequence) -> tuple:
+    """``check`` applied to every robot's entries, once per distinct combination of objects: a
+    shared value repeats one object, so many robots cost one check."""
+    done: dict[tuple[int, ...], object] = {}
+    out = []
+    for entries in zip(*per_robot, strict=True):
+        key = tuple(map(id, entries))
+        if key not in done:
+            done[key] = check(*entries)
+        out.append(done[key])
+    return tuple(out)
+
+
 def _default_range(rule: str, angles: np.ndarray) -> tuple[float, float]:
     if len(angles) > 1:
         return float(angles.min()), float(angles.max())
@@ -224,18 +240,20 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
         raise ConfigError(f"n_robots: expected an integer >= 1, got {n_robots!r}")
     n_robots = int(n_robots)
     history = values["history"]
-    if isinstance(history, bool) or not isinstance(history, int | np.integer) or history < 0:
-        raise ConfigError(f"history: expected an integer >= 0, got {history!r}")
+    if isinstance(history, bool) or not isinstance(history, int | np.integer) \
+            or not 0 <= history <= MAX_HISTORY:
+        raise ConfigError(f"history: expected an integer in [0, {MAX_HISTORY}], got {history!r}")
     privileged = values["privileged"]
     if not isinstance(privileged, bool):
         raise ConfigError(f"privileged: expected True or False, got {privileged!r}")
-    angle_sets = tuple(_angle_set("angles", s, bounce_rule)
-                       for s in _per_robot("angles", values["angles"], n_robots))
+    angle_sets = _once_each(lambda s: _angle_set("angles", s, bounce_rule),
+                            _per_robot("angles", values["angles"], n_robots))
     angle_range = values["angle_range"]
-    ranges = tuple(
-        _angle_range("angle_range", r, bounce_rule, a)
-        for r, a in zip(_per_robot("angle_range", angle_range, n_robots) if
-                        angle_range is not None else [None] * n_robots, angle_sets, strict=True)
+    ranges = _once_each(
+        lambda r, a: _angle_range("angle_range", r, bounce_rule, a),
+        _per_robot("angle_range", angle_range, n_robots) if angle_range is not None
+        else [None] * n_robots,
+        angle_sets,
     )
     noise_model = make_noise(values["noise"])
     cell_bins = _bins(values["cell_bins"])

@@ -35,6 +35,12 @@ quote the rows: an unquoted ``#`` starts a comment.
 Exactly one of ``outer`` and ``grid`` must be present; ``holes`` belongs to the polygon form and
 ``cell_size`` to the grid form.
 
+Limits: a map file holds at most `MAX_FILE_BYTES` (128 MiB, room for a 10 000 x 10 000 grid),
+a ring at most `MAX_VERTICES` (10**6) vertices, and brackets (``[``, ``{``) nest at most
+`MAX_DEPTH` (32) deep, in YAML also by indentation; a map needs 4 (mapping, holes, ring, vertex).
+Larger or deeper files raise `bounce_gym.errors.MapFormatError` before they are parsed into
+objects.
+
 File formats are chosen by suffix: ``.json``, ``.yaml`` or ``.yml`` (case-insensitive). Files
 are UTF-8. Duplicate keys are rejected. Every schema violation raises
 `bounce_gym.errors.MapFormatError` whose message names the file, the field and what is allowed;
@@ -66,6 +72,13 @@ __all__ = ["SUFFIXES", "from_dict", "load", "load_dict", "save", "to_dict"]
 
 #: File suffixes understood by `load` and `save`, mapped to their format.
 SUFFIXES = {".json": "json", ".yaml": "yaml", ".yml": "yaml"}
+
+#: Largest map file, in bytes.
+MAX_FILE_BYTES = 128 * 2**20
+#: Most vertices of one ring.
+MAX_VERTICES = 10**6
+#: Deepest nesting of lists and mappings in a map file (a map needs 4).
+MAX_DEPTH = 32
 
 _POLYGON_KEYS = ("name", "description", "outer", "holes")
 _GRID_KEYS = ("name", "description", "grid", "cell_size")
@@ -246,12 +259,18 @@ def load_dict(path: str | os.PathLike) -> dict:
     """
     path = Path(path)
     fmt = _format(path)
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise MapFormatError(
+            f"{path}: file has {size} bytes; map files may have at most {MAX_FILE_BYTES}"
+        )
     raw = path.read_bytes()
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise MapFormatError(f"{path}: not UTF-8 text ({exc})") from exc
     if fmt == "json":
+        _check_json_depth(raw, path)
         try:
             data = json.loads(text, object_pairs_hook=_unique_pairs, parse_constant=_no_constant)
         except MapFormatError as exc:
@@ -260,6 +279,7 @@ def load_dict(path: str | os.PathLike) -> dict:
             raise MapFormatError(f"{path}: not valid JSON: {exc}") from exc
     else:
         try:
+            _check_yaml_depth(text, path)
             data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
         except yaml.YAMLError as exc:
             raise MapFormatError(f"{path}: not valid YAML: {exc}") from exc
@@ -345,14 +365,51 @@ def _format(path: Path) -> str:
     return fmt
 
 
+def _too_deep(path: Path, depth: int | str) -> MapFormatError:
+    return MapFormatError(
+        f"{path}: lists and mappings nest {depth} deep; a map allows at most {MAX_DEPTH} "
+        "(it needs 4: mapping, holes, ring, vertex)"
+    )
+
+
+def _check_json_depth(raw: bytes, path: Path) -> None:
+    """Reject bracket nesting deeper than `MAX_DEPTH` before the recursive JSON parser meets it.
+
+    Counts every ``[``/``{`` against every ``]``/``}``, including those inside strings: a name
+    or description would need more than `MAX_DEPTH` unmatched brackets to trip it.
+    """
+    codes = np.frombuffer(raw, dtype=np.uint8)
+    step = np.isin(codes, (ord("["), ord("{"))).astype(np.int64)
+    step -= np.isin(codes, (ord("]"), ord("}")))
+    depth = int(np.cumsum(step).max(initial=0))
+    if depth > MAX_DEPTH:
+        raise _too_deep(path, depth)
+
+
+def _check_yaml_depth(text: str, path: Path) -> None:
+    """Reject YAML nesting (flow brackets or block indentation) deeper than `MAX_DEPTH`, from the
+    parser's event stream, before any object is built."""
+    depth = 0
+    for event in yaml.parse(text, Loader=_UniqueKeyLoader):
+        if isinstance(event, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_DEPTH:
+                raise _too_deep(path, f"more than {MAX_DEPTH}")
+        elif isinstance(event, yaml.CollectionEndEvent):
+            depth -= 1
+
+
 def _ring(value: object, field: str, source: str) -> list[list[float]]:
     allowed = "a list of at least 3 vertices, each a pair of numbers [x, y]"
     if isinstance(value, np.ndarray):
         value = value.tolist()
     if not isinstance(value, list | tuple):
         raise MapFormatError(f"{source}: '{field}' must be {allowed}, got {type(value).__name__}")
-    if len(value) < 3:
-        raise MapFormatError(f"{source}: '{field}' must be {allowed}, got {len(value)} vertices")
+    if not 3 <= len(value) <= MAX_VERTICES:
+        raise MapFormatError(
+            f"{source}: '{field}' must be {allowed} and at most {MAX_VERTICES}, "
+            f"got {len(value)} vertices"
+        )
     ring = []
     for k, vertex in enumerate(value):
         if (
@@ -380,8 +437,9 @@ def _no_constant(name: str) -> float:
     raise MapFormatError(f"non-standard JSON number {name}; coordinates must be finite numbers")
 
 
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """YAML safe loader that rejects duplicate mapping keys instead of keeping the last one."""
+class _UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+    """YAML safe loader (libyaml's C parser when PyYAML has it) that rejects duplicate mapping
+    keys instead of keeping the last one."""
 
 
 def _construct_unique_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode, deep: bool = False):

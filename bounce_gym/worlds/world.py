@@ -9,7 +9,7 @@ Edges of all rings are flattened into one array; edge ``k`` starts at vertex ``k
 from __future__ import annotations
 
 from collections.abc import Sequence
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 import shapely
@@ -259,11 +259,15 @@ class World:
     def boundary_distance(self, points: np.ndarray) -> np.ndarray:
         """Euclidean distance from each point (n, 2) to the nearest boundary edge."""
         pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        rel = pts[:, None, :] - self.edge_start[None, :, :]
         vec = self.edge_end - self.edge_start
-        s = np.clip(np.einsum("nek,ek->ne", rel, vec) / (self.lengths**2), 0.0, 1.0)
-        closest = rel - s[..., None] * vec[None]
-        return np.sqrt(np.min(np.einsum("nek,nek->ne", closest, closest), axis=1))
+        chunk = max(1, _PAIRS_PER_CHUNK // self.n_edges)  # bounded memory for many points
+        out = np.empty(len(pts))
+        for k in range(0, len(pts), chunk):
+            rel = pts[k : k + chunk, None, :] - self.edge_start[None, :, :]
+            s = np.clip(np.einsum("nek,ek->ne", rel, vec) / (self.lengths**2), 0.0, 1.0)
+            closest = rel - s[..., None] * vec[None]
+            out[k : k + chunk] = np.sqrt(np.min(np.einsum("nek,nek->ne", closest, closest), axis=1))
+        return out
 
     def eroded(self, radius: float, quad_segs: int = 16):
         """Configuration space of a disk robot of ``radius``: the free space shrunk by it.
@@ -274,6 +278,10 @@ class World:
         """
         if not np.isfinite(radius) or radius < 0:
             raise InvalidWorldError(f"radius must be a finite number >= 0, got {radius!r}")
+        return self._eroded(float(radius), int(quad_segs))
+
+    @lru_cache(maxsize=8)  # noqa: B019 (worlds are immutable and hashable)
+    def _eroded(self, radius: float, quad_segs: int):
         if radius == 0:
             return self.polygon
         return self.polygon.buffer(-radius, quad_segs=quad_segs)
@@ -303,19 +311,37 @@ class World:
         return inside.reshape(rows, cols)
 
     def sample_free(self, rng: np.random.Generator, n: int, radius: float = 0.0) -> np.ndarray:
-        """Draw ``n`` points uniformly from the free space at least ``radius`` from the boundary.
+        """Draw ``n`` points uniformly from the free space more than ``radius`` from the boundary.
 
-        Rejection sampling in the bounding box; raises if the C-space is (nearly) empty.
+        Rejection sampling in the bounding box when the C-space (`eroded`) fills at least
+        1/64 of it; otherwise (a thin or small C-space) uniform points of a triangulation of the
+        C-space, kept if they pass the same exact test. Both stop after a bounded number of
+        rounds.
+
+        Raises:
+            InvalidWorldError: the C-space is empty (at once), or too few points passed in the
+                allowed rounds.
         """
+        region = self.eroded(radius)
+        if region.area <= self.tol**2:
+            raise InvalidWorldError(
+                f"world {self.name!r}: no free space for a robot of radius {radius}: the free "
+                "space shrunk by the radius is empty"
+            )
         xmin, ymin, xmax, ymax = self.bounds
+        in_box = region.area * 64 >= (xmax - xmin) * (ymax - ymin)
         out = np.empty((0, 2))
-        for _ in range(1000):
+        for _ in range(1000 if in_box else 100):
             need = n - len(out)
             if need <= 0:
                 break
             batch = max(64, 4 * need)
-            pts = rng.uniform((xmin, ymin), (xmax, ymax), size=(batch, 2))
-            ok = self.contains(pts) & (self.boundary_distance(pts) > radius + self.tol)
+            if in_box:
+                pts = rng.uniform((xmin, ymin), (xmax, ymax), size=(batch, 2))
+            else:
+                pts = sample_in(region, rng, batch)
+            ok = shapely.contains_xy(self.polygon, pts[:, 0], pts[:, 1])
+            ok &= self.boundary_distance(pts) > radius + self.tol
             out = np.concatenate((out, pts[ok][:need]))
         if len(out) < n:
             raise InvalidWorldError(
@@ -331,6 +357,25 @@ class World:
             "outer": self.outer.tolist(),
             "holes": [h.tolist() for h in self.holes],
         }
+
+
+def sample_in(region, rng: np.random.Generator, n: int) -> np.ndarray:
+    """``n`` uniform points of a shapely (Multi)Polygon of positive area: a triangle of its
+    constrained Delaunay triangulation chosen by area, then a uniform point of the triangle."""
+    triangles = shapely.get_parts(shapely.constrained_delaunay_triangles(region))
+    corners = shapely.get_coordinates(shapely.get_exterior_ring(triangles)).reshape(-1, 4, 2)
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    ab, ac = b - a, c - a
+    area = 0.5 * np.abs(ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0])
+    pick = rng.choice(len(area), size=n, p=area / area.sum())
+    u, v = rng.uniform(size=(2, n, 1))
+    flip = u + v > 1
+    u, v = np.where(flip, 1 - u, u), np.where(flip, 1 - v, v)
+    return a[pick] + u * ab[pick] + v * ac[pick]
+
+
+#: Point-edge pairs `World.boundary_distance` handles at once.
+_PAIRS_PER_CHUNK = 1 << 20
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:

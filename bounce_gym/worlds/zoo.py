@@ -4,8 +4,8 @@ Stored maps are the YAML files in ``bounce_gym/worlds/maps/`` (schema: `bounce_g
 each carries a ``description`` saying where it comes from and, for reconstructions of maps
 that the papers only show as figures, what is known and what was invented (`describe`).
 
-Besides the stored maps, ``regular_<n>`` for any integer ``n >= 3`` (written without leading
-zeros) is the regular n-gon with circumradius 10 centred at (10, 10), first vertex at angle 0,
+Besides the stored maps, ``regular_<n>`` for any integer ``3 <= n <= 10000`` (`MAX_REGULAR`;
+written without leading zeros) is the regular n-gon with circumradius 10 centred at (10, 10), first vertex at angle 0,
 i.e. vertex ``k`` is ``(10 + 10 cos(2 pi k / n), 10 + 10 sin(2 pi k / n))``, counter-clockwise.
 
 Worlds are immutable, so `get` caches them and returns the same object on every call.
@@ -29,6 +29,9 @@ _MAPS_PACKAGE = "bounce_gym.worlds"
 _MAPS_DIR = "maps"
 _REGULAR = re.compile(r"regular_([1-9][0-9]*)")
 
+#: Largest ``n`` of ``regular_<n>``: beyond it the edges are shorter than 1e-2 and the polygon
+#: is a circle for every practical purpose.
+MAX_REGULAR = 10_000
 #: Regular n-gons: circumradius and centre.
 REGULAR_RADIUS = 10.0
 REGULAR_CENTER = (10.0, 10.0)
@@ -44,27 +47,26 @@ def get(name: str) -> World:
 
     Raises:
         InvalidWorldError: unknown name (the message lists the available names), or
-            ``regular_<n>`` with ``n < 3``.
+            ``regular_<n>`` with ``n`` outside ``[3, MAX_REGULAR]``.
     """
     if not isinstance(name, str):
         raise InvalidWorldError(f"name: expected a string, got {type(name).__name__}")
-    match = _REGULAR.fullmatch(name)
-    if match:
-        return _regular(int(match.group(1)))
+    n = _regular_size(name)
+    if n is not None:
+        return _regular(n)
     if name in _stored_names():
         return _stored(name)
     raise InvalidWorldError(
         f"unknown world {name!r}; available: {', '.join(_stored_names())}, "
-        "and regular_<n> for any integer n >= 3"
+        f"and regular_<n> for any integer 3 <= n <= {MAX_REGULAR}"
     )
 
 
 def describe(name: str) -> str:
     """The ``description`` of a zoo map: its source and what was reconstructed or invented."""
-    match = _REGULAR.fullmatch(name) if isinstance(name, str) else None
-    if match:
+    if isinstance(name, str) and _regular_size(name) is not None:
         return (
-            f"Regular {match.group(1)}-gon, circumradius {REGULAR_RADIUS:g} centred at "
+            f"Regular {name[len('regular_'):]}-gon, circumradius {REGULAR_RADIUS:g} centred at "
             f"{REGULAR_CENTER}, first vertex at angle 0, counter-clockwise."
         )
     get(name)  # raises the standard error for unknown names
@@ -73,6 +75,19 @@ def describe(name: str) -> str:
 
 
 # -- internals --------------------------------------------------------------------------------
+def _regular_size(name: str) -> int | None:
+    """``n`` if ``name`` is ``regular_<n>`` (checked against `MAX_REGULAR`), else None."""
+    match = _REGULAR.fullmatch(name)
+    if match is None:
+        return None
+    n = int(match.group(1))
+    if not 3 <= n <= MAX_REGULAR:
+        raise InvalidWorldError(
+            f"world {name!r}: regular_<n> needs an integer 3 <= n <= {MAX_REGULAR}, got {n}"
+        )
+    return n
+
+
 def _map_file(name: str):
     return resources.files(_MAPS_PACKAGE).joinpath(_MAPS_DIR, f"{name}.yaml")
 
@@ -98,8 +113,6 @@ def _stored(name: str) -> World:
 
 @lru_cache(maxsize=128)
 def _regular(n: int) -> World:
-    if n < 3:
-        raise InvalidWorldError(f"regular_<n>: n must be an integer >= 3, got {n}")
     angles = 2.0 * np.pi * np.arange(n) / n
     cx, cy = REGULAR_CENTER
     vertices = np.column_stack(

@@ -8,7 +8,8 @@ import pytest
 
 from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.multi_bounce_env import MultiBounceAEC, MultiBounceEnv
-from bounce_gym.envs.options import ARGUMENTS
+from bounce_gym.envs.options import ARGUMENTS, parse_options
+from bounce_gym.errors import ConfigError
 
 
 @pytest.mark.parametrize("make, name", [
@@ -41,3 +42,14 @@ def test_registered_ids_accept_overrides():
     assert env.unwrapped.options.step_length == 0.5
     parallel = pettingzoo.make("parallel", "bounce_gym/MultiBounce-v0", n_robots=2)
     assert parallel.unwrapped.options.n_robots == 2
+
+
+@pytest.mark.parametrize("history", [10_001, 10**9])
+def test_history_is_bounded(history):
+    # history=10**9 used to pass the options and run out of memory building the observation
+    with pytest.raises(ConfigError, match=r"history: expected an integer in \[0, 10000\]"):
+        parse_options({"history": history})
+
+
+def test_the_largest_history_is_accepted():
+    assert parse_options({"history": 10_000}).history == 10_000

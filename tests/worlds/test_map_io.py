@@ -313,3 +313,40 @@ def test_save_returns_path_and_accepts_strings(tmp_path, polygon_world):
 
 def test_to_ascii_matches_file_rows(grid_world):
     assert to_ascii(grid_world.occupancy(1.0)) == GRID_ROWS
+
+
+# -- size and nesting limits ------------------------------------------------------------------
+@pytest.mark.timeout(30)  # a hang guard only
+@pytest.mark.parametrize("suffix, text", [
+    (".json", "[" * 100_000 + "]" * 100_000),
+    (".yaml", "[" * 100_000 + "]" * 100_000),
+    (".yaml", "".join("  " * k + "-\n" for k in range(10_000))),  # block style, by indentation
+])
+def test_deep_nesting_is_a_map_format_error(tmp_path, suffix, text):
+    # used to end in RecursionError
+    path = tmp_path / f"deep{suffix}"
+    path.write_text(text)
+    with pytest.raises(MapFormatError, match="nest .* deep; a map allows at most 32"):
+        load(path)
+
+
+def test_nesting_within_the_limit_reaches_the_schema_check(tmp_path):
+    path = tmp_path / "nested.json"
+    path.write_text("[" * 32 + "]" * 32)
+    with pytest.raises(MapFormatError, match="expected a mapping"):
+        load(path)
+
+
+def test_too_large_a_file_is_a_map_format_error(tmp_path, monkeypatch):
+    monkeypatch.setattr(map_io, "MAX_FILE_BYTES", 100)
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps({"name": "x", "outer": [[0, 0], [1, 0], [0, 1]] * 10}))
+    with pytest.raises(MapFormatError, match=r"bytes; map files may have at most 100"):
+        load(path)
+
+
+def test_too_many_vertices_is_a_map_format_error(monkeypatch):
+    monkeypatch.setattr(map_io, "MAX_VERTICES", 5)
+    ring = [[np.cos(a), np.sin(a)] for a in np.linspace(0, 6, 6)]
+    with pytest.raises(MapFormatError, match=r"'outer' must be .* at most 5, got 6 vertices"):
+        from_dict({"name": "x", "outer": ring})

@@ -214,10 +214,18 @@ def test_regular_square_is_axis_aligned_diamond():
     assert np.allclose(world.outer, [[20, 10], [10, 20], [0, 10], [10, 0]])
 
 
-@pytest.mark.parametrize("name", ["regular_2", "regular_1"])
-def test_regular_needs_three_vertices(name):
-    with pytest.raises(InvalidWorldError, match="integer >= 3"):
+@pytest.mark.parametrize("name", ["regular_2", "regular_1", "regular_10001",
+                                  "regular_1000000000000"])
+def test_regular_needs_three_to_ten_thousand_vertices(name):
+    # regular_1000000000000 used to allocate 7 TiB (MemoryError)
+    with pytest.raises(InvalidWorldError, match=r"regular_<n> needs an integer 3 <= n <= 10000"):
         get(name)
+    with pytest.raises(InvalidWorldError, match=r"3 <= n <= 10000"):
+        describe(name)
+
+
+def test_regular_ten_thousand_is_the_largest():
+    assert len(get("regular_10000").outer) == 10000
 
 
 @pytest.mark.parametrize("name", ["nowhere", "regular_", "regular_03", "regular_-5",

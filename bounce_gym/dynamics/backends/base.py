@@ -14,13 +14,17 @@ import math
 from abc import ABC, abstractmethod
 
 import numpy as np
+import shapely
 
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
 from bounce_gym.worlds.raycast import GRAZE
+from bounce_gym.worlds.world import sample_in
 
 ROBOT_COLLISIONS = ("bounce", "ignore")
+#: Consecutive rejected start positions after which random placement samples only the room left.
+PLACEMENT_MISSES = 50
 
 
 class MotionBackend(ABC):
@@ -77,6 +81,8 @@ class MotionBackend(ABC):
         self.robot_collisions = robot_collisions
         #: time tolerance in ticks, from the world's length tolerance
         self.time_tol = world.tol / self.step_length
+        if self.collide and not self.point_robots_collide:  # disks, not grid cells
+            self._check_packing()
 
     @property
     def collide(self) -> bool:
@@ -128,20 +134,59 @@ class MotionBackend(ABC):
                 raise ConfigError(f"start positions of robots {i} and {j} overlap")
 
     def random_positions(self, rng: np.random.Generator) -> np.ndarray:
-        """Uniform start positions in the free space (non-overlapping when robots collide)."""
+        """Uniform start positions in the free space (non-overlapping when robots collide).
+
+        Colliding robots are placed one after another, each at a uniform point of the free space
+        that overlaps no robot placed before (random sequential placement). Fails fast: at once
+        when the robots' disks cover more than the free space they can reach (a necessary
+        condition; checked on construction), and as soon as no room is left for the next robot.
+        """
         if not self.collide:
             return self.world.sample_free(rng, self.n_robots, self.radius)
-        chosen: list[np.ndarray] = []
-        for _ in range(100 * self.n_robots + 100):
+        n, gap = self.n_robots, 2 * self.radius
+        chosen = np.empty((n, 2))
+        k = misses = 0
+        while k < n and misses < PLACEMENT_MISSES:
             p = self.world.sample_free(rng, 1, self.radius)[0]
-            if all(np.hypot(*(p - q)) > 2 * self.radius for q in chosen):
-                chosen.append(p)
-                if len(chosen) == self.n_robots:
-                    return np.array(chosen)
+            if np.all(np.hypot(*(chosen[:k] - p).T) > gap):
+                chosen[k], k, misses = p, k + 1, 0
+            else:
+                misses += 1
+        if k == n:
+            return chosen
+        # crowded: sample only where the next robot fits, until that room is gone
+        room = self.world.eroded(self.radius).difference(
+            shapely.union_all(shapely.buffer(shapely.points(chosen[:k]), gap)))
+        while k < n and room.area > self.world.tol**2:
+            candidates = sample_in(room, rng, 64)
+            ok = self.world.contains(candidates, self.radius)
+            ok &= np.all(np.linalg.norm(candidates[:, None] - chosen[None, :k], axis=2) > gap,
+                         axis=1)
+            if not ok.any():
+                break
+            p = candidates[np.argmax(ok)]
+            chosen[k], k = p, k + 1
+            room = room.difference(shapely.Point(p).buffer(gap))
+        if k == n:
+            return chosen
         raise ConfigError(
-            f"could not place {self.n_robots} robots of radius {self.radius} without overlap "
-            f"in world {self.world.name!r}"
+            f"n_robots: placed {k} of {n} robots of robot_radius={self.radius} in world "
+            f"{self.world.name!r} at random, then no room was left for the next one; use fewer "
+            "or smaller robots, or give start positions"
         )
+
+    def _check_packing(self) -> None:
+        """Raise `ConfigError` if ``n_robots`` disjoint disks of ``radius`` cannot fit in the
+        part of the free space that robot bodies can reach (its opening by the radius)."""
+        reach = self.world.eroded(self.radius).buffer(self.radius).area
+        cover = self.n_robots * math.pi * self.radius**2
+        if cover > reach:
+            fit = int(reach // (math.pi * self.radius**2))
+            raise ConfigError(
+                f"n_robots: {self.n_robots} robots of robot_radius={self.radius} cover "
+                f"{cover:.4g}, more than the {reach:.4g} of free space they can reach in world "
+                f"{self.world.name!r}; at most {fit} can fit"
+            )
 
     # -- helpers shared by backends
     @staticmethod
