@@ -14,11 +14,13 @@ bookkeeping", "Joint cell numbering"):
   extra cell ⊥.
 * **Collisions.** A joint cell whose two robots' position cells are within Chebyshev (king-move)
   distance ``min_sep_cells`` on the grid — 0 (default) = the same cell; 1, 2, … for cells smaller
-  than the robot diameter — and, with ``forbid_swaps=True``, one whose step makes the two
-  robots swap cells (they would pass through each other) maps to the absorbing sink ⊥ instead of
-  its product successor. So every cycle other than ⊥ itself, and every transient trajectory into
-  it, is collision-free by construction. A swap moves each robot one king move, so it
-  starts from Chebyshev distance 1 and ``forbid_swaps`` only matters for ``min_sep_cells=0``.
+  than the robot diameter —, one whose step makes two diagonal moves cross
+  (`bounce_gym.cells.crossing`: both robots at the midpoint of one 2×2 block half-way through
+  the tick), and, with ``forbid_swaps=True``, one whose step makes the two robots swap cells
+  (they would pass through each other) maps to the absorbing sink ⊥ instead of its product
+  successor. So every cycle other than ⊥ itself, and every transient trajectory into it, is
+  collision-free by construction. A swap or a crossing moves each robot one king move, so it
+  starts from Chebyshev distance 1 and only matters for ``min_sep_cells=0``.
 * **SCM.** The joint successor array is analysed with `bounce_gym.markov.scm.simple_cell_mapping`
   (array-based, so every joint cell is processed once, as in Algorithm 2's outer loop).
 * **SAMEREGION(F, x̃).** Robot j is assigned region F_j (a set of free position cells);
@@ -47,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bounce_gym.cells import CellModel, too_close
+from bounce_gym.cells import CellModel, crossing, too_close
 from bounce_gym.errors import ConfigError
 from bounce_gym.markov.scm import SCMResult, simple_cell_mapping
 
@@ -178,8 +180,8 @@ def joint_successor(model: CellModel, phis: Sequence[float], forbid_swaps: bool 
 
     Returns ``(successor, n_collision_cells)``: ``successor`` has N1·N2 + 1 entries (the last is
     the sink ⊥, which maps to itself); joint cells that collide — position cells within
-    Chebyshev distance ``min_sep_cells`` (`bounce_gym.cells.too_close`), or a swap when
-    ``forbid_swaps`` — map to ⊥.
+    Chebyshev distance ``min_sep_cells`` (`bounce_gym.cells.too_close`), crossing diagonal
+    moves (`bounce_gym.cells.crossing`), or a swap when ``forbid_swaps`` — map to ⊥.
     """
     if len(phis) != 2:
         raise ConfigError(f"phis: expected two bounce angles, got {len(phis)}")
@@ -193,8 +195,10 @@ def joint_successor(model: CellModel, phis: Sequence[float], forbid_swaps: bool 
     joint = succ[:sink].reshape(n, n)
     np.add(s1[:, None] * n, s2[None, :], out=joint)
     collide = close[pos[:, None], pos[None, :]]
+    npos1, npos2 = model.decode(s1)[0], model.decode(s2)[0]
+    rc = model.position_rc.astype(np.int32)
+    collide |= crossing(rc[pos][:, None], rc[npos1][:, None], rc[pos][None], rc[npos2][None])
     if forbid_swaps:
-        npos1, npos2 = model.decode(s1)[0], model.decode(s2)[0]
         collide |= (npos1[:, None] == pos[None, :]) & (npos2[None, :] == pos[:, None])
     joint[collide] = sink
     succ[sink] = sink

@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from baselines.visibility.partition import SIDE_TOL
 from bounce_gym.worlds import World
 
 __all__ = [
@@ -105,11 +106,13 @@ def relative_direction(seg_i: object, seg_j: object) -> float:
     return float(math.atan2(ti[0] * tj[1] - ti[1] * tj[0], ti[0] * tj[0] + ti[1] * tj[1]))
 
 
-def transition_side(seg_i: object, seg_j: object, tol: float = 1e-12) -> str:
+def transition_side(seg_i: object, seg_j: object, tol: float = SIDE_TOL) -> str:
     """``"right"`` (γ ∈ (0, π): e_j is reached by turning toward the counter-clockwise-next side,
     small θ, as for the next edge of a convex polygon), ``"left"`` (γ ∈ (−π, 0)) or
     ``"parallel"`` (γ ∈ {0, π}: Def. 11's classification is undefined;
-    docs/choices.md, "Contraction for non-adjacent edges")."""
+    docs/choices.md, "Contraction for non-adjacent edges"). Parallel means |sin γ| ≤ ``tol``, the
+    partition's sidedness tolerance: tangents of a polygon far from the origin carry rounding
+    errors far above 1e-12."""
     gamma = relative_direction(seg_i, seg_j)
     if abs(math.sin(gamma)) <= tol:
         return "parallel"

@@ -24,7 +24,13 @@ import networkx as nx
 import numpy as np
 import shapely
 
-from baselines.visibility.partition import Partition, _touches_points, closed_region
+from baselines.visibility.partition import (
+    SIDE_TOL,
+    VIS_REL,
+    Partition,
+    _touches_points,
+    closed_region,
+)
 
 __all__ = [
     "Reachability",
@@ -38,8 +44,7 @@ __all__ = [
     "weak_visibility_matrix",
 ]
 
-#: Angle tolerance (rad) for deciding singletons, and default width threshold of G_safe.
-ANGLE_TOL = 1e-12
+#: Default width threshold (rad) of G_safe.
 W_MIN = 1e-6
 
 
@@ -90,17 +95,23 @@ def entirely_visible(part: Partition, i: int, j: int, closed: bool | None = None
     return bool(visibility_matrix(part, closed)[i, j])
 
 
-def _angles(a, b, c, d, t, shared_tol):
-    """θ_r, θ_l of Prop. 2 for arrays of e_i = (a, b) with unit tangent t, e_j = (c, d)."""
+def _angle_above(t, v, tol):
+    """Angle of ``v`` counter-clockwise from the unit tangent ``t``, in [0, 2π); a ``v`` whose
+    end lies within the length ``tol`` of t's line is on it (angle exactly 0 or π), so the
+    result does not depend on where the polygon lies or on its units."""
+    h = _cross(t, v)
+    theta = np.arctan2(np.where(np.abs(h) <= tol, 0.0, h), _dot(t, v))
+    return np.where(theta < 0.0, theta + 2 * np.pi, theta)
+
+
+def _angles(a, b, c, d, t, tol):
+    """θ_r, θ_l of Prop. 2 for arrays of e_i = (a, b) with unit tangent t, e_j = (c, d); ``tol``
+    is the partition's length tolerance (shared end points, points on e_i's line)."""
     rc = c - b
-    theta_r = np.arctan2(_cross(t, rc), _dot(t, rc))
     ld = d - a
-    theta_l = np.arctan2(_cross(t, ld), _dot(t, ld))
-    theta_r = np.where(np.hypot(rc[..., 0], rc[..., 1]) <= shared_tol, 0.0, theta_r)
-    theta_l = np.where(np.hypot(ld[..., 0], ld[..., 1]) <= shared_tol, np.pi, theta_l)
-    # a ray from e_i that heads into e_i's own half-plane boundary: clamp to [0, π]
-    theta_r = np.where(theta_r < -ANGLE_TOL, theta_r + 2 * np.pi, theta_r)
-    theta_l = np.where(theta_l < -ANGLE_TOL, theta_l + 2 * np.pi, theta_l)
+    theta_r = np.where(np.hypot(rc[..., 0], rc[..., 1]) <= tol, 0.0, _angle_above(t, rc, tol))
+    theta_l = np.where(np.hypot(ld[..., 0], ld[..., 1]) <= tol, np.pi, _angle_above(t, ld, tol))
+    # a ray from e_i that heads below e_i's own supporting line: clamp to [0, π]
     return np.clip(theta_r, 0.0, np.pi), np.clip(theta_l, 0.0, np.pi)
 
 
@@ -119,12 +130,15 @@ def safe_interval(seg_i, seg_j, w_min: float = 0.0) -> tuple[float, float] | Non
     a, b = (np.asarray(p, dtype=np.float64) for p in seg_i)
     c, d = (np.asarray(p, dtype=np.float64) for p in seg_j)
     length = float(np.hypot(*(b - a)))
-    scale = max(length, float(np.hypot(*(d - c))))
-    theta_r, theta_l = _angles(a, b, c, d, (b - a) / length, 1e-9 * scale)
+    tol = VIS_REL * max(length, float(np.hypot(*(d - c))))
+    theta_r, theta_l = _angles(a, b, c, d, (b - a) / length, tol)
     theta_r, theta_l = float(theta_r), float(theta_l)
-    if theta_l - theta_r < max(w_min, 0.0) - ANGLE_TOL:
+    # θ_l = θ_r up to the angle that tol subtends at the nearer far end (c from b, d from a)
+    reach = [r for r in (float(np.hypot(*(c - b))), float(np.hypot(*(d - a)))) if r > tol]
+    angle_tol = tol / min(reach) if reach else 0.0
+    if theta_l - theta_r < max(w_min, 0.0) - angle_tol:
         return None
-    if abs(theta_l - theta_r) <= ANGLE_TOL:
+    if abs(theta_l - theta_r) <= angle_tol:
         theta_l = theta_r = 0.5 * (theta_l + theta_r)
     return theta_r, theta_l
 
@@ -150,7 +164,7 @@ def _weak_candidates(part: Partition, i: int, j: int, inside: np.ndarray) -> np.
     def meet(p0, p1, q0, q1):
         """Parameter along q0->q1 of its intersection with the line p0-p1 (None if parallel)."""
         den = _cross(p1 - p0, q1 - q0)
-        if abs(den) <= 1e-12 * np.hypot(*(p1 - p0)) * np.hypot(*(q1 - q0)):
+        if abs(den) <= SIDE_TOL * np.hypot(*(p1 - p0)) * np.hypot(*(q1 - q0)):
             return None
         return float(_cross(p0 - q0, p1 - p0) / -den)
 
@@ -172,7 +186,7 @@ def _weak_candidates(part: Partition, i: int, j: int, inside: np.ndarray) -> np.
             if s_ is not None and u is not None:
                 cands.append((s_, u))
     out = np.asarray(cands)
-    slack = 1e-12
+    slack = part.tol / np.array([part.length[i], part.length[j]])  # parameters within tol
     ok = (out >= -slack).all(axis=1) & (out <= 1 + slack).all(axis=1)
     return np.clip(out[ok], 0.0, 1.0)
 

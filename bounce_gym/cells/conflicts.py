@@ -3,8 +3,11 @@ where Alam & Bobadilla 2020 is silent: docs/choices.md, "Robot–robot conflicts
 
 Each robot proposes its target cell (−1 if an obstacle blocks it). A robot that wants to move is
 also blocked when its target is another moving robot's target, when two robots would swap cells,
-or when its target is the cell of a robot that stays — iterated to a fixpoint. Moving into a cell
-that another robot is vacating is allowed. Vectorised over a batch of joint states; shared by the
+when two diagonal moves cross (`crossing`: robot A from (r, c) to (r+1, c+1) while robot B goes
+from (r, c+1) to (r+1, c) — both robots would be at the shared midpoint half-way through the
+tick), or when its target is the cell of a robot that stays — iterated to a fixpoint. Moving into
+a cell that another robot is vacating is allowed. A blocked robot stays and rotates, whatever the
+rule that blocked it. Vectorised over a batch of joint states; shared by the
 ``cell`` backend of the environments and the joint cell model of the multi-robot planners.
 
 **Minimum separation** (``min_sep_cells`` s, for cells smaller than the robot diameter):
@@ -41,13 +44,30 @@ def crowded(position: np.ndarray, close: np.ndarray | None = None) -> np.ndarray
     return near.any(axis=(1, 2))
 
 
-def resolve_moves(position: np.ndarray, target: np.ndarray, close: np.ndarray | None = None
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def crossing(from_a: np.ndarray, to_a: np.ndarray, from_b: np.ndarray, to_b: np.ndarray
+             ) -> np.ndarray:
+    """Whether two simultaneous king moves cross diagonally (grid coordinates (..., 2), which
+    broadcast; a robot that stays has ``to == from``).
+
+    The moves take the same tick at constant speed, so half-way both robots are at their move's
+    midpoint: the moves cross when the midpoints coincide and the robots do not simply swap
+    cells (a swap is its own rule). For king moves this is exactly the pair of crossing
+    diagonals of one 2×2 block; a robot that stays never crosses anyone.
+    """
+    from_a, to_a, from_b, to_b = (np.asarray(x) for x in (from_a, to_a, from_b, to_b))
+    same_mid = np.all(from_a + to_a == from_b + to_b, axis=-1)
+    swap = np.all(from_a == to_b, axis=-1) & np.all(to_a == from_b, axis=-1)
+    return same_mid & ~swap
+
+
+def resolve_moves(position: np.ndarray, target: np.ndarray, position_rc: np.ndarray,
+                  close: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Which robots stay, given their cells and proposed targets.
 
     Args:
         position: (batch, m) current position cell of every robot.
         target: (batch, m) proposed target position cell, −1 where an obstacle blocks the move.
+        position_rc: (n_positions, 2) grid coordinates of the position cells (for `crossing`).
         close: the `too_close` matrix of a minimum separation; ``None`` = the same cell only.
 
     Returns:
@@ -74,16 +94,21 @@ def resolve_moves(position: np.ndarray, target: np.ndarray, close: np.ndarray | 
     at &= wants[:, :, None] & ~eye
     swap = (target[:, :, None] == position[:, None, :]) & wants[:, :, None]
     swap &= np.swapaxes(swap, 1, 2)
+    rc_from = position_rc[position]
+    rc_to = position_rc[np.where(wants, target, position)]
+    # swapping or crossing: the two robots would pass through each other
+    through = swap | (crossing(rc_from[:, :, None], rc_to[:, :, None], rc_from[:, None],
+                               rc_to[:, None]) & ~eye)
     while True:
         moving = ~stays
         mm = moving[:, :, None] & moving[:, None, :]
-        newly = moving & (np.any(same & mm, axis=2) | np.any(swap & mm, axis=2)
+        newly = moving & (np.any(same & mm, axis=2) | np.any(through & mm, axis=2)
                           | np.any(at & stays[:, None, :], axis=2))
         if not newly.any():
             break
         stays |= newly
     by_robot = stays & wants
-    contact = by_robot[:, :, None] & (same | swap | (at & stays[:, None, :]))
+    contact = by_robot[:, :, None] & (same | through | (at & stays[:, None, :]))
     has = contact.any(axis=2)
     blocker[has] = np.argmax(contact, axis=2)[has]
     pairs = np.triu(contact | np.swapaxes(contact, 1, 2), 1).sum(axis=(1, 2))

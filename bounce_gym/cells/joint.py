@@ -90,7 +90,7 @@ class JointCellModel:
         target0 = self.model.targets[k, p]
         if not self.collisions or self.m == 1:
             return p, k, target0, np.zeros(len(joint), dtype=np.int64)
-        stays, _, pairs = resolve_moves(p, target0, self.close)
+        stays, _, pairs = resolve_moves(p, target0, self.model.position_rc, self.close)
         return p, k, np.where(stays, -1, target0), pairs
 
     def step(self, joint: np.ndarray, return_collisions: bool = False):

@@ -82,7 +82,8 @@ class CellBackend(MotionBackend):
         target = self.model.targets[k, p]
         if not self.collide:
             return p, target, np.full(len(p), NO_CONTACT, dtype=np.int64)
-        stays, blocker, _ = resolve_moves(p[None], target[None], self.close)
+        stays, blocker, _ = resolve_moves(p[None], target[None], self.model.position_rc,
+                                         self.close)
         return p, np.where(stays[0], -1, target), blocker[0]
 
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:

@@ -116,11 +116,19 @@ def test_sink_is_absorbing(model):
     n = model.n_cells
     sink = n * n
     assert len(succ) == sink + 1 and succ[sink] == sink
-    assert n_coll == model.n_positions * model.n_bins**2
     z1, z2 = np.divmod(np.arange(sink), n)
-    same = model.decode(z1)[0] == model.decode(z2)[0]
-    assert np.all(succ[:sink][same] == sink)
-    assert np.all(succ[:sink][~same] < sink)
+    p1, p2 = model.decode(z1)[0], model.decode(z2)[0]
+    same = p1 == p2
+    # crossing diagonals: both robots at one midpoint half-way through the tick, not a swap
+    s = model.successor(phi)[0]
+    q1, q2 = model.decode(s[z1])[0], model.decode(s[z2])[0]
+    rc = model.position_rc
+    mid = np.all(rc[p1] + rc[q1] == rc[p2] + rc[q2], axis=1)
+    cross = mid & ~same & ~((q1 == p2) & (q2 == p1))
+    assert cross.any()
+    assert n_coll == model.n_positions * model.n_bins**2 + cross.sum()
+    assert np.all(succ[:sink][same | cross] == sink)
+    assert np.all(succ[:sink][~(same | cross)] < sink)
     # the sink is a period-1 group that is rejected
     res = persistent_behavior(model, [phi, phi])
     assert res.scm.periods[res.scm.group[sink]] == 1
@@ -258,3 +266,22 @@ def test_zoo_grid_10x10_r_positive(deg):
     for cyc in res.cycles:
         z1, z2 = res.split(cyc)
         assert np.all(model.decode(z1)[0] != model.decode(z2)[0])
+
+
+def test_accepted_cycles_never_cross_diagonally():
+    """docs/choices.md, "Robot–robot conflicts on the grid": two robots whose diagonal moves
+    cross meet at the shared corner half-way through the tick, so no accepted cycle may contain
+    such a step (grid_10x10 at φ = 90° accepted 6 such cycles of 73 before the rule)."""
+    from bounce_gym.worlds import get
+
+    model = CellModel(get("grid_10x10"))
+    phi = math.radians(90)
+    res = persistent_behavior(model, [phi, phi])
+    rc = model.position_rc
+    for cyc in res.cycles:
+        z1, z2 = res.split(cyc)
+        a, b = rc[model.decode(z1)[0]], rc[model.decode(z2)[0]]
+        a1, b1 = np.roll(a, -1, axis=0), np.roll(b, -1, axis=0)
+        swap = np.all(a == b1, axis=1) & np.all(b == a1, axis=1)
+        assert not np.any(np.all(a + a1 == b + b1, axis=1) & ~swap)
+    assert res.r > 0

@@ -250,8 +250,8 @@ def test_min_sep_zero_is_the_same_cell_rule(grid10):
     assert jm.close is None
     p, k = grid10.decode(x)
     target = grid10.targets[k, p]
-    plain = resolve_moves(p, target)
-    explicit = resolve_moves(p, target, too_close(grid10.position_rc, 0))
+    plain = resolve_moves(p, target, grid10.position_rc)
+    explicit = resolve_moves(p, target, grid10.position_rc, too_close(grid10.position_rc, 0))
     for a, b in zip(plain, explicit, strict=True):
         assert np.array_equal(a, b)
 

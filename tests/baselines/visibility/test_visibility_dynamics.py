@@ -86,6 +86,17 @@ def test_opposite_sides_of_rectangle_are_isometric():
     np.testing.assert_allclose(vd.slope(bottom, top, theta), -1.0, rtol=1e-12)
 
 
+@pytest.mark.parametrize("angle", [0.3, 0.7, 1.2])
+def test_opposite_sides_stay_parallel_far_from_the_origin(angle):
+    """A rotated 7 x 3 rectangle shifted by (10⁵, −7·10⁴): its opposite walls' tangents differ by
+    about 2e-12 rad of rounding, which the former 1e-12 tolerance called a turn."""
+    rot = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    v = [np.array([1e5, -7e4]) + rot @ np.array(p) for p in [(0, 0), (7, 0), (7, 3), (0, 3)]]
+    bottom, top = np.array([v[0], v[1]]), np.array([v[2], v[3]])
+    assert vd.transition_side(bottom, top) == "parallel"
+    assert vd.interior_angle(bottom, top) == 0.0
+
+
 def random_valid_pair(rng):
     """Two random segments and a (s, θ) whose ray really hits the second one."""
     while True:
