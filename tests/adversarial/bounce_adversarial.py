@@ -290,7 +290,7 @@ def trajectory_digest(rule: str, seed: int, n_bounces: int = 300, backend: str =
                       noise: str = "reliable", n_robots: int = 1) -> str:
     """sha256 of the positions, headings, clocks and ticks of ``n_bounces`` bounces, built from
     ``seed`` alone (nothing is pickled): the same in every process for the same arguments."""
-    world = make_world("holes", 0, 3.0, 1e6)
+    world = make_world("holes", 0, 100.0, 1e6)
     dyn = make_dynamics(world, backend, rule, noise, 0.002 if n_robots > 1 else 0.0,
                         world.diameter / 40, n_robots,
                         "bounce" if n_robots > 1 else "ignore")
