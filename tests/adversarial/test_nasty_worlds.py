@@ -73,13 +73,19 @@ def test_quick(tally, world, backend):
 
 @pytest.mark.slow
 @pytest.mark.timeout(900)
+@pytest.mark.parametrize("n_robots", [1, 4])
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("world", WORLDS, ids=_id)
-def test_slow(tally, world, backend):
-    """Every rule x noise model the backend supports, point robot and disk, 400 bounces each."""
+def test_slow(tally, world, backend, n_robots):
+    """Every rule x noise model the backend supports: one robot (point and disk alternating,
+    250 bounces each) and four colliding disks of 1/100 of the map (150 bounces each)."""
     index = WORLDS.index(world)
     for k, (rule, noise) in enumerate(_combos(backend)):
-        _run(tally, *world, backend, rule, noise, 0.002 * (k % 2), 400, 1000 * index + k)
+        if n_robots == 1:
+            _run(tally, *world, backend, rule, noise, 0.002 * (k % 2), 250, 1000 * index + k)
+        else:
+            _run(tally, *world, backend, rule, noise, 0.01, 150, 1000 * index + k,
+                 n_robots=n_robots, robot_collisions="bounce")
 
 
 MULTI_WORLDS = [w for w in WORLDS if w[1] in (1e-4, 1.0, 1e5)]
@@ -95,17 +101,6 @@ def test_multi_robot_disks_never_overlap(tally, world, backend):
     rule, noise = combos[index % len(combos)]
     _run(tally, *world, backend, rule, noise, 0.01, 100, index, n_robots=4,
          robot_collisions="bounce")
-
-
-@pytest.mark.slow
-@pytest.mark.timeout(900)
-@pytest.mark.parametrize("backend", BACKENDS)
-@pytest.mark.parametrize("world", WORLDS, ids=_id)
-def test_multi_robot_slow(tally, world, backend):
-    index = WORLDS.index(world)
-    for k, (rule, noise) in enumerate(_combos(backend)):
-        _run(tally, *world, backend, rule, noise, 0.01, 150, 1000 * index + k, n_robots=4,
-             robot_collisions="bounce")
 
 
 # -- kinematic vs pymunk -------------------------------------------------------------------------
