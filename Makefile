@@ -4,8 +4,11 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DEMO ?= evaluate.py
 PYTEST_ARGS ?=
+# `make test` leaves out the tests marked slow (the long adversarial runs); `make test-slow`
+# runs only those. CI runs both.
+PYTEST_MARK ?= not slow
 
-.PHONY: install test demo bench lint clean
+.PHONY: install test test-slow demo bench lint clean
 
 install: $(STAMP)
 
@@ -16,7 +19,10 @@ $(STAMP): pyproject.toml setup.py constraints.txt
 	touch $@
 
 test: $(STAMP)
-	SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy $(BIN)/python -m pytest -q $(PYTEST_ARGS)
+	SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy $(BIN)/python -m pytest -q -m "$(PYTEST_MARK)" $(PYTEST_ARGS)
+
+test-slow: $(STAMP)
+	SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy $(BIN)/python -m pytest -q -m slow $(PYTEST_ARGS)
 
 # The main job: evaluate.py on the default config, configs/eval_default.yaml
 # (`make demo DEMO="-m bounce_gym.demo"` runs the short simulator demo instead).
