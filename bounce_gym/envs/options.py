@@ -36,7 +36,8 @@ Arguments (defaults of the single-robot env; the multi-robot envs start from ``g
 * ``cell_bins``, ``corner_rule``: orientation bins (default 8) and diagonal rule (default
   ``"target_only"``, see `bounce_gym.cells.model`) of the env's cell model — the cell backend's
   grid, and the model the env hands planners on every backend (``env.cell_model()``).
-* multi-robot only: ``n_robots``; ``robot_collisions`` (``"bounce"`` | ``"ignore"``);
+* multi-robot only: ``n_robots`` (at most 10,000: one PettingZoo agent each);
+  ``robot_collisions`` (``"bounce"`` | ``"ignore"``);
   ``turn_angles`` (degrees; extra discrete actions that turn a robot in place, parallel form
   only); ``min_sep_cells`` (``cell`` backend: robots within this Chebyshev distance collide,
   0 = the same cell).
@@ -65,6 +66,9 @@ from bounce_gym.worlds import World
 BACKENDS = ("kinematic", "pymunk", "cell")
 #: Largest ``history`` (observation length grows by 2 per entry).
 MAX_HISTORY = 10_000
+#: Largest ``n_robots`` of an env (every robot is a PettingZoo agent with its own dicts; the
+#: batched dynamics, `bounce_gym.dynamics.BounceDynamics`, takes more).
+MAX_ROBOTS = 10_000
 STEP_MODES = ("bounce", "tick")
 ACTION_TYPES = ("discrete", "continuous")
 
@@ -236,8 +240,9 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
     backend = _choice("backend", values["backend"], BACKENDS)
     bounce_rule = _choice("bounce_rule", values["bounce_rule"], sorted(RULES))
     n_robots = values["n_robots"]
-    if isinstance(n_robots, bool) or not isinstance(n_robots, int | np.integer) or n_robots < 1:
-        raise ConfigError(f"n_robots: expected an integer >= 1, got {n_robots!r}")
+    if isinstance(n_robots, bool) or not isinstance(n_robots, int | np.integer) \
+            or not 1 <= n_robots <= MAX_ROBOTS:
+        raise ConfigError(f"n_robots: expected an integer in [1, {MAX_ROBOTS}], got {n_robots!r}")
     n_robots = int(n_robots)
     history = values["history"]
     if isinstance(history, bool) or not isinstance(history, int | np.integer) \

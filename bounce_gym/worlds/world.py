@@ -42,7 +42,11 @@ def _as_ring(points: object, label: str) -> np.ndarray:
 
 
 def _signed_area(ring: np.ndarray) -> float:
-    x, y = ring[:, 0], ring[:, 1]
+    """Shoelace area, positive for a counter-clockwise ring. Coordinates are taken relative to
+    the first vertex, so a small ring far from the origin (map coordinates in metres of a
+    projected system) keeps its digits instead of cancelling products of huge numbers."""
+    rel = ring - ring[0]
+    x, y = rel[:, 0], rel[:, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 

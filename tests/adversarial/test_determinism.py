@@ -53,15 +53,7 @@ def test_spawned_worker_gives_the_same_trajectories(digests):
     assert got == digests
 
 
-NOT_YET_PICKLABLE = ("fixed", "specular", "monotonic", "nilles_relative")
-
-
-@pytest.mark.parametrize("rule", [
-    pytest.param(rule, marks=pytest.mark.xfail(
-        strict=True, raises=(AttributeError, pickle.PicklingError),
-        reason="rules are local closures until the pickling fix"))
-    if rule in NOT_YET_PICKLABLE else rule
-    for rule in RULE_NAMES])
+@pytest.mark.parametrize("rule", RULE_NAMES)
 def test_pickled_dynamics_continue_identically(rule):
     world = make_world("holes", 0, 100.0, 1e6)
     dyn = make_dynamics(world, "kinematic", rule, "reliable", 0.0, world.diameter / 40)

@@ -4,8 +4,8 @@ IndexError, KeyError, MemoryError or RecursionError.
 Every keyword of `bounce_gym.envs.options.ARGUMENTS` gets strings, None, bools, NaN, inf, huge
 ints, nested lists and complex numbers, on `BounceEnv` and `MultiBounceEnv`. Allowed outcomes:
 the env builds (the value happens to be valid), a `BounceGymError`, or a `TypeError` for a
-keyword the env does not take. Inputs that still fail today are listed in `KNOWN_BAD` and run as
-strict xfails in `test_known_bad_inputs`; the property test skips them (and only them).
+keyword the env does not take. Huge sizes (which would allocate in proportion if they were not
+refused) run in a memory-capped child process (`HUGE_INPUTS`).
 """
 
 import math
@@ -69,25 +69,21 @@ def _huge_size(key: str, value: object) -> bool:
     return key in ("history", "n_robots") and isinstance(value, int) and value > 10_000
 
 
-#: Inputs that fail today (found by the property test below), as strict xfails: each turns red
-#: once fixed, and is then deleted here.
-KNOWN_BAD = [
-    ("single", "history", 10**9, "MemoryError: a huge history sizes the observation space"),
-    ("multi", "history", 10**9, "MemoryError: a huge history sizes the observation space"),
-    ("multi", "n_robots", 10**9, "MemoryError: robots are allocated before any size check"),
-    ("single", "noise", {"type": "reliable", "r": "a"},
-     "ValueError: could not convert string to float: 'a' (make_noise's float())"),
-    ("single", "noise", {"type": "interval", "lo": [1], "hi": 2},
-     "TypeError from float() of a list in make_noise"),
+#: Inputs the property test below found failing (MemoryError, raw ValueError/TypeError) before
+#: they were fixed; they must now be refused with the package's error.
+HUGE_INPUTS = [
+    ("single", "history", 10**9),
+    ("multi", "history", 10**9),
+    ("multi", "n_robots", 10**9),
+    ("single", "noise", {"type": "reliable", "r": "a"}),
+    ("single", "noise", {"type": "interval", "lo": [1], "hi": 2}),
 ]
 
 
 @pytest.mark.timeout(150)
-@pytest.mark.parametrize(("env", "key", "value", "why"), [
-    pytest.param(*case, marks=pytest.mark.xfail(strict=True, reason=case[3]))
-    for case in KNOWN_BAD])
-def test_known_bad_inputs(env, key, value, why):
-    assert _outcome(env, key, value) in ("package error", "built")
+@pytest.mark.parametrize(("env", "key", "value"), HUGE_INPUTS)
+def test_formerly_failing_inputs_raise_package_errors(env, key, value):
+    assert _outcome(env, key, value) == "package error"
 
 
 def _in_process(env: str, key: str, value: object) -> None:
@@ -116,7 +112,8 @@ def test_junk_arguments_raise_package_errors(tally, env, key, data):
     allocation) and noise dicts with non-numeric fields (raw ValueError / TypeError)."""
     value = data.draw(JUNK)
     if _huge_size(key, value):
-        return  # KNOWN_BAD: MemoryError
+        assert _outcome(env, key, value) in ("package error", "built")
+        return
     tally["bad inputs"] += 1
     _in_process(env, key, value)
 
@@ -125,8 +122,5 @@ def test_junk_arguments_raise_package_errors(tally, env, key, data):
 @settings(max_examples=60, deadline=None, derandomize=True)
 @given(env=st.sampled_from(["single", "multi"]), value=NOISE_JUNK)
 def test_junk_noise_fields_raise_package_errors(tally, env, value):
-    fields = [v for k, v in value.items() if k != "type"]
-    if any(not isinstance(v, int | float) or isinstance(v, bool) for v in fields):
-        return  # KNOWN_BAD: make_noise's float() raises raw ValueError / TypeError
     tally["bad inputs"] += 1
     _in_process(env, "noise", value)

@@ -31,8 +31,15 @@ def test_more_robots_than_random_placement_can_seat_fail_once_the_room_is_gone()
 
 @pytest.mark.timeout(30)  # a hang guard only; this gave no answer in minutes before
 def test_more_robots_than_the_free_space_holds_fail_on_construction():
-    with pytest.raises(ConfigError, match=r"n_robots: 100000 robots of robot_radius=0.3 cover .* "
+    with pytest.raises(ConfigError, match=r"n_robots: 5000 robots of robot_radius=0.3 cover .* "
                                           r"at most 664 can fit"):
+        MultiBounceEnv(n_robots=5_000)
+
+
+@pytest.mark.timeout(30)
+def test_more_robots_than_an_env_takes_fail_before_any_allocation():
+    with pytest.raises(ConfigError, match=r"n_robots: expected an integer in \[1, 10000\], "
+                                          r"got 100000"):
         MultiBounceEnv(n_robots=100_000)
 
 
