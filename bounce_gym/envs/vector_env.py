@@ -91,9 +91,24 @@ class BounceVectorEnv(VectorEnv):
 
     # -- episodes ---------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
-        """Reset every env; ``seed`` s seeds env i with s + i (a list gives one seed per env)."""
+        """Reset every env; ``seed`` s seeds env i with s + i (a list gives one seed per env).
+
+        ``options["reset_mask"]`` (an (N,) bool array, as SyncVectorEnv takes it) resets only
+        those envs; the other options go to every env's reset.
+        """
         super().reset(seed=seed)
         n = self.num_envs
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
+        rows = np.arange(n)
+        if mask is not None:
+            mask = np.asarray(mask)
+            if mask.shape != (n,) or mask.dtype != np.bool_:
+                raise ConfigError(f"options['reset_mask']: expected {n} bools, got dtype "
+                                  f"{mask.dtype}, shape {mask.shape}")
+            if self.dynamics.state is None and not mask.all():
+                raise ConfigError("options['reset_mask']: the first reset resets every env")
+            rows = np.flatnonzero(mask)
         if seed is None:
             seeds = [None] * n
         elif isinstance(seed, int | np.integer):
@@ -102,21 +117,21 @@ class BounceVectorEnv(VectorEnv):
             seeds = list(seed)
             if len(seeds) != n:
                 raise ConfigError(f"seed: expected {n} seeds, got {len(seeds)}")
-        for i, s in enumerate(seeds):
-            if s is not None or self._rngs[i] is None:
-                self._rngs[i] = seeding.np_random(s)[0]
-        self._options = options
-        infos = self._reset_envs(np.arange(n), {})
-        self._autoreset[:] = False
+        for i in rows:
+            if seeds[i] is not None or self._rngs[i] is None:
+                self._rngs[i] = seeding.np_random(seeds[i])[0]
+        infos = self._reset_envs(rows, {}, options)
+        self._autoreset[rows] = False
         return self._observation(), infos
 
-    def _reset_envs(self, rows: np.ndarray, infos: dict) -> dict:
+    def _reset_envs(self, rows: np.ndarray, infos: dict, options: dict | None = None) -> dict:
         """Start new episodes in ``rows``: each runs the single-robot reset with its own
-        generator, and its state, task state and reset info are copied into the batch."""
+        generator and ``options`` (an autoreset passes none), and its state, task state and reset
+        info are copied into the batch."""
         core = self.single.core
         state = self.dynamics.state
         for i in rows:
-            core.reset(self._rngs[i], self._options)
+            core.reset(self._rngs[i], options)
             if state is None:  # the first reset: a batch of copies to overwrite row by row
                 state = self._first_state(core)
             one = core.state
