@@ -96,7 +96,7 @@ class BounceVectorEnv(VectorEnv):
         ``options["reset_mask"]`` (an (N,) bool array, as SyncVectorEnv takes it) resets only
         those envs; the other options go to every env's reset.
         """
-        super().reset(seed=seed)
+        super().reset(seed=seed if isinstance(seed, int | np.integer) else None)
         n = self.num_envs
         options = dict(options or {})
         mask = options.pop("reset_mask", None)
