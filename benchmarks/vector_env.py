@@ -24,35 +24,9 @@ import yaml
 
 import bounce_gym  # noqa: F401
 from bounce_gym import worlds
-from bounce_gym.dynamics import BounceDynamics
 
 ID = "bounce_gym/Bounce-v0"
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "train_navigation.yaml"
-
-
-def _best_rate(setup: Callable[[], Callable[[], int]], repeats: int) -> float:
-    """Best rate (events per second) of ``repeats`` runs; ``setup`` returns the timed callable."""
-    best = 0.0
-    for _ in range(repeats):
-        run = setup()
-        start = time.perf_counter()
-        events = run()
-        best = max(best, events / (time.perf_counter() - start))
-    return best
-
-
-def bounce_each(n: int, rounds: int) -> Callable[[], int]:
-    dyn = BounceDynamics(worlds.get("two_rooms"), n, robot_collisions="ignore")
-    dyn.reset(np.random.default_rng(0))
-    dyn.bounce_each(1.0)  # drive to the first contact
-    angles = np.random.default_rng(1).uniform(0.2, 2 * np.pi - 0.2, (rounds, n))
-
-    def run() -> int:
-        for row in angles:
-            dyn.bounce_each(row)
-        return rounds * n
-
-    return run
 
 
 def vector_steps(n: int, steps: int, mode: str) -> Callable[[], int]:
@@ -93,8 +67,12 @@ def _row(name: str, ratio: float, target: float) -> None:
 
 
 def main(quick: bool = False, repeats: int = 3) -> None:
+    from benchmarks.run import _time as _best_rate  # imported here: run.py imports this module
+    from benchmarks.run import independent_robots
+
     rounds = 20 if quick else 100
-    anchor = _best_rate(lambda: bounce_each(1024, rounds), repeats)
+    anchor = _best_rate(lambda: independent_robots(worlds.get("two_rooms"), 1024, rounds),
+                        repeats)
     native = _best_rate(lambda: vector_steps(1024, rounds, "vector_entry_point"), repeats)
     print(f"bounce_each, 1,024 robots: {anchor:,.0f} robot-bounces/s; "
           f"vector env N = 1,024: {native:,.0f}")
