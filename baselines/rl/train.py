@@ -9,7 +9,8 @@ A training configuration (YAML, see ``configs/train_*.yaml``)::
                                      # that senses only contact and time)
     total_timesteps: 20000
     seed: 0
-    n_envs: 4                        # SB3 DummyVecEnv copies (DQN uses 1)
+    n_envs: 4                        # parallel episodes (DQN uses 1)
+    vec_env: native                  # native | sync | subproc (see below)
     hyperparams: {learning_rate: 0.0003}
     checkpoint_every: 5000           # 0 = none
     tensorboard: false
@@ -21,6 +22,14 @@ and the final model — is written atomically and listed with its sha256 in its 
 ``manifest.json`` (`baselines.rl.model_files`): a crash at any instant leaves complete files only.
 Mistakes (a bad key, env argument or hyperparameter, a ``name`` that is not one folder name, a
 models folder that cannot be written) raise `ConfigError` before training starts.
+
+**Batched episodes.** ``vec_env: native`` (the default for ids with a Gymnasium
+``vector_entry_point``: free, navigation, coverage) steps the ``n_envs`` episodes as one batch
+(`bounce_gym.envs.vector_env.BounceVectorEnv` seen through `baselines.rl.vector_vec_env`); env i
+is seeded with seed + i, as SB3 seeds its copies, so it runs the same episodes as ``sync`` (SB3's
+DummyVecEnv of ``gym.make`` copies, the default for the other ids) — only faster. ``subproc``
+runs the copies in SB3's SubprocVecEnv. Options the batch cannot run (``step_mode: tick``, the
+pymunk backend, noise) raise `ConfigError` with ``native``: choose ``sync`` for them.
 
 **Several robots.** With a PettingZoo id (``bounce_gym/MultiBounceCoverage-v0``, …) the robots
 share one policy (parameter sharing): the parallel env becomes one SB3 VecEnv with a slot per
@@ -50,7 +59,8 @@ ALGOS = ("ppo", "dqn", "recurrentppo")
 MULTI_ALGOS = ("ppo",)
 _KEYS = {"name": str, "env": str, "env_kwargs": dict, "algo": str, "total_timesteps": int,
          "seed": int, "n_envs": int, "hyperparams": dict, "checkpoint_every": int,
-         "tensorboard": bool, "models": str, "resume": bool}
+         "tensorboard": bool, "models": str, "resume": bool, "vec_env": str}
+VEC_ENVS = ("native", "sync", "subproc")
 
 
 def validate_train_config(config: object) -> dict:
@@ -77,11 +87,22 @@ def validate_train_config(config: object) -> dict:
     if multi and config["algo"] not in MULTI_ALGOS:
         raise ConfigError(f"config.algo: a multi-robot env trains one shared policy with one of "
                           f"{MULTI_ALGOS}, got {config['algo']!r}")
+    if config.get("vec_env", "native") not in VEC_ENVS:
+        raise ConfigError(f"config.vec_env: expected one of {VEC_ENVS}, got {config['vec_env']!r}")
+    if multi and config.get("vec_env", "native") != "native":
+        raise ConfigError("config.vec_env: a multi-robot env is one VecEnv with a slot per robot; "
+                          "leave vec_env unset")
+    if config.get("vec_env") == "native" and not multi \
+            and gym.spec(config["env"]).vector_entry_point is None:
+        raise ConfigError(f"config.vec_env: {config['env']} has no native batched env; use "
+                          "'sync' or 'subproc'")
     if config["total_timesteps"] < 1:
         raise ConfigError(f"config.total_timesteps: expected an integer >= 1, got "
                           f"{config['total_timesteps']}")
     check_folder_name("config.name", config["name"])
-    defaults = {"env_kwargs": {}, "seed": 0, "n_envs": 1 if multi else 4, "hyperparams": {},
+    native = multi or gym.spec(config["env"]).vector_entry_point is not None
+    defaults = {"vec_env": "native" if native else "sync", "env_kwargs": {}, "seed": 0,
+                "n_envs": 1 if multi else 4, "hyperparams": {},
                 "checkpoint_every": 0, "tensorboard": False, "models": "models", "resume": False}
     for key, value in defaults.items():
         config.setdefault(key, value)
@@ -95,7 +116,8 @@ def validate_train_config(config: object) -> dict:
 
 
 def make_train_env(config: Mapping):
-    """The VecEnv to train on: SB3's ``make_vec_env`` copies, or for a PettingZoo id the
+    """The VecEnv to train on: the native batch, SB3's ``make_vec_env`` copies (``vec_env``),
+    or for a PettingZoo id the
     parameter-sharing adapter (one slot per robot) under ``VecMonitor``. Bad ``env_kwargs``
     raise `ConfigError`."""
     with config_errors("config.env_kwargs"):
@@ -112,10 +134,20 @@ def _make_train_env(config: Mapping):
         return VecMonitor(ParallelToVecEnv(pettingzoo.make("parallel", config["env"],
                                                            **config["env_kwargs"])))
     from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import SubprocVecEnv, VecMonitor
 
     n_envs = 1 if config["algo"] == "dqn" else config["n_envs"]
+    if config["vec_env"] == "native":
+        from baselines.rl.vector_vec_env import VectorToVecEnv
+
+        env = VecMonitor(VectorToVecEnv(gym.make_vec(
+            config["env"], num_envs=n_envs, vectorization_mode="vector_entry_point",
+            **config["env_kwargs"])))
+        env.seed(config["seed"])
+        return env
     return make_vec_env(config["env"], n_envs=n_envs, seed=config["seed"],
-                        env_kwargs=config["env_kwargs"])
+                        env_kwargs=config["env_kwargs"],
+                        vec_env_cls=SubprocVecEnv if config["vec_env"] == "subproc" else None)
 
 
 def model_path(config: Mapping) -> Path:

@@ -9,6 +9,9 @@ Gymnasium ids (``gym.make(id, **overrides)``):
 | ``bounce_gym/BounceCoverage-v0`` | lab_fig1 | coverage (uniform target) | 500 |
 | ``bounce_gym/BounceLocalization-v0`` | lab_localization_a, φ = 45°, cell backend | localization with the combinatorial filter | 200 |
 
+The free, navigation and coverage ids also have a ``vector_entry_point``: ``gym.make_vec(id,
+num_envs=N)`` builds a `bounce_gym.envs.vector_env.BounceVectorEnv` (N robots stepped as one batch).
+
 PettingZoo ids (``pettingzoo.make("parallel" | "aec", id, **overrides)``), ``max_cycles`` 500:
 ``bounce_gym/MultiBounce-v0`` (grid_15x15, 4 robots, free), ``bounce_gym/MultiBounceCoverage-v0``
 (grid_15x15, 4 robots, shared coverage) and ``bounce_gym/MultiBounceMonitoring-v0`` (grid_20x12,
@@ -31,6 +34,10 @@ GYM_ENVS = {
          "task_kwargs": {"filter_factory": "combinatorial"}}, 200),
 }
 
+#: the ids whose envs `BounceVectorEnv` batches (localization's filter is not batched)
+VECTOR_ENTRY_POINT = "bounce_gym.envs.vector_env:BounceVectorEnv"
+VECTOR_IDS = ("bounce_gym/Bounce-v0", "bounce_gym/BounceNavigation-v0",
+              "bounce_gym/BounceCoverage-v0")
 
 PETTINGZOO_ENVS = {
     "bounce_gym/MultiBounce-v0": {"world": "grid_15x15", "task": "free"},
@@ -40,7 +47,10 @@ PETTINGZOO_ENVS = {
 
 
 def is_pettingzoo_id(env_id: str) -> bool:
-    """Whether ``env_id`` is one of the multi-robot PettingZoo ids (not a Gymnasium id)."""
+    """Whether ``env_id`` is one of the multi-robot The free, navigation and coverage ids also have a ``vector_entry_point``: ``gym.make_vec(id,
+num_envs=N)`` builds a `bounce_gym.envs.vector_env.BounceVectorEnv` (N robots stepped as one batch).
+
+PettingZoo ids (not a Gymnasium id)."""
     return env_id in PETTINGZOO_ENVS
 
 
@@ -55,6 +65,7 @@ def register_envs() -> None:
     for env_id, (kwargs, steps) in GYM_ENVS.items():
         if env_id not in gym.registry:
             gym.register(env_id, entry_point="bounce_gym.envs.bounce_env:BounceEnv",
+                         vector_entry_point=VECTOR_ENTRY_POINT if env_id in VECTOR_IDS else None,
                          kwargs=kwargs, max_episode_steps=steps)
     for env_type, registry in (("parallel", pettingzoo.parallel_registry),
                                ("aec", pettingzoo.aec_registry)):

@@ -1,0 +1,92 @@
+"""Throughput of the native batched env (`BounceVectorEnv`); ratios against anchors of the same run.
+
+Run with ``python -m benchmarks.vector_env``. Prints one row per ratio with its target; asserts
+nothing. Rates are the best of ``repeats`` runs (time.perf_counter):
+
+* robot-bounces/s of ``gym.make_vec("bounce_gym/Bounce-v0", 1024)`` ÷ `BounceDynamics.bounce_each`
+  with 1,024 robots in two_rooms (the dynamics alone; target ≥ 0.5);
+* env-steps/s of the native env at N = 64 ÷ ``vectorization_mode="sync"`` at N = 64
+  (target ≥ 100);
+* PPO training env-steps/s on ``configs/train_navigation.yaml``'s env through the SB3 view of the
+  native env ÷ through SB3's DummyVecEnv of ``gym.make`` copies (4,096 steps, torch on one
+  thread; target ≥ 5).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import yaml
+
+import bounce_gym  # noqa: F401
+from bounce_gym import worlds
+
+ID = "bounce_gym/Bounce-v0"
+CONFIG = Path(__file__).resolve().parent.parent / "configs" / "train_navigation.yaml"
+
+
+def vector_steps(n: int, steps: int, mode: str) -> Callable[[], int]:
+    env = gym.make_vec(ID, num_envs=n, vectorization_mode=mode)
+    env.reset(seed=0)
+    actions = np.random.default_rng(1).integers(0, 3, (steps, n))
+
+    def run() -> int:
+        for row in actions:
+            env.step(row)
+        return steps * n
+
+    return run
+
+
+def ppo_rate(vec_env: str, steps: int) -> float:
+    """Env steps per second of a PPO run of ``steps`` steps on the navigation training env."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from baselines.rl.train import make_train_env, validate_train_config
+
+    torch.set_num_threads(1)
+    config = yaml.safe_load(CONFIG.read_text())
+    config = validate_train_config({**config, "vec_env": vec_env, "total_timesteps": steps})
+    env = make_train_env(config)
+    model = PPO("MlpPolicy", env, seed=0, device="cpu", **config["hyperparams"])
+    start = time.perf_counter()
+    model.learn(steps)
+    rate = steps / (time.perf_counter() - start)
+    env.close()
+    return rate
+
+
+def _row(name: str, ratio: float, target: float) -> None:
+    verdict = "ok" if ratio >= target else "below target"
+    print(f"{name:<58} {ratio:>9.2f}  target >= {target:g}  {verdict}")
+
+
+def main(quick: bool = False, repeats: int = 3) -> None:
+    from benchmarks.run import _time as _best_rate  # imported here: run.py imports this module
+    from benchmarks.run import independent_robots
+
+    rounds = 20 if quick else 100
+    anchor = _best_rate(lambda: independent_robots(worlds.get("two_rooms"), 1024, rounds),
+                        repeats)
+    native = _best_rate(lambda: vector_steps(1024, rounds, "vector_entry_point"), repeats)
+    print(f"bounce_each, 1,024 robots: {anchor:,.0f} robot-bounces/s; "
+          f"vector env N = 1,024: {native:,.0f}")
+    _row("vector env N=1024 / bounce_each 1024 robots", native / anchor, 0.5)
+    steps = 20 if quick else 100
+    fast = _best_rate(lambda: vector_steps(64, steps, "vector_entry_point"), repeats)
+    slow = _best_rate(lambda: vector_steps(64, max(steps // 5, 4), "sync"), repeats)
+    print(f"N = 64 env-steps/s: native {fast:,.0f}, sync {slow:,.0f}")
+    _row("vector env N=64 / make_vec sync N=64", fast / slow, 100)
+    ppo_steps = 1024 if quick else 4096
+    ours, theirs = ppo_rate("native", ppo_steps), ppo_rate("sync", ppo_steps)
+    print(f"PPO env-steps/s: native view {ours:,.0f}, DummyVecEnv {theirs:,.0f}")
+    _row("PPO train_navigation native view / DummyVecEnv", ours / theirs, 5)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,443 @@
+"""`BounceVectorEnv`: N independent single-robot episodes stepped as one batch.
+
+A Gymnasium 1.x ``VectorEnv`` (registered as the ``vector_entry_point`` of the free, navigation
+and coverage ids, so ``gym.make_vec(id, num_envs=N)`` builds it). The N robots live in ONE
+`BounceDynamics` with ``robot_collisions="ignore"``: a step rotates every robot and drives each
+to its own next contact in one vectorised call (`BounceDynamics.bounce_each` on the kinematic
+backend, whole-cell moves of the `CellModel` on the cell backend); rewards and terminations are
+the tasks' formulas on arrays.
+
+It reproduces ``gym.make_vec(id, num_envs=N, vectorization_mode="sync")`` step for step:
+``reset(seed=s)`` seeds env i with s + i, each env starts where a single env reset with that seed
+starts (the reset runs the single-robot core and copies its state into the batch), autoreset is
+``NEXT_STEP`` and the registered ``max_episode_steps`` truncates each env. Infos are dicts of
+arrays with ``_key`` masks, as SyncVectorEnv builds them, except ``cell``, an (N, 2) int array
+(row, col) where SyncVectorEnv has an object array of tuples.
+
+Not batched (a `ConfigError` says why): ``step_mode="tick"``, the pymunk backend, actuation
+noise, rendering and the localization task.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from bounce_gym.dynamics import BounceDynamics
+from bounce_gym.dynamics.noise import Exact
+from bounce_gym.envs.bounce_env import BounceEnv
+from bounce_gym.envs.tasks import CoverageTask, NavigationTask
+from bounce_gym.envs.tasks.base import StepEvents, path_samples, tick_length
+from bounce_gym.errors import ActionError, ConfigError
+
+#: the single-robot tasks this env batches
+VECTOR_TASKS = ("free", "navigation", "coverage")
+#: kinematic backend state that a reset copies from the single-robot core along with the pose
+_KINEMATIC_AHEAD = ("_ahead_distance", "_ahead_edge", "_ahead_normal")
+_STATE_FIELDS = ("position", "heading", "blocked", "clock", "bumps", "contact_edge",
+                 "contact_robot", "contact_normal", "odometer")
+
+
+class BounceVectorEnv(VectorEnv):
+    """N single-robot `BounceEnv` episodes in numpy arrays, stepped together.
+
+    Args:
+        num_envs: N.
+        max_episode_steps: per-env truncation (``gym.make_vec`` passes the registered value);
+            None: never truncated.
+        render_mode: only None.
+        **options: the keyword arguments of `BounceEnv` (one set, shared by the N envs).
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+
+    def __init__(self, num_envs: int, max_episode_steps: int | None = None,
+                 render_mode: str | None = None, **options: object) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) \
+                or num_envs < 1:
+            raise ConfigError(f"num_envs: expected an integer >= 1, got {num_envs!r}")
+        if render_mode is not None:
+            raise ConfigError("render_mode: the batched env does not render; render one "
+                              "gym.make env instead")
+        self.single = BounceEnv(**options)  # validates the options; resets run its core
+        opts = self.options = self.single.options
+        task = self.single.core.task
+        reason = _unbatchable(opts, task)
+        if reason:
+            raise ConfigError(f"BounceVectorEnv: {reason}; use "
+                              "gym.make_vec(..., vectorization_mode='sync')")
+        self.num_envs = n = int(num_envs)
+        self.max_episode_steps = max_episode_steps
+        self.single_observation_space = self.single.observation_space
+        self.single_action_space = self.single.action_space
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
+        self.render_mode = None
+        self.dynamics = BounceDynamics(
+            opts.world, n, backend=opts.backend, rule=opts.bounce_rule, noise=opts.noise,
+            radius=opts.robot_radius, step_length=opts.step_length, robot_collisions="ignore",
+            backend_options=opts.backend_options)
+        self.task = _BATCHED[task.name](task, n)
+        self._rngs: list[np.random.Generator | None] = [None] * n
+        self._ticks = np.zeros(n, dtype=np.int64)
+        self._elapsed = np.zeros(n, dtype=np.int64)
+        self._autoreset = np.zeros(n, dtype=bool)
+        self._history = np.zeros((n, opts.history, 2), dtype=np.float32)
+        self._last_angle = np.full(n, math.nan)
+
+    # -- episodes ---------------------------------------------------------------------------
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+        """Reset every env; ``seed`` s seeds env i with s + i (a list gives one seed per env).
+
+        ``options["reset_mask"]`` (an (N,) bool array, as SyncVectorEnv takes it) resets only
+        those envs; the other options go to every env's reset.
+        """
+        super().reset(seed=seed if isinstance(seed, int | np.integer) else None)
+        n = self.num_envs
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
+        rows = np.arange(n)
+        if mask is not None:
+            mask = np.asarray(mask)
+            if mask.shape != (n,) or mask.dtype != np.bool_:
+                raise ConfigError(f"options['reset_mask']: expected {n} bools, got dtype "
+                                  f"{mask.dtype}, shape {mask.shape}")
+            if self.dynamics.state is None and not mask.all():
+                raise ConfigError("options['reset_mask']: the first reset resets every env")
+            rows = np.flatnonzero(mask)
+        if seed is None:
+            seeds = [None] * n
+        elif isinstance(seed, int | np.integer):
+            seeds = [int(seed) + i for i in range(n)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != n:
+                raise ConfigError(f"seed: expected {n} seeds, got {len(seeds)}")
+        for i in rows:
+            if seeds[i] is not None or self._rngs[i] is None:
+                self._rngs[i] = seeding.np_random(seeds[i])[0]
+        infos = self._reset_envs(rows, {}, options)
+        self._autoreset[rows] = False
+        return self._observation(), infos
+
+    def _reset_envs(self, rows: np.ndarray, infos: dict, options: dict | None = None) -> dict:
+        """Start new episodes in ``rows``: each runs the single-robot reset with its own
+        generator and ``options`` (an autoreset passes none), and its state, task state and reset
+        info are copied into the batch."""
+        core = self.single.core
+        state = self.dynamics.state
+        for i in rows:
+            core.reset(self._rngs[i], options)
+            if state is None:  # the first reset: a batch of copies to overwrite row by row
+                state = self._first_state(core)
+            one = core.state
+            for name in _STATE_FIELDS:
+                getattr(state, name)[i] = getattr(one, name)[0]
+            if self.options.backend == "kinematic":
+                for name in _KINEMATIC_AHEAD:
+                    getattr(self.dynamics.backend, name)[i] = getattr(core.dynamics.backend,
+                                                                      name)[0]
+            self._ticks[i] = one.ticks
+            self.task.load(i, core.task)
+        if self.options.backend == "cell":
+            self.dynamics.backend.update_contacts(state, np.arange(self.num_envs))
+        self._elapsed[rows] = 0
+        self._history[rows] = 0.0
+        self._last_angle[rows] = math.nan
+        return self._infos(infos, rows, self.task.info(self.dynamics.state), step=False)
+
+    def _first_state(self, core):
+        one = core.state
+        n = self.num_envs
+        return self.dynamics.reset(np.random.default_rng(0), np.repeat(one.position, n, axis=0),
+                                   np.repeat(one.heading, n))
+
+    def step(self, actions):
+        if self.dynamics.state is None:
+            raise ConfigError("call reset() before step()")
+        angles = self._angles(actions)
+        n = self.num_envs
+        state = self.dynamics.state
+        start = state.position.copy()
+        bumping = state.blocked.copy()
+        clock_before = state.clock.copy()
+        bumps_before = state.bumps.copy()
+        if self.options.backend == "cell":
+            self.dynamics.tick(angles)  # every robot is blocked: this tick is the rotation
+            driven = _drive_cells_each(self.dynamics.backend, state)
+        else:
+            driven = self.dynamics.bounce_each(angles)
+        ticks = bumping + driven
+        self._ticks += ticks
+        changed = bumping & ~np.isnan(self._last_angle) & (angles != self._last_angle)
+        self._last_angle[bumping] = angles[bumping]
+        if self.options.history:
+            rows = np.flatnonzero(bumping)
+            self._history[rows, 1:] = self._history[rows, :-1]
+            self._history[rows, 0, 0] = clock_before[rows] / self.options.max_clock
+            self._history[rows, 0, 1] = np.mod(angles[rows], 2 * np.pi) / (2 * np.pi)
+        events = StepEvents(
+            ticks=ticks, start=start, end=state.position.copy(), heading=state.heading.copy(),
+            bumps=state.bumps - bumps_before, angles=np.where(bumping, angles, math.nan),
+            angle_changed=changed, robot_contact=np.zeros(n, dtype=bool))
+        rewards, terminated, task_info = self.task.step(state, events, self._ticks)
+        self._elapsed += 1
+        truncated = (np.zeros(n, dtype=bool) if self.max_episode_steps is None
+                     else self._elapsed >= self.max_episode_steps)
+        stepped = np.flatnonzero(~self._autoreset)
+        infos = self._infos({}, stepped, task_info, step=True,
+                            step_ticks=ticks)
+        resetting = np.flatnonzero(self._autoreset)
+        if len(resetting):
+            self._reset_envs(resetting, infos)
+            rewards[resetting] = 0.0
+            terminated[resetting] = False
+            truncated[resetting] = False
+        self._autoreset = terminated | truncated
+        return self._observation(), rewards, terminated, truncated, infos
+
+    def _angles(self, actions) -> np.ndarray:
+        """(N,) bounce angles in radians; malformed actions raise `ActionError`."""
+        opts = self.options
+        n = self.num_envs
+        raw = np.asarray(actions)
+        if opts.action_type == "discrete":
+            if raw.shape != (n,) or not np.issubdtype(raw.dtype, np.integer):
+                raise ActionError(f"actions: expected {n} integer indices, got dtype "
+                                  f"{raw.dtype}, shape {raw.shape}")
+            phi = opts.angles[0]
+            bad = (raw < 0) | (raw >= len(phi))
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                raise ActionError(f"actions[{i}]: index {int(raw[i])} is out of range "
+                                  f"[0, {len(phi)})")
+            return phi[raw]
+        if raw.dtype.kind not in "iuf":
+            raise ActionError(f"actions: expected real numbers in [-1, 1], got dtype {raw.dtype}")
+        if raw.shape not in ((n, 1), (n,)):
+            raise ActionError(f"actions: expected shape ({n}, 1), got shape {raw.shape}")
+        a = raw.astype(np.float64).reshape(n)
+        bad = ~((a >= -1.0) & (a <= 1.0))  # NaN too
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ActionError(f"actions[{i}]: {a[i]} is outside [-1, 1] (actions are not "
+                              "clipped)")
+        lo, hi = opts.angle_range[0]
+        return lo + (a + 1.0) / 2.0 * (hi - lo)
+
+    # -- sensing ----------------------------------------------------------------------------
+    def _observation(self) -> np.ndarray:
+        state = self.dynamics.state
+        opts = self.options
+        n = self.num_envs
+        parts = [state.blocked[:, None].astype(np.float32), (state.clock / opts.max_clock)[:, None]]
+        if opts.history:
+            parts.append(self._history.reshape(n, -1))
+        if opts.privileged:
+            xmin, ymin, xmax, ymax = opts.world.bounds
+            parts.append((state.position - (xmin, ymin)) / (xmax - xmin, ymax - ymin))
+            parts.append(state.direction)
+        features = self.task.observation()
+        if features is not None:
+            parts.append(features)
+        obs = np.concatenate(parts, axis=1, dtype=np.float32)
+        if opts.privileged or features is not None:
+            np.clip(obs, self.single.core.obs_low, self.single.core.obs_high, out=obs)
+        return obs
+
+    def _infos(self, infos: dict, rows: np.ndarray, task_info: dict, step: bool,
+               step_ticks: np.ndarray | None = None) -> dict:
+        """Write the info of envs ``rows`` into ``infos`` (arrays with ``_key`` masks)."""
+        state = self.dynamics.state
+        opts = self.options
+        xmin, ymin = opts.world.bounds[:2]
+        cells = np.floor((state.position - (xmin, ymin)) / opts.step_length).astype(int)
+        cells = np.clip(cells, 0, self.single.core._cell_max)[:, ::-1]
+        values = {"ticks": self._ticks, "position": state.position, "heading": state.heading,
+                  "cell": cells, "clock": state.clock, "bumps": state.bumps,
+                  "contact_edge": state.contact_edge, **task_info}
+        if step:
+            values["step_ticks"] = step_ticks
+        n = self.num_envs
+        for key, value in values.items():
+            present = None
+            if isinstance(value, tuple):  # (values, mask): a key only some envs report
+                value, present = value
+            chosen = rows if present is None else rows[present[rows]]
+            if not len(chosen):
+                continue
+            if key not in infos:
+                infos[key] = np.zeros((n, *value.shape[1:]), dtype=value.dtype)
+                infos[f"_{key}"] = np.zeros(n, dtype=bool)
+            infos[key][chosen] = value[chosen]
+            infos[f"_{key}"][chosen] = True
+        return infos
+
+    def close_extras(self, **kwargs) -> None:
+        self.single.close()
+
+
+def _unbatchable(opts, task) -> str | None:
+    """Why these options cannot be batched, or None."""
+    if task.name not in VECTOR_TASKS:
+        return (f"task {task.name!r} is not batched (its filter keeps a set of candidate "
+                "configurations per robot, updated by set operations one robot at a time)"
+                if task.name == "localization" else f"task {task.name!r} is not batched")
+    if opts.step_mode != "bounce":
+        return ("step_mode 'tick' is not batched (a step is one tick of every robot: use "
+                "step_mode='bounce')")
+    if opts.backend == "pymunk":
+        return ("the pymunk backend steps all bodies in one physics space on a shared clock, "
+                "so its robots cannot each drive to their own contact")
+    if not isinstance(opts.noise, Exact):
+        return ("actuation noise is not batched (each env draws its noise from its own "
+                "generator, one robot at a time)")
+    return None
+
+
+def _drive_cells_each(backend, state) -> np.ndarray:
+    """Cell backend: every robot moves cell to cell until its own next contact, as a lone
+    robot's drive does. Returns the ticks each robot drove."""
+    model = backend.model
+    p, k = model.decode(backend.cells(state))
+    ticks = np.zeros(state.n_robots, dtype=np.int64)
+    moving = np.flatnonzero(~state.blocked)
+    while len(moving):
+        target = model.targets[k[moving], p[moving]]
+        go = target >= 0
+        moving, target = moving[go], target[go]
+        new = model.centres[target]
+        state.odometer[moving] += np.hypot(*(new - state.position[moving]).T)
+        state.position[moving] = new
+        p[moving] = target
+        state.clock[moving] += 1
+        ticks[moving] += 1
+    backend.update_contacts(state, np.arange(state.n_robots))
+    return ticks
+
+
+# -- batched tasks ----------------------------------------------------------------------------
+
+class _FreeBatch:
+    """No reward, never terminates."""
+
+    def __init__(self, task, n: int) -> None:
+        self.n = n
+
+    def load(self, i: int, task) -> None:
+        """Take env ``i``'s episode state from the single-robot task just reset."""
+
+    def info(self, state) -> dict:
+        """Task info of every env, for the robots' ``state``."""
+        return {}
+
+    def observation(self) -> np.ndarray | None:
+        return None
+
+    def step(self, state, events: StepEvents, ticks: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+        return np.zeros(self.n), np.zeros(self.n, dtype=bool), {}
+
+
+class _NavigationBatch(_FreeBatch):
+    """`NavigationTask` for N robots: goals, arrival and the tick and angle-change costs."""
+
+    def __init__(self, task: NavigationTask, n: int) -> None:
+        super().__init__(task, n)
+        self.single = task
+        self.goal_position = np.zeros((n, 2))
+        self.goal_heading = np.zeros(n)
+        self.reached = np.zeros(n, dtype=bool)
+        self.features = np.zeros((n, task.observation_size), dtype=np.float32)
+
+    def load(self, i, task):
+        self.goal_position[i] = task.goal[0][0]
+        self.goal_heading[i] = task.goal[1][0]
+        self.reached[i] = False
+        self.features[i] = task.observation(None)[0] if task.observe_task else 0.0
+
+    def info(self, state):
+        gap = state.position - self.goal_position
+        return {"goal_position": self.goal_position.copy(),
+                "goal_heading": self.goal_heading.copy(),
+                "distance_to_goal": np.hypot(gap[:, 0], gap[:, 1]),
+                "is_success": self.reached.copy()}
+
+    def observation(self):
+        return self.features if self.single.observe_task else None
+
+    def step(self, state, events, ticks):
+        single = self.single
+        err = (events.heading - self.goal_heading + np.pi) % (2 * np.pi) - np.pi
+        arrive = np.full(self.n, np.nan)
+        # the disk test of a lone robot, run only where the heading is within tolerance
+        for i in np.flatnonzero(np.abs(err) <= single.heading_tolerance):
+            single.goal = (self.goal_position[i:i + 1], self.goal_heading[i:i + 1])
+            one = StepEvents(ticks=int(events.ticks[i]), start=events.start[i:i + 1],
+                             end=events.end[i:i + 1], heading=events.heading[i:i + 1],
+                             bumps=events.bumps[i:i + 1], angles=events.angles[i:i + 1],
+                             angle_changed=events.angle_changed[i:i + 1],
+                             robot_contact=events.robot_contact[i:i + 1])
+            found = single._ticks_to_goal(one)
+            if found is not None:
+                arrive[i] = found
+        hit = ~np.isnan(arrive)
+        spent = np.where(hit, np.minimum(events.ticks, arrive), events.ticks)
+        changed = events.angle_changed
+        reward = -single.w1 * spent - (single.w2 - single.w1) * changed
+        reward[hit] += single.goal_bonus
+        self.reached |= hit
+        info = self.info(state)
+        to_goal = np.where(hit, ticks - events.ticks + np.nan_to_num(arrive), 0).astype(np.int64)
+        info.update(ticks_to_goal=(to_goal, hit), angle_changed=changed.copy())
+        return reward, self.reached.copy(), info
+
+
+class _CoverageBatch(_FreeBatch):
+    """`CoverageTask` for N robots: one visit histogram and visited grid per env."""
+
+    def __init__(self, task: CoverageTask, n: int) -> None:
+        super().__init__(task, n)
+        self.single = task
+        shape = (n, *task.free.shape)
+        self.visits = np.zeros(shape)
+        self.visited = np.zeros(shape, dtype=bool)
+        self.distance = np.zeros(n)
+        self.n_free = task.free.sum()
+
+    def load(self, i, task):
+        self.visits[i] = task.visits
+        self.visited[i] = task.visited
+        self.distance[i] = task.distance
+
+    def info(self, state):
+        flat = self.visits.reshape(self.n, -1)
+        total = flat.sum(axis=1)
+        hist = np.where(total[:, None] > 0, flat / np.where(total > 0, total, 1.0)[:, None], flat)
+        gap = hist - self.single.target.reshape(1, -1)
+        return {"coverage": self.visited[:, self.single.free].mean(axis=1),
+                "distance": np.hypot.reduce(gap, axis=1),
+                "tv_distance": 0.5 * np.abs(gap).sum(axis=1)}
+
+    def step(self, state, events, ticks):
+        task = self.single
+        robot, points, spent = path_samples(events, tick_length(task.options, events.heading),
+                                            task.cell_size / 4)
+        row, col = task._cells(points)
+        np.add.at(self.visits, (robot, row, col), spent)
+        new = ~self.visited[robot, row, col] & task.free[row, col]
+        self.visited[robot, row, col] = True
+        cells = np.unique(np.ravel_multi_index((robot[new], row[new], col[new]),
+                                               self.visits.shape))
+        new_cells = np.bincount(cells // (task.free.size), minlength=self.n)
+        info = self.info(state)
+        reward = (task.coverage_weight * new_cells / self.n_free
+                  + task.distance_weight * (self.distance - info["distance"]))
+        self.distance = info["distance"].copy()
+        return reward, np.zeros(self.n, dtype=bool), info
+
+
+_BATCHED = {"free": _FreeBatch, "navigation": _NavigationBatch, "coverage": _CoverageBatch}

@@ -1,0 +1,162 @@
+"""`BounceVectorEnv` against N ``gym.make`` envs in Gymnasium's SyncVectorEnv."""
+
+from __future__ import annotations
+
+import pickle
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode
+
+import bounce_gym  # noqa: F401
+from bounce_gym.envs.vector_env import BounceVectorEnv
+from bounce_gym.errors import ActionError, ConfigError
+
+IDS = ["bounce_gym/Bounce-v0", "bounce_gym/BounceNavigation-v0", "bounce_gym/BounceCoverage-v0"]
+CASES = [(env_id, kwargs) for env_id in IDS for kwargs in (
+    {}, {"action_type": "continuous"}, {"backend": "cell"})]
+
+
+def _pair(env_id, n, **kwargs):
+    native = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+    sync = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", **kwargs)
+    return native, sync
+
+
+def _same_step(a, b, where):
+    for name, x, y in zip(("obs", "reward", "terminated", "truncated"), a[:4], b[:4],
+                          strict=True):
+        assert x.dtype == y.dtype and np.array_equal(x, y), (where, name, x, y)
+    _same_infos(a[4], b[4], where)
+
+
+def _same_infos(mine, theirs, where):
+    # documented difference: ``cell`` is an (N, 2) int array, not an object array of tuples
+    assert set(mine) == set(theirs), (where, set(mine) ^ set(theirs))
+    for key, value in theirs.items():
+        if key == "cell":
+            expect = np.array([c if c is not None else (0, 0) for c in value])
+            assert np.array_equal(mine[key][theirs["_cell"]], expect[theirs["_cell"]]), where
+        else:
+            assert np.array_equal(mine[key], value), (where, key, mine[key], value)
+            assert mine[key].dtype == value.dtype, (where, key)
+
+
+@pytest.mark.parametrize(("env_id", "kwargs"), CASES)
+def test_same_episodes_as_sync_vector_env(env_id, kwargs):
+    """Same seeds and actions: identical observations, rewards, flags and infos, across
+    truncations, terminations and next-step autoresets."""
+    n = 5
+    native, sync = _pair(env_id, n, max_episode_steps=40, **kwargs)
+    a, b = native.reset(seed=11), sync.reset(seed=11)
+    assert np.array_equal(a[0], b[0])
+    _same_infos(a[1], b[1], "reset")
+    native.action_space.seed(2)
+    ended = 0
+    for t in range(130):
+        actions = native.action_space.sample()
+        out, ref = native.step(actions), sync.step(actions)
+        _same_step(out, ref, t)
+        ended += int((out[2] | out[3]).sum())
+    assert ended >= n  # every env went through at least one autoreset
+    a, b = native.reset(seed=5), sync.reset(seed=5)  # a second reset with a new seed
+    assert np.array_equal(a[0], b[0])
+
+
+def test_navigation_goals_are_reached_identically():
+    """Terminations by the task (not only by time): a goal region large enough to be hit."""
+    kwargs = {"task_kwargs": {"goal_radius": 3.0, "heading_tolerance_deg": 90}}
+    native, sync = _pair("bounce_gym/BounceNavigation-v0", 8, **kwargs)
+    native.reset(seed=0)
+    sync.reset(seed=0)
+    native.action_space.seed(0)
+    hits = 0
+    for t in range(80):
+        actions = native.action_space.sample()
+        out, ref = native.step(actions), sync.step(actions)
+        _same_step(out, ref, t)
+        hits += int(out[2].sum())
+    assert hits > 0
+
+
+def test_history_and_privileged_observations():
+    native, sync = _pair("bounce_gym/Bounce-v0", 4, history=3, privileged=True)
+    native.reset(seed=1)
+    sync.reset(seed=1)
+    for t in range(20):
+        actions = np.array([t % 3, 1, 2, 0])
+        _same_step(native.step(actions), sync.step(actions), t)
+
+
+def test_vector_env_api():
+    env = gym.make_vec("bounce_gym/Bounce-v0", num_envs=3)
+    assert isinstance(env.unwrapped, BounceVectorEnv)
+    assert env.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+    assert env.num_envs == 3
+    assert env.single_action_space == gym.spaces.Discrete(3)
+    assert env.action_space == gym.spaces.MultiDiscrete([3, 3, 3])
+    obs, info = env.reset(seed=0)
+    assert obs in env.observation_space and obs.shape == (3, 2)
+    assert info["_ticks"].all()
+    obs2, _ = env.reset(seed=0)
+    assert np.array_equal(obs, obs2)  # seeding is deterministic
+    obs, rewards, terminated, truncated, info = env.step(env.action_space.sample())
+    assert obs in env.observation_space
+    assert rewards.dtype == np.float64 and terminated.dtype == truncated.dtype == np.bool_
+    assert env.unwrapped.max_episode_steps == 500  # the registered limit
+
+
+def test_reset_mask_resets_only_those_envs():
+    env = BounceVectorEnv(3)
+    obs, _ = env.reset(seed=4)
+    moved, _, _, _, _ = env.step(np.array([0, 1, 2]))
+    again, info = env.reset(options={"reset_mask": np.array([True, False, False])})
+    assert np.array_equal(again[1:], moved[1:])
+    assert info["_ticks"].tolist() == [True, False, False]
+
+
+def test_pickling_keeps_the_episodes():
+    env = BounceVectorEnv(4, world="lab_fig1", task="coverage")
+    env.reset(seed=3)
+    env.step(np.array([0, 1, 2, 0]))
+    copy = pickle.loads(pickle.dumps(env))
+    actions = np.array([2, 2, 1, 0])
+    a, b = env.step(actions), copy.step(actions)
+    for x, y in zip(a[:4], b[:4], strict=True):
+        assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize(("kwargs", "actions"), [
+    ({}, np.array([0, 3])),
+    ({}, np.array([0.0, 1.0])),
+    ({}, np.array([0])),
+    ({}, np.array([-1, 0])),
+    ({"action_type": "continuous"}, np.array([[0.5], [1.5]], dtype=np.float32)),
+    ({"action_type": "continuous"}, np.array([[np.nan], [0.0]])),
+    ({"action_type": "continuous"}, np.array([[True], [False]])),
+    ({"action_type": "continuous"}, np.zeros((2, 2))),
+])
+def test_bad_actions_raise_action_error(kwargs, actions):
+    env = BounceVectorEnv(2, **kwargs)
+    env.reset(seed=0)
+    with pytest.raises(ActionError):
+        env.step(actions)
+
+
+@pytest.mark.parametrize(("kwargs", "reason"), [
+    ({"step_mode": "tick"}, "tick"),
+    ({"backend": "pymunk"}, "pymunk"),
+    ({"noise": {"type": "interval", "lo_deg": -5, "hi_deg": 5}}, "noise"),
+    ({"world": "lab_localization_a", "task": "localization", "angles": (45.0,),
+      "backend": "cell", "task_kwargs": {"filter_factory": "combinatorial"}}, "filter"),
+    ({"render_mode": "rgb_array"}, "render"),
+])
+def test_what_is_not_batched_is_a_config_error(kwargs, reason):
+    with pytest.raises(ConfigError, match=reason):
+        BounceVectorEnv(2, **kwargs)
+
+
+def test_localization_keeps_the_sync_fallback():
+    env = gym.make_vec("bounce_gym/BounceLocalization-v0", num_envs=2)
+    assert isinstance(env, gym.vector.SyncVectorEnv)
