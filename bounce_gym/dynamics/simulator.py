@@ -149,11 +149,14 @@ class BounceDynamics:
         """
         state = self._require_state()
         params = self._parameters(params)
-        if self._scalar_path and state.blocked[0]:
-            # one robot: the rotation tick, then the scalar drive to the next contact
+        if self.n_robots == 1 and state.blocked[0]:
+            # one robot: the rotation tick (in which a blocked robot does not drive), then the
+            # drive to the next contact — on the scalar path where the backend has one
             state.ticks += 1
             self._rotate(self._lone, params)
-            return 1 + int(self.backend.drive_each(state)[0])
+            if self._scalar_path:
+                return 1 + int(self.backend.drive_each(state)[0])
+            return 1 + self.backend.drive(state, np.inf, until_first_block=True)
         self.tick(params)
         return 1 + self.backend.drive(state, np.inf, until_first_block=True)
 
@@ -223,6 +226,8 @@ class BounceDynamics:
             i = int(idx[0])
             heading = (float(state.heading[i]) + float(params[i])) % TWO_PI
             state.heading[i] = 0.0 if heading >= TWO_PI else heading
+            state.bumps[i] += 1
+            state.clock[i] = 0
         else:
             heading = self.rule(state.heading[idx], state.contact_normal[idx], params[idx])
             width = self.backend.bin_width
@@ -231,8 +236,8 @@ class BounceDynamics:
             elif not isinstance(self.noise, Exact):
                 heading = wrap(heading + self.noise.sample(len(idx), self.rng))
             state.heading[idx] = heading
-        state.bumps[idx] += 1
-        state.clock[idx] = 0
+            state.bumps[idx] += 1
+            state.clock[idx] = 0
         self.backend.update_contacts(state, idx)
 
     def _parameters(self, params: object) -> np.ndarray:

@@ -10,6 +10,9 @@ from gymnasium import spaces
 
 from bounce_gym.errors import ActionError
 
+#: action types taken as an index without further checks (exact types: bool is not among them)
+_INDEX_TYPES = frozenset({int, np.int64, np.int32})
+
 
 def action_space(action_type: str, n_angles: int) -> spaces.Space:
     """``Discrete(|Φ|)`` or a symmetric ``Box(-1, 1, (1,), float32)``."""
@@ -27,6 +30,8 @@ def to_angle(action: object, action_type: str, angles: np.ndarray,
     ``angle_range``.
     """
     if action_type == "discrete":
+        if type(action) in _INDEX_TYPES and 0 <= action < len(angles):  # the common case, fast
+            return float(angles[action])
         if isinstance(action, bool | np.bool_):
             raise ActionError(f"{who}: expected an integer index, got a bool")
         value = np.asarray(action)

@@ -32,6 +32,7 @@ class EnvBase:
         self.options = parse_options(kwargs, defaults, fixed, who=type(self).__name__)
         self.core = BounceCore(self.options,
                                make_task(self.options.task, self.options.task_kwargs, tasks))
+        self.core.keep_trails = render_mode is not None  # only drawings read the trails
         self.render_mode = render_mode
         self._renderer = None
 

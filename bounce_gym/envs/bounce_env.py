@@ -87,14 +87,15 @@ class BounceEnv(EnvBase, gym.Env):
             raise gym.error.ResetNeeded("call reset() before step()")
         angle = to_angle(action, self.options.action_type, self.options.angles[0],
                          self.options.angle_range[0])
-        obs, rewards, terminated, info = self.core.step(np.array([angle]))
+        obs, reward, terminated, info = self.core.step_one(angle)
         if self.render_mode == "human":
             self.render()
-        return obs[0], float(rewards[0]), bool(terminated[0]), False, _single(info)
+        return obs, reward, terminated, False, info
 
 
 def _single(info: dict) -> dict:
-    """Per-robot arrays of the core's info, unpacked for the single robot."""
+    """Per-robot arrays of the core's info, unpacked for the single robot (as
+    `BounceCore.step_one` reports them)."""
     out = dict(info)
     out["position"] = info["position"][0]
     out["heading"] = float(info["heading"][0])

@@ -55,6 +55,11 @@ class BounceCore:
         self.obs_low = np.array(low, dtype=np.float32)
         self.obs_high = np.array(high, dtype=np.float32)
         self.option_keys = frozenset({"start"}) | task.option_keys
+        #: whether the task's step does anything (the free task's does not: reward 0, no end,
+        #: no info), so whether a step needs `StepEvents`
+        self._task_steps = type(task).step is not Task.step
+        #: whether steps extend the trails (set by an env that renders; only drawings read them)
+        self.keep_trails = True
         # largest (col, row) of the step-length grid of `World.occupancy`: a robot touching the
         # right or top wall (or a hair outside by rounding) still reports a cell of the grid
         xmin, ymin, xmax, ymax = options.world.bounds
@@ -137,25 +142,72 @@ class BounceCore:
         else:
             self.dynamics.tick(angles)
             ticks = 1
-        used = np.where(bumping, angles, math.nan)
         changed = bumping & ~np.isnan(self.last_angle) & (angles != self.last_angle)
         self.last_angle[bumping] = angles[bumping]
         if self.options.history and bumping.any():
-            rows = np.flatnonzero(bumping)
-            self.history[rows, 1:] = self.history[rows, :-1]
-            self.history[rows, 0, 0] = clock_before[rows] / self.options.max_clock
-            self.history[rows, 0, 1] = np.mod(angles[rows], 2 * np.pi) / (2 * np.pi)
-        for trail, p in zip(self.trails, state.position, strict=True):
-            trail.append(p.copy())
-        events = StepEvents(
-            ticks=int(ticks), start=start, end=state.position.copy(), heading=state.heading.copy(),
-            bumps=state.bumps - bumps_before, angles=used, angle_changed=changed,
-            robot_contact=state.blocked & (state.contact_robot >= 0),
-        )
-        rewards, terminated, info = self.task.step(state, events)
+            self._remember(np.flatnonzero(bumping), clock_before, angles)
+        self._extend_trails()
+        rewards, terminated, info = self.task.step(
+            state, self._events(ticks, start, bumps_before, bumping, angles, changed))
         info = self._info(info)
         info["step_ticks"] = int(ticks)
         return self.observation(), rewards.astype(np.float64), terminated, info
+
+    def step_one(self, angle: float) -> tuple[np.ndarray, float, bool, dict]:
+        """`step` of a lone robot with bounce angle ``angle`` (radians) and no turn, unpacked
+        as `BounceEnv` returns it: observation (d,), reward, terminated and the robot's info.
+
+        The single-robot hot path: the same numbers as `step`, in plain Python scalars, with
+        `StepEvents` built only for a task that reads them.
+        """
+        state = self.dynamics.state
+        bumping = bool(state.blocked[0])
+        clock_before = int(state.clock[0])
+        if self._task_steps:
+            start, bumps_before = state.position.copy(), state.bumps.copy()
+        if self.options.step_mode == "bounce":
+            ticks = self.dynamics.bounce(angle)
+        else:
+            self.dynamics.tick(angle)
+            ticks = 1
+        last = float(self.last_angle[0])
+        changed = bumping and last == last and angle != last  # last == last: not NaN
+        if bumping:
+            self.last_angle[0] = angle
+            if self.options.history:
+                self._remember(np.zeros(1, dtype=np.int64), np.array([clock_before]),
+                               np.array([angle]))
+        self._extend_trails()
+        reward, terminated, task_info = 0.0, False, {}
+        if self._task_steps:
+            rewards, ends, task_info = self.task.step(state, self._events(
+                ticks, start, bumps_before, np.array([bumping]), np.array([angle]),
+                np.array([changed])))
+            reward, terminated = float(rewards[0]), bool(ends[0])
+        info = self._info_one(task_info)
+        info["step_ticks"] = int(ticks)
+        return self._observation_one(), reward, terminated, info
+
+    def _remember(self, rows: np.ndarray, clock_before: np.ndarray, angles: np.ndarray) -> None:
+        """Push (clock before the bump, angle) onto the sensing history of the robots ``rows``
+        that bumped (``clock_before`` and ``angles`` indexed by robot)."""
+        self.history[rows, 1:] = self.history[rows, :-1]
+        self.history[rows, 0, 0] = clock_before[rows] / self.options.max_clock
+        self.history[rows, 0, 1] = np.mod(angles[rows], 2 * np.pi) / (2 * np.pi)
+
+    def _extend_trails(self) -> None:
+        if self.keep_trails:
+            for trail, p in zip(self.trails, self.dynamics.state.position, strict=True):
+                trail.append(p.copy())
+
+    def _events(self, ticks: int, start: np.ndarray, bumps_before: np.ndarray,
+                bumping: np.ndarray, angles: np.ndarray, changed: np.ndarray) -> StepEvents:
+        state = self.dynamics.state
+        return StepEvents(
+            ticks=int(ticks), start=start, end=state.position.copy(), heading=state.heading.copy(),
+            bumps=state.bumps - bumps_before, angles=np.where(bumping, angles, math.nan),
+            angle_changed=changed, robot_contact=state.blocked & (state.contact_robot >= 0),
+        )
 
     # -- sensing ----------------------------------------------------------------------------
     def observation(self) -> np.ndarray:
@@ -178,6 +230,38 @@ class BounceCore:
             # and history are in range by construction (max_clock bounds every drive)
             np.clip(obs, self.obs_low, self.obs_high, out=obs)
         return obs
+
+    def _observation_one(self) -> np.ndarray:
+        """`observation` of a lone robot, (d,); contact, clock and history without numpy calls."""
+        opts = self.options
+        if opts.privileged or self.task.observation_size:
+            return self.observation()[0]
+        state = self.dynamics.state
+        values = [float(state.blocked[0]), int(state.clock[0]) / opts.max_clock]
+        if opts.history:
+            values += self.history[0].ravel().tolist()
+        return np.array(values, dtype=np.float32)
+
+    def _info_one(self, task_info: dict) -> dict:
+        """`_info` of a lone robot, unpacked to Python scalars (as `BounceEnv` reports it)."""
+        state = self.dynamics.state
+        xmin, ymin = self.options.world.bounds[:2]
+        step = self.options.step_length
+        position = state.position[0].copy()
+        x, y = position.tolist()
+        col_max, row_max = self._cell_max.tolist()
+        info = {
+            "ticks": int(state.ticks),
+            "position": position,
+            "heading": float(state.heading[0]),
+            "cell": (min(max(math.floor((y - ymin) / step), 0), row_max),
+                     min(max(math.floor((x - xmin) / step), 0), col_max)),
+            "clock": int(state.clock[0]),
+            "bumps": int(state.bumps[0]),
+            "contact_edge": int(state.contact_edge[0]),
+        }
+        info.update(task_info)
+        return info
 
     def _info(self, task_info: dict) -> dict:
         """The true state for evaluation (never part of the observation)."""

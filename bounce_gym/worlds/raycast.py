@@ -177,15 +177,44 @@ def _first_hit_chunk(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) 
 
 
 def _first_hit_one(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) -> Hits:
-    """`_first_hit_chunk` for a single ray with 1-D arrays and scalars (the single-robot hot path)."""
-    ox, oy = float(o[0]), float(o[1])
-    dx, dy = float(d[0]), float(d[1])
-    q = (np.array([dx, dy, ox, oy, ox * dy - oy * dx, 1.0]) @ f.mat).reshape(5, f.n_edges)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(q[:4].min(axis=0) >= 0.0, q[4] / q[0], np.inf)
-    edge = int(np.argmin(t))
-    distance = float(t[edge])
-    normal = f.normals[edge]
+    """`_first_hit_chunk` for a single ray, as `_cast_one` computes it."""
+    distance, edge, vertex, nx, ny = _cast_one(f, radius, float(o[0]), float(o[1]), float(d[0]),
+                                               float(d[1]))
+    return Hits(np.array([distance]), np.array([edge]), np.array([vertex]), np.array([[nx, ny]]))
+
+
+def first_hit_scalar(world: World, ox: float, oy: float, dx: float, dy: float,
+                     radius: float = 0.0) -> tuple[float, int, int, float, float]:
+    """`first_hit` of one ray from (ox, oy) along (dx, dy), in plain Python numbers:
+    ``(distance, edge, vertex, nx, ny)``, bit for bit the values `first_hit` returns (the
+    single-robot hot path)."""
+    return _cast_one(_features(world, radius), radius, ox, oy, dx, dy)
+
+
+def _cast_one(f: _Features, radius: float, ox: float, oy: float, dx: float,
+              dy: float) -> tuple[float, int, int, float, float]:
+    """One ray against prepared features. The edge tests come from the same matrix product as
+    `_first_hit_chunk`, so they round alike; the choice among edges is a Python loop, cheaper
+    than half a dozen numpy calls on the few edges of a typical world."""
+    n = f.n_edges
+    q = (np.array([dx, dy, ox, oy, ox * dy - oy * dx, 1.0]) @ f.mat).tolist()
+    # np.argmin over t = num / approach (inf where a test fails): the first minimum, or the
+    # first NaN; edge 0 when every t is inf
+    distance, edge = math.inf, 0
+    for k in range(n):
+        den = q[k]
+        if den >= 0.0 and q[n + k] >= 0.0 and q[2 * n + k] >= 0.0 and q[3 * n + k] >= 0.0:
+            num = q[4 * n + k]
+            if den == 0.0:  # numpy's x / 0: ±inf, or NaN for 0 / 0
+                t = math.copysign(math.inf, num) * math.copysign(1.0, den) if num else math.nan
+            else:
+                t = num / den
+            if t != t:
+                distance, edge = t, k
+                break
+            if t < distance:
+                distance, edge = t, k
+    nx, ny = f.normals[edge].tolist()
     vertex = -1
     if math.isfinite(distance):
         wx, wy = float(f.ax[edge]) - ox, float(f.ay[edge]) - oy
@@ -207,7 +236,5 @@ def _first_hit_one(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) ->
             edge = vertex = int(f.vid[kv])
             px, py = ox + distance * dx - f.vx[kv], oy + distance * dy - f.vy[kv]
             norm = math.hypot(px, py)
-            normal = np.array([px / norm, py / norm])
-    return Hits(
-        np.array([max(distance, 0.0)]), np.array([edge]), np.array([vertex]), normal[None, :].copy()
-    )
+            nx, ny = float(px / norm), float(py / norm)
+    return max(distance, 0.0), edge, vertex, nx, ny

@@ -100,6 +100,8 @@ class CellBackend(MotionBackend):
         if until_first_block and state.blocked.any():
             return 0
         self._check_drive_window(max_ticks, until_first_block)
+        if state.n_robots == 1:
+            return self._drive_lone(state, max_ticks, until_first_block)
         ticks = 0
         while ticks < max_ticks:
             # every change of a pose ends in update_contacts, which keeps the plan it computed
@@ -116,4 +118,32 @@ class CellBackend(MotionBackend):
             self.update_contacts(state, np.arange(state.n_robots))
             if until_first_block and state.blocked.any():
                 break
+        return ticks
+
+    def _drive_lone(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        """`drive` of a lone robot: follow its bin's row of the target map in Python ints and
+        write the state once at the end (the same positions, clock and odometer sums)."""
+        p, target, _ = self._last_plan
+        row = self.model.targets[int(self.model.bin_of(state.heading)[0])]
+        path, target = [int(p[0])], int(target[0])
+        ticks = 0
+        while ticks < max_ticks:
+            if target >= 0:
+                path.append(target)
+                target = int(row[target])
+            ticks += 1
+            if until_first_block and target < 0:
+                break
+        if len(path) > 1:
+            centres = self.model.centres[path]
+            hops = centres[1:] - centres[:-1]
+            odometer = float(state.odometer[0])
+            for hop in np.hypot(hops[:, 0], hops[:, 1]).tolist():
+                odometer += hop  # one addition per tick, as the robots' loop adds them
+            state.odometer[0] = odometer
+            state.position[0] = centres[-1]
+            state.clock[0] += len(path) - 1
+        state.ticks += ticks
+        if ticks:
+            self.update_contacts(state, np.zeros(1, dtype=np.int64))
         return ticks

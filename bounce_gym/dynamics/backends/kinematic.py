@@ -20,6 +20,7 @@ import numpy as np
 from bounce_gym.dynamics.backends.base import EventDrivenBackend
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
 from bounce_gym.errors import ConfigError
+from bounce_gym.worlds.raycast import first_hit_scalar
 
 
 class KinematicBackend(EventDrivenBackend):
@@ -37,6 +38,9 @@ class KinematicBackend(EventDrivenBackend):
         self.update_contacts(state, np.arange(m))
 
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
+        if state.n_robots == 1 and len(robots) == 1:
+            self._update_one(state)
+            return
         robots = np.asarray(robots, dtype=np.int64)
         if len(robots) == 0:
             return
@@ -47,6 +51,19 @@ class KinematicBackend(EventDrivenBackend):
         self._ahead_edge[sel] = hits.edge
         self._ahead_normal[sel] = hits.normal
         self._classify_contacts(state, robots, sel, hits.distance, hits.edge, hits.normal)
+
+    def _update_one(self, state: RobotState) -> None:
+        """`update_contacts` of a lone robot in plain floats (no robot can block it)."""
+        (dx, dy), = state.direction.tolist()  # numpy's cos and sin, as for many robots
+        x, y = state.position[0].tolist()
+        dist, edge, _, nx, ny = first_hit_scalar(self.world, x, y, dx, dy, self.radius)
+        self._ahead_distance[0] = dist
+        self._ahead_edge[0] = edge
+        self._ahead_normal[0] = nx, ny
+        wall = dist <= self.contact_tol
+        state.contact_edge[0] = edge if wall else NO_CONTACT
+        state.contact_normal[0] = nx, ny
+        state.blocked[0] = wall
 
     # Time is distance driven (one tick = step_length), so a robot that stops at a wall lands
     # exactly at position + direction * (its wall distance).

@@ -231,6 +231,9 @@ class PymunkBackend(EventDrivenBackend):
     def _write_bodies(self, state: RobotState, velocity: np.ndarray, positions: bool) -> None:
         """Make the engine bodies hold the state's velocities (and positions, if asked)."""
         bodies = self._bodies
+        if self.n_robots == 1:
+            self._write_lone_body(state, velocity[0].tolist(), positions)
+            return
         moving = ~state.blocked
         for i in np.flatnonzero(moving != self._body_senses_walls).tolist():
             self._disks[i].filter = self._filters[bool(moving[i])]
@@ -244,6 +247,22 @@ class PymunkBackend(EventDrivenBackend):
         for i in stale.tolist():
             bodies[i].velocity = (float(velocity[i, 0]), float(velocity[i, 1]))
         self._body_vel[stale] = velocity[stale]
+
+    def _write_lone_body(self, state: RobotState, velocity: list[float], positions: bool) -> None:
+        """`_write_bodies` of a lone robot, in plain floats."""
+        moving = not state.blocked[0]
+        if moving != self._body_senses_walls[0]:
+            self._disks[0].filter = self._filters[moving]
+            self._body_senses_walls[0] = moving
+        body = self._bodies[0]
+        if positions:
+            position = state.position[0].tolist()
+            if position != self._body_pos[0].tolist():  # NaN (unknown) is unequal to anything
+                body.position = tuple(position)
+                self._body_pos[0] = position
+        if velocity != self._body_vel[0].tolist():
+            body.velocity = tuple(velocity)
+            self._body_vel[0] = velocity
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
