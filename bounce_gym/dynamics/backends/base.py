@@ -283,13 +283,17 @@ class MotionBackend(ABC):
 
 #: Consecutive zero-length events after which a drive declares itself stuck (a bug).
 MAX_ZENO = 10_000
+#: Relative margin of the broad phase of `pair_contacts`: pairs a little farther apart than two
+#: robots can close in the window are examined too, so rounding never drops a contact.
+BROAD_SLACK = 1e-3
 
 
 class EventDrivenBackend(MotionBackend):
     """A continuous backend that advances all robots from one contact event to the next.
 
     `drive` is written once here: find each moving robot's distance to its wall ahead
-    (`_wall_distances`) and, with collisions on, the first disk–disk contact of each pair; move
+    (`_wall_distances`) and, with collisions on, the first disk–disk contact of each pair that
+    can meet before the nearest wall (`pair_contacts`, a broad phase then the exact times); move
     everyone to the earliest event or to the end of the window (`_advance`, the backend's own
     way of moving: closed form or one physics step); then stop the robots involved
     (`_settle_contacts`). Time is distance driven: one tick lasts ``step_length``.
@@ -312,13 +316,20 @@ class EventDrivenBackend(MotionBackend):
             if not np.all(np.isfinite(s_wall)):
                 lost = int(moving[~np.isfinite(s_wall)][0])
                 raise RuntimeError(f"robot {lost} left the free space at {state.position[lost]}")
-            s_pairs = None
             s_robot = np.full(len(moving), np.inf)
             if self.collide:
+                # only pairs that touch before the nearest wall and before the window closes
+                # can change what happens next (`pair_contacts` finds exactly those): a later
+                # contact is neither the next event nor due with it
                 velocity = np.zeros_like(state.position)
                 velocity[moving] = state.direction[moving]
-                s_pairs = pair_contact_times(state.position, velocity, self.radius, moving)
-                s_robot = s_pairs.min(axis=1)
+                horizon = min(float(s_wall.min()), limit - elapsed) + tol
+                first, second, s_pair = pair_contacts(state.position, velocity, self.radius,
+                                                      horizon)
+                soonest = np.full(state.n_robots, np.inf)
+                np.minimum.at(soonest, first, s_pair)
+                np.minimum.at(soonest, second, s_pair)
+                s_robot = soonest[moving]
             s_next = float(min(s_wall.min(), s_robot.min()))
             ds = min(s_next, limit - elapsed)
             event = s_next <= ds + tol
@@ -332,7 +343,10 @@ class EventDrivenBackend(MotionBackend):
                                    "bookkeeping bug)")
             walls = moving[s_wall <= s_next + tol]
             at_robot = s_robot <= s_next + tol
-            pairs = None if s_pairs is None else s_pairs[at_robot] <= s_next + tol
+            pairs = None
+            if self.collide:
+                due = s_pair <= s_next + tol
+                pairs = np.column_stack((first[due], second[due]))
             self._settle_contacts(state, walls, moving[at_robot], pairs)
             if until_first_block:
                 limit = min(limit, self._end_of_tick(elapsed))
@@ -353,31 +367,58 @@ class EventDrivenBackend(MotionBackend):
 
     @abstractmethod
     def _settle_contacts(self, state: RobotState, walls: np.ndarray, robots: np.ndarray,
-                         partners: np.ndarray | None) -> None:
-        """Stop the robots that reached a wall (``walls``) or another robot (``robots``, with
-        ``partners`` (len(robots), m): which robots each one reached)."""
+                         pairs: np.ndarray | None) -> None:
+        """Stop the robots that reached a wall (``walls``) or another robot (``robots``; ``pairs``
+        (k, 2): the robot pairs that touched, None when robots do not collide)."""
 
 
-def pair_contact_times(position: np.ndarray, velocity: np.ndarray, radius: float,
-                       rows: np.ndarray) -> np.ndarray:
-    """Earliest future time at which robot ``rows[k]`` starts to overlap robot j, per pair.
+def pair_contacts(position: np.ndarray, velocity: np.ndarray, radius: float,
+                  horizon: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Robot pairs whose disks start to touch within ``horizon``, and when.
 
-    Closed form for disks of equal radius moving with constant velocities: the smallest t >= 0
-    with |Δp + Δv t| = 2R while approaching. Returns (len(rows), m) with ``inf`` where the pair
-    never touches (or is the same robot, or is separating, or only grazes: the relative path
-    meets the 2R circle at an angle below `GRAZE`, as for walls — two touching robots sliding
-    past each other tangentially are not a contact).
+    Robots move with constant ``velocity`` (unit speed or standing still). Returns
+    ``(first, second, time)``: the pairs ``first < second`` (ascending by ``first``, then
+    ``second``) with ``time <= horizon``, where ``time`` is the earliest t >= 0 at which
+    |Δp + Δv t| = 2R while approaching. Pairs that never touch, separate, both stand still or
+    only graze (the relative path meets the 2R circle at an angle below `GRAZE`, as for walls: two
+    touching robots sliding past each other tangentially are not a contact) are left out.
+
+    Broad phase: until ``horizon`` a robot stays within ``horizon / 2`` of the midpoint of its
+    path, so two robots can only touch if those midpoints are within 2R + ``horizon``; pairs whose
+    midpoints are farther apart along x or y (by a sweep over the midpoints sorted by x) are never
+    examined. The narrow phase solves the pairs left in closed form, exactly as a search over all
+    pairs would (`contact_times`), so the result is the same, bit for bit.
     """
-    dp = position[rows, None, :] - position[None, :, :]
-    dv = velocity[rows, None, :] - velocity[None, :, :]
-    a = np.einsum("ijk,ijk->ij", dv, dv)
-    b = np.einsum("ijk,ijk->ij", dp, dv)
-    c = np.einsum("ijk,ijk->ij", dp, dp) - (2 * radius) ** 2
+    n = len(position)
+    reach = (2.0 * radius + horizon) * (1.0 + BROAD_SLACK)
+    mid = position + velocity * (0.5 * horizon) if math.isfinite(horizon) else position
+    order = np.argsort(mid[:, 0], kind="stable")
+    xs = mid[order, 0]
+    # sorted position k is paired with k + 1 .. last[k] - 1: those within reach along x
+    last = np.searchsorted(xs, xs + reach, side="right")
+    counts = last - np.arange(1, n + 1)
+    k = np.repeat(np.arange(n), counts)
+    partner = np.arange(len(k)) - np.repeat(np.cumsum(counts) - counts, counts) + k + 1
+    a, b = order[k], order[partner]
+    near = np.abs(mid[a, 1] - mid[b, 1]) <= reach
+    first, second = np.minimum(a[near], b[near]), np.maximum(a[near], b[near])
+    time = contact_times(position[first] - position[second], velocity[first] - velocity[second],
+                         radius)
+    due = time <= horizon
+    first, second, time = first[due], second[due], time[due]
+    sort = np.lexsort((second, first))
+    return first[sort], second[sort], time[sort]
+
+
+def contact_times(dp: np.ndarray, dv: np.ndarray, radius: float) -> np.ndarray:
+    """First contact time of disk pairs with relative positions ``dp`` and velocities ``dv``
+    ((n, 2) each), ``inf`` where they never touch: the narrow phase of `pair_contacts`."""
+    a = dv[:, 0] * dv[:, 0] + dv[:, 1] * dv[:, 1]
+    b = dp[:, 0] * dv[:, 0] + dp[:, 1] * dv[:, 1]
+    c = (dp[:, 0] * dp[:, 0] + dp[:, 1] * dp[:, 1]) - (2 * radius) ** 2
     disc = b * b - a * c
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (-b - np.sqrt(np.maximum(disc, 0.0))) / a
     # disc / a = (2R)² − (closest approach)²: at least sin²(GRAZE) · (2R)²
     ok = (b < 0) & (disc > a * (GRAZE * 2 * radius) ** 2) & (a > 0)
-    t = np.where(ok, np.maximum(t, 0.0), np.inf)
-    t[np.arange(len(rows)), rows] = np.inf
-    return t
+    return np.where(ok, np.maximum(t, 0.0), np.inf)
