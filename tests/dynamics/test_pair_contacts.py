@@ -1,8 +1,9 @@
-"""The broad phase of robot–robot contacts changes nothing: `pair_contacts` returns exactly what
-a search over all pairs returns, and drives with it are bit-identical to drives with that search.
+"""The broad phases of robot–robot contacts change nothing: `pair_contacts` returns exactly what
+a search over all pairs returns, drives with it are bit-identical to drives with that search, and
+`MotionBackend.robot_blockers` equals its all-pairs form.
 
-The reference below is the all-pairs closed form the backends used before the broad phase
-(every moving robot against every robot, one (rows x m) table per event), kept verbatim.
+The references below are the all-pairs forms the backends used before the broad phases (one
+(rows x m) table per event), kept verbatim.
 """
 
 import numpy as np
@@ -13,6 +14,7 @@ from hypothesis import strategies as st
 from bounce_gym.dynamics import BounceDynamics
 from bounce_gym.dynamics.backends import base
 from bounce_gym.dynamics.backends.base import pair_contacts
+from bounce_gym.dynamics.state import NO_CONTACT
 from bounce_gym.worlds import World
 from bounce_gym.worlds.raycast import GRAZE
 
@@ -115,3 +117,42 @@ def test_drives_with_the_broad_phase_equal_drives_with_all_pairs(monkeypatch, ba
     slow = run()
     np.testing.assert_array_equal(fast, slow)
     assert (fast[:, 3 * m: 4 * m] >= 0).any()  # robots did meet
+
+
+def all_pairs_blockers(backend, state, robots):
+    """`MotionBackend.robot_blockers` over every robot pair."""
+    blocker = np.full(len(robots), NO_CONTACT, dtype=np.int64)
+    normal = np.zeros((len(robots), 2))
+    rel = state.position[None, :, :] - state.position[robots, None, :]  # i -> j
+    dist = np.hypot(rel[..., 0], rel[..., 1])
+    d = state.direction[robots]
+    facing = np.einsum("ik,ijk->ij", d, rel) > GRAZE * np.maximum(dist, 1e-300)
+    touching = dist <= 2 * backend.radius + backend.contact_tol
+    touching[np.arange(len(robots)), robots] = False
+    cand = touching & facing
+    has = cand.any(axis=1)
+    if np.any(has):
+        score = np.where(cand, np.einsum("ik,ijk->ij", d, rel) / np.maximum(dist, 1e-300), -2)
+        j = np.argmax(score, axis=1)
+        blocker[has] = j[has]
+        vec = -rel[np.flatnonzero(has), j[has]]
+        normal[has] = vec / np.hypot(vec[:, 0], vec[:, 1])[:, None]
+    return blocker, normal
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_robot_blockers_equal_the_all_pairs_search(seed):
+    m = 60
+    dyn = BounceDynamics(_box(8.0), m, radius=0.3, robot_collisions="bounce")
+    state = dyn.reset(np.random.default_rng(seed))
+    rng = np.random.default_rng(seed + 100)
+    found = 0
+    for _ in range(60):
+        dyn.bounce(rng.uniform(0.5, 2 * np.pi - 0.5, m))
+        for robots in (np.arange(m), np.flatnonzero(state.blocked), np.array([3, 1])):
+            got = dyn.backend.robot_blockers(state, robots)
+            want = all_pairs_blockers(dyn.backend, state, robots)
+            np.testing.assert_array_equal(got[0], want[0])
+            np.testing.assert_array_equal(got[1], want[1])
+            found += int((got[0] >= 0).sum())
+    assert found > 0

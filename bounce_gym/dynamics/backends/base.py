@@ -255,29 +255,35 @@ class MotionBackend(ABC):
         """For each of ``robots``: the touching robot it faces (or -1) and the contact normal.
 
         Robot i is blocked by robot j when the disks touch (within tolerance) and i's heading
-        points towards j's centre.
+        points towards j's centre; among several, the one most directly ahead (the lowest index
+        among equals). Only robots within touching distance along both axes are examined further.
         """
         robots = np.asarray(robots, dtype=np.int64)
         blocker = np.full(len(robots), NO_CONTACT, dtype=np.int64)
         normal = np.zeros((len(robots), 2))
         if not self.collide or len(robots) == 0:
             return blocker, normal
-        rel = state.position[None, :, :] - state.position[robots, None, :]  # i -> j
-        dist = np.hypot(rel[..., 0], rel[..., 1])
+        reach = 2 * self.radius + self.contact_tol
+        pos = state.position
+        rel_x = pos[:, 0] - pos[robots, 0, None]  # (robots, m): robot k -> robot j
+        rel_y = pos[:, 1] - pos[robots, 1, None]
+        near = (np.abs(rel_x) <= reach) & (np.abs(rel_y) <= reach)
+        near[np.arange(len(robots)), robots] = False
+        k, j = np.nonzero(near)  # row-major: by robot, then by the other's index
+        x, y = rel_x[k, j], rel_y[k, j]
+        dist = np.hypot(x, y)
         d = state.direction[robots]
+        ahead = d[k, 0] * x + d[k, 1] * y
         # facing = heading within 90° − GRAZE of the other centre (a tangential touch is none)
-        facing = np.einsum("ik,ijk->ij", d, rel) > GRAZE * np.maximum(dist, 1e-300)
-        touching = dist <= 2 * self.radius + self.contact_tol
-        touching[np.arange(len(robots)), robots] = False
-        cand = touching & facing
-        has = cand.any(axis=1)
-        if np.any(has):
-            # among several, the one most directly ahead
-            score = np.where(cand, np.einsum("ik,ijk->ij", d, rel) / np.maximum(dist, 1e-300), -2)
-            j = np.argmax(score, axis=1)
-            blocker[has] = j[has]
-            vec = -rel[np.flatnonzero(has), j[has]]
-            normal[has] = vec / np.hypot(vec[:, 0], vec[:, 1])[:, None]
+        cand = (dist <= reach) & (ahead > GRAZE * np.maximum(dist, 1e-300))
+        if np.any(cand):
+            k, j, x, y = k[cand], j[cand], x[cand], y[cand]
+            score = ahead[cand] / np.maximum(dist[cand], 1e-300)
+            best = np.lexsort((j, -score, k))  # per robot: highest score, then lowest index
+            first = best[np.r_[True, k[best][1:] != k[best][:-1]]]
+            blocker[k[first]] = j[first]
+            vec = np.column_stack((-x[first], -y[first]))
+            normal[k[first]] = vec / np.hypot(vec[:, 0], vec[:, 1])[:, None]
         return blocker, normal
 
 
@@ -385,29 +391,40 @@ def pair_contacts(position: np.ndarray, velocity: np.ndarray, radius: float,
 
     Broad phase: until ``horizon`` a robot stays within ``horizon / 2`` of the midpoint of its
     path, so two robots can only touch if those midpoints are within 2R + ``horizon``; pairs whose
-    midpoints are farther apart along x or y (by a sweep over the midpoints sorted by x) are never
-    examined. The narrow phase solves the pairs left in closed form, exactly as a search over all
-    pairs would (`contact_times`), so the result is the same, bit for bit.
+    midpoints are farther apart along x or y (`close_pairs`) are never examined. The narrow phase
+    solves the pairs left in closed form, exactly as a search over all pairs would
+    (`contact_times`), so the result is the same, bit for bit.
     """
-    n = len(position)
     reach = (2.0 * radius + horizon) * (1.0 + BROAD_SLACK)
     mid = position + velocity * (0.5 * horizon) if math.isfinite(horizon) else position
-    order = np.argsort(mid[:, 0], kind="stable")
-    xs = mid[order, 0]
-    # sorted position k is paired with k + 1 .. last[k] - 1: those within reach along x
-    last = np.searchsorted(xs, xs + reach, side="right")
-    counts = last - np.arange(1, n + 1)
-    k = np.repeat(np.arange(n), counts)
-    partner = np.arange(len(k)) - np.repeat(np.cumsum(counts) - counts, counts) + k + 1
-    a, b = order[k], order[partner]
-    near = np.abs(mid[a, 1] - mid[b, 1]) <= reach
-    first, second = np.minimum(a[near], b[near]), np.maximum(a[near], b[near])
+    first, second = close_pairs(mid, reach)
     time = contact_times(position[first] - position[second], velocity[first] - velocity[second],
                          radius)
     due = time <= horizon
     first, second, time = first[due], second[due], time[due]
     sort = np.lexsort((second, first))
     return first[sort], second[sort], time[sort]
+
+
+def close_pairs(points: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of ``points`` (n, 2) at most ``reach`` apart along both x and y, as index arrays
+    ``first < second`` (in no particular order).
+
+    Sort and sweep: sorted by x, each point is paired with the following points up to ``reach``
+    further along x, and those pairs are kept whose y are within ``reach`` too. O(n log n) plus
+    the pairs within reach along x.
+    """
+    n = len(points)
+    order = np.argsort(points[:, 0], kind="stable")
+    xs = points[order, 0]
+    # sorted position k is paired with k + 1 .. last[k] - 1
+    last = np.searchsorted(xs, xs + reach, side="right")
+    counts = last - np.arange(1, n + 1)
+    k = np.repeat(np.arange(n), counts)
+    partner = np.arange(len(k)) - np.repeat(np.cumsum(counts) - counts, counts) + k + 1
+    a, b = order[k], order[partner]
+    near = np.abs(points[a, 1] - points[b, 1]) <= reach
+    return np.minimum(a[near], b[near]), np.maximum(a[near], b[near])
 
 
 def contact_times(dp: np.ndarray, dv: np.ndarray, radius: float) -> np.ndarray:
