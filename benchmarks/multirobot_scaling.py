@@ -1,7 +1,7 @@
 """How `MultiBounceEnv` scales with the number of robots m at constant crowding.
 
-Run with ``python -m benchmarks.multirobot_scaling`` (``--steps``, ``--repeats``, ``--ms``).
-Prints agent-steps/s (one agent-step = one robot's share of a parallel env step) at m = 20, 50,
+Run with ``python -m benchmarks.multirobot_scaling`` (``--steps``, ``--repeats``, ``--ms``,
+``--step-mode``, ``--unscaled``). Prints agent-steps/s (one agent-step = one robot's share of a parallel env step) at m = 20, 50,
 100 on the kinematic and pymunk backends (``step_mode="bounce"``, ``robot_collisions="bounce"``,
 robot radius 0.3, step length 1, random discrete actions), and the ratio of the rate at the
 largest m to the rate at m = 20 against the target 0.8: the cost per robot-step should not grow
@@ -12,7 +12,8 @@ The world: the ``grid_15x15`` layout with its cell size scaled by sqrt(m / 20), 
 grows in proportion to m. The robots are then as crowded at every m (free area per robot and the
 chance per unit of distance to meet another robot are the same) and the world has the same edges,
 so a wall ray cast costs the same; only the number of robots changes. (On the unscaled grid,
-100 robots would be five times as crowded as 20: more contacts per step, a different workload.)
+100 robots would be five times as crowded as 20: more contacts per step, a different workload;
+``--unscaled`` measures that too.)
 """
 
 from __future__ import annotations
@@ -38,9 +39,11 @@ def scaled_grid(m: int):
     return world_from_grid(free, math.sqrt(m / BASE_M), name=f"grid_15x15_x{m}")
 
 
-def multi_env(m: int, backend: str, n_steps: int) -> Callable[[], int]:
+def multi_env(m: int, backend: str, n_steps: int, step_mode: str = "bounce",
+              world=None) -> Callable[[], int]:
     """A reset env and a function that runs ``n_steps`` parallel steps, returning agent-steps."""
-    env = MultiBounceEnv(world=scaled_grid(m), n_robots=m, backend=backend, max_cycles=10**9)
+    env = MultiBounceEnv(world=scaled_grid(m) if world is None else world, n_robots=m,
+                         backend=backend, step_mode=step_mode, max_cycles=10**9)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     n_actions = env.action_space(env.possible_agents[0]).n
@@ -91,11 +94,15 @@ def rate(make: Callable[[], Callable[[], int] | None], repeats: int) -> float | 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--steps", type=int, default=4_000,
+    parser.add_argument("--steps", type=int, default=10_000,
                         help="agent-steps per timed run (divided by m for env steps)")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--ms", type=int, nargs="+", default=[20, 50, 100])
+    parser.add_argument("--step-mode", choices=["bounce", "tick"], default="bounce")
+    parser.add_argument("--unscaled", action="store_true",
+                        help="the plain grid_15x15 at every m (crowding grows with m)")
     args = parser.parse_args(argv)
+    world = (lambda m: worlds.get("grid_15x15")) if args.unscaled else scaled_grid
     anchor = rate(lambda: pistonball(max(args.steps // 20, 1)), args.repeats)
     print(f"{'backend':<10} {'m':>4} {'world':<16} {'agent-steps/s':>14} {'x pistonball':>13}")
     if anchor is not None:
@@ -103,13 +110,14 @@ def main(argv: list[str] | None = None) -> None:
     for backend in ("kinematic", "pymunk"):
         rates = {}
         for m in args.ms:
-            rates[m] = rate(lambda m=m, b=backend: multi_env(m, b, max(args.steps // m, 1)),
+            rates[m] = rate(lambda m=m, b=backend: multi_env(m, b, max(args.steps // m, 1),
+                                                             args.step_mode, world(m)),
                             args.repeats)
             rel = f"{rates[m] / anchor:13.2f}" if anchor else f"{'—':>13}"
-            print(f"{backend:<10} {m:>4} {scaled_grid(m).name:<16} {rates[m]:>14,.0f} {rel}")
+            print(f"{backend:<10} {m:>4} {world(m).name:<16} {rates[m]:>14,.0f} {rel}")
         lo, hi = min(args.ms), max(args.ms)
         print(f"{backend:<10} ratio m={hi} / m={lo}: {rates[hi] / rates[lo]:.2f} "
-              f"(target >= {TARGET})")
+              f"(target >= {TARGET}; {args.step_mode} mode)")
 
 
 if __name__ == "__main__":
