@@ -66,6 +66,10 @@ from bounce_gym.errors import ActionError, ConfigError
 MULTI_ROBOT_TASKS = ("free", "coverage", "monitoring")
 
 
+#: info entries with one row per robot; each agent's info holds its own row
+PER_ROBOT_INFO = ("position", "heading", "cell", "clock", "bumps", "contact_edge",
+                  "contact_robot")
+
 #: the multi-robot envs' own defaults of the arguments of `bounce_gym.envs.options`
 MULTI_ROBOT_DEFAULTS = {"world": "grid_15x15", "n_robots": 4, "robot_radius": 0.3,
                         "robot_collisions": "bounce"}
@@ -89,6 +93,7 @@ class _MultiBase(EnvBase):
         #: per robot, what its action indices select: Φ_i, then the turn commands
         self._choices = [np.concatenate((phi, self.options.turn_angles))
                          for phi in self.options.angles]
+        self._discrete = self.options.action_type == "discrete"
         self._action_spaces = {
             a: action_space(self.options.action_type, len(self._choices[i]))
             for a, i in self.agent_index.items()
@@ -115,21 +120,24 @@ class _MultiBase(EnvBase):
     def _angle(self, agent: str, action: object) -> float:
         """The radians an action selects: a bounce angle of Φ_i or, past Φ_i, a turn command."""
         i = self.agent_index[agent]
-        return to_angle(action, self.options.action_type, self._choices[i],
+        choices = self._choices[i]
+        if self._discrete and isinstance(action, int | np.integer) \
+                and not isinstance(action, bool) and 0 <= action < len(choices):
+            return float(choices[action])  # a plain index: what to_angle would return, sooner
+        return to_angle(action, self.options.action_type, choices,
                         self.options.angle_range[i], who=f"action of {agent}")
 
     def _agent_infos(self, info: dict, agents) -> dict[str, dict]:
-        per_robot = ("position", "heading", "cell", "clock", "bumps", "contact_edge",
-                     "contact_robot")
-        shared = {k: v for k, v in info.items() if k not in per_robot}
-        out = {}
-        for agent in agents:
-            i = self.agent_index[agent]
-            item = dict(shared)
-            item.update({k: info[k][i].copy() if hasattr(info[k][i], "copy") else info[k][i]
-                         for k in per_robot})
-            out[agent] = item
-        return out
+        """Each agent's info: the shared entries, and its own row of every per-robot entry.
+
+        One copy per per-robot entry, then each agent gets a row of it (a view, or a numpy
+        scalar): no per-agent copies, and no agent's row can change another's or the env's data.
+        """
+        shared = {k: v for k, v in info.items() if k not in PER_ROBOT_INFO}
+        rows = list(zip(*(list(np.array(info[k])) for k in PER_ROBOT_INFO), strict=True))
+        index = self.agent_index
+        return {a: {**shared, **dict(zip(PER_ROBOT_INFO, rows[index[a]], strict=True))}
+                for a in agents}
 
     def state(self) -> np.ndarray:
         st = self.core.state

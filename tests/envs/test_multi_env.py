@@ -217,3 +217,22 @@ def test_path_samples_account_for_every_tick():
     # robot 0 drove 2.5 ticks, bumped 1 and stood 0.5 at its end point
     at_end = (robot == 0) & np.all(points == [0.5, 9.5], axis=1)
     assert ticks[at_end].sum() == pytest.approx(0.5)
+
+
+def test_agent_infos_hold_each_robots_own_row_and_do_not_share_memory():
+    env = MultiBounceEnv(n_robots=5, task="monitoring")
+    env.reset(seed=1)
+    *_, infos = env.step(dict.fromkeys(env.agents, 1))
+    state = env.core.state
+    for agent, info in infos.items():
+        i = env.agent_index[agent]
+        np.testing.assert_array_equal(info["position"], state.position[i])
+        assert info["position"].shape == (2,) and info["cell"].shape == (2,)
+        assert isinstance(info["heading"], np.float64) and info["heading"] == state.heading[i]
+        for key in ("clock", "bumps", "contact_edge", "contact_robot"):
+            assert isinstance(info[key], np.int64) and info[key] == getattr(state, key)[i]
+        assert info["encounters"] == infos["robot_0"]["encounters"]  # shared entries
+    before = state.position.copy()
+    infos["robot_0"]["position"][:] = -1.0
+    np.testing.assert_array_equal(state.position, before)
+    assert infos["robot_1"]["position"][0] != -1.0

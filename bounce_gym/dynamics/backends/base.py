@@ -255,41 +255,51 @@ class MotionBackend(ABC):
         """For each of ``robots``: the touching robot it faces (or -1) and the contact normal.
 
         Robot i is blocked by robot j when the disks touch (within tolerance) and i's heading
-        points towards j's centre.
+        points towards j's centre; among several, the one most directly ahead (the lowest index
+        among equals). Only robots within touching distance along both axes are examined further.
         """
         robots = np.asarray(robots, dtype=np.int64)
         blocker = np.full(len(robots), NO_CONTACT, dtype=np.int64)
         normal = np.zeros((len(robots), 2))
         if not self.collide or len(robots) == 0:
             return blocker, normal
-        rel = state.position[None, :, :] - state.position[robots, None, :]  # i -> j
-        dist = np.hypot(rel[..., 0], rel[..., 1])
+        reach = 2 * self.radius + self.contact_tol
+        pos = state.position
+        rel_x = pos[:, 0] - pos[robots, 0, None]  # (robots, m): robot k -> robot j
+        rel_y = pos[:, 1] - pos[robots, 1, None]
+        near = (np.abs(rel_x) <= reach) & (np.abs(rel_y) <= reach)
+        near[np.arange(len(robots)), robots] = False
+        k, j = np.nonzero(near)  # row-major: by robot, then by the other's index
+        x, y = rel_x[k, j], rel_y[k, j]
+        dist = np.hypot(x, y)
         d = state.direction[robots]
+        ahead = d[k, 0] * x + d[k, 1] * y
         # facing = heading within 90° − GRAZE of the other centre (a tangential touch is none)
-        facing = np.einsum("ik,ijk->ij", d, rel) > GRAZE * np.maximum(dist, 1e-300)
-        touching = dist <= 2 * self.radius + self.contact_tol
-        touching[np.arange(len(robots)), robots] = False
-        cand = touching & facing
-        has = cand.any(axis=1)
-        if np.any(has):
-            # among several, the one most directly ahead
-            score = np.where(cand, np.einsum("ik,ijk->ij", d, rel) / np.maximum(dist, 1e-300), -2)
-            j = np.argmax(score, axis=1)
-            blocker[has] = j[has]
-            vec = -rel[np.flatnonzero(has), j[has]]
-            normal[has] = vec / np.hypot(vec[:, 0], vec[:, 1])[:, None]
+        cand = (dist <= reach) & (ahead > GRAZE * np.maximum(dist, 1e-300))
+        if np.any(cand):
+            k, j, x, y = k[cand], j[cand], x[cand], y[cand]
+            score = ahead[cand] / np.maximum(dist[cand], 1e-300)
+            best = np.lexsort((j, -score, k))  # per robot: highest score, then lowest index
+            first = best[np.r_[True, k[best][1:] != k[best][:-1]]]
+            blocker[k[first]] = j[first]
+            vec = np.column_stack((-x[first], -y[first]))
+            normal[k[first]] = vec / np.hypot(vec[:, 0], vec[:, 1])[:, None]
         return blocker, normal
 
 
 #: Consecutive zero-length events after which a drive declares itself stuck (a bug).
 MAX_ZENO = 10_000
+#: Relative margin of the broad phase of `pair_contacts`: pairs a little farther apart than two
+#: robots can close in the window are examined too, so rounding never drops a contact.
+BROAD_SLACK = 1e-3
 
 
 class EventDrivenBackend(MotionBackend):
     """A continuous backend that advances all robots from one contact event to the next.
 
     `drive` is written once here: find each moving robot's distance to its wall ahead
-    (`_wall_distances`) and, with collisions on, the first disk–disk contact of each pair; move
+    (`_wall_distances`) and, with collisions on, the first disk–disk contact of each pair that
+    can meet before the nearest wall (`pair_contacts`, a broad phase then the exact times); move
     everyone to the earliest event or to the end of the window (`_advance`, the backend's own
     way of moving: closed form or one physics step); then stop the robots involved
     (`_settle_contacts`). Time is distance driven: one tick lasts ``step_length``.
@@ -312,13 +322,20 @@ class EventDrivenBackend(MotionBackend):
             if not np.all(np.isfinite(s_wall)):
                 lost = int(moving[~np.isfinite(s_wall)][0])
                 raise RuntimeError(f"robot {lost} left the free space at {state.position[lost]}")
-            s_pairs = None
             s_robot = np.full(len(moving), np.inf)
             if self.collide:
+                # only pairs that touch before the nearest wall and before the window closes
+                # can change what happens next (`pair_contacts` finds exactly those): a later
+                # contact is neither the next event nor due with it
                 velocity = np.zeros_like(state.position)
                 velocity[moving] = state.direction[moving]
-                s_pairs = pair_contact_times(state.position, velocity, self.radius, moving)
-                s_robot = s_pairs.min(axis=1)
+                horizon = min(float(s_wall.min()), limit - elapsed) + tol
+                first, second, s_pair = pair_contacts(state.position, velocity, self.radius,
+                                                      horizon)
+                soonest = np.full(state.n_robots, np.inf)
+                np.minimum.at(soonest, first, s_pair)
+                np.minimum.at(soonest, second, s_pair)
+                s_robot = soonest[moving]
             s_next = float(min(s_wall.min(), s_robot.min()))
             ds = min(s_next, limit - elapsed)
             event = s_next <= ds + tol
@@ -332,7 +349,10 @@ class EventDrivenBackend(MotionBackend):
                                    "bookkeeping bug)")
             walls = moving[s_wall <= s_next + tol]
             at_robot = s_robot <= s_next + tol
-            pairs = None if s_pairs is None else s_pairs[at_robot] <= s_next + tol
+            pairs = None
+            if self.collide:
+                due = s_pair <= s_next + tol
+                pairs = np.column_stack((first[due], second[due]))
             self._settle_contacts(state, walls, moving[at_robot], pairs)
             if until_first_block:
                 limit = min(limit, self._end_of_tick(elapsed))
@@ -353,31 +373,69 @@ class EventDrivenBackend(MotionBackend):
 
     @abstractmethod
     def _settle_contacts(self, state: RobotState, walls: np.ndarray, robots: np.ndarray,
-                         partners: np.ndarray | None) -> None:
-        """Stop the robots that reached a wall (``walls``) or another robot (``robots``, with
-        ``partners`` (len(robots), m): which robots each one reached)."""
+                         pairs: np.ndarray | None) -> None:
+        """Stop the robots that reached a wall (``walls``) or another robot (``robots``; ``pairs``
+        (k, 2): the robot pairs that touched, None when robots do not collide)."""
 
 
-def pair_contact_times(position: np.ndarray, velocity: np.ndarray, radius: float,
-                       rows: np.ndarray) -> np.ndarray:
-    """Earliest future time at which robot ``rows[k]`` starts to overlap robot j, per pair.
+def pair_contacts(position: np.ndarray, velocity: np.ndarray, radius: float,
+                  horizon: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Robot pairs whose disks start to touch within ``horizon``, and when.
 
-    Closed form for disks of equal radius moving with constant velocities: the smallest t >= 0
-    with |Δp + Δv t| = 2R while approaching. Returns (len(rows), m) with ``inf`` where the pair
-    never touches (or is the same robot, or is separating, or only grazes: the relative path
-    meets the 2R circle at an angle below `GRAZE`, as for walls — two touching robots sliding
-    past each other tangentially are not a contact).
+    Robots move with constant ``velocity`` (unit speed or standing still). Returns
+    ``(first, second, time)``: the pairs ``first < second`` (ascending by ``first``, then
+    ``second``) with ``time <= horizon``, where ``time`` is the earliest t >= 0 at which
+    |Δp + Δv t| = 2R while approaching. Pairs that never touch, separate, both stand still or
+    only graze (the relative path meets the 2R circle at an angle below `GRAZE`, as for walls: two
+    touching robots sliding past each other tangentially are not a contact) are left out.
+
+    Broad phase: until ``horizon`` a robot stays within ``horizon / 2`` of the midpoint of its
+    path, so two robots can only touch if those midpoints are within 2R + ``horizon``; pairs whose
+    midpoints are farther apart along x or y (`close_pairs`) are never examined. The narrow phase
+    solves the pairs left in closed form, exactly as a search over all pairs would
+    (`contact_times`), so the result is the same, bit for bit.
     """
-    dp = position[rows, None, :] - position[None, :, :]
-    dv = velocity[rows, None, :] - velocity[None, :, :]
-    a = np.einsum("ijk,ijk->ij", dv, dv)
-    b = np.einsum("ijk,ijk->ij", dp, dv)
-    c = np.einsum("ijk,ijk->ij", dp, dp) - (2 * radius) ** 2
+    reach = (2.0 * radius + horizon) * (1.0 + BROAD_SLACK)
+    mid = position + velocity * (0.5 * horizon) if math.isfinite(horizon) else position
+    first, second = close_pairs(mid, reach)
+    time = contact_times(position[first] - position[second], velocity[first] - velocity[second],
+                         radius)
+    due = time <= horizon
+    first, second, time = first[due], second[due], time[due]
+    sort = np.lexsort((second, first))
+    return first[sort], second[sort], time[sort]
+
+
+def close_pairs(points: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of ``points`` (n, 2) at most ``reach`` apart along both x and y, as index arrays
+    ``first < second`` (in no particular order).
+
+    Sort and sweep: sorted by x, each point is paired with the following points up to ``reach``
+    further along x, and those pairs are kept whose y are within ``reach`` too. O(n log n) plus
+    the pairs within reach along x.
+    """
+    n = len(points)
+    order = np.argsort(points[:, 0], kind="stable")
+    xs = points[order, 0]
+    # sorted position k is paired with k + 1 .. last[k] - 1
+    last = np.searchsorted(xs, xs + reach, side="right")
+    counts = last - np.arange(1, n + 1)
+    k = np.repeat(np.arange(n), counts)
+    partner = np.arange(len(k)) - np.repeat(np.cumsum(counts) - counts, counts) + k + 1
+    a, b = order[k], order[partner]
+    near = np.abs(points[a, 1] - points[b, 1]) <= reach
+    return np.minimum(a[near], b[near]), np.maximum(a[near], b[near])
+
+
+def contact_times(dp: np.ndarray, dv: np.ndarray, radius: float) -> np.ndarray:
+    """First contact time of disk pairs with relative positions ``dp`` and velocities ``dv``
+    ((n, 2) each), ``inf`` where they never touch: the narrow phase of `pair_contacts`."""
+    a = dv[:, 0] * dv[:, 0] + dv[:, 1] * dv[:, 1]
+    b = dp[:, 0] * dv[:, 0] + dp[:, 1] * dv[:, 1]
+    c = (dp[:, 0] * dp[:, 0] + dp[:, 1] * dp[:, 1]) - (2 * radius) ** 2
     disc = b * b - a * c
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (-b - np.sqrt(np.maximum(disc, 0.0))) / a
     # disc / a = (2R)² − (closest approach)²: at least sin²(GRAZE) · (2R)²
     ok = (b < 0) & (disc > a * (GRAZE * 2 * radius) ** 2) & (a > 0)
-    t = np.where(ok, np.maximum(t, 0.0), np.inf)
-    t[np.arange(len(rows)), rows] = np.inf
-    return t
+    return np.where(ok, np.maximum(t, 0.0), np.inf)

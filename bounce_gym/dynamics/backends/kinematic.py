@@ -76,7 +76,7 @@ class KinematicBackend(EventDrivenBackend):
         self._ahead_distance[moving] = s_wall - travel
         return travel
 
-    def _settle_contacts(self, state, walls, robots, partners):
+    def _settle_contacts(self, state, walls, robots, pairs):
         self._block_at_walls(state, walls, self._ahead_edge[walls], self._ahead_normal[walls])
         if len(robots):
             self._stop_touching(state, robots)

@@ -11,7 +11,7 @@ The backend builds one `pymunk.Space` (on the first `reset`, and again after unp
 
 Driving is **conservative advancement**. For every robot that moves, a pymunk segment query along
 its heading finds the first boundary feature it can reach; for robot pairs the closed form of
-`pair_contact_times` gives the first disk–disk contact. The space is then stepped with ``dt`` equal
+`pair_contacts` gives the first disk–disk contact. The space is then stepped with ``dt`` equal
 to the earliest of these events (capped by the drive window) — one physics step per event, so a
 single-robot bounce costs one step however long the drive — and pymunk itself moves the bodies.
 Engine time is distance: robots move at unit speed, one tick lasts ``step_length`` time units of
@@ -408,13 +408,13 @@ class PymunkBackend(EventDrivenBackend):
         self._hit_dist[moving] = s_wall - ds
         return ds
 
-    def _settle_contacts(self, state, walls, robots, partners):
+    def _settle_contacts(self, state, walls, robots, pairs):
         walls_touched, pairs_touched = self._sensed()
         if len(walls):
             self._confirm_walls(state, walls, walls_touched)
             self._block_at_walls(state, walls, self._hit_edge[walls], self._hit_normal[walls])
         if len(robots):
-            self._confirm_pairs(state, robots, partners, pairs_touched)
+            self._confirm_pairs(state, robots, pairs, pairs_touched)
             self._stop_touching(state, robots)
 
     # -- helpers ----------------------------------------------------------------------------
@@ -433,11 +433,16 @@ class PymunkBackend(EventDrivenBackend):
                 walls.setdefault(i, set()).add(k)
         return walls, pairs
 
-    def _confirm_pairs(self, state: RobotState, robots: np.ndarray, partners: np.ndarray,
+    def _confirm_pairs(self, state: RobotState, robots: np.ndarray, pairs: np.ndarray,
                        touched: set[tuple[int, int]]) -> None:
-        """Every predicted disk–disk contact must have been reported by the engine's callback."""
-        for i, row in zip(robots.tolist(), partners, strict=True):
-            if not any((i, j) in touched for j in np.flatnonzero(row).tolist()):
+        """Every robot that reached another robot (``robots``; ``pairs``: the pairs predicted to
+        touch) must be in a pair whose contact the engine's callback reported."""
+        felt = set()
+        for i, j in pairs.tolist():
+            if (i, j) in touched:
+                felt.update((i, j))
+        for i in robots.tolist():
+            if i not in felt:
                 raise RuntimeError(
                     f"pymunk reported no contact for robot {i} at {state.position[i].tolist()} "
                     "although it reached another robot"

@@ -8,6 +8,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon, box
 
+from bounce_gym.dynamics.backends.base import close_pairs
 from bounce_gym.envs.tasks.base import Task, path_samples, tick_length
 from bounce_gym.errors import ConfigError
 from bounce_gym.validate import number, numbers
@@ -89,15 +90,16 @@ class MonitoringTask(Task):
         return rewards, np.zeros(m, dtype=bool), info
 
     def _encounters(self, points: np.ndarray) -> int:
-        """Robot pairs together at ``points`` (m, 2): see the class docstring."""
+        """Robot pairs together at ``points`` (m, 2): see the class docstring. Pairs are counted
+        per shared cell, or among the pairs within 2R along both axes, not over all pairs."""
         opts = self.options
-        i, j = np.triu_indices(len(points), k=1)
         if opts.backend == "cell" or opts.robot_radius == 0:
             cells = np.floor((points - opts.world.bounds[:2]) / opts.step_length)
-            together = np.all(cells[i] == cells[j], axis=1)
-        else:
-            together = np.hypot(*(points[i] - points[j]).T) < 2 * opts.robot_radius
-        return int(together.sum())
+            _, count = np.unique(cells.astype(np.int64), axis=0, return_counts=True)
+            return int((count * (count - 1) // 2).sum())
+        gap = 2 * opts.robot_radius
+        i, j = close_pairs(points, gap)
+        return int(np.count_nonzero(np.hypot(*(points[i] - points[j]).T) < gap))
 
     def render_layers(self):
         rings = []
