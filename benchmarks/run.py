@@ -173,6 +173,15 @@ def main(argv: list[str] | None = None) -> None:
     coverage.main(["--seeds", "2", "--steps", "1500"])
     print()
     multirobot.main(["--seeds", "5"])
+    # throughput ratios against anchors measured in the same run (issue #13)
+    from benchmarks import env_step, multirobot_scaling, vector_env
+
+    print()
+    env_step.main(["--steps", "2000", "--rounds", "3"] if args.quick else [])
+    print()
+    vector_env.main(quick=args.quick, repeats=args.repeats)
+    print()
+    multirobot_scaling.main(["--steps", "4000"] if args.quick else [])
 
 
 if __name__ == "__main__":
