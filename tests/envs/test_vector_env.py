@@ -160,3 +160,36 @@ def test_what_is_not_batched_is_a_config_error(kwargs, reason):
 def test_localization_keeps_the_sync_fallback():
     env = gym.make_vec("bounce_gym/BounceLocalization-v0", num_envs=2)
     assert isinstance(env, gym.vector.SyncVectorEnv)
+
+
+@pytest.mark.parametrize("backend", ["kinematic", "cell"])
+def test_small_goals_any_heading_are_reached_identically(backend):
+    """Every path is checked against the goal disk (any heading counts): the batch's cheap
+    near-goal screen must never drop an arrival the lone robot's exact test finds."""
+    kwargs = {"backend": backend, "angles": [45, 90, 135],
+              "task_kwargs": {"goal_radius": 0.5, "heading_tolerance_deg": 180}}
+    native, sync = _pair("bounce_gym/BounceNavigation-v0", 16, **kwargs)
+    native.reset(seed=7)
+    sync.reset(seed=7)
+    native.action_space.seed(7)
+    hits = 0
+    for t in range(120):
+        actions = native.action_space.sample()
+        out, ref = native.step(actions), sync.step(actions)
+        _same_step(out, ref, t)
+        hits += int(out[2].sum())
+    assert hits > 0
+
+
+def test_returned_arrays_are_not_the_env_state():
+    """Observations and infos may be kept and written by the caller without changing the
+    episodes (the info arrays are handed out without a zero-filled copy)."""
+    env, ref = BounceVectorEnv(3), BounceVectorEnv(3)
+    env.reset(seed=2)
+    ref.reset(seed=2)
+    for t in range(30):
+        actions = np.array([t % 3, 1, 2])
+        out, expect = env.step(actions), ref.step(actions)
+        _same_step(out, expect, t)
+        for array in (out[0], *(v for k, v in out[4].items() if not k.startswith("_"))):
+            array[...] = 0
