@@ -47,8 +47,14 @@ class VectorToVecEnv(VecEnv):
         done = terminated | truncated
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
         for key, value in info.items():
-            if not key.startswith("_"):
-                for i in np.flatnonzero(info[f"_{key}"]):
+            if key.startswith("_"):
+                continue
+            mask = info[f"_{key}"]
+            if mask.all():  # the usual case: one pass over the rows, no index arrays
+                for one, item in zip(infos, value, strict=True):
+                    one[key] = item
+            else:
+                for i in np.flatnonzero(mask):
                     infos[i][key] = value[i]
         if done.any():
             for i in np.flatnonzero(done):

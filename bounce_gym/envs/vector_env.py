@@ -12,7 +12,8 @@ It reproduces ``gym.make_vec(id, num_envs=N, vectorization_mode="sync")`` step f
 starts (the reset runs the single-robot core and copies its state into the batch), autoreset is
 ``NEXT_STEP`` and the registered ``max_episode_steps`` truncates each env. Infos are dicts of
 arrays with ``_key`` masks, as SyncVectorEnv builds them, except ``cell``, an (N, 2) int array
-(row, col) where SyncVectorEnv has an object array of tuples.
+(row, col) where SyncVectorEnv has an object array of tuples, and the masks of keys every env
+reports, which are one shared read-only all-True array.
 
 Not batched (a `ConfigError` says why): ``step_mode="tick"``, the pymunk backend, actuation
 noise, rendering and the localization task.
@@ -88,6 +89,10 @@ class BounceVectorEnv(VectorEnv):
         self._autoreset = np.zeros(n, dtype=bool)
         self._history = np.zeros((n, opts.history, 2), dtype=np.float32)
         self._last_angle = np.full(n, math.nan)
+        self._all_rows = np.arange(n)
+        self._origin = np.array(opts.world.bounds[:2], dtype=np.float64)
+        self._all_true = _read_only(np.ones(n, dtype=bool))
+        self._no_contact = _read_only(np.zeros(n, dtype=bool))
 
     # -- episodes ---------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -148,7 +153,7 @@ class BounceVectorEnv(VectorEnv):
         self._elapsed[rows] = 0
         self._history[rows] = 0.0
         self._last_angle[rows] = math.nan
-        return self._infos(infos, rows, self.task.info(self.dynamics.state), step=False)
+        return self._infos(infos, rows, self.task.info(self.dynamics.state))
 
     def _first_state(self, core):
         one = core.state
@@ -157,41 +162,47 @@ class BounceVectorEnv(VectorEnv):
                                    np.repeat(one.heading, n))
 
     def step(self, actions):
-        if self.dynamics.state is None:
+        state = self.dynamics.state
+        if state is None:
             raise ConfigError("call reset() before step()")
         angles = self._angles(actions)
-        n = self.num_envs
-        state = self.dynamics.state
+        opts = self.options
         start = state.position.copy()
         bumping = state.blocked.copy()
-        clock_before = state.clock.copy()
-        bumps_before = state.bumps.copy()
-        if self.options.backend == "cell":
+        if opts.history:
+            rows = np.flatnonzero(bumping)
+            clock_before = state.clock[rows]
+        if opts.backend == "cell":
             self.dynamics.tick(angles)  # every robot is blocked: this tick is the rotation
             driven = _drive_cells_each(self.dynamics.backend, state)
         else:
             driven = self.dynamics.bounce_each(angles)
         ticks = bumping + driven
         self._ticks += ticks
-        changed = bumping & ~np.isnan(self._last_angle) & (angles != self._last_angle)
-        self._last_angle[bumping] = angles[bumping]
-        if self.options.history:
-            rows = np.flatnonzero(bumping)
-            self._history[rows, 1:] = self._history[rows, :-1]
-            self._history[rows, 0, 0] = clock_before[rows] / self.options.max_clock
-            self._history[rows, 0, 1] = np.mod(angles[rows], 2 * np.pi) / (2 * np.pi)
+        last = self._last_angle
+        changed = bumping & (angles != last) & (last == last)  # last == last: not NaN
+        if bumping.all():
+            self._last_angle = angles
+        else:
+            last[bumping] = angles[bumping]
+        if opts.history:
+            history = self._history
+            history[rows, 1:] = history[rows, :-1]
+            history[rows, 0, 0] = clock_before / opts.max_clock
+            history[rows, 0, 1] = np.mod(angles[rows], 2 * np.pi) / (2 * np.pi)
+        # a bump is the one rotation tick of a blocked robot, so bumps grew by ``bumping``
         events = StepEvents(
             ticks=ticks, start=start, end=state.position.copy(), heading=state.heading.copy(),
-            bumps=state.bumps - bumps_before, angles=np.where(bumping, angles, math.nan),
-            angle_changed=changed, robot_contact=np.zeros(n, dtype=bool))
+            bumps=bumping.astype(np.int64), angles=np.where(bumping, angles, math.nan),
+            angle_changed=changed, robot_contact=self._no_contact)
         rewards, terminated, task_info = self.task.step(state, events, self._ticks)
         self._elapsed += 1
-        truncated = (np.zeros(n, dtype=bool) if self.max_episode_steps is None
+        truncated = (np.zeros(self.num_envs, dtype=bool) if self.max_episode_steps is None
                      else self._elapsed >= self.max_episode_steps)
-        stepped = np.flatnonzero(~self._autoreset)
-        infos = self._infos({}, stepped, task_info, step=True,
-                            step_ticks=ticks)
         resetting = np.flatnonzero(self._autoreset)
+        stepped = self._all_rows if not len(resetting) else np.flatnonzero(~self._autoreset)
+        # the step's position and heading are the fresh copies ``events`` holds
+        infos = self._infos({}, stepped, task_info, events, step_ticks=ticks)
         if len(resetting):
             self._reset_envs(resetting, infos)
             rewards[resetting] = 0.0
@@ -206,12 +217,12 @@ class BounceVectorEnv(VectorEnv):
         n = self.num_envs
         raw = np.asarray(actions)
         if opts.action_type == "discrete":
-            if raw.shape != (n,) or not np.issubdtype(raw.dtype, np.integer):
+            if raw.shape != (n,) or raw.dtype.kind not in "iu":
                 raise ActionError(f"actions: expected {n} integer indices, got dtype "
                                   f"{raw.dtype}, shape {raw.shape}")
             phi = opts.angles[0]
-            bad = (raw < 0) | (raw >= len(phi))
-            if bad.any():
+            if raw.min() < 0 or raw.max() >= len(phi):
+                bad = (raw < 0) | (raw >= len(phi))
                 i = int(np.flatnonzero(bad)[0])
                 raise ActionError(f"actions[{i}]: index {int(raw[i])} is out of range "
                                   f"[0, {len(phi)})")
@@ -231,42 +242,60 @@ class BounceVectorEnv(VectorEnv):
 
     # -- sensing ----------------------------------------------------------------------------
     def _observation(self) -> np.ndarray:
+        """(N, d) float32 observations, written column block by column block into one fresh
+        array (the values `BounceCore.observation` concatenates, cast the same way)."""
         state = self.dynamics.state
         opts = self.options
         n = self.num_envs
-        parts = [state.blocked[:, None].astype(np.float32), (state.clock / opts.max_clock)[:, None]]
+        core = self.single.core
+        obs = np.empty((n, len(core.obs_low)), dtype=np.float32)
+        obs[:, 0] = state.blocked
+        obs[:, 1] = state.clock / opts.max_clock
+        col = 2
         if opts.history:
-            parts.append(self._history.reshape(n, -1))
+            obs[:, col:col + 2 * opts.history] = self._history.reshape(n, -1)
+            col += 2 * opts.history
         if opts.privileged:
             xmin, ymin, xmax, ymax = opts.world.bounds
-            parts.append((state.position - (xmin, ymin)) / (xmax - xmin, ymax - ymin))
-            parts.append(state.direction)
+            obs[:, col:col + 2] = (state.position - (xmin, ymin)) / (xmax - xmin, ymax - ymin)
+            obs[:, col + 2:col + 4] = state.direction
+            col += 4
         features = self.task.observation()
         if features is not None:
-            parts.append(features)
-        obs = np.concatenate(parts, axis=1, dtype=np.float32)
-        if opts.privileged or features is not None:
-            np.clip(obs, self.single.core.obs_low, self.single.core.obs_high, out=obs)
+            obs[:, col:] = features
+        if opts.privileged or features is not None:  # np.clip's arithmetic, without its wrapper
+            np.minimum(np.maximum(obs, core.obs_low, out=obs), core.obs_high, out=obs)
         return obs
 
-    def _infos(self, infos: dict, rows: np.ndarray, task_info: dict, step: bool,
-               step_ticks: np.ndarray | None = None) -> dict:
-        """Write the info of envs ``rows`` into ``infos`` (arrays with ``_key`` masks)."""
+    def _infos(self, infos: dict, rows: np.ndarray, task_info: dict,
+               events: StepEvents | None = None, step_ticks: np.ndarray | None = None) -> dict:
+        """Write the info of envs ``rows`` into ``infos`` (arrays with ``_key`` masks).
+
+        A step passes its ``events`` (whose end positions and headings are already fresh copies)
+        and ``step_ticks``. When every env reports a key, its array is the value itself (no
+        zero-filled copy) and its mask the shared read-only all-True array.
+        """
         state = self.dynamics.state
-        opts = self.options
-        xmin, ymin = opts.world.bounds[:2]
-        cells = np.floor((state.position - (xmin, ymin)) / opts.step_length).astype(int)
-        cells = np.clip(cells, 0, self.single.core._cell_max)[:, ::-1]
-        values = {"ticks": self._ticks, "position": state.position, "heading": state.heading,
-                  "cell": cells, "clock": state.clock, "bumps": state.bumps,
-                  "contact_edge": state.contact_edge, **task_info}
-        if step:
+        cells = (state.position - self._origin) / self.options.step_length
+        cells = np.floor(cells, out=cells).astype(np.int64)
+        np.minimum(np.maximum(cells, 0, out=cells), self.single.core._cell_max, out=cells)
+        values = {"ticks": self._ticks.copy(),
+                  "position": state.position.copy() if events is None else events.end,
+                  "heading": state.heading.copy() if events is None else events.heading,
+                  "cell": cells[:, ::-1], "clock": state.clock.copy(), "bumps": state.bumps.copy(),
+                  "contact_edge": state.contact_edge.copy(), **task_info}
+        if step_ticks is not None:
             values["step_ticks"] = step_ticks
         n = self.num_envs
+        every = len(rows) == n
         for key, value in values.items():
             present = None
             if isinstance(value, tuple):  # (values, mask): a key only some envs report
                 value, present = value
+            elif every and key not in infos:
+                infos[key] = value
+                infos[f"_{key}"] = self._all_true
+                continue
             chosen = rows if present is None else rows[present[rows]]
             if not len(chosen):
                 continue
@@ -279,6 +308,11 @@ class BounceVectorEnv(VectorEnv):
 
     def close_extras(self, **kwargs) -> None:
         self.single.close()
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
 
 
 def _unbatchable(opts, task) -> str | None:
@@ -373,8 +407,10 @@ class _NavigationBatch(_FreeBatch):
         single = self.single
         err = (events.heading - self.goal_heading + np.pi) % (2 * np.pi) - np.pi
         arrive = np.full(self.n, np.nan)
-        # the disk test of a lone robot, run only where the heading is within tolerance
-        for i in np.flatnonzero(np.abs(err) <= single.heading_tolerance):
+        # the disk test of a lone robot, run only where the heading is within tolerance and the
+        # path passes near the goal
+        for i in np.flatnonzero((np.abs(err) <= single.heading_tolerance)
+                                & self._near_goal(events)):
             single.goal = (self.goal_position[i:i + 1], self.goal_heading[i:i + 1])
             one = StepEvents(ticks=int(events.ticks[i]), start=events.start[i:i + 1],
                              end=events.end[i:i + 1], heading=events.heading[i:i + 1],
@@ -385,16 +421,31 @@ class _NavigationBatch(_FreeBatch):
             if found is not None:
                 arrive[i] = found
         hit = ~np.isnan(arrive)
-        spent = np.where(hit, np.minimum(events.ticks, arrive), events.ticks)
         changed = events.angle_changed
+        info = self.info(state)
+        info["angle_changed"] = changed
+        if not hit.any():
+            return -single.w1 * events.ticks - (single.w2 - single.w1) * changed, \
+                self.reached.copy(), info
+        spent = np.where(hit, np.minimum(events.ticks, arrive), events.ticks)
         reward = -single.w1 * spent - (single.w2 - single.w1) * changed
         reward[hit] += single.goal_bonus
         self.reached |= hit
-        info = self.info(state)
+        info["is_success"] = self.reached.copy()
         to_goal = np.where(hit, ticks - events.ticks + np.nan_to_num(arrive), 0).astype(np.int64)
-        info.update(ticks_to_goal=(to_goal, hit), angle_changed=changed.copy())
+        info["ticks_to_goal"] = (to_goal, hit)
         return reward, self.reached.copy(), info
 
+    def _near_goal(self, events: StepEvents) -> np.ndarray:
+        """(N,) bool: the step's segment comes within the goal radius (plus a margin far above
+        rounding) of the goal — a superset of the robots the exact disk test can accept."""
+        seg = events.end - events.start
+        rel = self.goal_position - events.start
+        length2 = np.einsum("ij,ij->i", seg, seg)
+        along = np.clip(np.einsum("ij,ij->i", rel, seg) / np.where(length2 > 0, length2, 1.0),
+                        0.0, 1.0)
+        gap = rel - along[:, None] * seg
+        return np.einsum("ij,ij->i", gap, gap) <= (self.single.goal_radius + 1e-6) ** 2
 
 class _CoverageBatch(_FreeBatch):
     """`CoverageTask` for N robots: one visit histogram and visited grid per env."""

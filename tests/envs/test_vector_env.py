@@ -64,15 +64,22 @@ def test_same_episodes_as_sync_vector_env(env_id, kwargs):
     assert np.array_equal(a[0], b[0])
 
 
-def test_navigation_goals_are_reached_identically():
-    """Terminations by the task (not only by time): a goal region large enough to be hit."""
-    kwargs = {"task_kwargs": {"goal_radius": 3.0, "heading_tolerance_deg": 90}}
-    native, sync = _pair("bounce_gym/BounceNavigation-v0", 8, **kwargs)
+@pytest.mark.parametrize(("n", "kwargs"), [
+    (8, {"task_kwargs": {"goal_radius": 3.0, "heading_tolerance_deg": 90}}),
+    # any heading counts, so every path is checked against the goal disk: the batch's cheap
+    # near-goal screen must never drop an arrival the lone robot's exact test finds
+    *((16, {"backend": backend, "angles": [45, 90, 135],
+            "task_kwargs": {"goal_radius": 0.5, "heading_tolerance_deg": 180}})
+      for backend in ("kinematic", "cell")),
+])
+def test_navigation_goals_are_reached_identically(n, kwargs):
+    """Terminations by the task (not only by time): goal regions that are hit."""
+    native, sync = _pair("bounce_gym/BounceNavigation-v0", n, **kwargs)
     native.reset(seed=0)
     sync.reset(seed=0)
     native.action_space.seed(0)
     hits = 0
-    for t in range(80):
+    for t in range(100):
         actions = native.action_space.sample()
         out, ref = native.step(actions), sync.step(actions)
         _same_step(out, ref, t)
@@ -160,3 +167,17 @@ def test_what_is_not_batched_is_a_config_error(kwargs, reason):
 def test_localization_keeps_the_sync_fallback():
     env = gym.make_vec("bounce_gym/BounceLocalization-v0", num_envs=2)
     assert isinstance(env, gym.vector.SyncVectorEnv)
+
+
+def test_returned_arrays_are_not_the_env_state():
+    """Observations and infos may be kept and written by the caller without changing the
+    episodes (the info arrays are handed out without a zero-filled copy)."""
+    env, ref = BounceVectorEnv(3), BounceVectorEnv(3)
+    env.reset(seed=2)
+    ref.reset(seed=2)
+    for t in range(30):
+        actions = np.array([t % 3, 1, 2])
+        out, expect = env.step(actions), ref.step(actions)
+        _same_step(out, expect, t)
+        for array in (out[0], *(v for k, v in out[4].items() if not k.startswith("_"))):
+            array[...] = 0
