@@ -29,9 +29,18 @@ numbering and N_pos, not N, as threshold).
 
 **All plans (Alg. 2)** with the line-12 inversion fixed (A9: no path ⇒ L = −1, the diagonal is 0):
 one multi-layer single-source Dijkstra per start cell (N calls, not N² pair queries), keeping the
-weights ``L`` (N × N) and the predecessor trees (N × N·|Φ|); a plan ``M[i][j]`` is decoded when
-asked for, so the N² strings are never stored. The diagonal plan is the empty plan (the paper's M
-is NIL there); ``plan is None ⇔ L = −1`` holds for every pair.
+weights ``L`` (N × N) and the end layers (N × N); a plan ``M[i][j]`` is decoded when asked for
+from the predecessor tree of start i, so the N² strings are never stored. The diagonal plan is
+the empty plan (the paper's M is NIL there); ``plan is None ⇔ L = −1`` holds for every pair.
+
+**Memory of all plans.** ``L`` is float32 when that is exact (sums of w1 and w2 such as the
+paper's 1 and 100 are), else float64; the end layers are int8: 5 bytes per pair (about 0.8 GB at
+12,480 cells), plus 1 byte per pair once the angle statistics are asked for. Of the predecessor
+trees (4·N·|Φ| bytes each) only as many as fit in ``tree_budget`` (default `TREE_BUDGET`) are
+kept, the most recently used ones; a tree that is not kept is searched again when a plan from
+its start is decoded. The angle statistics are computed in blocks of start cells
+(`BLOCK_BYTES` of work arrays). Small maps (N·|Φ|·N·4 bytes within the budget: 26 MB for
+lab_complex) keep every tree and never search twice.
 
 **Policies.** `PlanExecutor` replays a plan in a `bounce_gym.envs.BounceEnv` with
 ``step_mode="bounce"`` (one step = one bump tick with the chosen angle, then driving to the next
@@ -47,8 +56,9 @@ bins of the model and distinct modulo 360°.
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -62,6 +72,10 @@ __all__ = ["FORWARD", "BUMP", "Plan", "Roadmap", "AllPlans", "goal_cells"]
 #: edge kinds of the roadmap
 FORWARD, BUMP = 0, 1
 _NO_PRED = -9999  # scipy's predecessor value for "no predecessor"
+#: Default bytes of predecessor trees `Roadmap.all_pairs` keeps.
+TREE_BUDGET = 64 * 2**20
+#: Bytes of work arrays per block of start cells in `AllPlans.angle_masks`.
+BLOCK_BYTES = 32 * 2**20
 
 
 # -- plans ------------------------------------------------------------------------------------
@@ -152,6 +166,8 @@ class Roadmap:
         graph: the (N·|Φ|) x (N·|Φ|) CSR weight matrix (sorted indices, no duplicate edges).
         edge_kind, edge_angle: per stored edge (aligned with ``graph.data``): `FORWARD` or `BUMP`,
             and the index of the bump's angle in ``angles`` (−1 for forward edges).
+        blocked: (N,) the cell's step is blocked: all its edges are bumps, each into the layer
+            of its angle.
         dijkstra_calls: number of Dijkstra runs made so far (one per query or start cell).
     """
 
@@ -215,7 +231,7 @@ class Roadmap:
                                     indptr.astype(np.int32)), shape=(self.n_nodes, self.n_nodes))
         self.edge_kind = np.concatenate(kind)[order]
         self.edge_angle = np.concatenate(angle)[order]
-        self._max_degree = int(np.diff(indptr).max()) if self.n_nodes else 0
+        self.blocked = bump
 
     # -- nodes and edges ----------------------------------------------------------------------
     def node(self, cell: int, layer: int) -> int:
@@ -239,23 +255,6 @@ class Roadmap:
             if g.indices[e] == v:
                 return e
         raise KeyError(f"no roadmap edge {u} -> {v}")
-
-    def edges_between(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Vectorised `edge`: edge indices of pairs u → v, −1 where there is none."""
-        g = self.graph
-        u, v = np.asarray(u, dtype=np.int64), np.asarray(v, dtype=np.int64)
-        out = np.full(u.shape, -1, dtype=np.int64)
-        ok = (u >= 0) & (v >= 0)
-        uu, vv = u[ok], v[ok]
-        lo, hi = g.indptr[uu], g.indptr[uu + 1]
-        found = np.full(uu.shape, -1, dtype=np.int64)
-        for t in range(self._max_degree):
-            e = lo + t
-            inside = e < hi
-            hit = inside & (g.indices[np.where(inside, e, 0)] == vv)
-            found[hit] = e[hit]
-        out[ok] = found
-        return out
 
     # -- queries ------------------------------------------------------------------------------
     def _search(self, start: int) -> tuple[np.ndarray, np.ndarray]:
@@ -321,27 +320,33 @@ class Roadmap:
                     layers=tuple(layers.tolist()), symbols=tuple(symbols), weight=weight,
                     angle_changes=changes)
 
-    def all_pairs(self) -> AllPlans:
+    def all_pairs(self, tree_budget: int = TREE_BUDGET) -> AllPlans:
         """All minimum plans (Alg. 2, line 12 fixed): N Dijkstra runs, one per start cell.
 
-        The result is cached; `plan_between` uses it.
+        Keeps the predecessor trees that fit in ``tree_budget`` bytes (at least one; see the
+        module docstring, "Memory of all plans"). The result is cached; `plan_between` uses it.
         """
         n, m = self.n_cells, self.n_layers
-        weights = np.empty((n, n))
-        layer = np.zeros((n, n), dtype=np.int8)
-        preds = np.empty((n, self.n_nodes), dtype=np.int32)
+        capacity = max(1, int(tree_budget) // (4 * self.n_nodes))
+        plans = AllPlans(self, np.empty((n, n), dtype=np.float32),
+                         np.zeros((n, n), dtype=np.int8), capacity)
         goal_nodes = np.arange(n)[None, :] + n * np.arange(m)[:, None]  # (m, n)
         for s in range(n):
             dist, pred = self._search(s)
-            preds[s] = pred
+            plans.keep(s, pred)
             d = dist[goal_nodes]
-            layer[s] = np.argmin(d, axis=0)
-            weights[s] = d[layer[s], np.arange(n)]
-        weights[~np.isfinite(weights)] = -1.0  # Alg. 2 lines 11-12 with the test fixed: no path
-        layer[np.arange(n), np.arange(n)] = 0
-        weights[np.arange(n), np.arange(n)] = 0.0  # lines 1-2: the diagonal stays 0 (and NIL)
-        self._all = AllPlans(self, weights, preds, layer)
-        return self._all
+            layer = np.argmin(d, axis=0)
+            weight = d[layer, np.arange(n)]
+            weight[~np.isfinite(weight)] = -1.0  # Alg. 2 lines 11-12 with the test fixed: no path
+            weight[s] = 0.0  # lines 1-2: the diagonal stays 0 (and NIL)
+            layer[s] = 0
+            if plans.L.dtype != weight.dtype and not np.array_equal(
+                    weight.astype(plans.L.dtype), weight):
+                plans.L = plans.L.astype(weight.dtype)
+            plans.L[s] = weight
+            plans.end_layer[s] = layer
+        self._all = plans
+        return plans
 
     def plan_between(self, i: int, j: int) -> Plan | None:
         """``M[i][j]`` of the all-pairs result (computed on first use), decoded on demand."""
@@ -350,21 +355,40 @@ class Roadmap:
         return self._all.plan_between(i, j)
 
 
-@dataclass(eq=False)
 class AllPlans:
-    """Result of `Roadmap.all_pairs`: weights L and the predecessor trees of the N searches.
+    """Result of `Roadmap.all_pairs`: weights L, end layers, and some predecessor trees.
 
     Attributes:
-        L: (N, N) plan weights, −1 where no plan exists, 0 on the diagonal.
-        predecessors: (N, N·|Φ|) int32, the Dijkstra predecessor tree of every start cell.
-        end_layer: (N, N) the active angle index at the goal of each plan.
+        L: (N, N) plan weights, −1 where no plan exists, 0 on the diagonal; float32 when exact.
+        end_layer: (N, N) int8, the active angle index at the goal of each plan.
+        capacity: how many predecessor trees are kept (the most recently used).
     """
 
-    roadmap: Roadmap
-    L: np.ndarray
-    predecessors: np.ndarray
-    end_layer: np.ndarray
-    _masks: np.ndarray | None = field(default=None, repr=False)
+    def __init__(self, roadmap: Roadmap, L: np.ndarray, end_layer: np.ndarray,
+                 capacity: int) -> None:
+        self.roadmap = roadmap
+        self.L = L
+        self.end_layer = end_layer
+        self.capacity = capacity
+        self._trees: OrderedDict[int, np.ndarray] = OrderedDict()
+        self._masks: np.ndarray | None = None
+
+    def keep(self, start: int, tree: np.ndarray) -> None:
+        """Store the predecessor tree of ``start``, dropping the least recently used beyond
+        ``capacity``."""
+        self._trees[start] = tree.astype(np.int32, copy=False)
+        self._trees.move_to_end(start)
+        while len(self._trees) > self.capacity:
+            self._trees.popitem(last=False)
+
+    def predecessors(self, start: int) -> np.ndarray:
+        """(N·|Φ|,) int32 Dijkstra predecessor tree of a start cell, searched again if it was
+        not kept."""
+        tree = self._trees.get(start)
+        if tree is None:
+            tree = self.roadmap._search(start)[1]
+        self.keep(start, tree)
+        return self._trees[start]
 
     def reachable(self) -> np.ndarray:
         """(N, N) bool: a plan exists (the diagonal included)."""
@@ -378,64 +402,72 @@ class AllPlans:
             return rm._empty(i)
         if self.L[i, j] < 0:
             return None
-        return rm._decode(self.predecessors[i], rm.node(j, int(self.end_layer[i, j])), i)
+        return rm._decode(self.predecessors(i), rm.node(j, int(self.end_layer[i, j])), i)
 
     def angle_masks(self) -> np.ndarray:
         """(N, N) bit masks of the angles each plan uses (bit i = ``angles[i]``); 0 where none.
 
-        Computed on the predecessor trees by pointer doubling (whole-array, no decoding).
+        uint8 up to 8 angles. Computed on the predecessor trees by pointer doubling, a block
+        of start cells at a time (kept trees first), without decoding: a tree edge into node
+        (z, i) from a blocked cell is a bump with angle i.
         """
         if self._masks is not None:
             return self._masks
         rm = self.roadmap
         n, v = rm.n_cells, rm.n_nodes
-        pred = self.predecessors.astype(np.int64)
-        has = pred >= 0
-        child = np.broadcast_to(np.arange(v), pred.shape)
-        e = np.full(pred.shape, -1, dtype=np.int64)
-        e[has] = rm.edges_between(pred[has], child[has])
-        if np.any(e[has] < 0):
-            raise AssertionError("a predecessor link is not a roadmap edge")
         dtype = np.uint8 if rm.n_layers <= 8 else np.int64
-        bits = np.zeros(pred.shape, dtype=dtype)
-        bump = np.zeros(pred.shape, dtype=bool)
-        bump[has] = rm.edge_kind[e[has]] == BUMP
-        bits[bump] = np.left_shift(1, rm.edge_angle[e[bump]].astype(np.int64)).astype(dtype)
-        # pointer doubling on the flattened forest: OR the bits of ever farther ancestors
-        itype = np.int32 if pred.size < 2**31 else np.int64
-        rows = (np.arange(n, dtype=itype) * v)[:, None]
-        anc = (np.where(has, pred, child).astype(itype) + rows).ravel()
-        bits = bits.ravel()
-        while True:
-            bits |= bits[anc]
-            nxt = anc[anc]
-            if np.array_equal(nxt, anc):
-                break
-            anc = nxt
-        bits = bits.reshape(pred.shape).astype(np.int64)
-        ends = rm.node(0, 0) + np.arange(n)[None, :] + n * self.end_layer.astype(np.int64)
-        masks = np.take_along_axis(bits, ends, axis=1)
+        layer_bit = np.left_shift(1, np.arange(v) // n).astype(dtype)
+        masks = np.zeros((n, n), dtype=dtype)
+        starts = list(self._trees) + [s for s in range(n) if s not in self._trees]
+        block = max(1, BLOCK_BYTES // (32 * v))  # about 32 bytes of work per tree node
+        for lo in range(0, n, block):
+            rows = np.array(starts[lo:lo + block])
+            pred = np.stack([self.predecessors(int(s)) for s in rows])
+            has = pred >= 0
+            bits = np.where(has & rm.blocked[np.where(has, pred, 0) % n], layer_bit,
+                            0).astype(dtype).ravel()
+            # pointer doubling on the flattened forest: OR the bits of ever farther ancestors
+            offset = (np.arange(len(rows)) * v)[:, None]
+            anc = (np.where(has, pred, np.arange(v)) + offset).astype(np.int32).ravel()
+            while True:
+                bits |= bits[anc]
+                nxt = anc[anc]
+                if np.array_equal(nxt, anc):
+                    break
+                anc = nxt
+            ends = np.arange(n)[None, :] + n * self.end_layer[rows].astype(np.int64)
+            masks[rows] = np.take_along_axis(bits.reshape(len(rows), v), ends, axis=1)
         masks[self.L < 0] = 0
-        masks[np.arange(n), np.arange(n)] = 0
+        np.fill_diagonal(masks, 0)
         self._masks = masks
         return masks
 
-    def distinct_angle_counts(self) -> np.ndarray:
-        """(N, N) number of distinct angles of each plan; −1 where there is no plan."""
-        masks = self.angle_masks()
-        counts = np.zeros(masks.shape, dtype=np.int64)
+    def _distinct(self, rows: slice) -> np.ndarray:
+        """int8 number of distinct angles of the plans from the start cells ``rows``; −1 where
+        there is no plan."""
+        masks = self.angle_masks()[rows]
+        counts = np.zeros(masks.shape, dtype=np.int8)
         for b in range(self.roadmap.n_layers):
-            counts += (masks >> b) & 1
-        counts[self.L < 0] = -1
+            counts += ((masks >> b) & 1).astype(np.int8)
+        counts[self.L[rows] < 0] = -1
         return counts
+
+    def distinct_angle_counts(self) -> np.ndarray:
+        """(N, N) int8 number of distinct angles of each plan; −1 where there is no plan."""
+        return self._distinct(slice(None))
 
     def histogram(self) -> dict:
         """Plans of the ordered pairs i ≠ j by number of distinct angles (0..|Φ|), and the
         number of unreachable pairs (key ``"none"``): the statistic of the paper's Figs. 7-8."""
-        counts = self.distinct_angle_counts()
-        off = ~np.eye(len(counts), dtype=bool)
-        out = {c: int(np.sum(counts[off] == c)) for c in range(self.roadmap.n_layers + 1)}
-        out["none"] = int(np.sum(counts[off] == -1))
+        n, k = self.roadmap.n_cells, self.roadmap.n_layers
+        total = np.zeros(k + 2, dtype=np.int64)
+        block = max(1, BLOCK_BYTES // (8 * n))
+        for lo in range(0, n, block):
+            counts = self._distinct(slice(lo, lo + block)).astype(np.int64) + 1
+            total += np.bincount(counts.ravel(), minlength=k + 2)
+        total[1] -= n  # the diagonal: the empty plans, 0 angles
+        out = {c: int(total[c + 1]) for c in range(k + 1)}
+        out["none"] = int(total[0])
         return out
 
 

@@ -151,44 +151,115 @@ def safe_intervals(part: Partition, i: np.ndarray, j: np.ndarray) -> tuple[np.nd
                    shared)
 
 
-def _weak_candidates(part: Partition, i: int, j: int, inside: np.ndarray) -> np.ndarray:
-    """Parameters (s, u) of candidate sight lines p = a + s(b - a), q = c + u(d - c).
+def _group_pairs(group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (x, y), x < y, of rows of one group (``group`` sorted), ordered by x then y."""
+    n = len(group)
+    end = np.searchsorted(group, group, side="right")
+    first = np.arange(n) + 1
+    reps = np.maximum(end - first, 0)
+    x = np.repeat(np.arange(n), reps)
+    offset = np.arange(len(x)) - np.repeat(np.cumsum(reps) - reps, reps)
+    return x, np.repeat(first, reps) + offset
+
+
+def _meet(p0, p1, q0, q1) -> tuple[np.ndarray, np.ndarray]:
+    """Parameter along q0->q1 of its intersection with the line p0-p1, and whether the lines
+    are not parallel (arrays of points)."""
+    dp, dq = p1 - p0, q1 - q0
+    den = _cross(dp, dq)
+    ok = np.abs(den) > SIDE_TOL * np.hypot(dp[:, 0], dp[:, 1]) * np.hypot(dq[:, 0], dq[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return _cross(p0 - q0, dp) / -den, ok
+
+
+def _weak_candidates(part: Partition, ii: np.ndarray, jj: np.ndarray, hit_pair: np.ndarray,
+                     hit_vertex: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Parameters (s, u) of candidate sight lines p = a + s(b - a), q = c + u(d - c) of all
+    pairs (ii[k], jj[k]) at once; ``hit_pair``/``hit_vertex`` list the P' vertices w near each
+    pair's hull. Returns (pair index k, (s, u)) grouped by k.
 
     If the closed set of visible pairs is non-empty, one of its corners is a candidate: both
     end points fixed, one end point fixed and the line through a vertex ``w`` of P', or the line
     through two vertices (each constraint is "s or u at a bound" or "passes through w").
+    Within a pair: the four corners, then per vertex w the lines from a, b, c, d through it,
+    then the lines through two vertices.
     """
-    a, b, c, d = part.start[i], part.end[i], part.start[j], part.end[j]
-    cands = [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0), (1.0, 1.0)]
+    a, b, c, d = part.start[ii], part.end[ii], part.start[jj], part.end[jj]
+    n_pairs = len(ii)
+    keys = [np.repeat(np.arange(n_pairs), 4)]
+    params = [np.tile([[0.0, 0.0], [0.0, 1.0], [1.0, 0.0], [1.0, 1.0]], (n_pairs, 1))]
+    order = np.argsort(hit_pair, kind="stable")
+    k, w = hit_pair[order], part.start[hit_vertex[order]]
+    lines, kept = [], []
+    for fixed, p, q0, q1, s_free in ((0.0, a, c, d, False), (1.0, b, c, d, False),
+                                     (0.0, c, a, b, True), (1.0, d, a, b, True)):
+        p = p[k]
+        t, ok = _meet(p, w, q0[k], q1[k])
+        ok &= np.hypot(*(w - p).T) > part.tol
+        bound = np.full(len(t), fixed)
+        lines.append(np.column_stack((t, bound) if s_free else (bound, t)))
+        kept.append(ok)
+    kept = np.stack(kept, axis=1).ravel()  # per vertex w: the lines from a, b, c, d
+    keys.append(np.repeat(k, 4)[kept])
+    params.append(np.stack(lines, axis=1).reshape(-1, 2)[kept])
+    x, y = _group_pairs(k)
+    kx, w1, w2 = k[x], w[x], w[y]
+    s_, ok_s = _meet(w1, w2, a[kx], b[kx])
+    u, ok_u = _meet(w1, w2, c[kx], d[kx])
+    keys.append(kx[ok_s & ok_u])
+    params.append(np.column_stack((s_, u))[ok_s & ok_u])
+    keys, params = np.concatenate(keys), np.concatenate(params)
+    order = np.argsort(keys, kind="stable")
+    keys, params = keys[order], params[order]
+    slack = part.tol / np.column_stack((part.length[ii], part.length[jj]))[keys]
+    ok = (params >= -slack).all(axis=1) & (params <= 1 + slack).all(axis=1)
+    return keys[ok], np.clip(params[ok], 0.0, 1.0)
 
-    def meet(p0, p1, q0, q1):
-        """Parameter along q0->q1 of its intersection with the line p0-p1 (None if parallel)."""
-        den = _cross(p1 - p0, q1 - q0)
-        if abs(den) <= SIDE_TOL * np.hypot(*(p1 - p0)) * np.hypot(*(q1 - q0)):
-            return None
-        return float(_cross(p0 - q0, p1 - p0) / -den)
 
-    for w in inside:
-        for s0, p in ((0.0, a), (1.0, b)):
-            if np.hypot(*(w - p)) > part.tol:
-                u = meet(p, w, c, d)
-                if u is not None:
-                    cands.append((s0, u))
-        for u0, q in ((0.0, c), (1.0, d)):
-            if np.hypot(*(w - q)) > part.tol:
-                s_ = meet(q, w, a, b)
-                if s_ is not None:
-                    cands.append((s_, u0))
-    for k1 in range(len(inside)):
-        for k2 in range(k1 + 1, len(inside)):
-            w1, w2 = inside[k1], inside[k2]
-            s_, u = meet(w1, w2, a, b), meet(w1, w2, c, d)
-            if s_ is not None and u is not None:
-                cands.append((s_, u))
-    out = np.asarray(cands)
-    slack = part.tol / np.array([part.length[i], part.length[j]])  # parameters within tol
-    ok = (out >= -slack).all(axis=1) & (out <= 1 + slack).all(axis=1)
-    return np.clip(out[ok], 0.0, 1.0)
+def _sight_lines(part: Partition, i: np.ndarray, j: np.ndarray, st: np.ndarray):
+    """End points p on e_i, q on e_j of the lines with parameters ``st``, and whether each line
+    leaves both segments into free space (far end strictly left of the supporting line)."""
+    a, c = part.start[i], part.start[j]
+    p = a + st[:, :1] * (part.end[i] - a)
+    q = c + st[:, 1:] * (part.end[j] - c)
+    eps = part.tol
+    good = (_cross(part.tangent[i], q - a) > eps) & (_cross(part.tangent[j], p - c) > eps)
+    return p, q, good
+
+
+def _group_means(group: np.ndarray, rows: np.ndarray, n_groups: int) -> tuple[np.ndarray,
+                                                                              np.ndarray]:
+    """Mean of the rows of every non-empty group (``group`` sorted), summed in row order as
+    ``np.mean(axis=0)`` does; returns (groups, means)."""
+    counts = np.bincount(group, minlength=n_groups)
+    groups = np.flatnonzero(counts)
+    first = np.searchsorted(group, groups)
+    total = rows[first].copy()
+    for r in range(1, int(counts.max(initial=0))):
+        more = counts[groups] > r
+        total[more] += rows[first[more] + r]
+    return groups, total / counts[groups][:, None]
+
+
+def _unique_rows(group: np.ndarray, st: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct (group, s, u) rows, sorted by group."""
+    order = np.lexsort((st[:, 1], st[:, 0], group))
+    group, st = group[order], st[order]
+    new = np.ones(len(group), dtype=bool)
+    new[1:] = (group[1:] != group[:-1]) | (st[1:] != st[:-1]).any(axis=1)
+    return group[new], st[new]
+
+
+def _open_sight(part: Partition, ii: np.ndarray, jj: np.ndarray, k: np.ndarray, st: np.ndarray,
+                region, tree: shapely.STRtree) -> np.ndarray:
+    """Pairs k whose line with parameters ``st`` leaves both segments into free space, lies in
+    the closed free space and passes no P' vertex but its own end points (open sight lines)."""
+    p, q, good = _sight_lines(part, ii[k], jj[k], st)
+    k, p, q = k[good], p[good], q[good]
+    lines = shapely.linestrings(np.stack((p, q), axis=1))
+    inside = shapely.covers(region, lines)
+    k, lines, p, q = k[inside], lines[inside], p[inside], q[inside]
+    return k[~_touches_points(lines, [p, q], part.start, part.tol, tree)]
 
 
 def weak_visibility_matrix(part: Partition, closed: bool | None = None) -> np.ndarray:
@@ -198,7 +269,8 @@ def weak_visibility_matrix(part: Partition, closed: bool | None = None) -> np.nd
     segment's supporting line), so segments on one line, or meeting only at a reflex vertex, are
     not adjacent. ``closed=True``: exact, via the corner candidates of `_weak_candidates`.
     ``closed=False`` (Def. 5 with open segments and the interior of P) is approximated by testing
-    the midpoints of pairs of closed-visible candidates with open sight lines.
+    the midpoints of pairs of closed-visible candidates, and their mean, with open sight lines.
+    All pairs are tested together (one array of candidate lines, one call per predicate).
     """
     closed = part.closed if closed is None else closed
     m, eps = part.n, part.tol
@@ -215,37 +287,31 @@ def weak_visibility_matrix(part: Partition, closed: bool | None = None) -> np.nd
     corners = np.stack((a[ii], b[ii], a[jj], b[jj]), axis=1)
     hulls = shapely.convex_hull(shapely.multipoints(corners))
     tree = shapely.STRtree(shapely.points(part.start))
-    hi, vi = tree.query(hulls, predicate="dwithin", distance=eps)
-    inside: list[list[int]] = [[] for _ in range(len(ii))]
-    for h, v in zip(hi.tolist(), vi.tolist(), strict=True):
-        inside[h].append(v)
+    hit_pair, hit_vertex = tree.query(hulls, predicate="dwithin", distance=eps)
+    k, st = _weak_candidates(part, ii, jj, hit_pair, hit_vertex)
+    p, q, good = _sight_lines(part, ii[k], jj[k], st)
+    k, st = k[good], st[good]
     region = closed_region(part.world, eps)
-    for k, (i, j) in enumerate(zip(ii.tolist(), jj.tolist(), strict=True)):
-        cand = _weak_candidates(part, i, j, part.start[inside[k]])
-        p = a[i] + cand[:, :1] * (b[i] - a[i])
-        q = a[j] + cand[:, 1:] * (b[j] - a[j])
-        good = (_cross(part.tangent[i], q - a[i]) > eps) & (_cross(part.tangent[j], p - a[j]) > eps)
-        if not good.any():
-            continue
-        p, q, cand = p[good], q[good], cand[good]
-        vis = shapely.covers(region, shapely.linestrings(np.stack((p, q), axis=1)))
-        if closed:
-            seen = bool(vis.any())
-        else:
-            cand = cand[vis]
-            if len(cand) == 0:
-                continue
-            mids = np.vstack([(cand[:, None, :] + cand[None, :, :]).reshape(-1, 2) / 2,
-                              cand.mean(axis=0, keepdims=True)])
-            p = a[i] + mids[:, :1] * (b[i] - a[i])
-            q = a[j] + mids[:, 1:] * (b[j] - a[j])
-            good = ((_cross(part.tangent[i], q - a[i]) > eps)
-                    & (_cross(part.tangent[j], p - a[j]) > eps))
-            lines = shapely.linestrings(np.stack((p[good], q[good]), axis=1))
-            seen = bool(good.any()) and bool(
-                (shapely.covers(region, lines)
-                 & ~_touches_points(lines, [p[good], q[good]], part.start, eps)).any())
-        out[i, j] = out[j, i] = seen
+    vis = shapely.covers(region, shapely.linestrings(np.stack((p[good], q[good]), axis=1)))
+    k, st = k[vis], st[vis]
+    seen = np.zeros(len(ii), dtype=bool)
+    if closed:
+        seen[k] = True
+    else:
+        # midpoints (x + y) / 2 of the closed-visible candidates of a pair and their mean, with
+        # open sight lines. Duplicate candidates and the order of x, y add no midpoint; the
+        # candidates themselves and the means go first, the other midpoints only for the pairs
+        # still unseen.
+        groups, means = _group_means(k, st, len(ii))
+        k, st = _unique_rows(k, st)
+        seen[_open_sight(part, ii, jj, np.concatenate((k, groups)),
+                         np.concatenate((st, means)), region, tree)] = True
+        x, y = _group_pairs(k)
+        rest = ~seen[k[x]]
+        x, y = x[rest], y[rest]
+        seen[_open_sight(part, ii, jj, k[x], (st[x] + st[y]) / 2, region, tree)] = True
+    out[ii[seen], jj[seen]] = True
+    out[jj[seen], ii[seen]] = True
     return out
 
 

@@ -153,17 +153,17 @@ def visible_pairs(world: World, a: np.ndarray, b: np.ndarray, closed: bool = Tru
     return ok & ~_touches_points(lines, [a, b], pts, eps)
 
 
-def _touches_points(geoms, ends: list[np.ndarray], pts: np.ndarray, eps: float) -> np.ndarray:
-    """Whether a point of ``pts`` other than the geometry's own corners ``ends`` is within eps."""
-    tree = shapely.STRtree(shapely.points(pts))
+def _touches_points(geoms, ends: list[np.ndarray], pts: np.ndarray, eps: float,
+                    tree: shapely.STRtree | None = None) -> np.ndarray:
+    """Whether a point of ``pts`` other than the geometry's own corners ``ends`` is within eps
+    (``tree``: an STRtree of ``pts`` as points, if one is at hand)."""
+    tree = shapely.STRtree(shapely.points(pts)) if tree is None else tree
     gi, pi = tree.query(geoms, predicate="dwithin", distance=eps)
-    bad = np.zeros(len(geoms), dtype=bool)
-    for g, p in zip(gi, pi, strict=True):
-        if bad[g]:
-            continue
-        if all(np.hypot(*(pts[p] - e[g])) > eps for e in ends):
-            bad[g] = True
-    return bad
+    other = np.ones(len(gi), dtype=bool)
+    for e in ends:
+        gap = pts[pi] - e[gi]
+        other &= np.hypot(gap[:, 0], gap[:, 1]) > eps
+    return np.bincount(gi[other], minlength=len(geoms)) > 0
 
 
 def _grazes(v: np.ndarray, r: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -323,6 +323,40 @@ def test_distinct_angle_counts_match_the_decoded_plans(small):
     assert hist["none"] == int(np.sum(ap.L < 0))
 
 
+def test_all_pairs_with_few_kept_trees_gives_the_same_plans(small):
+    """With a tree budget of one predecessor tree, the weights, plans and angle statistics equal
+    those of the run that keeps every tree; a start whose tree was dropped is searched again
+    (and kept, least recently used first out). L is float32 when that is exact."""
+    model, _, full = small
+    rm = Roadmap(model, PHI)
+    ap = rm.all_pairs(tree_budget=1)
+    n = model.n_cells
+    assert ap.capacity == 1 and rm.dijkstra_calls == n
+    assert full.L.dtype == ap.L.dtype == np.float32
+    np.testing.assert_array_equal(ap.L, full.L)
+    np.testing.assert_array_equal(ap.end_layer, full.end_layer)
+    for i, j in [(0, 5), (0, 9), (17, 3), (n - 1, 2)]:
+        assert str(ap.plan_between(i, j)) == str(full.plan_between(i, j))
+    # 0, 17 and n - 1 (kept last by all_pairs, dropped for 0) searched again; 0 kept for (0, 9)
+    assert rm.dijkstra_calls == n + 3
+    np.testing.assert_array_equal(ap.angle_masks(), full.angle_masks())
+    np.testing.assert_array_equal(ap.distinct_angle_counts(), full.distinct_angle_counts())
+    assert ap.histogram() == full.histogram()
+
+
+def test_all_pairs_weights_stay_float64_when_float32_is_not_exact():
+    """w1 = 0.1 makes sums that float32 cannot hold: L is float64 and equals the single
+    queries' weights."""
+    model = small_map()
+    rm = Roadmap(model, PHI, w1=0.1, w2=10.0)
+    ap = rm.all_pairs()
+    assert ap.L.dtype == np.float64
+    rng = np.random.default_rng(5)
+    for i, j in rng.integers(model.n_cells, size=(50, 2)).tolist():
+        plan = rm.plan(i, j)
+        assert (plan is None and ap.L[i, j] == -1) or plan.weight == ap.L[i, j]
+
+
 def test_fig7_histogram_on_the_reconstruction(lab):
     """Sec. V-B, Fig. 7: on our lab_navigation reconstruction an independent script found {0: 568,
     1: 36547, 2: 25698, 3: 5770} with 78 489 unreachable ordered pairs. Which angles a plan uses can

@@ -14,7 +14,7 @@ from baselines.visibility.graph import (
     safe_interval,
     visibility_matrix,
 )
-from baselines.visibility.partition import partition
+from baselines.visibility.partition import partition, visible_pairs
 from bounce_gym import worlds
 from bounce_gym.worlds import World
 from bounce_gym.worlds.generators import random_star_polygon
@@ -296,3 +296,44 @@ def test_square_with_hole():
         out = [g.edges[node, k] for k in g.successors(node)]
         assert any(abs(a["lo"]) <= 1e-6 for a in out)
         assert any(abs(a["hi"] - PI) <= 1e-6 for a in out)
+
+
+# -- the BVG against sampled sight lines ---------------------------------------------------------
+def _sampled_arcs(part, samples: int = 7) -> set[tuple[int, int]]:
+    """Pairs (i, j) joined by one of samples² open sight lines between interior points of e_i
+    and e_j that leave both segments into free space (`visible_pairs` with closed=False)."""
+    t = np.linspace(0.05, 0.95, samples)
+    i, j, s, u = (x.ravel() for x in np.meshgrid(np.arange(part.n), np.arange(part.n), t, t,
+                                                  indexing="ij"))
+    keep = i != j
+    i, j, s, u = i[keep], j[keep], s[keep], u[keep]
+    p = part.start[i] + s[:, None] * (part.end[i] - part.start[i])
+    q = part.start[j] + u[:, None] * (part.end[j] - part.start[j])
+
+    def left(k, x):
+        rel = x - part.start[k]
+        return part.tangent[k, 0] * rel[:, 1] - part.tangent[k, 1] * rel[:, 0] > part.tol
+
+    ok = left(i, q) & left(j, p)
+    ok[ok] = visible_pairs(part.world, p[ok], q[ok], closed=False,
+                           exclude_points=part.start)
+    return set(zip(i[ok].tolist(), j[ok].tolist(), strict=True))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_bvg_contains_sampled_sight_lines_and_the_safe_graph(seed):
+    """The all-pairs BVG (one array of candidate lines for every pair at once) has an arc
+    wherever a sampled sight line joins two segments; the Def. 5 (open) arcs are a subset of the
+    closed ones, and G_safe's arcs (entire visibility) are BVG arcs."""
+    rng = np.random.default_rng(seed)
+    world = random_star_polygon(rng, 12 + 4 * seed, irregularity=0.3, spikiness=0.4)
+    if seed == 3:
+        world = World([(0, 0), (10, 0), (10, 10), (0, 10)],
+                      holes=[[(4, 4), (6, 4), (6, 6), (4, 6)]])
+    part = partition(world)
+    closed, opened = set(bvg(part, closed=True).edges), set(bvg(part).edges)
+    sampled = _sampled_arcs(part)
+    assert sampled and sampled <= closed
+    assert sampled <= opened
+    assert opened <= closed
+    assert set(safe_graph(part).edges) <= opened
