@@ -174,7 +174,7 @@ def main(argv: list[str] | None = None) -> None:
     print()
     multirobot.main(["--seeds", "5"])
     # throughput ratios against anchors measured in the same run (issue #13)
-    from benchmarks import env_step, multirobot_scaling, vector_env
+    from benchmarks import env_step, multirobot_scaling, planners, vector_env
 
     print()
     env_step.main(["--steps", "2000", "--rounds", "3"] if args.quick else [])
@@ -182,6 +182,8 @@ def main(argv: list[str] | None = None) -> None:
     vector_env.main(quick=args.quick, repeats=args.repeats)
     print()
     multirobot_scaling.main(["--steps", "4000"] if args.quick else [])
+    print()
+    planners.main(quick=args.quick, repeats=args.repeats)
 
 
 if __name__ == "__main__":
