@@ -309,11 +309,19 @@ class EventDrivenBackend(MotionBackend):
     everyone to the earliest event or to the end of the window (`_advance`, the backend's own
     way of moving: closed form or one physics step); then stop the robots involved
     (`_settle_contacts`). Time is distance driven: one tick lasts ``step_length``.
+
+    A lone robot takes `_drive_lone`, the same loop in plain floats through scalar versions of
+    those hooks (the single-robot hot path); backends override them where numpy costs more than
+    the work.
     """
 
     def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
         if state.n_robots == 1:
             return self._drive_lone(state, max_ticks, until_first_block)
+        return self._drive_events(state, max_ticks, until_first_block)
+
+    def _drive_events(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        """`drive` of any number of robots: from one contact event to the next."""
         if until_first_block and state.blocked.any():
             return 0
         self._check_drive_window(max_ticks, until_first_block)
@@ -367,7 +375,7 @@ class EventDrivenBackend(MotionBackend):
         return self._finish_drive(state, driven, limit, elapsed)
 
     def _drive_lone(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
-        """`drive` of a lone robot, in plain floats: the loop above, which for one robot meets
+        """`drive` of a lone robot, in plain floats: `_drive_events`, which for one robot meets
         at most one event (no robot can stop it, and the wall it reaches blocks it), so the
         robot drives once — to its wall or to the end of the window — through the scalar hooks
         `_lone_wall_distance`, `_lone_advance` and `_lone_settle`."""
@@ -403,7 +411,8 @@ class EventDrivenBackend(MotionBackend):
 
     def _lone_advance(self, state: RobotState, s_wall: float, ds: float, event: bool) -> float:
         """`_advance` of a lone robot (its wall ``s_wall`` ahead): the distance it drove."""
-        return float(np.min(self._advance(state, _LONE, np.array([s_wall]), ds, event)))
+        drove = self._advance(state, _LONE, np.array([s_wall]), ds, event)
+        return float(np.min(drove))  # one distance, as an array or a number
 
     def _lone_settle(self, state: RobotState) -> None:
         """`_settle_contacts` of a lone robot that reached its wall."""
