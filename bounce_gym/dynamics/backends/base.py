@@ -293,6 +293,7 @@ class MotionBackend(ABC):
 
 #: The robot index array of a lone robot.
 _LONE = np.zeros(1, dtype=np.int64)
+_LONE.flags.writeable = False
 #: Consecutive zero-length events after which a drive declares itself stuck (a bug).
 MAX_ZENO = 10_000
 #: Relative margin of the broad phase of `pair_contacts`: pairs a little farther apart than two

@@ -52,6 +52,8 @@ Model details (the tests pin the agreement with the kinematic backend):
 * The first reachable wall of a robot does not change while it drives straight, so the query
   result is cached per robot (keyed by exact position and heading) and only redone after a
   rotation, or when the state was changed from outside.
+* A lone robot (the single-robot env's hot path) takes the same query, step and callback with
+  its bookkeeping in plain floats (`EventDrivenBackend` gives it at most one event per drive).
 
 **One Space per backend, not per episode.** pymunk bodies, shapes and handlers form reference
 cycles, so a Space dropped at every reset waits for Python's cyclic garbage collector (about
@@ -248,12 +250,9 @@ class PymunkBackend(EventDrivenBackend):
         self._body_vel[stale] = velocity[stale]
 
     def _write_lone_body(self, state: RobotState, velocity: list[float]) -> None:
-        """`_write_bodies` of a lone robot, in plain floats."""
+        """`_write_bodies` of a lone robot, in plain floats. It is written only to drive, so its
+        shape keeps sensing walls (the filter every robot gets on `reset`)."""
         positions, self._synced = not self._synced, True
-        moving = not state.blocked[0]
-        if moving != self._body_senses_walls[0]:
-            self._disks[0].filter = self._filters[moving]
-            self._body_senses_walls[0] = moving
         body = self._bodies[0]
         if positions:
             position = state.position[0].tolist()
