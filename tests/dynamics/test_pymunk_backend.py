@@ -284,3 +284,38 @@ def test_reused_space_gives_the_same_episodes_as_a_new_one():
     np.testing.assert_array_equal(a[0], b[0])
     np.testing.assert_array_equal(a[1], b[1])
     assert a[2] == b[2]
+
+
+@pytest.mark.parametrize("backend", ["kinematic", "pymunk"])
+@pytest.mark.parametrize("world", [HOLED, GRID, worlds.get("two_rooms")], ids=lambda w: w.name)
+@pytest.mark.parametrize("radius", [0.0, 0.3])
+def test_lone_robot_drive_is_the_event_loop_bit_for_bit(backend, world, radius):
+    """A lone robot's scalar `drive` against the general event loop, bit for bit: bounces,
+    ticks and drive windows of whole, fractional and zero ticks, with and without stopping at
+    the first block, on a step length that makes tick rounding matter."""
+    lean, loop = (BounceDynamics(world, backend=backend, radius=radius, step_length=0.7)
+                  for _ in range(2))
+    loop.backend._drive_lone = loop.backend._drive_events  # route every drive to the loop
+    for dyn in (lean, loop):
+        dyn.reset(np.random.default_rng(4))
+    rng = np.random.default_rng(5)
+    for _ in range(600):
+        kind, phi = rng.integers(4), rng.uniform(0.1, 2 * np.pi - 0.1)
+        ticks = rng.choice([0.0, 1.0, 2.5, 4.0, np.inf])
+        until = bool(rng.integers(2)) or ticks == np.inf
+        results = []
+        for dyn in (lean, loop):
+            if kind == 0:
+                results.append(dyn.bounce(phi))
+            elif kind == 1:
+                results.append(dyn.tick(phi).tolist())
+            else:
+                if dyn.state.blocked[0]:
+                    dyn.turn(np.array([phi]))
+                results.append(dyn.backend.drive(dyn.state, ticks, until))
+        assert results[0] == results[1]
+        a, b = lean.state, loop.state
+        for name in ("position", "heading", "blocked", "clock", "bumps", "contact_edge",
+                     "contact_robot", "contact_normal", "odometer"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+        assert a.ticks == b.ticks

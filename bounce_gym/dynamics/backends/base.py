@@ -204,13 +204,17 @@ class MotionBackend(ABC):
                       elapsed: float) -> int:
         """Account a drive: every robot's clock gains the ticks it drove in, odometers the
         distance, the global clock the ticks of the window. Returns those ticks."""
-        step = self.step_length
-        ticks = math.ceil((limit if math.isfinite(limit) else elapsed) / step - self.time_tol)
-        drove = np.ceil(driven / step - self.time_tol).astype(np.int64)
+        ticks = self._window_ticks(limit, elapsed)
+        drove = np.ceil(driven / self.step_length - self.time_tol).astype(np.int64)
         state.clock += np.minimum(drove, ticks)
         state.odometer += driven
         state.ticks += ticks
         return ticks
+
+    def _window_ticks(self, limit: float, elapsed: float) -> int:
+        """Ticks of a drive window that closed at distance ``limit`` (``elapsed`` if endless)."""
+        return math.ceil((limit if math.isfinite(limit) else elapsed) / self.step_length
+                         - self.time_tol)
 
     @staticmethod
     def _block_at_walls(state: RobotState, robots: np.ndarray, edge: np.ndarray,
@@ -287,6 +291,9 @@ class MotionBackend(ABC):
         return blocker, normal
 
 
+#: The robot index array of a lone robot.
+_LONE = np.zeros(1, dtype=np.int64)
+_LONE.flags.writeable = False
 #: Consecutive zero-length events after which a drive declares itself stuck (a bug).
 MAX_ZENO = 10_000
 #: Relative margin of the broad phase of `pair_contacts`: pairs a little farther apart than two
@@ -303,9 +310,19 @@ class EventDrivenBackend(MotionBackend):
     everyone to the earliest event or to the end of the window (`_advance`, the backend's own
     way of moving: closed form or one physics step); then stop the robots involved
     (`_settle_contacts`). Time is distance driven: one tick lasts ``step_length``.
+
+    A lone robot takes `_drive_lone`, the same loop in plain floats through scalar versions of
+    those hooks (the single-robot hot path); backends override them where numpy costs more than
+    the work.
     """
 
     def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        if state.n_robots == 1:
+            return self._drive_lone(state, max_ticks, until_first_block)
+        return self._drive_events(state, max_ticks, until_first_block)
+
+    def _drive_events(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        """`drive` of any number of robots: from one contact event to the next."""
         if until_first_block and state.blocked.any():
             return 0
         self._check_drive_window(max_ticks, until_first_block)
@@ -357,6 +374,50 @@ class EventDrivenBackend(MotionBackend):
             if until_first_block:
                 limit = min(limit, self._end_of_tick(elapsed))
         return self._finish_drive(state, driven, limit, elapsed)
+
+    def _drive_lone(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        """`drive` of a lone robot, in plain floats: `_drive_events`, which for one robot meets
+        at most one event (no robot can stop it, and the wall it reaches blocks it), so the
+        robot drives once — to its wall or to the end of the window — through the scalar hooks
+        `_lone_wall_distance`, `_lone_advance` and `_lone_settle`."""
+        blocked = bool(state.blocked[0])
+        if until_first_block and blocked:
+            return 0
+        self._check_drive_window(max_ticks, until_first_block)
+        tol = self.contact_tol
+        limit = float(max_ticks) * self.step_length
+        driven = elapsed = 0.0
+        self._start_drive()
+        if not blocked and elapsed < limit - tol:
+            s_wall = self._lone_wall_distance(state)
+            if not math.isfinite(s_wall):
+                raise RuntimeError(f"robot 0 left the free space at {state.position[0]}")
+            elapsed = min(s_wall, limit)
+            event = s_wall <= elapsed + tol
+            driven = self._lone_advance(state, s_wall, elapsed, event)
+            if event:
+                self._lone_settle(state)
+                if until_first_block:
+                    limit = min(limit, self._end_of_tick(elapsed))
+        ticks = self._window_ticks(limit, elapsed)
+        state.clock[0] += min(math.ceil(driven / self.step_length - self.time_tol), ticks)
+        state.odometer[0] += driven
+        state.ticks += ticks
+        return ticks
+
+    # The scalar hooks of `_drive_lone`, by default the array hooks applied to robot 0.
+    def _lone_wall_distance(self, state: RobotState) -> float:
+        """`_wall_distances` of a lone robot."""
+        return float(self._wall_distances(state, _LONE)[0])
+
+    def _lone_advance(self, state: RobotState, s_wall: float, ds: float, event: bool) -> float:
+        """`_advance` of a lone robot (its wall ``s_wall`` ahead): the distance it drove."""
+        drove = self._advance(state, _LONE, np.array([s_wall]), ds, event)
+        return float(np.min(drove))  # one distance, as an array or a number
+
+    def _lone_settle(self, state: RobotState) -> None:
+        """`_settle_contacts` of a lone robot that reached its wall."""
+        self._settle_contacts(state, _LONE, _LONE[:0], None)
 
     def _start_drive(self) -> None:
         """Hook called once at the start of every `drive`."""

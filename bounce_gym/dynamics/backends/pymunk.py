@@ -52,6 +52,8 @@ Model details (the tests pin the agreement with the kinematic backend):
 * The first reachable wall of a robot does not change while it drives straight, so the query
   result is cached per robot (keyed by exact position and heading) and only redone after a
   rotation, or when the state was changed from outside.
+* A lone robot (the single-robot env's hot path) takes the same query, step and callback with
+  its bookkeeping in plain floats (`EventDrivenBackend` gives it at most one event per drive).
 
 **One Space per backend, not per episode.** pymunk bodies, shapes and handlers form reference
 cycles, so a Space dropped at every reset waits for Python's cyclic garbage collector (about
@@ -228,12 +230,11 @@ class PymunkBackend(EventDrivenBackend):
             self._build_space()
         return self._space
 
-    def _write_bodies(self, state: RobotState, velocity: np.ndarray, positions: bool) -> None:
-        """Make the engine bodies hold the state's velocities (and positions, if asked)."""
+    def _write_bodies(self, state: RobotState, velocity: np.ndarray) -> None:
+        """Make the engine bodies hold the state's velocities, and its positions before the first
+        step of a drive (the state may have been changed from outside since the last)."""
+        positions, self._synced = not self._synced, True
         bodies = self._bodies
-        if self.n_robots == 1:
-            self._write_lone_body(state, velocity[0].tolist(), positions)
-            return
         moving = ~state.blocked
         for i in np.flatnonzero(moving != self._body_senses_walls).tolist():
             self._disks[i].filter = self._filters[bool(moving[i])]
@@ -248,12 +249,10 @@ class PymunkBackend(EventDrivenBackend):
             bodies[i].velocity = (float(velocity[i, 0]), float(velocity[i, 1]))
         self._body_vel[stale] = velocity[stale]
 
-    def _write_lone_body(self, state: RobotState, velocity: list[float], positions: bool) -> None:
-        """`_write_bodies` of a lone robot, in plain floats."""
-        moving = not state.blocked[0]
-        if moving != self._body_senses_walls[0]:
-            self._disks[0].filter = self._filters[moving]
-            self._body_senses_walls[0] = moving
+    def _write_lone_body(self, state: RobotState, velocity: list[float]) -> None:
+        """`_write_bodies` of a lone robot, in plain floats. It is written only to drive, so its
+        shape keeps sensing walls (the filter every robot gets on `reset`)."""
+        positions, self._synced = not self._synced, True
         body = self._bodies[0]
         if positions:
             position = state.position[0].tolist()
@@ -334,6 +333,20 @@ class PymunkBackend(EventDrivenBackend):
         nx, ny = self._normal_xy[edge]
         return max(best_e, 0.0), edge, NO_CONTACT, nx, ny
 
+    def _refresh_lone(self, state: RobotState) -> tuple[float, int, float, float]:
+        """`_refresh_hits` of a lone robot, in plain floats: ``(distance, edge, nx, ny)``."""
+        self._engine()
+        (dx, dy), = state.direction.tolist()  # numpy's cos and sin, as for many robots
+        x, y = state.position[0].tolist()
+        dist, edge, vertex, nx, ny = self._cast(x, y, dx, dy)
+        self._hit_dist[0] = dist
+        self._hit_edge[0] = edge
+        self._hit_vertex[0] = vertex
+        self._hit_normal[0] = nx, ny
+        self._hit_origin[0] = x, y
+        self._hit_heading[0] = state.heading[0]
+        return dist, edge, nx, ny
+
     def _refresh_hits(self, state: RobotState, robots: np.ndarray) -> None:
         """Query the first wall hit of ``robots`` from their current pose into the cache."""
         self._engine()
@@ -359,6 +372,14 @@ class PymunkBackend(EventDrivenBackend):
             self._refresh_hits(state, robots[stale])
         return self._hit_dist[robots]
 
+    def _lone_wall_distance(self, state: RobotState) -> float:
+        x, y = state.position[0].tolist()
+        ox, oy = self._hit_origin[0].tolist()
+        # NaN (no query yet) is unequal to anything
+        if float(state.heading[0]) != float(self._hit_heading[0]) or x != ox or y != oy:
+            return self._refresh_lone(state)[0]
+        return float(self._hit_dist[0])
+
     # -- MotionBackend ----------------------------------------------------------------------
     def reset(self, state: RobotState) -> None:
         if state.n_robots != self.n_robots:
@@ -374,6 +395,13 @@ class PymunkBackend(EventDrivenBackend):
         self.update_contacts(state, np.arange(state.n_robots))
 
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
+        if state.n_robots == 1 and len(robots) == 1:  # no robot can block a lone one
+            dist, edge, nx, ny = self._refresh_lone(state)
+            wall = dist <= self.contact_tol
+            state.contact_edge[0] = edge if wall else NO_CONTACT
+            state.contact_normal[0] = nx, ny
+            state.blocked[0] = wall
+            return
         robots = np.asarray(robots, dtype=np.int64)
         if len(robots) == 0:
             return
@@ -385,21 +413,15 @@ class PymunkBackend(EventDrivenBackend):
     # ``step_length`` time units of the space, so a step of dt moves a robot by exactly
     # ``position + direction * dt``.
     def _start_drive(self) -> None:
+        self._engine()
         self._synced = False  # positions may have been changed from outside since the last drive
 
     def _advance(self, state, moving, s_wall, ds, event):
         # conservative advancement: one physics step, to the event or to the window's end
-        space = self._engine()
         velocity = np.zeros_like(state.position)
         velocity[moving] = state.direction[moving]
-        self._write_bodies(state, velocity, positions=not self._synced)
-        self._synced = True
-        self._touching.clear()
-        self._armed = event
-        try:
-            space.step(ds if ds > 0.0 else _SENSE_DT)
-        finally:
-            self._armed = False
+        self._write_bodies(state, velocity)
+        self._step(ds, event)
         bodies = self._bodies
         for i in moving.tolist():
             state.position[i] = bodies[i].position
@@ -407,6 +429,27 @@ class PymunkBackend(EventDrivenBackend):
         self._hit_origin[moving] = state.position[moving]
         self._hit_dist[moving] = s_wall - ds
         return ds
+
+    def _lone_advance(self, state, s_wall, ds, event):
+        (dx, dy), = state.direction.tolist()
+        self._write_lone_body(state, [dx, dy])
+        self._step(ds, event)
+        x, y = self._bodies[0].position
+        state.position[0] = x, y
+        self._body_pos[0] = x, y
+        self._hit_origin[0] = x, y
+        self._hit_dist[0] = s_wall - ds
+        return ds
+
+    def _step(self, ds: float, event: bool) -> None:
+        """One physics step of length ``ds`` (the bodies are up to date); with ``event``, the
+        contacts the engine reports in it are recorded."""
+        self._touching.clear()
+        self._armed = event
+        try:
+            self._space.step(ds if ds > 0.0 else _SENSE_DT)
+        finally:
+            self._armed = False
 
     def _settle_contacts(self, state, walls, robots, pairs):
         walls_touched, pairs_touched = self._sensed()
@@ -416,6 +459,13 @@ class PymunkBackend(EventDrivenBackend):
         if len(robots):
             self._confirm_pairs(state, robots, pairs, pairs_touched)
             self._stop_touching(state, robots)
+
+    def _lone_settle(self, state):
+        self._confirm_wall(state, 0, {self._edge_of[wall] for _, wall in self._touching})
+        state.blocked[0] = True
+        state.contact_edge[0] = self._hit_edge[0]
+        state.contact_robot[0] = NO_CONTACT
+        state.contact_normal[0] = self._hit_normal[0]
 
     # -- helpers ----------------------------------------------------------------------------
     def _sensed(self) -> tuple[dict[int, set[int]], set[tuple[int, int]]]:
@@ -453,12 +503,16 @@ class PymunkBackend(EventDrivenBackend):
     ) -> None:
         """Every predicted wall contact must have been reported by the engine's callback."""
         for i in robots.tolist():
-            edge, vertex = int(self._hit_edge[i]), int(self._hit_vertex[i])
-            felt = touched.get(i, set())
-            if edge in felt or (vertex >= 0 and int(self._prev_edge[vertex]) in felt):
-                continue
-            raise RuntimeError(
-                f"pymunk reported no contact between robot {i} and edge {edge} at "
-                f"{state.position[i].tolist()} although the robot reached it"
-            )
+            self._confirm_wall(state, i, touched.get(i, set()))
+
+    def _confirm_wall(self, state: RobotState, i: int, felt: set[int]) -> None:
+        """Robot ``i`` reached its wall ahead: one of the edges it touches must be in ``felt``,
+        the edges the engine reported touching it."""
+        edge, vertex = int(self._hit_edge[i]), int(self._hit_vertex[i])
+        if edge in felt or (vertex >= 0 and int(self._prev_edge[vertex]) in felt):
+            return
+        raise RuntimeError(
+            f"pymunk reported no contact between robot {i} and edge {edge} at "
+            f"{state.position[i].tolist()} although the robot reached it"
+        )
 
