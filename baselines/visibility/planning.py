@@ -35,6 +35,7 @@ import numpy as np
 from baselines.policy import Policy, episode_rng
 from baselines.visibility.dynamics import CompositeCycle, composite_fixed_point, contraction
 from baselines.visibility.partition import Partition, assemble
+from bounce_gym.errors import ConfigError
 
 __all__ = [
     "PatrolPlan",
@@ -429,8 +430,31 @@ def _inside(rng: np.random.Generator, lo, hi, margin: float, size=None):
     return np.clip(x, np.nextafter(lo, hi), np.nextafter(hi, lo))
 
 
+class _ThetaSamplingPolicy(Policy):
+    """What the two visibility policies share: they run in `BounceEnv` with Nilles et al.'s
+    fixed rule and continuous actions, and draw θ strictly inside safe intervals from a random
+    stream that restarts every episode (`baselines.policy.episode_rng`)."""
+
+    seed: int | None
+    rng: np.random.Generator
+    range: tuple[float, float]
+
+    def start_options(self, env, seed: int) -> None:
+        self.rng = episode_rng(self.seed, seed)
+        return None
+
+    def _bind(self, env) -> None:
+        """Check the env runs the fixed rule with continuous actions; take its action range."""
+        opts = env.unwrapped.options
+        if opts.bounce_rule != "fixed" or opts.action_type != "continuous":
+            raise ConfigError(f"{type(self).__name__} needs BounceEnv(bounce_rule='fixed', "
+                              f"action_type='continuous'), got {opts.bounce_rule!r}, "
+                              f"{opts.action_type!r}")
+        self.range = tuple(float(x) for x in opts.angle_range[0])
+
+
 @dataclass
-class PlanPolicy(Policy):
+class PlanPolicy(_ThetaSamplingPolicy):
     """Run a `VisibilityPlan` in `BounceEnv` (``bounce_rule="fixed"``, continuous actions).
 
     At each contact the robot's P' segment is ``part.locate(info["contact_edge"],
@@ -459,18 +483,8 @@ class PlanPolicy(Policy):
         self.replans = 0
         self.range = (0.0, math.pi)
 
-    def start_options(self, env, seed: int) -> None:
-        """Restart the random stream of θ (`baselines.policy.episode_rng`)."""
-        self.rng = episode_rng(self.seed, seed)
-        return None
-
     def reset(self, env) -> None:
-        opts = env.unwrapped.options
-        if opts.bounce_rule != "fixed" or opts.action_type != "continuous":
-            raise ValueError("PlanPolicy needs BounceEnv(bounce_rule='fixed', "
-                             f"action_type='continuous'), got {opts.bounce_rule!r}, "
-                             f"{opts.action_type!r}")
-        self.range = tuple(float(x) for x in opts.angle_range[0])
+        self._bind(env)
         self._check(self.plan)
         self._current = self.plan
         self.stage, self.reached_goal, self.off_plan, self.replans = 0, False, False, 0
@@ -556,7 +570,7 @@ def monte_carlo(world, part: Partition, plan: VisibilityPlan, n: int = 1000, see
 
 
 @dataclass
-class PatrolPolicy(Policy):
+class PatrolPolicy(_ThetaSamplingPolicy):
     """Run a `PatrolPlan` in `BounceEnv` (``bounce_rule="fixed"``, continuous actions).
 
     On a segment of the cycle the robot bounces with that stage's action (``plan.thetas``), so it
@@ -576,17 +590,8 @@ class PatrolPolicy(Policy):
         self.rng = np.random.default_rng(self.seed)
         self.range = (0.0, math.pi)
 
-    def start_options(self, env, seed: int) -> None:
-        """Restart the random stream of θ (`baselines.policy.episode_rng`)."""
-        self.rng = episode_rng(self.seed, seed)
-        return None
-
     def reset(self, env) -> None:
-        opts = env.unwrapped.options
-        if opts.bounce_rule != "fixed" or opts.action_type != "continuous":
-            raise ValueError("PatrolPolicy needs BounceEnv(bounce_rule='fixed', "
-                             "action_type='continuous')")
-        self.range = tuple(float(x) for x in opts.angle_range[0])
+        self._bind(env)
         outside = [t for t in self.plan.thetas if not self.range[0] <= t <= self.range[1]]
         if outside:
             raise ValueError(f"the cycle's actions {outside} rad lie outside the env's "
