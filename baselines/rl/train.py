@@ -15,6 +15,7 @@ A training configuration (YAML, see ``configs/train_*.yaml``)::
     checkpoint_every: 5000           # 0 = none
     tensorboard: false
     models: models                   # saved as models/<name>/<algo>_seed<seed>.zip
+    torch_threads: 1                 # torch intra-op threads of this process (default 1)
 
 Training resumes from the saved model of the same name when ``resume: true`` (an error if there
 is none). Every file it writes — checkpoints (``checkpoints/<algo>_seed<seed>_<N>_steps.zip``)
@@ -59,7 +60,8 @@ ALGOS = ("ppo", "dqn", "recurrentppo")
 MULTI_ALGOS = ("ppo",)
 _KEYS = {"name": str, "env": str, "env_kwargs": dict, "algo": str, "total_timesteps": int,
          "seed": int, "n_envs": int, "hyperparams": dict, "checkpoint_every": int,
-         "tensorboard": bool, "models": str, "resume": bool, "vec_env": str}
+         "tensorboard": bool, "models": str, "resume": bool, "vec_env": str,
+         "torch_threads": int}
 VEC_ENVS = ("native", "sync", "subproc")
 
 
@@ -103,10 +105,12 @@ def validate_train_config(config: object) -> dict:
     native = multi or gym.spec(config["env"]).vector_entry_point is not None
     defaults = {"vec_env": "native" if native else "sync", "env_kwargs": {}, "seed": 0,
                 "n_envs": 1 if multi else 4, "hyperparams": {},
-                "checkpoint_every": 0, "tensorboard": False, "models": "models", "resume": False}
+                "checkpoint_every": 0, "tensorboard": False, "models": "models", "resume": False,
+                "torch_threads": 1}
     for key, value in defaults.items():
         config.setdefault(key, value)
-    for key, least in (("n_envs", 1), ("seed", 0), ("checkpoint_every", 0)):
+    for key, least in (("n_envs", 1), ("seed", 0), ("checkpoint_every", 0),
+                       ("torch_threads", 1)):
         if config[key] < least:
             raise ConfigError(f"config.{key}: expected an integer >= {least}, got {config[key]}")
     if multi and config["n_envs"] != 1:
@@ -183,9 +187,13 @@ def train(config: Mapping, progress: bool = True) -> Path:
     if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError("config.tensorboard: needs the tensorboard package "
                           "(pip install tensorboard), or set tensorboard: false")
+    import torch
     from gymnasium import spaces
     from sb3_contrib import RecurrentPPO
     from stable_baselines3 import DQN, PPO
+
+    # small MLPs on tiny batches: more intra-op threads only contend with the env processes
+    torch.set_num_threads(config["torch_threads"])
 
     algo_class = {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[config["algo"]]
     check_hyperparams(algo_class, config["hyperparams"])

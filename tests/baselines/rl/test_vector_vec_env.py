@@ -65,3 +65,21 @@ def test_tiny_ppo_training_through_the_native_view(tmp_path):
               "hyperparams": {"n_steps": 32, "batch_size": 64, "n_epochs": 1}}
     path = train(config, progress=False)
     assert path.is_file()
+
+
+def test_training_sets_torch_to_the_configured_threads(tmp_path):
+    import torch
+
+    config = {"name": "x", "env": ENV, "algo": "ppo", "total_timesteps": 10}
+    assert validate_train_config(config)["torch_threads"] == 1
+    with pytest.raises(ConfigError, match="torch_threads"):
+        validate_train_config({**config, "torch_threads": 0})
+    before = torch.get_num_threads()
+    try:
+        torch.set_num_threads(2)
+        train({**config, "env_kwargs": {"backend": "cell"}, "total_timesteps": 64, "n_envs": 2,
+               "models": str(tmp_path), "hyperparams": {"n_steps": 32, "batch_size": 32,
+                                                        "n_epochs": 1}}, progress=False)
+        assert torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(before)
