@@ -26,7 +26,7 @@ from bounce_gym.errors import BounceGymError
 
 def evaluate(config_path: str | None, progress: bool = True) -> int:
     """Run an evaluation configuration, print the tables and write the run folder."""
-    from baselines.files import check_writable
+    from bounce_gym.files import check_writable
     from experiments.config import load_config, validate_config
     from experiments.report import (
         families_of,

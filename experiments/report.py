@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from baselines.files import atomic_write
+from bounce_gym.files import atomic_write
 from experiments.families.base import Family
 from experiments.plots.trajectories import plot_trajectories
 from experiments.registry import FAMILIES

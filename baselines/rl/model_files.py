@@ -23,8 +23,8 @@ import re
 import zipfile
 from pathlib import Path
 
-from baselines.files import atomic_file, atomic_write
 from bounce_gym.errors import ConfigError
+from bounce_gym.files import atomic_file, atomic_write
 
 #: The name of a saved model: ``<algo>_seed<seed>.zip``.
 MODEL_NAME = re.compile(r"(ppo|dqn|recurrentppo)_seed(\d+)\.zip")

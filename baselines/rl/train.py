@@ -51,10 +51,10 @@ from pathlib import Path
 import gymnasium as gym
 
 import bounce_gym  # noqa: F401  (registers the environments)
-from baselines.files import check_writable
 from baselines.rl.model_files import check_folder_name, load_model, save_model
 from bounce_gym.envs.registration import PETTINGZOO_ENVS, is_pettingzoo_id
 from bounce_gym.errors import ConfigError, config_errors
+from bounce_gym.files import check_writable
 
 ALGOS = ("ppo", "dqn", "recurrentppo")
 MULTI_ALGOS = ("ppo",)

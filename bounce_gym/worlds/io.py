@@ -56,7 +56,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import secrets
 from collections.abc import Mapping
 from numbers import Real
 from pathlib import Path
@@ -65,6 +64,7 @@ import numpy as np
 import yaml
 
 from bounce_gym.errors import InvalidWorldError, MapFormatError
+from bounce_gym.files import atomic_write
 from bounce_gym.worlds.grid import parse_ascii, to_ascii, world_from_grid
 from bounce_gym.worlds.world import World
 
@@ -322,31 +322,8 @@ def save(
         text = yaml.safe_dump(
             d, sort_keys=False, default_flow_style=None, allow_unicode=True, width=100
         )
-    _atomic_write(path, text.encode("utf-8"))
+    atomic_write(path, text.encode("utf-8"))
     return path
-
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    directory = path.parent
-    for _ in range(100):
-        tmp = directory / f".{path.name}.{secrets.token_hex(6)}.tmp"
-        try:
-            # O_EXCL: never clobber; mode 0o666 lets the umask decide, as for a normal open().
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-        except FileExistsError:
-            continue
-        break
-    else:  # pragma: no cover - 100 collisions of 48 random bits
-        raise OSError(f"could not create a temporary file next to {path}")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 # -- helpers ----------------------------------------------------------------------------------

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from baselines.files import atomic_write
+from bounce_gym.files import atomic_write
 
 
 def pyplot():

@@ -9,10 +9,8 @@ unchanged), so a reader may see fewer frames than were written when the picture 
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
-import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -20,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from bounce_gym.errors import ConfigError
+from bounce_gym.files import atomic_file
 
 
 def _check_frames(frames: Sequence[np.ndarray]) -> list[np.ndarray]:
@@ -92,22 +91,9 @@ def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike, fps: float =
     # an adaptive palette without dithering: crisp flat colours and a much smaller file
     images = [im.convert("P", palette=Image.Palette.ADAPTIVE, colors=128,
                          dither=Image.Dither.NONE) for im in images]
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            images[0].save(
-                fh,
-                format="GIF",
-                save_all=True,
-                append_images=images[1:],
-                duration=duration,
-                loop=0,
-            )
-        os.replace(tmp_name, out)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp_name)
-        raise
+    with atomic_file(out) as fh:
+        images[0].save(fh, format="GIF", save_all=True, append_images=images[1:],
+                       duration=duration, loop=0)
     return out
 
 
