@@ -35,6 +35,16 @@ def number(field: str, value: object, *, minimum: float | None = None,
     return value
 
 
+def integer(field: str, value: object, minimum: int, maximum: int | None = None) -> int:
+    """``value`` as an int, if it is an integer (Python or numpy, not bool) in
+    [``minimum``, ``maximum``] (no upper bound if ``maximum`` is None)."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum \
+            or (maximum is not None and value > maximum):
+        allowed = f">= {minimum}" if maximum is None else f"in [{minimum}, {maximum}]"
+        raise ConfigError(f"{field}: expected an integer {allowed}, got {value!r}")
+    return int(value)
+
+
 def numbers(field: str, value: object) -> np.ndarray:
     """``value`` (a number, a nested sequence of numbers or a real array) as a finite float64
     array. Every entry must be a number as `number` means it: a bool, string or complex value

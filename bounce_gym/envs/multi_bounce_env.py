@@ -62,6 +62,7 @@ from pettingzoo import AECEnv, ParallelEnv
 from bounce_gym.envs.actions import action_space, to_angle
 from bounce_gym.envs.base import EnvBase
 from bounce_gym.errors import ActionError, ConfigError
+from bounce_gym.validate import integer
 
 MULTI_ROBOT_TASKS = ("free", "coverage", "monitoring")
 
@@ -82,9 +83,7 @@ class _MultiBase(EnvBase):
 
     def __init__(self, max_cycles: int = 500, render_mode: str | None = None,
                  **options: object) -> None:
-        if isinstance(max_cycles, bool) or not isinstance(max_cycles, int | np.integer) \
-                or max_cycles < 1:
-            raise ConfigError(f"max_cycles: expected an integer >= 1, got {max_cycles!r}")
+        max_cycles = integer("max_cycles", max_cycles, 1)
         self._build(options, render_mode, MULTI_ROBOT_TASKS, defaults=MULTI_ROBOT_DEFAULTS)
         self.max_cycles = int(max_cycles)
         self.possible_agents = [f"robot_{i}" for i in range(self.options.n_robots)]

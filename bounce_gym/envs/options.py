@@ -60,6 +60,7 @@ from bounce_gym.dynamics.backends.base import ROBOT_COLLISIONS
 from bounce_gym.dynamics.noise import NoiseModel, make_noise
 from bounce_gym.dynamics.rules import RULES, check_parameters
 from bounce_gym.errors import ConfigError, InvalidWorldError
+from bounce_gym.validate import integer
 from bounce_gym.validate import number as _number
 from bounce_gym.worlds import World
 
@@ -239,15 +240,8 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
     values.update(kwargs)
     backend = _choice("backend", values["backend"], BACKENDS)
     bounce_rule = _choice("bounce_rule", values["bounce_rule"], sorted(RULES))
-    n_robots = values["n_robots"]
-    if isinstance(n_robots, bool) or not isinstance(n_robots, int | np.integer) \
-            or not 1 <= n_robots <= MAX_ROBOTS:
-        raise ConfigError(f"n_robots: expected an integer in [1, {MAX_ROBOTS}], got {n_robots!r}")
-    n_robots = int(n_robots)
-    history = values["history"]
-    if isinstance(history, bool) or not isinstance(history, int | np.integer) \
-            or not 0 <= history <= MAX_HISTORY:
-        raise ConfigError(f"history: expected an integer in [0, {MAX_HISTORY}], got {history!r}")
+    n_robots = integer("n_robots", values["n_robots"], 1, MAX_ROBOTS)
+    history = integer("history", values["history"], 0, MAX_HISTORY)
     privileged = values["privileged"]
     if not isinstance(privileged, bool):
         raise ConfigError(f"privileged: expected True or False, got {privileged!r}")
@@ -287,7 +281,7 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
         step_length=_number("step_length", values["step_length"], minimum=0.0, strict=True),
         step_mode=_choice("step_mode", values["step_mode"], STEP_MODES),
         action_type=_choice("action_type", action_type, ACTION_TYPES),
-        history=int(history),
+        history=history,
         privileged=privileged,
         robot_collisions=_choice("robot_collisions", values["robot_collisions"],
                                  ROBOT_COLLISIONS),

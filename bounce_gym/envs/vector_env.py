@@ -34,6 +34,7 @@ from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.tasks import CoverageTask, NavigationTask
 from bounce_gym.envs.tasks.base import StepEvents, path_samples, tick_length
 from bounce_gym.errors import ActionError, ConfigError
+from bounce_gym.validate import integer
 
 #: the single-robot tasks this env batches
 VECTOR_TASKS = ("free", "navigation", "coverage")
@@ -58,9 +59,7 @@ class BounceVectorEnv(VectorEnv):
 
     def __init__(self, num_envs: int, max_episode_steps: int | None = None,
                  render_mode: str | None = None, **options: object) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) \
-                or num_envs < 1:
-            raise ConfigError(f"num_envs: expected an integer >= 1, got {num_envs!r}")
+        num_envs = integer("num_envs", num_envs, 1)
         if render_mode is not None:
             raise ConfigError("render_mode: the batched env does not render; render one "
                               "gym.make env instead")
