@@ -4,8 +4,10 @@
     bounce-gym train config.yaml [--timesteps N] [--resume] [--no-progress]
     bounce-gym trust models/<name>/<algo>_seed<N>.zip ...
 
-``evaluate`` prints a table (per experiment and policy) and writes ``episodes.csv``,
-``results.json`` and plots into ``<output>/<name>-<timestamp>/``; without a configuration it runs
+``evaluate`` prints tables (per experiment and policy, every cell with its 95% interval and
+count) and writes ``episodes.csv``, ``summary.csv``, ``results.json``, plots and, for a
+configuration with ``leaderboard: true``, ``leaderboard.md`` and ``leaderboard.csv`` into
+``<output>/<name>-<timestamp>/``; without a configuration it runs
 the default one (``eval_default.yaml``; format: `experiments.config`). ``train`` saves the model
 as ``models/<name>/<algo>_seed<seed>.zip``, where ``evaluate`` finds it (format:
 `baselines.rl.train`), listed in ``models/<name>/manifest.json``; ``evaluate`` loads only listed
@@ -28,10 +30,14 @@ def evaluate(config_path: str | None, progress: bool = True) -> int:
     """Run an evaluation configuration, print the tables and write the run folder."""
     from bounce_gym.files import check_writable
     from experiments.config import load_config, validate_config
+    from experiments.leaderboard import write_leaderboard
+    from experiments.provenance import provenance
     from experiments.report import (
         families_of,
         format_table,
+        notes_of,
         summarise,
+        table_rows,
         write_plots,
         write_results,
     )
@@ -40,13 +46,19 @@ def evaluate(config_path: str | None, progress: bool = True) -> int:
     config = validate_config(load_config(config_path))
     check_writable("config.output", Path(config["output"]))
     rows, plots = run(config, progress=progress)
-    families = families_of(plots)
-    summary = summarise(rows, families)
+    families, notes, made = families_of(plots), notes_of(plots), provenance()
+    summary, per_seed = table_rows(summarise(rows, families), rows)
     print(format_table(summary, families))
+    for note in notes:
+        print(f"note: {note}")
     folder = Path(config["output"]) / f"{config['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
-    write_results(folder, [r.row() for r in rows], summary, config)
-    written = write_plots(folder, plots, summary)
-    print(f"\nwrote {folder}/episodes.csv, results.json and {len(written)} plots")
+    write_results(folder, [r.row() for r in rows], summary, config, per_seed, notes, made)
+    written = write_plots(folder, plots, summary, per_seed)
+    if config["leaderboard"]:
+        written += write_leaderboard(folder, config, summary, families, notes, made)
+    print(f"\nwrote {folder}/episodes.csv, summary.csv, results.json and {len(written)} other "
+          "files" + (" (leaderboard.md, leaderboard.csv, plots)" if config["leaderboard"]
+                     else " (plots)"))
     return 0
 
 

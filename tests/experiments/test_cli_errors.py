@@ -31,8 +31,11 @@ def _one_error(capsys, argv: list[str]) -> str:
 
 
 def _experiment(**overrides) -> dict:
-    return {"name": "a", "env": "bounce_gym/BounceNavigation-v0", "env_kwargs": NAV,
-            "seeds": [0], "max_steps": 5, "policies": ["random"], **overrides}
+    """A small navigation experiment; an override of None leaves the key out."""
+    exp = {"name": "a", "env": "bounce_gym/BounceNavigation-v0", "env_kwargs": NAV,
+           "seeds": [10_000], "max_steps": 5, "horizon_reason": "a quick test",
+           "policies": ["random"], **overrides}
+    return {k: v for k, v in exp.items() if v is not None}
 
 
 @pytest.mark.parametrize(("experiment", "message"), [
@@ -42,7 +45,15 @@ def _experiment(**overrides) -> dict:
      "config.experiments[1].env_kwargs: "),
     (_experiment(env_kwargs={"world": "MAP"}),
      "config.experiments[1].env_kwargs: "),
-    (_experiment(seeds=[-1]), "config.experiments[1].seeds: expected a list of integers >= 0"),
+    (_experiment(seeds=[-1]), "config.experiments[1].seeds: evaluation seeds must be >= 10000"),
+    (_experiment(seeds=[3, 10_001]),
+     "config.experiments[1].seeds: evaluation seeds must be >= 10000 (training uses the seeds "
+     "below it, baselines.seeds), got [3]"),
+    (_experiment(seeds={"start": 0, "count": 200}),
+     "config.experiments[1].seeds.start: expected an integer >= 10000, got 0"),
+    (_experiment(max_steps=7, horizon_reason=None),
+     "config.experiments[1].max_steps: 7 differs from the horizon 200 that "
+     "bounce_gym/BounceNavigation-v0 registers"),
     (_experiment(policies=["rl"], name="../x"),
      "config.experiments[1].name (the folder of its rl models): expected the name of a folder"),
     (_experiment(policies=["rl"], rl_models="../x"),
