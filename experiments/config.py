@@ -166,6 +166,17 @@ def registered_horizon(env_id: str) -> int | None:
     return gym.spec(env_id).max_episode_steps
 
 
+def world_name(experiment: Mapping) -> str:
+    """The world an experiment runs on: its ``env_kwargs.world`` (a map file by its file name)
+    or the one its env id registers."""
+    world = experiment["env_kwargs"].get("world")
+    if world is None:
+        spec = (pettingzoo.parallel_registry[experiment["env"]]
+                if is_pettingzoo_id(experiment["env"]) else gym.spec(experiment["env"]))
+        world = spec.kwargs.get("world", "?")
+    return Path(world).name if isinstance(world, str) else getattr(world, "name", str(world))
+
+
 def _seeds(where: str, seeds: object) -> list[int]:
     """The evaluation seeds of ``seeds`` (a list, or ``{start, count}``), all held out."""
     if isinstance(seeds, Mapping):

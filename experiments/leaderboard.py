@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from bounce_gym.files import atomic_write
+from experiments.config import world_name
 from experiments.plots.figures import pyplot, save_figure
 from experiments.report import cell, csv_text, tables
 
@@ -48,9 +49,8 @@ def markdown(config: Mapping, summary: list[dict], families: Mapping, notes: lis
             exp, family = experiments[name], families[name]
             mine = ordered([r for r in rows if r["experiment"] == name], family)
             shown = [c for c in columns if c != "experiment" and any(c in r for r in mine)]
-            world = exp["env_kwargs"].get("world", "the env's default world")
             lines += [f"## {name} ({exp.get('difficulty', 'no difficulty given')})", "",
-                      f"{heading}: `{exp['env']}` on {world}; {len(exp['seeds'])} episodes per "
+                      f"{heading}: `{exp['env']}` on {world_name(exp)}; {len(exp['seeds'])} episodes per "
                       f"policy (seeds {exp['seeds'][0]}–{exp['seeds'][-1]}), horizon "
                       f"{exp['max_steps']} steps; score: {family.score} "
                       f"({'higher' if family.higher_is_better else 'lower'} is better).", "",
