@@ -112,12 +112,6 @@ class Run:
         return checkpoints(self.checkpoint_folder, self.run, self.seed)
 
 
-def model_path(config: Mapping, seed: int | None = None) -> Path:
-    """Where the model of ``seed`` (default: the first seed) of a validated configuration is
-    saved."""
-    return Run(config, config["seeds"][0] if seed is None else seed).model
-
-
 def train(config: Mapping, progress: bool = True, callbacks: Sequence = (),
           folder: Path | None = None, log: Callable[[str], None] | None = None) -> list[Path]:
     """Train (or resume) an agent for every seed of ``config`` and save each where the
@@ -214,7 +208,8 @@ def _train_run(run: Run, progress: bool, extra_callbacks: list, log) -> Path:
                                 tensorboard_log=log_dir)
         restore(model, state)
         attach_monitor_file(env, run.monitor, config["env"], keep_rows=state["episodes"])
-        log(f"{run.stem}: resumed from {path} ({steps} of {total} steps)")
+        log(f"{run.stem}: resumed from {path} ({steps} of {total} steps)" if steps < total
+            else f"{run.stem}: already trained for {steps} steps ({path})")
     else:
         env = make_train_env(config, run.seed)
         kwargs = algo_kwargs(config["hyperparams"])
