@@ -141,6 +141,7 @@ def train(config: Mapping, progress: bool = True, callbacks: Sequence = (),
 
 
 def _check_checkpoints(config: Mapping, runs: list[Run]) -> None:
+    """Resume only from checkpoints of this configuration, and never start afresh over one."""
     found = {run.stem: run.checkpoints() for run in runs}
     folder = runs[0].checkpoint_folder
     if config["resume"] and not any(found.values()):
@@ -151,6 +152,10 @@ def _check_checkpoints(config: Mapping, runs: list[Run]) -> None:
         raise ConfigError(f"config.resume: {folder} already holds checkpoints of {stem} (the "
                           f"newest at {steps} steps); pass --resume to continue them, or delete "
                           "them to start again (a checkpoint is never overwritten)")
+    for run in runs:
+        if found[run.stem]:
+            path = found[run.stem][max(found[run.stem])]
+            _check_same_config(read_model(path).metadata.get("config", {}), run.config, path)
 
 
 def _check_action_space(config: Mapping) -> None:
@@ -191,48 +196,24 @@ def _check_same_config(saved: Mapping, config: Mapping, path: Path) -> None:
 
 
 def _train_run(run: Run, progress: bool, extra_callbacks: list, log) -> Path:
-    from baselines.rl.resume import capture, checkpoint_callback, restore
+    from baselines.rl.resume import capture, checkpoint_callback
     from baselines.rl.wrappers import describe
 
     config = run.config
-    total = config["total_timesteps"]
-    log_dir = str(run.folder / "tensorboard") if config["tensorboard"] else None
-    found = run.checkpoints() if config["resume"] else {}
-    if found:
-        steps, path = max(found.items())
-        checkpoint = read_model(path)
-        _check_same_config(checkpoint.metadata.get("config", {}), config, path)
-        state = checkpoint.resume_state()
-        env = make_train_env(config, run.seed)
-        model = checkpoint.load(env.observation_space, env.action_space, env=env,
-                                tensorboard_log=log_dir)
-        restore(model, state)
-        attach_monitor_file(env, run.monitor, config["env"], keep_rows=state["episodes"])
-        log(f"{run.stem}: resumed from {path} ({steps} of {total} steps)" if steps < total
-            else f"{run.stem}: already trained for {steps} steps ({path})")
-    else:
-        env = make_train_env(config, run.seed)
-        kwargs = algo_kwargs(config["hyperparams"])
-        try:
-            model = _algo_class(config["algo"])(
-                POLICIES[config["algo"]], env, seed=run.seed, device="cpu", verbose=0,
-                tensorboard_log=log_dir, **kwargs)
-        except (AssertionError, TypeError, ValueError) as exc:  # SB3's checks of the values
-            env.close()
-            raise ConfigError(f"config.hyperparams: {exc}") from None
-        attach_monitor_file(env, run.monitor, config["env"])
-        log(f"{run.stem}: training {total} steps")
-
-    def metadata() -> dict:
-        return {"config": config, "wrappers": describe(env)}
-
-    def save_checkpoint(model) -> None:
-        save_model(model, run.checkpoint(model.num_timesteps), metadata(),
-                   resume=capture(model), overwrite=False)
-
+    env = make_train_env(config, run.seed)
     try:
-        if model.num_timesteps < total:
-            model.learn(total - model.num_timesteps,
+        found = run.checkpoints() if config["resume"] else {}
+        model = _resumed(run, env, found, log) if found else _fresh(run, env, log)
+
+        def metadata() -> dict:
+            return {"config": config, "wrappers": describe(env)}
+
+        def save_checkpoint(model) -> None:
+            save_model(model, run.checkpoint(model.num_timesteps), metadata(),
+                       resume=capture(model), overwrite=False)
+
+        if model.num_timesteps < config["total_timesteps"]:
+            model.learn(config["total_timesteps"] - model.num_timesteps,
                         callback=[checkpoint_callback(config["checkpoint_every"],
                                                       save_checkpoint), *extra_callbacks],
                         progress_bar=progress, reset_num_timesteps=not found)
@@ -242,3 +223,40 @@ def _train_run(run: Run, progress: bool, extra_callbacks: list, log) -> Path:
     finally:
         env.close()
     return run.model
+
+
+def _log_dir(run: Run) -> str | None:
+    return str(run.folder / "tensorboard") if run.config["tensorboard"] else None
+
+
+def _fresh(run: Run, env, log):
+    """A new model of the run's algorithm on ``env``, its monitor file started."""
+    config = run.config
+    kwargs = algo_kwargs(config["hyperparams"])
+    try:
+        model = _algo_class(config["algo"])(
+            POLICIES[config["algo"]], env, seed=run.seed, device="cpu", verbose=0,
+            tensorboard_log=_log_dir(run), **kwargs)
+    except (AssertionError, TypeError, ValueError) as exc:  # SB3's checks of the values
+        raise ConfigError(f"config.hyperparams: {exc}") from None
+    attach_monitor_file(env, run.monitor, config["env"])
+    log(f"{run.stem}: training {config['total_timesteps']} steps")
+    return model
+
+
+def _resumed(run: Run, env, found: dict[int, Path], log):
+    """The model of the newest checkpoint in ``found``, with everything restored into it and
+    into ``env``, its monitor file cut back to the checkpoint."""
+    from baselines.rl.resume import restore
+
+    steps, path = max(found.items())
+    checkpoint = read_model(path)
+    state = checkpoint.resume_state()
+    model = checkpoint.load(env.observation_space, env.action_space, env=env,
+                            tensorboard_log=_log_dir(run))
+    restore(model, state)
+    attach_monitor_file(env, run.monitor, run.config["env"], keep_rows=state["episodes"])
+    total = run.config["total_timesteps"]
+    log(f"{run.stem}: resumed from {path} ({steps} of {total} steps)" if steps < total
+        else f"{run.stem}: already trained for {steps} steps ({path})")
+    return model
