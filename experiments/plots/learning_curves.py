@@ -44,7 +44,8 @@ def plot_learning_curves(runs: list[Run], path: Path, window: int) -> Path:
                 ax.plot(columns["steps"], columns[metric], color=colour, lw=0.6, alpha=0.45)
             steps, mean, low, high = run.across_seeds(metric)
             ax.plot(steps, mean, color=colour, lw=2,
-                    label=f"{run.name} (mean of {len(run.seeds)} seeds)")
+                    label=f"{run.name} ({len(run.seeds)} seeds)" if len(run.seeds) > 1
+                    else f"{run.name} (1 seed)")
             if len(run.seeds) > 1:
                 ax.fill_between(steps, low, high, color=colour, alpha=0.2, lw=0)
         ax.set_xlabel("env steps")
@@ -79,6 +80,6 @@ def summary_lines(runs: list[Run]) -> list[str]:
             ci = f" [{low[-1]:.3g}, {high[-1]:.3g}]" if np.isfinite(low[-1]) else ""
             parts.append(f"{metric} {mean[-1]:.3g}{ci}")
         steps = min(run.final(seed)["env_steps"] for seed in run.seeds)
-        lines.append(f"{run.name}: {len(run.seeds)} seeds, at {steps} env steps: "
-                     + ", ".join(parts))
+        seeds = f"{len(run.seeds)} seed{'s' if len(run.seeds) > 1 else ''}"
+        lines.append(f"{run.name}: {seeds}, at {steps} env steps: " + ", ".join(parts))
     return lines
