@@ -121,15 +121,50 @@ def _train(**overrides) -> dict:
     (_train(hyperparams={"colour": 1}), [], "config.hyperparams.colour: not a hyperparameter"),
     (_train(algo="dqn", env_kwargs={"action_type": "continuous"}, hyperparams={}), [],
      "config.algo: dqn needs discrete actions"),
-    (_train(), ["--resume"], "config.resume: no saved model"),
+    (_train(), ["--resume"], "config.resume: nothing to resume: "),
+    (_train(seeds=[0, 10000]), [], "config.seeds: seed 10000 with n_envs 1 would seed envs up "
+                                   "to 10000"),
+    (_train(n_envs=3, seeds=[9998]), [], "config.seeds: seed 9998 with n_envs 3 would seed "
+                                         "envs up to 10000; training env seeds must stay below "
+                                         "10000"),
+    (_train(seed=0, seeds=[1]), [], "config.seeds: give either seed"),
+    (_train(seeds=[1, 1]), [], "config.seeds: expected a non-empty list of distinct integers"),
+    (_train(n_stack=0), [], "config.n_stack: expected an integer >= 1, got 0"),
+    (_train(normalize={"norm_obs": 1}), [], "config.normalize.norm_obs: expected true or false"),
+    (_train(normalize={"clip": 1}), [], "config.normalize: unknown keys ['clip']"),
+    (_train(variant="Stack 4"), [], "config.variant: expected lower-case letters and digits"),
+    (_train(hyperparams={"learning_rate": "lin_x"}), [],
+     "config.hyperparams.learning_rate: expected lin_<number>, got 'lin_x'"),
+    (_train(hyperparams={"n_epochs": "lin_1"}), [],
+     "config.hyperparams.n_epochs: a lin_ schedule is allowed only for"),
+    (_train(hyperparams={"policy_kwargs": {"activation_fn": "sigmoid"}}), [],
+     "config.hyperparams.policy_kwargs.activation_fn: expected one of"),
+    (_train(hyperparams_file="missing.yaml"), [], "config.hyperparams_file: file '"),
+    (_train(hyperparams_file="hp.yaml"), [], "config.hyperparams_file: "),
+    (_train(algo="dqn", hyperparams_file="hp.yaml"), [],
+     "config.hyperparams_file: bounce_gym/BounceNavigation-v0 names policy 'MlpLstmPolicy', but "
+     "dqn trains 'MlpPolicy'"),
     (_train(models="FILE/x"), [], "config.models: cannot write into"),
 ])
 def test_train_reports_each_mistake_in_one_line(tmp_path, capsys, monkeypatch, config, extra,
                                                 message):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "FILE").write_text("not a folder")
+    _write(tmp_path / "hp.yaml", {"bounce_gym/BounceNavigation-v0": {"policy": "MlpLstmPolicy"}}
+           if isinstance(config, dict) and config.get("algo") == "dqn"
+           else {"bounce_gym/Bounce-v0": {}})
     if config is not None:
         _write(tmp_path / "t.yaml", config)
     line = _one_error(capsys, ["train", "t.yaml", "--no-progress", *extra])
     assert line.startswith(f"error: {message}")
-    assert not list(tmp_path.glob("**/*.zip"))
+    assert not (tmp_path / "models").exists()  # nothing written, not even an empty folder
+
+
+@pytest.mark.skipif(__import__("importlib").util.find_spec("tensorboard") is not None,
+                    reason="tensorboard is installed")
+def test_tensorboard_logs_name_the_extra_to_install(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    _write(tmp_path / "t.yaml", _train(tensorboard=True))
+    line = _one_error(capsys, ["train", "t.yaml", "--no-progress"])
+    assert line == ("error: config.tensorboard: needs the tensorboard package "
+                    "(pip install -e .[tensorboard]), or set tensorboard: false")
