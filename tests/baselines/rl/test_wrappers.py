@@ -88,8 +88,8 @@ def test_without_its_wrappers_the_model_would_act_differently(tmp_path):
     ({"normalize": {"norm_obs": True, "clip_obs": 10, "epsilon": 1e-8}},
      r"wrappers.normalize: incomplete or not numbers"),
     ({"normalize": {"norm_obs": True, "clip_obs": 10, "epsilon": 1e-8,
-                    "obs_rms": {"mean": [0.0], "var": [1.0], "count": 1}}},
-     r"wrappers.normalize.obs_rms: expected finite mean and var >= 0 of shape \(2,\)"),
+                    "obs_rms": {"mean": [0.0, 0.0], "var": [1.0, 1.0], "count": 1}}},
+     r"wrappers.normalize.obs_rms: expected finite mean and var >= 0 of shape \(1,\)"),
 ])
 def test_bad_wrappers_in_a_model_file_are_one_error(wrappers, message):
     env = gym.make("bounce_gym/Bounce-v0")
