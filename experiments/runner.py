@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
-from baselines.rl.model_files import MODEL_NAME, model_files
+from baselines.rl.model_files import MODEL_NAME, model_files, run_name
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError, config_errors
 from experiments.config import validate_config
@@ -106,7 +106,8 @@ def model_policies(folder: Path, env, label: str) -> list[tuple[Policy, str]]:
     for path in model_files(folder):
         policy = kind(path, env)
         policy.name = f"rl {label}{path.stem}"
-        out.append((policy, f"rl {label}{MODEL_NAME.fullmatch(path.name).group(1)}"))
+        name = MODEL_NAME.fullmatch(path.name)
+        out.append((policy, f"rl {label}{run_name(name['algo'], name['variant'])}"))
     return out
 
 

@@ -106,8 +106,10 @@ def mean(values: Sequence[float]) -> Estimate:
 
 
 def _tasks(scores) -> list[np.ndarray]:
-    """Per-task score arrays from a (runs, tasks) array or a list of per-task run scores."""
-    if isinstance(scores, np.ndarray) or not isinstance(scores, list | tuple):
+    """Per-task score arrays from a (runs, tasks) array, a flat sequence of numbers (one task)
+    or a list of per-task run scores."""
+    flat = isinstance(scores, list | tuple) and all(np.ndim(s) == 0 for s in scores)
+    if flat or isinstance(scores, np.ndarray) or not isinstance(scores, list | tuple):
         array = np.asarray(scores, dtype=float)
         array = array[:, None] if array.ndim == 1 else array
         if array.ndim != 2:

@@ -110,10 +110,11 @@ def test_rl_rows_are_aggregated_over_training_seeds_with_the_iqm():
     rows += [EpisodeResult("e", "random", 10_000 + i, 4, 10, 0.0, {"success": i < 3})
              for i in range(10)]
     shown, per_seed = table_rows(summarise(rows, {"e": navigation.FAMILY}), rows)
-    assert [r["policy"] for r in shown] == ["rl ppo", "random"]
+    assert [r["policy"] for r in shown] == ["rl ppo", "random"]  # variants: test_wrappers
     assert [r["policy"] for r in per_seed] == [f"rl ppo_seed{k}" for k in range(5)]
     ppo = shown[0]
     expected = stats.iqm_estimate(rates)
+    assert expected.lo < expected.value < expected.hi  # a list of seed scores is one task
     assert (ppo["success"], ppo["success_lo"], ppo["success_hi"]) == pytest.approx(
         (expected.value, expected.lo, expected.hi))
     assert ppo["success"] == pytest.approx((0.5 + 0.6 + 0.7) / 3)  # the middle 50% of seeds

@@ -103,7 +103,8 @@ def test_the_evaluation_scores_a_stacked_model_beside_a_plain_one(tmp_path):
     _trained(tmp_path, n_stack=2, normalize=True, variant="stack2")
     _trained(tmp_path)
     config = {"models": str(tmp_path), "experiments": [
-        {"name": "n", "env": ENV, "env_kwargs": NAV, "seeds": [10_000, 10_001], "max_steps": 20, "horizon_reason": "a short check",
-         "policies": ["rl"]}]}
+        {"name": "n", "env": ENV, "env_kwargs": NAV, "seeds": [10_000, 10_001], "max_steps": 20,
+         "horizon_reason": "a short check", "policies": ["rl"]}]}
     rows, _ = run(config, progress=False)
     assert sorted({r.policy for r in rows}) == ["rl ppo-stack2_seed0", "rl ppo_seed0"]
+    assert sorted({r.group for r in rows}) == ["rl ppo", "rl ppo-stack2"]  # one row per variant
