@@ -58,9 +58,9 @@ from scipy.sparse.linalg import splu
 from bounce_gym.errors import ConfigError
 
 if TYPE_CHECKING:
-    from bounce_gym.cells import CellModel
+    from bounce_gym.cells import CellModel, DrifterCells
 
-__all__ = ["MODES", "GCMResult", "gcm", "generalized_cell_mapping"]
+__all__ = ["MODES", "GCMResult", "gcm", "generalized_cell_mapping", "layer_gcm"]
 
 #: Initial distributions of the limiting distribution (see the module docstring).
 MODES = ("all", "persistent", "group")
@@ -294,6 +294,14 @@ def gcm(model: CellModel, phi: float, eps: float = 0.0, r: float = 1.0,
     """The GCM analysis of ``model.transition_matrix(phi, eps, r)`` (angles in radians, r the
     probability of the nominal rotation)."""
     return generalized_cell_mapping(model.transition_matrix(phi, eps, r), mode=mode)
+
+
+def layer_gcm(model: DrifterCells, layer: int, mode: str | np.ndarray = "all") -> GCMResult:
+    """The GCM analysis of one layer of a drifter model (thesis Alg. 5.1 PERSISTENTBEHAVIOR):
+    persistent groups, transient groups by domicile set (`GCMResult.domicile_groups`),
+    absorption times and probabilities. Cell k of the result is state
+    ``model.offsets[layer] + k``."""
+    return generalized_cell_mapping(model.transition_matrix(layer), mode=mode)
 
 
 # -- internals --------------------------------------------------------------------------------
