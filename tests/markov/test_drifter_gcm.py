@@ -10,8 +10,10 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from bounce_gym.cells import DrifterCells
+from bounce_gym.errors import ConfigError
 from bounce_gym.flows import get
 from bounce_gym.markov.gcm import generalized_cell_mapping, layer_gcm
+from bounce_gym.markov.ordering import grid_dissection
 
 
 @pytest.mark.parametrize("rho", [0.6, 0.8, 0.9])
@@ -139,3 +141,38 @@ def test_uniform_flow_drains_to_the_downstream_boundary():
     # the noise is centred on the target, so the drift is one column per step
     z = res.transient_index[model.state_of(0, 10, 1)]
     assert res.absorption_time[z] == pytest.approx(27, rel=0.05)
+
+
+# -- large-layer machinery: elimination order and grouping ------------------------------------
+def test_grid_dissection_is_a_permutation_with_separators_last():
+    rows, cols = np.divmod(np.arange(40 * 50), 50)
+    order = grid_dissection(rows, cols, width=2)
+    assert np.array_equal(np.sort(order), np.arange(40 * 50))
+    # the first cut halves the longer side (50 columns) with a band of 2 columns, ordered last
+    band = order[-80:]
+    assert np.ptp(cols[band]) == 1 and len(np.unique(rows[band])) == 40
+    assert set(cols[band].tolist()) == {24, 25}  # at the median column, 24.5, rounded down
+
+
+@pytest.mark.parametrize("name, layer", [("two_sink", 0), ("scb_like", 2)])
+def test_the_elimination_order_changes_no_result(name, layer):
+    model = DrifterCells(get(name), t=None if name == "two_sink" else 3600.0)
+    ordered = layer_gcm(model, layer)
+    assert ordered.order is not None
+    plain = generalized_cell_mapping(model.transition_matrix(layer))
+    assert np.allclose(ordered.absorption_time, plain.absorption_time, rtol=1e-9)
+    assert np.allclose(ordered.absorption, plain.absorption, atol=1e-12)
+    assert np.allclose(ordered.limiting, plain.limiting, atol=1e-12)
+    with pytest.raises(ConfigError, match="order: expected a permutation"):
+        generalized_cell_mapping(model.transition_matrix(layer), order=[0, 0, 1])
+
+
+def test_domicile_groups_match_the_rows_of_the_domicile_matrix():
+    res = layer_gcm(DrifterCells(get("scb_like"), t=12 * 3600.0), 0)
+    d = res.domiciles.tolil()
+    expected: dict[frozenset, list[int]] = {}
+    for i, cell in enumerate(res.transient):
+        expected.setdefault(frozenset(d.rows[i]), []).append(int(cell))
+    got = res.domicile_groups()
+    assert {k: v.tolist() for k, v in got.items()} == expected
+    assert list(got) == sorted(got, key=lambda k: (len(k), sorted(k)))
