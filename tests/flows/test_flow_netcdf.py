@@ -50,7 +50,8 @@ def test_static_field_round_trip_has_no_time_dimension(tmp_path):
     f = FlowField(np.ones((1, 3, 3)), np.zeros((1, 3, 3)), x=[0.0, 1.0, 2.0], y=[0.0, 1.0, 2.0])
     path = save_flow(f, tmp_path / "s.nc")
     with xr.open_dataset(path) as ds:
-        assert "time" not in ds.dims and ds.u.attrs["standard_name"] == "eastward_sea_water_velocity"
+        assert "time" not in ds.dims
+        assert ds.u.attrs["standard_name"] == "eastward_sea_water_velocity"
     assert same(f, load_flow(path))
 
 
@@ -106,7 +107,8 @@ def test_mapping_names_a_models_variables_and_water_mask(tmp_path):
 
 
 def test_surface_product_without_depth_is_one_layer_at_zero(tmp_path):
-    ds = xr.Dataset({"u": (("y", "x"), np.ones((2, 3)), VEL), "v": (("y", "x"), np.ones((2, 3)), VEL)},
+    ones = np.ones((2, 3))
+    ds = xr.Dataset({"u": (("y", "x"), ones, VEL), "v": (("y", "x"), ones, VEL)},
                     coords={"x": ("x", [0.0, 1.0, 2.0], {"units": "m"}),
                             "y": ("y", [0.0, 1.0], {"units": "m"})})
     ds.to_netcdf(tmp_path / "hf.nc")
