@@ -178,11 +178,14 @@ class FlowField:
         j0, wy = _cell_and_weight(self.y, y)
         i0, wx = _cell_and_weight(self.x, x)
         k0, k1, wt = self.time_weights(t, outside)
+        # flat indices of the four surrounding nodes in (L, T, Ny, Nx), at snapshot 0
+        ny, nx = self.shape
+        corners = ((layer * self.n_times * ny + j0) * nx + i0)[..., None] + (0, 1, nx, nx + 1)
         out = []
-        for comp in (self.u, self.v):
-            val = _bilinear(comp[:, k0], layer, j0, i0, wy, wx)
+        for comp in (self.u.reshape(-1), self.v.reshape(-1)):
+            val = _bilinear(comp, corners + k0 * ny * nx, wy, wx)
             if wt:
-                val = (1 - wt) * val + wt * _bilinear(comp[:, k1], layer, j0, i0, wy, wx)
+                val = (1 - wt) * val + wt * _bilinear(comp, corners + k1 * ny * nx, wy, wx)
             out.append(val)
         return out[0], out[1]
 
@@ -211,6 +214,20 @@ class FlowField:
         if layer.dtype.kind not in "iu" or np.any(layer < 0) or np.any(layer >= self.n_layers):
             raise InvalidFlowError(f"layer: expected integers in [0, {self.n_layers - 1}]")
         return layer.astype(np.intp)
+
+    # -- pickling (environments travel to worker processes) ---------------------------------
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["attrs"] = dict(self.attrs)  # a mapping proxy does not pickle
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        state["attrs"] = MappingProxyType(state["attrs"])
+        self.__dict__.update(state)
+        for name in ("u", "v", "land", "x", "y", "depth", "time"):
+            array = getattr(self, name)
+            if array is not None:
+                array.flags.writeable = False
 
     def __repr__(self) -> str:
         time = "static" if self.time is None else f"{self.n_times} times"
@@ -312,7 +329,10 @@ def _inside(nodes: np.ndarray, p: np.ndarray) -> np.ndarray:
     return (p >= lo) & (p <= hi)
 
 
-def _bilinear(grid: np.ndarray, layer, j0, i0, wy, wx) -> np.ndarray:
-    """Bilinear interpolation in ``grid[layer, j, i]`` (shape (L, Ny, Nx))."""
-    return ((1 - wy) * ((1 - wx) * grid[layer, j0, i0] + wx * grid[layer, j0, i0 + 1])
-            + wy * ((1 - wx) * grid[layer, j0 + 1, i0] + wx * grid[layer, j0 + 1, i0 + 1]))
+def _bilinear(flat: np.ndarray, corners: np.ndarray, wy, wx) -> np.ndarray:
+    """Bilinear interpolation between the values ``flat[corners]`` of the nodes (j0, i0),
+    (j0, i0 + 1), (j0 + 1, i0), (j0 + 1, i0 + 1) (the last axis of ``corners``), gathered
+    with one `numpy.take`."""
+    c = flat.take(corners)
+    return ((1 - wy) * ((1 - wx) * c[..., 0] + wx * c[..., 1])
+            + wy * ((1 - wx) * c[..., 2] + wx * c[..., 3]))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 
@@ -30,6 +32,17 @@ def test_layout_and_read_only_arrays():
     for arr in (f.u, f.v, f.x, f.y, f.depth, f.time, f.land):
         with pytest.raises(ValueError):
             arr[(0,) * arr.ndim] = 1
+
+
+def test_pickles_with_its_attrs_and_read_only_arrays():
+    f = small(attrs={"source": "test", "seed": 3}, name="small")
+    g = pickle.loads(pickle.dumps(f))
+    assert dict(g.attrs) == {"source": "test", "seed": 3} and g.name == "small"
+    for name in ("u", "v", "x", "y", "depth", "time", "land"):
+        assert np.array_equal(getattr(g, name), getattr(f, name))
+        assert not getattr(g, name).flags.writeable
+    with pytest.raises(TypeError):
+        g.attrs["seed"] = 4  # still a read-only mapping
 
 
 def test_static_field_has_one_time_slot_and_defaults_depth():
