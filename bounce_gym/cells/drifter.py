@@ -123,6 +123,7 @@ class DrifterCells:
                     self.vertical, self.legal):
             arr.flags.writeable = False
         self._drift: sp.csr_matrix | None = None
+        self._drift_cumsum: np.ndarray | None = None  # running sum of the drift matrix's entries
 
     # -- sizes and lookups ------------------------------------------------------------------
     @property
@@ -199,8 +200,32 @@ class DrifterCells:
         drift = actions == DRIFT
         out = np.empty(states.shape, dtype=np.int64)
         out[~drift] = self.vertical[states[~drift], actions[~drift]]
-        out[drift] = _sample_rows(self.drift_matrix(), states[drift], rng)
+        out[drift] = _sample_rows(self.drift_matrix(), self._cumsum(), states[drift], rng)
         return out
+
+    def sample_one(self, state: int, action: int, rng: np.random.Generator) -> int:
+        """`sample` of one state and action, in plain ints: the same draw from ``rng`` (one
+        uniform number for a drift, none for a vertical move) and the same next state, without
+        array overheads (the hot path of a single-drifter environment)."""
+        if not (0 <= state < self.n_states and action in (DRIFT, UP, DOWN)):
+            raise ActionError(f"state {state}, action {action}: expected a state in "
+                              f"[0, {self.n_states - 1}] and an action 0, 1 or 2")
+        if not self.legal[state, action]:
+            raise ActionError(f"actions: {ACTIONS[action]} is illegal in state {state} (cell "
+                              f"{tuple(self.cells[state].tolist())})")
+        if action != DRIFT:
+            return int(self.vertical[state, action])
+        P, cum = self.drift_matrix(), self._cumsum()
+        start, stop = int(P.indptr[state]), int(P.indptr[state + 1])
+        before = float(cum[start - 1]) if start > 0 else 0.0
+        k = int(np.searchsorted(cum, before + rng.random(), side="right"))
+        return int(P.indices[min(max(k, start), stop - 1)])
+
+    def _cumsum(self) -> np.ndarray:
+        """Running sum of the drift matrix's entries (`_sample_rows`), computed once."""
+        if self._drift_cumsum is None:
+            self._drift_cumsum = np.cumsum(self.drift_matrix().data)
+        return self._drift_cumsum
 
     # -- internals --------------------------------------------------------------------------
     def _flowline_offsets(self, lay, j, i, speed, still) -> tuple[np.ndarray, np.ndarray]:
@@ -264,11 +289,12 @@ class DrifterCells:
         return P
 
 
-def _sample_rows(P: sp.csr_matrix, rows: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """One column per row index, drawn with the row's probabilities (rows sum to 1)."""
+def _sample_rows(P: sp.csr_matrix, cum: np.ndarray, rows: np.ndarray,
+                 rng: np.random.Generator) -> np.ndarray:
+    """One column per row index, drawn with the row's probabilities (rows sum to 1); ``cum`` is
+    ``np.cumsum(P.data)``, computed once per matrix rather than per call."""
     if len(rows) == 0:
         return np.zeros(0, dtype=np.int64)
-    cum = np.cumsum(P.data)
     start = P.indptr[rows]
     stop = P.indptr[rows + 1]
     before = np.where(start > 0, cum[np.maximum(start - 1, 0)], 0.0)

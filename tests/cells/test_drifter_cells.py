@@ -166,3 +166,21 @@ def test_constructor_checks():
         DrifterCells(f, step="rk45")
     with pytest.raises(ConfigError, match="layer"):
         DrifterCells(f).layer_states(1)
+
+
+def test_sample_one_draws_what_sample_draws():
+    model = DrifterCells(get("two_sink", n_layers=3), rho=0.7)
+    rng = np.random.default_rng(0)
+    states = rng.integers(model.n_states, size=400)
+    actions = np.array([rng.choice(np.flatnonzero(model.legal[s])) for s in states])
+    batch = np.random.default_rng(1)
+    single = np.random.default_rng(1)
+    expected = [int(model.sample(np.array([s]), np.array([a]), batch)[0])
+                for s, a in zip(states, actions, strict=True)]
+    got = [model.sample_one(int(s), int(a), single) for s, a in zip(states, actions, strict=True)]
+    assert got == expected
+    assert batch.random() == single.random()  # the same number of draws
+    with pytest.raises(ActionError, match="up is illegal"):
+        model.sample_one(int(model.layer_states(0)[0]), UP, single)
+    with pytest.raises(ActionError, match="expected a state"):
+        model.sample_one(model.n_states, DRIFT, single)
