@@ -16,6 +16,10 @@ PettingZoo ids (``pettingzoo.make("parallel" | "aec", id, **overrides)``), ``max
 ``bounce_gym/MultiBounce-v0`` (grid_15x15, 4 robots, free), ``bounce_gym/MultiBounceCoverage-v0``
 (grid_15x15, 4 robots, shared coverage) and ``bounce_gym/MultiBounceMonitoring-v0`` (grid_20x12,
 4 robots, one region each).
+
+Drifters (thesis ch. 5, `bounce_gym.envs.drifters`): the Gymnasium id ``bounce_gym/Drifter-v0``
+(one profiling drifter, scb_like flow, cell backend, reach task; max_episode_steps 200) and the
+PettingZoo id ``bounce_gym/MultiDrifter-v0`` (4 drifters covering the surface; max_cycles 500).
 """
 
 from __future__ import annotations
@@ -46,12 +50,19 @@ PETTINGZOO_ENVS = {
 }
 
 
-def is_pettingzoo_id(env_id: str) -> bool:
-    """Whether ``env_id`` is one of the multi-robot The free, navigation and coverage ids also have a ``vector_entry_point``: ``gym.make_vec(id,
-num_envs=N)`` builds a `bounce_gym.envs.vector_env.BounceVectorEnv` (N robots stepped as one batch).
+#: drifter ids (thesis ch. 5): Gymnasium id -> (entry point, max_episode_steps)
+DRIFTER_GYM_ENVS = {
+    "bounce_gym/Drifter-v0": ("bounce_gym.envs.drifters.env:DrifterEnv", 200),
+}
+#: drifter PettingZoo ids -> the module with ``parallel_env`` and ``env``
+DRIFTER_PETTINGZOO_ENVS = {
+    "bounce_gym/MultiDrifter-v0": "bounce_gym.envs.drifters.multi_drifter_v0",
+}
 
-PettingZoo ids (not a Gymnasium id)."""
-    return env_id in PETTINGZOO_ENVS
+
+def is_pettingzoo_id(env_id: str) -> bool:
+    """Whether ``env_id`` is one of the multi-robot PettingZoo ids (not a Gymnasium id)."""
+    return env_id in PETTINGZOO_ENVS or env_id in DRIFTER_PETTINGZOO_ENVS
 
 
 _ENTRY = {
@@ -67,9 +78,17 @@ def register_envs() -> None:
             gym.register(env_id, entry_point="bounce_gym.envs.bounce_env:BounceEnv",
                          vector_entry_point=VECTOR_ENTRY_POINT if env_id in VECTOR_IDS else None,
                          kwargs=kwargs, max_episode_steps=steps)
+    for env_id, (entry_point, steps) in DRIFTER_GYM_ENVS.items():
+        if env_id not in gym.registry:
+            gym.register(env_id, entry_point=entry_point, max_episode_steps=steps)
     for env_type, registry in (("parallel", pettingzoo.parallel_registry),
                                ("aec", pettingzoo.aec_registry)):
         for env_id, kwargs in PETTINGZOO_ENVS.items():
             if env_id not in registry:
                 pettingzoo.register(env_type, env_id, entry_point=_ENTRY[env_type],
                                     max_cycles=500, kwargs=kwargs)
+        for env_id, module in DRIFTER_PETTINGZOO_ENVS.items():
+            if env_id not in registry:
+                function = "parallel_env" if env_type == "parallel" else "env"
+                pettingzoo.register(env_type, env_id, entry_point=f"{module}:{function}",
+                                    max_cycles=500)
