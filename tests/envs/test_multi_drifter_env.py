@@ -102,6 +102,11 @@ def test_deep_drifters_do_not_cover_the_surface():
     assert infos["drifter_0"]["coverage"] == coverage
 
 
+def test_the_fleet_size_follows_the_deploy_list():
+    env = MultiDrifterEnv(**THREE, deploy=[(0, 1, 1), (1, 2, 2)])
+    assert env.possible_agents == ["drifter_0", "drifter_1"]
+
+
 def test_random_deployment_is_distinct_surface_cells():
     env = MultiDrifterEnv(**THREE, n_drifters=50)
     _, infos = env.reset(seed=4)
@@ -132,7 +137,7 @@ def test_pickled_env_continues_exactly():
 
 @pytest.mark.parametrize(("kwargs", "field"), [
     (dict(n_drifters=0), "n_drifters"),
-    (dict(deploy=[(0, 1, 1)]), "deploy"),
+    (dict(n_drifters=2, deploy=[(0, 1, 1)]), "deploy"),
     (dict(deploy={"layer": 0}), "deploy"),
     (dict(n_drifters=2, deploy=[(0, 1, 1), (0, 20, 28)]), r"deploy\[1\]"),
     (dict(max_cycles=0), "max_cycles"),

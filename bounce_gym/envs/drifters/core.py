@@ -26,7 +26,7 @@ from bounce_gym.cells.drifter import ACTIONS, DRIFT, DrifterCells
 from bounce_gym.envs.drifters.backends import CellFleet, ContinuousFleet
 from bounce_gym.envs.drifters.options import DrifterOptions
 from bounce_gym.envs.drifters.regions import parse_region
-from bounce_gym.envs.drifters.tasks import ReachTask, make_task
+from bounce_gym.envs.drifters.tasks import make_task
 from bounce_gym.errors import ActionError, ConfigError
 
 TRAIL_LENGTH = 64
@@ -163,8 +163,7 @@ class DrifterCore:
                ) -> tuple[np.ndarray, list]:
         """Start states (N,) and exact start points (None where a drifter starts at its
         cell's centre)."""
-        forbidden = (self.task.forbidden_starts() if isinstance(self.task, ReachTask)
-                     else np.zeros(0, dtype=np.int64))
+        forbidden = self.task.forbidden_starts()
         if spec is None:  # deployed at the surface (thesis §5.3.2), anywhere
             surface = np.setdiff1d(self.model.layer_states(0), forbidden)
             if not len(surface):
@@ -211,8 +210,6 @@ class DrifterCore:
         }
         if self.options.backend == "continuous":
             info["time"] = float(self.fleet.time)
-        if isinstance(self.task, ReachTask):
-            info["distance_to_goal"] = self.task.distance(positions)
         info.update(task_info)
         return info
 

@@ -85,8 +85,8 @@ class DrifterEnv(DrifterEnvBase, gym.Env):
 
     def __init__(self, render_mode: str | None = None, field_style: str = "arrows",
                  **options: object) -> None:
-        self._build(options, render_mode, field_style, n_drifters=1, clock_steps=None,
-                    start_key="start", fixed=MULTI_ONLY)
+        self._build(options, render_mode, field_style, n_drifters=None, clock_steps=None,
+                    start_key="start", defaults={"n_drifters": 1}, fixed=MULTI_ONLY)
         self.action_space = spaces.Discrete(3)
         self.observation_space = spaces.Box(self.core.obs_low, self.core.obs_high,
                                             dtype=np.float32)

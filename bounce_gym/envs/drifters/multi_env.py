@@ -30,9 +30,10 @@ All drifters terminate when the whole surface is visited; all are truncated afte
 
 ## Arguments
 
-``n_drifters`` (default 4), ``deploy`` (None: each drifter at a uniformly random surface cell,
-distinct while there are enough; or a list with one region per drifter, see
-`bounce_gym.envs.drifters.regions`; per episode with ``reset(options={"deploy": [...]})``),
+``n_drifters`` (default 4, or the length of ``deploy``), ``deploy`` (None: each drifter at a
+uniformly random surface cell, distinct while there are enough; or a list with one region per
+drifter, see `bounce_gym.envs.drifters.regions`; per episode with
+``reset(options={"deploy": [...]})``),
 ``max_cycles`` (default 500), ``render_mode``, ``field_style``, and the flow, backend and
 sensing arguments of `DrifterEnv` (``flow``, ``flow_kwargs``, ``backend``, ``rho``,
 ``cell_map``, ``start_time``, ``step_seconds``, ``substeps``, ``diffusivity``, ``land_rule``,
@@ -73,6 +74,9 @@ class MultiDrifterEnv(DrifterEnvBase, ParallelEnv):
     def __init__(self, max_cycles: int = 500, render_mode: str | None = None,
                  field_style: str = "arrows", **options: object) -> None:
         self.max_cycles = integer("max_cycles", max_cycles, 1)
+        deploy = options.get("deploy")
+        if "n_drifters" not in options and isinstance(deploy, list | tuple):
+            options = {**options, "n_drifters": len(deploy)}  # one drifter per deploy entry
         self._build(options, render_mode, field_style, n_drifters=None,
                     clock_steps=self.max_cycles, start_key="deploy",
                     defaults={"task": "cover"}, fixed=SINGLE_ONLY)

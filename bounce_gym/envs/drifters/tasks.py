@@ -39,6 +39,9 @@ class DrifterTask:
     region_key = "region"
     #: features appended to each drifter's observation
     observation_size = 0
+    #: whether drawings mark the region (a goal or a region to stay in; a region to cover is
+    #: shown by its visited cells instead)
+    marked = True
 
     def __init__(self, region: object, model: DrifterCells, normalise=None) -> None:
         if region is None:
@@ -72,6 +75,10 @@ class DrifterTask:
         """The drifters are placed in ``states``; returns the task's info."""
         return {}
 
+    def forbidden_starts(self) -> np.ndarray:
+        """States a start may not be in."""
+        return np.zeros(0, dtype=np.int64)
+
     def step(self, states: np.ndarray, positions: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray, dict]:
         """Rewards (N,), terminated (N,) and info after a step that left the drifters in
@@ -101,13 +108,14 @@ class ReachTask(DrifterTask):
         super().__init__(goal, model, normalise)
         self.reward = reward
 
-    def forbidden_starts(self) -> np.ndarray:
-        """States a random start avoids (the goal)."""
+    def forbidden_starts(self):
+        """The goal: it is absorbing, so no episode starts in it."""
         return self.region.states
 
     def start(self, states, positions):
         self._centres = self.model.centre(self.region.states)
-        return {"is_success": np.zeros(len(states), dtype=bool)}
+        return {"is_success": np.zeros(len(states), dtype=bool),
+                "distance_to_goal": self._distance(positions)}
 
     def step(self, states, positions):
         reached = self._inside[states]
@@ -115,9 +123,10 @@ class ReachTask(DrifterTask):
             rewards = np.where(reached, 100.0, -1.0)
         else:
             rewards = reached.astype(np.float64)
-        return rewards, reached, {"is_success": reached}
+        return rewards, reached, {"is_success": reached,
+                                  "distance_to_goal": self._distance(positions)}
 
-    def distance(self, positions: np.ndarray) -> np.ndarray:
+    def _distance(self, positions: np.ndarray) -> np.ndarray:
         """(N,) metres from each drifter to the nearest goal cell centre."""
         cx, cy = self._centres
         return distance_to(self.model.field, positions[:, 0], positions[:, 1], cx, cy)
@@ -140,6 +149,7 @@ class StayTask(DrifterTask):
 
 class CoverTask(DrifterTask):
     name = "cover"
+    marked = False
 
     def __init__(self, region: object, model: DrifterCells) -> None:
         super().__init__({"layer": 0} if region is None else region, model)

@@ -201,9 +201,10 @@ def draw_drifters(renderer: FlowRenderer, core, layer: int) -> np.ndarray:
     model = core.model
     field = model.field
     highlight = np.zeros(model.index.shape[1:], dtype=bool)
-    region = core.task.region.states
-    here = model.cells[region, 0] == layer
-    highlight[model.cells[region[here], 1], model.cells[region[here], 2]] = True
+    if core.task.marked:
+        region = core.task.region.states
+        here = model.cells[region, 0] == layer
+        highlight[model.cells[region[here], 1], model.cells[region[here], 2]] = True
     t = core.fleet.time
     clock = "" if t is None or field.time is None else (
         f"  t = {t / 3600:.1f} h" if core.options.backend == "continuous"
