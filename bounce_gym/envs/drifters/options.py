@@ -31,10 +31,11 @@ naming it; a bad value raises `ConfigError` naming the argument and what is allo
 * ``clock_steps``: steps at which the normalised clock reads 1 (single-drifter env, default
   200, the registered horizon; the multi-drifter env uses ``max_cycles``).
 * ``task``: single drifter ``"reach"`` (default), ``"stay"`` or ``"cover"``; the fleet covers
-  the surface. ``goal`` (reach), ``region`` (stay, cover) and ``start`` / ``deploy`` are
-  regions of cells (`bounce_gym.envs.drifters.regions`); ``reward`` (reach): ``"success"``
-  (default: 1 on reaching the goal, else 0) or ``"thesis"`` (Eq. 5.10: 100 on reaching it,
-  else -1).
+  the surface. ``goal`` (reach; default ``{"cell": (0, 5, 5), "halo": 1}``, the 3 x 3 surface
+  cells around row 5, column 5), ``region`` (stay: required; cover: default the surface) and
+  ``start`` / ``deploy`` (default: random surface cells) are regions of cells
+  (`bounce_gym.envs.drifters.regions`); ``reward`` (reach): ``"success"`` (default: 1 on
+  reaching the goal, else 0) or ``"thesis"`` (Eq. 5.10: 100 on reaching it, else -1).
 """
 
 from __future__ import annotations
