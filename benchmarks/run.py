@@ -14,7 +14,8 @@ Cell-model rows (issue #4): `benchmarks.scm_gcm` (SCM on ~9 M cells, GCM on 65 8
 issue #6: `benchmarks.visibility` (partition + safe graph, random-polygon reachability);
 issue #7: `benchmarks.multirobot` (steps to coverage vs m, planning time and memory for
 m = 2..10, the m = 2 monitoring joint map); issue #15: `benchmarks.drifters` (the GCM of a
-10^6-cell drifter layer, continuous advection against OceanParcels in the same run).
+10^6-cell drifter layer, continuous advection against OceanParcels in the same run) and
+`benchmarks.drifter_planners` (value iteration on 3 x 10^5 states, deployment counts).
 """
 
 from __future__ import annotations
@@ -190,6 +191,11 @@ def main(argv: list[str] | None = None) -> None:
 
     print()
     drifters.main((["--quick"] if args.quick else []) + ["--repeats", str(args.repeats)])
+    # drifter planners (issue #15): value iteration on 3 x 10^5 states, deployment counts
+    from benchmarks import drifter_planners
+
+    print()
+    drifter_planners.main((["--quick"] if args.quick else []) + ["--repeats", str(args.repeats)])
 
 
 if __name__ == "__main__":
