@@ -25,9 +25,10 @@ import numpy as np
 
 from baselines.drifters.behavior import PersistentBehavior
 from baselines.drifters.graph import reachable, source_components
+from bounce_gym.cells import DrifterCells
 from bounce_gym.errors import ConfigError
 
-__all__ = ["Deployment", "deployment_locations", "group_coverage"]
+__all__ = ["Deployment", "deploy_cells", "deployment_locations", "group_coverage"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,6 +77,13 @@ def group_coverage(behavior: PersistentBehavior, states) -> np.ndarray:
         if len(starts):
             covered |= reachable(behavior.graph, starts) & mask
     return covered
+
+
+def deploy_cells(model: DrifterCells, states) -> list[tuple[int, int, int]]:
+    """The cells (layer, j, i) of ``states``: one region per drifter, the ``deploy`` argument of
+    ``bounce_gym/MultiDrifter-v0``."""
+    states = np.asarray(states, dtype=np.int64)
+    return [(int(lay), int(j), int(i)) for lay, j, i in model.cells[states]]
 
 
 def _check_behavior(behavior) -> None:
