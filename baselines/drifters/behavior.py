@@ -80,11 +80,15 @@ class PersistentBehavior:
     def reach(self, states) -> np.ndarray:
         """(n_cells,) bool: the cells of the layer that any of ``states`` leads to, the states
         included (the rows of the thesis' connectivity matrix C, or'ed)."""
-        local = self._local("states", states)
+        local = self.local(states)
         return reachable(self.graph, local)
 
-    def _local(self, field: str, states) -> np.ndarray:
+    def local(self, states, field: str = "states") -> np.ndarray:
+        """Layer-local indices (state - offset) of ``states`` of this layer; `ConfigError` naming
+        ``field`` for anything else."""
         states = np.asarray(states)
+        if states.size == 0:
+            return np.zeros(0, dtype=np.int64)
         if states.dtype.kind not in "iu":
             raise ConfigError(f"{field}: expected integer states of layer {self.layer}")
         local = states.astype(np.int64).ravel() - self.offset

@@ -66,7 +66,7 @@ def group_coverage(behavior: PersistentBehavior, states) -> np.ndarray:
     """(n_cells,) bool: the cells of the layer reached from a cell of ``states`` that lies in
     the same persistent or transient group (the coverage Alg. 5.2 guarantees)."""
     _check_behavior(behavior)
-    local = behavior._local("states", states)
+    local = behavior.local(states)
     covered = np.zeros(behavior.n_cells, dtype=bool)
     members = [g - behavior.offset for g in behavior.groups]
     members += [t - behavior.offset for t in behavior.transient_groups.values()]
