@@ -7,13 +7,16 @@ nothing. Rates are the best of ``repeats`` runs (time.perf_counter):
   with 1,024 robots in two_rooms (the dynamics alone; target ≥ 0.5);
 * env-steps/s of the native env at N = 64 ÷ ``vectorization_mode="sync"`` at N = 64
   (target ≥ 100);
-* PPO training env-steps/s on ``configs/train_navigation.yaml``'s env through the SB3 view of the
+* PPO training env-steps/s on ``configs/train_navigation.yaml`` through the SB3 view of the
   native env ÷ through SB3's DummyVecEnv of ``gym.make`` copies (4,096 steps, torch on one
-  thread; target ≥ 5).
+  thread; target ≥ 5). Both run as `baselines.rl.train.train` runs them (monitor file,
+  VecNormalize, the configuration's hyperparameters), timed from the first to the last step of
+  learning.
 """
 
 from __future__ import annotations
 
+import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -42,23 +45,33 @@ def vector_steps(n: int, steps: int, mode: str) -> Callable[[], int]:
     return run
 
 
-def ppo_rate(vec_env: str, steps: int) -> float:
-    """Env steps per second of a PPO run of ``steps`` steps on the navigation training env."""
-    import torch
-    from stable_baselines3 import PPO
+def ppo_rate(vec_env: str, steps: int, config_path: Path = CONFIG) -> float:
+    """Env steps per second of PPO learning ``steps`` steps with a training configuration (one
+    seed, no checkpoint), as `baselines.rl.train.train` runs it; building and saving the model
+    are not timed."""
+    from stable_baselines3.common.callbacks import BaseCallback
 
-    from baselines.rl.train import make_train_env, validate_train_config
+    from baselines.rl.train import train
 
-    torch.set_num_threads(1)
-    config = yaml.safe_load(CONFIG.read_text())
-    config = validate_train_config({**config, "vec_env": vec_env, "total_timesteps": steps})
-    env = make_train_env(config)
-    model = PPO("MlpPolicy", env, seed=0, device="cpu", **config["hyperparams"])
-    start = time.perf_counter()
-    model.learn(steps)
-    rate = steps / (time.perf_counter() - start)
-    env.close()
-    return rate
+    class Timer(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.start, self.first = time.perf_counter(), self.model.num_timesteps
+
+        def _on_training_end(self) -> None:
+            self.rate = (self.model.num_timesteps - self.first) / (time.perf_counter()
+                                                                   - self.start)
+
+        def _on_step(self) -> bool:
+            return True
+
+    timer = Timer()
+    config = yaml.safe_load(config_path.read_text())
+    config.pop("seed", None)
+    with tempfile.TemporaryDirectory() as models:
+        train({**config, "vec_env": vec_env, "total_timesteps": steps, "seeds": [0],
+               "checkpoint_every": 0, "models": models}, progress=False, callbacks=[timer],
+              folder=config_path.parent)
+    return timer.rate
 
 
 def _row(name: str, ratio: float, target: float) -> None:

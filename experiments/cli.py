@@ -1,22 +1,32 @@
 """The ``bounce-gym`` command: evaluate planners, baselines and trained agents; train agents.
 
     bounce-gym evaluate [config.yaml] [--no-progress]
-    bounce-gym train config.yaml [--timesteps N] [--resume] [--no-progress]
+    bounce-gym train config.yaml [--timesteps N] [--seeds S ...] [--resume] [--no-progress]
+    bounce-gym curves models/<name> [--window EPISODES]
     bounce-gym trust models/<name>/<algo>_seed<N>.zip ...
 
-``evaluate`` prints a table (per experiment and policy) and writes ``episodes.csv``,
-``results.json`` and plots into ``<output>/<name>-<timestamp>/``; without a configuration it runs
-the default one (``eval_default.yaml``; format: `experiments.config`). ``train`` saves the model
-as ``models/<name>/<algo>_seed<seed>.zip``, where ``evaluate`` finds it (format:
-`baselines.rl.train`), listed in ``models/<name>/manifest.json``; ``evaluate`` loads only listed
-model files, and ``trust`` lists one obtained elsewhere (`baselines.rl.model_files`). A mistake
-in a configuration, an env argument or a model file is one line ``error: ...`` on stderr and
-exit status 2, reported before any long work starts.
+``evaluate`` prints tables (per experiment and policy, every cell with its 95% interval and
+count) and writes ``episodes.csv``, ``summary.csv``, ``results.json``, plots and, for a
+configuration with ``leaderboard: true``, ``leaderboard.md`` and ``leaderboard.csv`` into
+``<output>/<name>-<timestamp>/``; without a configuration it runs the default one
+(``eval_default.yaml``; format: `experiments.config`). ``train`` saves a model per seed as
+``models/<name>/<algo>_seed<seed>.zip``, where ``evaluate`` finds it (format:
+`baselines.rl.train`), listed in ``models/<name>/manifest.json``, and then draws the folder's
+learning curves, as ``curves`` does at any time (``learning_curves.png`` and ``.csv``,
+`experiments.plots.learning_curves`); ``evaluate`` loads only listed model files, and ``trust``
+lists one obtained elsewhere (`baselines.rl.model_files`). A mistake in a configuration, an env
+argument or a model file is one line ``error: ...`` on stderr and exit status 2, reported before
+any long work starts.
+
+The environment variable ``BOUNCE_GYM_MAX_TIMESTEPS=N`` caps every training run at N env steps
+(SB3 still finishes the iteration it is in): a smoke test of a documented training command,
+which then runs exactly as written.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -28,10 +38,14 @@ def evaluate(config_path: str | None, progress: bool = True) -> int:
     """Run an evaluation configuration, print the tables and write the run folder."""
     from bounce_gym.files import check_writable
     from experiments.config import load_config, validate_config
+    from experiments.leaderboard import write_leaderboard
+    from experiments.provenance import provenance
     from experiments.report import (
         families_of,
         format_table,
+        notes_of,
         summarise,
+        table_rows,
         write_plots,
         write_results,
     )
@@ -40,28 +54,72 @@ def evaluate(config_path: str | None, progress: bool = True) -> int:
     config = validate_config(load_config(config_path))
     check_writable("config.output", Path(config["output"]))
     rows, plots = run(config, progress=progress)
-    families = families_of(plots)
-    summary = summarise(rows, families)
+    families, notes, made = families_of(plots), notes_of(plots), provenance()
+    summary, per_seed = table_rows(summarise(rows, families), rows)
     print(format_table(summary, families))
+    for note in notes:
+        print(f"note: {note}")
     folder = Path(config["output"]) / f"{config['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
-    write_results(folder, [r.row() for r in rows], summary, config)
-    written = write_plots(folder, plots, summary)
-    print(f"\nwrote {folder}/episodes.csv, results.json and {len(written)} plots")
+    write_results(folder, [r.row() for r in rows], summary, config, per_seed, notes, made)
+    written = write_plots(folder, plots, summary, per_seed)
+    if config["leaderboard"]:
+        written += write_leaderboard(folder, config, summary, families, notes, made)
+    print(f"\nwrote {folder}/episodes.csv, summary.csv, results.json and {len(written)} other "
+          "files" + (" (leaderboard.md, leaderboard.csv, plots)" if config["leaderboard"]
+                     else " (plots)"))
     return 0
 
 
+#: The environment variable capping every training run (module docstring).
+MAX_TIMESTEPS = "BOUNCE_GYM_MAX_TIMESTEPS"
+
+
 def train(config_path: str, timesteps: int | None = None, resume: bool = False,
-          progress: bool = True) -> int:
-    """Train (or resume) the agent of a training configuration and report where it is saved."""
+          progress: bool = True, seeds: list[int] | None = None) -> int:
+    """Train (or resume) the agents of a training configuration, report where they are saved,
+    and draw the folder's learning curves."""
     from baselines.rl.train import train as train_agent
+    from bounce_gym.errors import ConfigError
     from experiments.config import load_config
 
     config = load_config(config_path)
-    if isinstance(config, dict) and timesteps is not None:
-        config["total_timesteps"] = timesteps
-    if isinstance(config, dict) and resume:
-        config["resume"] = True
-    print(f"saved {train_agent(config, progress=progress)}")
+    if isinstance(config, dict):
+        for key, value in (("total_timesteps", timesteps), ("seeds", seeds)):
+            if value is not None:
+                config[key] = value
+        if seeds is not None:
+            config.pop("seed", None)
+        if resume:
+            config["resume"] = True
+        cap = os.environ.get(MAX_TIMESTEPS)
+        if cap is not None:
+            if not cap.isdigit() or int(cap) < 1:
+                raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {cap!r}")
+            budget = config.get("total_timesteps", int(cap))
+            config["total_timesteps"] = min(budget, int(cap)) if isinstance(budget, int) \
+                else budget
+    paths = train_agent(config, progress=progress, folder=Path(config_path).parent, log=print)
+    for path in paths:
+        print(f"saved {path}")
+    return curves(str(paths[0].parent), required=False)
+
+
+def curves(folder: str, window: int | None = None, required: bool = True) -> int:
+    """Draw the learning curves of a models folder and print where each run ended (a
+    `ConfigError` if no episode has finished yet, unless not ``required``)."""
+    from baselines.rl.curves import WINDOW
+    from bounce_gym.errors import ConfigError
+    from experiments.plots.learning_curves import write_learning_curves
+
+    written, lines = write_learning_curves(Path(folder), WINDOW if window is None else window)
+    if not written:
+        if required:
+            raise ConfigError(f"curves: {folder} holds no monitor file with a finished "
+                              "episode; train first")
+        print("no episode has finished yet: no learning curves")
+        return 0
+    print("\n".join(lines))
+    print(f"wrote {' and '.join(str(p) for p in written)}")
     return 0
 
 
@@ -82,9 +140,19 @@ def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
 
 def train_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("config", help="YAML training configuration")
-    parser.add_argument("--timesteps", type=int, help="override total_timesteps")
-    parser.add_argument("--resume", action="store_true", help="continue from the saved model")
+    parser.add_argument("--timesteps", type=int, help="override total_timesteps (per seed)")
+    parser.add_argument("--seeds", type=int, nargs="+", metavar="S",
+                        help="override the configuration's seeds")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue every seed from its newest checkpoint")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    return parser
+
+
+def curves_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("folder", help="a models folder, models/<name>")
+    parser.add_argument("--window", type=int,
+                        help="episodes in the moving mean (default 100, as SB3's ep_rew_mean)")
     return parser
 
 
@@ -101,10 +169,19 @@ def dispatch(args: argparse.Namespace) -> int:
             return evaluate(args.config, progress=not args.no_progress)
         if args.command == "trust":
             return trust(args.models)
-        return train(args.config, args.timesteps, args.resume, progress=not args.no_progress)
+        if args.command == "curves":
+            return curves(args.folder, args.window)
+        return train(args.config, args.timesteps, args.resume, progress=not args.no_progress,
+                     seeds=args.seeds)
     except BounceGymError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        if args.command != "train":
+            raise
+        print("interrupted: run the same command with --resume to continue from the newest "
+              "checkpoint", file=sys.stderr)
+        return 130
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -112,6 +189,8 @@ def main(argv: list[str] | None = None) -> int:
     commands = parser.add_subparsers(dest="command", required=True)
     evaluate_parser(commands.add_parser("evaluate", help="evaluate policies side by side"))
     train_parser(commands.add_parser("train", help="train a Stable-Baselines3 agent"))
+    curves_parser(commands.add_parser("curves", help="draw the learning curves of trained "
+                                                     "agents"))
     trust_parser(commands.add_parser("trust", help="let evaluate load these model files"))
     return dispatch(parser.parse_args(argv))
 

@@ -6,17 +6,37 @@ A configuration lists *experiments*; each names a registered environment id — 
 run:
 
 * ``planner`` — the analytic planner of the experiment's family (`experiments.registry`);
-* ``random`` — a random angle of Φ at every bump (every robot its own);
+* ``random`` — a random angle of Φ at every bump (every robot its own), drawn from the
+  episode's seed;
 * ``fixed`` — one policy per angle of Φ (the papers' single bounce policies; all robots alike);
-* ``rl`` — every Stable-Baselines3 model found under ``models/<experiment name>/`` (what
-  ``bounce-gym train`` saves there); for several robots one PPO model shared by all of them.
+  with two or more of them the report adds the best fixed angle per episode in hindsight
+  (`experiments.oracle`);
+* ``rl`` — every Stable-Baselines3 model ``<algo>_seed<N>.zip`` found in the experiment's model
+  folders (what ``bounce-gym train`` saves); for several robots one PPO model shared by all.
 
-Optional keys: ``rl_models`` names the sub-folder of ``models/`` to load instead of the
-experiment name, so several experiments can score one trained model; ``visibility`` makes a
-single-robot experiment a safe-plan scenario (`experiments.families.visibility`);
-``planner_kwargs`` (multi-robot only) are keyword arguments of the planner's ``for_env`` (e.g.
-``{phi: 135}``). A multi-robot env is built with ``max_cycles = max_steps``, so ``env_kwargs``
-may not set ``max_cycles``.
+**Seeds.** Evaluation seeds are disjoint from training seeds (`baselines.seeds`): every seed
+must be at least ``EVALUATION_SEEDS_START`` (10,000). ``seeds`` is a list of distinct integers
+or ``{start: 10000, count: 200}`` (the seeds start, start + 1, …); the validated configuration
+holds the list. Default: one seed, 10,000.
+
+**Horizon.** An episode lasts at most the horizon its env registers — Gymnasium's
+``max_episode_steps``, PettingZoo's ``max_cycles`` — which is also what training uses.
+``max_steps`` may be left out (the validated configuration holds the registered horizon) or
+restate it; a different ``max_steps`` needs ``horizon_reason: <why>`` in the same experiment,
+and then sets the env's own limit (``gym.make(max_episode_steps=...)``, ``max_cycles``), so that
+the env and the episode loop stop together. ``env_kwargs`` may set neither limit.
+
+Optional keys: ``rl_models`` — the folder of ``models/`` to load instead of the experiment name,
+or a list of them; an entry may be ``{folder: <name>, env_kwargs: {privileged: true}}`` to run
+models trained with another observation (only ``privileged`` and ``history`` may differ, so the
+episodes stay the same); ``visibility`` makes a single-robot experiment a safe-plan scenario
+(`experiments.families.visibility`); ``planner_kwargs`` (multi-robot only) are keyword arguments
+of the planner's ``for_env`` (e.g. ``{phi: 135}``); ``difficulty`` (``easy``, ``medium`` or
+``hard``) labels the experiment in a leaderboard. A top-level ``leaderboard: true`` makes the
+evaluation write ``leaderboard.md`` and ``leaderboard.csv`` (`experiments.leaderboard`).
+
+A relative map file in ``env_kwargs.world`` (``*.yaml``, ``*.yml``, ``*.json``) of a
+configuration file is read relative to that file's folder.
 
 The default configuration is the packaged ``eval_default.yaml`` (the top-level ``configs/``
 folder of a source checkout, ``experiments/configs/`` once installed).
@@ -29,20 +49,28 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import gymnasium as gym
+import pettingzoo
 import yaml
 
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.model_files import check_folder_name
+from baselines.seeds import EVALUATION_SEEDS_START
 from bounce_gym.envs.registration import PETTINGZOO_ENVS, is_pettingzoo_id
 from bounce_gym.errors import ConfigError
+from bounce_gym.validate import integer
 
 POLICY_KINDS = ("planner", "random", "fixed", "rl")
+DIFFICULTIES = ("easy", "medium", "hard")
 DEFAULT_CONFIG_NAME = "eval_default.yaml"
+#: env options a model folder of ``rl_models`` may set differently (observation only)
+OBSERVATION_OPTIONS = frozenset({"privileged", "history"})
+_MAP_SUFFIXES = (".yaml", ".yml", ".json")
 
-_TOP_KEYS = {"name": str, "output": str, "models": str, "experiments": list}
-_EXPERIMENT_KEYS = {"name": str, "env": str, "env_kwargs": dict, "seeds": list,
-                    "max_steps": int, "policies": list, "visibility": dict,
-                    "planner_kwargs": dict, "rl_models": str}
+_TOP_KEYS = {"name": str, "output": str, "models": str, "experiments": list, "leaderboard": bool}
+_EXPERIMENT_KEYS = {"name": str, "env": str, "env_kwargs": dict, "seeds": list | dict,
+                    "max_steps": int, "horizon_reason": str, "policies": list,
+                    "visibility": dict, "planner_kwargs": dict, "rl_models": str | list,
+                    "difficulty": str}
 
 
 def configs_folder() -> Path:
@@ -54,23 +82,36 @@ def configs_folder() -> Path:
 
 
 def load_config(path: str | Path | None = None) -> dict:
-    """The YAML configuration at ``path`` (the default configuration if ``None``), unvalidated."""
+    """The YAML configuration at ``path`` (the default configuration if ``None``), unvalidated;
+    relative map files in ``env_kwargs.world`` resolved against the file's folder."""
     file = configs_folder() / DEFAULT_CONFIG_NAME if path is None else Path(path)
     if not file.is_file():
         raise ConfigError(f"config: file {str(path if path is not None else file)!r} does not "
                           "exist")
     try:
-        return yaml.safe_load(file.read_text(encoding="utf-8"))
+        config = yaml.safe_load(file.read_text(encoding="utf-8"))
     except yaml.YAMLError as exc:  # one line: what is wrong and where
         mark = getattr(exc, "problem_mark", None)
         at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         raise ConfigError(f"config: {file} is not valid YAML: {problem}{at}") from None
+    _resolve_map_files(config, file.parent)
+    return config
+
+
+def _resolve_map_files(config: object, folder: Path) -> None:
+    experiments = config.get("experiments") if isinstance(config, dict) else None
+    for exp in experiments if isinstance(experiments, list) else []:
+        kwargs = exp.get("env_kwargs") if isinstance(exp, dict) else None
+        world = kwargs.get("world") if isinstance(kwargs, dict) else None
+        if isinstance(world, str) and world.endswith(_MAP_SUFFIXES) \
+                and not Path(world).is_absolute():
+            kwargs["world"] = str(folder / world)
 
 
 def validate_config(config: object) -> dict:
     """Check a configuration and fill in the defaults; raise `ConfigError` naming the key and
-    what is allowed."""
+    what is allowed. A validated configuration validates to itself."""
     if not isinstance(config, Mapping):
         raise ConfigError(f"config: expected a mapping, got {type(config).__name__}")
     _check_keys("config", config, _TOP_KEYS, required=("experiments",))
@@ -78,6 +119,7 @@ def validate_config(config: object) -> dict:
     config.setdefault("name", "run")
     config.setdefault("output", "runs")
     config.setdefault("models", "models")
+    config.setdefault("leaderboard", False)
     if not config["experiments"]:
         raise ConfigError("config.experiments: expected at least one experiment")
     names = set()
@@ -87,8 +129,6 @@ def validate_config(config: object) -> dict:
             raise ConfigError(f"{where}: expected a mapping, got {type(exp).__name__}")
         _check_keys(where, exp, _EXPERIMENT_KEYS, required=("name", "env"))
         exp.setdefault("env_kwargs", {})
-        exp.setdefault("seeds", [0])
-        exp.setdefault("max_steps", 200)
         exp.setdefault("policies", list(POLICY_KINDS))
         if exp["name"] in names:
             raise ConfigError(f"{where}.name: {exp['name']!r} is used twice")
@@ -102,20 +142,116 @@ def validate_config(config: object) -> dict:
         elif "planner_kwargs" in exp:
             raise ConfigError(f"{where}.planner_kwargs: only for multi-robot experiments "
                               f"(env one of {list(PETTINGZOO_ENVS)})")
-        if "rl_models" in exp:
-            check_folder_name(f"{where}.rl_models", exp["rl_models"])
-        elif "rl" in exp["policies"]:
-            check_folder_name(f"{where}.name (the folder of its rl models)", exp["name"])
-        if not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0
-                   for s in exp["seeds"]):
-            raise ConfigError(f"{where}.seeds: expected a list of integers >= 0, got "
-                              f"{exp['seeds']!r}")
-        if exp["max_steps"] < 1:
-            raise ConfigError(f"{where}.max_steps: expected an integer >= 1")
+        if "max_episode_steps" in exp["env_kwargs"]:
+            raise ConfigError(f"{where}.env_kwargs.max_episode_steps: not allowed; the "
+                              "experiment's horizon is max_steps (see horizon_reason)")
+        exp["seeds"] = _seeds(f"{where}.seeds", exp.get("seeds", [EVALUATION_SEEDS_START]))
+        _check_horizon(where, exp)
         unknown = [p for p in exp["policies"] if p not in POLICY_KINDS]
         if unknown:
             raise ConfigError(f"{where}.policies: unknown {unknown}; allowed are {POLICY_KINDS}")
+        if "rl_models" in exp or "rl" in exp["policies"]:
+            exp["rl_models"] = _model_folders(where, exp)
+        if "difficulty" in exp and exp["difficulty"] not in DIFFICULTIES:
+            raise ConfigError(f"{where}.difficulty: expected one of {DIFFICULTIES}, got "
+                              f"{exp['difficulty']!r}")
     return config
+
+
+def registered_horizon(env_id: str) -> int | None:
+    """The episode limit an env id registers: Gymnasium's ``max_episode_steps`` or PettingZoo's
+    ``max_cycles`` (``None`` if it registers none)."""
+    if is_pettingzoo_id(env_id):
+        return pettingzoo.parallel_registry[env_id].max_cycles
+    return gym.spec(env_id).max_episode_steps
+
+
+def world_name(experiment: Mapping) -> str:
+    """The world an experiment runs on: its ``env_kwargs.world`` (a map file by its file name)
+    or the one its env id registers."""
+    world = experiment["env_kwargs"].get("world")
+    if world is None:
+        spec = (pettingzoo.parallel_registry[experiment["env"]]
+                if is_pettingzoo_id(experiment["env"]) else gym.spec(experiment["env"]))
+        world = spec.kwargs.get("world", "?")
+    return Path(world).name if isinstance(world, str) else getattr(world, "name", str(world))
+
+
+def _seeds(where: str, seeds: object) -> list[int]:
+    """The evaluation seeds of ``seeds`` (a list, or ``{start, count}``), all held out."""
+    if isinstance(seeds, Mapping):
+        _check_keys(where, seeds, {"start": int, "count": int}, required=("start", "count"))
+        start = integer(f"{where}.start", seeds["start"], minimum=EVALUATION_SEEDS_START)
+        seeds = list(range(start, start + integer(f"{where}.count", seeds["count"], minimum=1)))
+    if not seeds or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
+        raise ConfigError(f"{where}: expected a non-empty list of integers or {{start, count}}, "
+                          f"got {seeds!r}")
+    low = [s for s in seeds if s < EVALUATION_SEEDS_START]
+    if low:
+        raise ConfigError(f"{where}: evaluation seeds must be >= {EVALUATION_SEEDS_START} "
+                          f"(training uses the seeds below it, baselines.seeds), got {low[:5]}"
+                          f"{' ...' if len(low) > 5 else ''}")
+    if len(set(seeds)) != len(seeds):
+        twice = sorted({s for s in seeds if seeds.count(s) > 1})
+        raise ConfigError(f"{where}: every seed once (an episode counts once), repeated: "
+                          f"{twice[:5]}")
+    return list(seeds)
+
+
+def _check_horizon(where: str, exp: dict) -> None:
+    horizon = registered_horizon(exp["env"])
+    reason = exp.get("horizon_reason")
+    if reason is not None and not reason.strip():
+        raise ConfigError(f"{where}.horizon_reason: expected a non-empty explanation")
+    if "max_steps" not in exp:
+        if horizon is None:
+            raise ConfigError(f"{where}.max_steps: {exp['env']} registers no horizon; give "
+                              "max_steps and horizon_reason")
+        if reason is not None:
+            raise ConfigError(f"{where}.horizon_reason: only with a max_steps that differs from "
+                              f"the registered horizon {horizon}")
+        exp["max_steps"] = horizon
+        return
+    steps = integer(f"{where}.max_steps", exp["max_steps"], minimum=1)
+    if steps == horizon and reason is not None:
+        raise ConfigError(f"{where}.horizon_reason: only with a max_steps that differs from "
+                          f"the registered horizon {horizon}")
+    if steps != horizon and reason is None:
+        raise ConfigError(f"{where}.max_steps: {steps} differs from the horizon {horizon} that "
+                          f"{exp['env']} registers (and training uses); leave max_steps out, or "
+                          "say why in horizon_reason")
+
+
+def _model_folders(where: str, exp: dict) -> list[dict]:
+    """``rl_models`` as a list of ``{folder, env_kwargs}`` (default: the experiment's name)."""
+    given = "rl_models" in exp
+    field = f"{where}.rl_models" if given else f"{where}.name (the folder of its rl models)"
+    entries = exp.get("rl_models", exp["name"])
+    listed = isinstance(entries, list)
+    entries = entries if listed else [entries]
+    if not entries:
+        raise ConfigError(f"{field}: expected a folder name or a non-empty list of them")
+    out = []
+    for i, entry in enumerate(entries):
+        at = f"{field}[{i}]" if listed else field
+        if isinstance(entry, str):
+            check_folder_name(at, entry)
+            entry = {"folder": entry}
+        if not isinstance(entry, Mapping):
+            raise ConfigError(f"{at}: expected a folder name or {{folder, env_kwargs}}, got "
+                              f"{entry!r}")
+        _check_keys(at, entry, {"folder": str, "env_kwargs": dict}, required=("folder",))
+        check_folder_name(f"{at}.folder", entry["folder"])
+        extra = dict(entry.get("env_kwargs", {}))
+        if set(extra) - OBSERVATION_OPTIONS:
+            raise ConfigError(f"{at}.env_kwargs: only observation options "
+                              f"{sorted(OBSERVATION_OPTIONS)} may differ from the experiment's, "
+                              f"got {sorted(set(extra) - OBSERVATION_OPTIONS)}")
+        out.append({"folder": entry["folder"], "env_kwargs": extra})
+    folders = [e["folder"] for e in out]
+    if len(set(folders)) != len(folders):
+        raise ConfigError(f"{field}: a folder is named twice: {folders}")
+    return out
 
 
 def _check_multi_robot(where: str, exp: dict) -> None:
@@ -123,7 +259,7 @@ def _check_multi_robot(where: str, exp: dict) -> None:
         raise ConfigError(f"{where}.visibility: only for single-robot experiments")
     if "max_cycles" in exp["env_kwargs"]:
         raise ConfigError(f"{where}.env_kwargs.max_cycles: not allowed; the experiment's "
-                          "max_steps is the env's max_cycles")
+                          "horizon is max_steps (see horizon_reason)")
     exp.setdefault("planner_kwargs", {})
 
 
@@ -136,5 +272,9 @@ def _check_keys(where: str, mapping: Mapping, allowed: dict, required: tuple) ->
             raise ConfigError(f"{where}: missing key {key!r}")
     for key, kind in allowed.items():
         if key in mapping and not isinstance(mapping[key], kind):
-            raise ConfigError(f"{where}.{key}: expected {kind.__name__}, got "
+            raise ConfigError(f"{where}.{key}: expected {_kind_name(kind)}, got "
                               f"{type(mapping[key]).__name__}")
+
+
+def _kind_name(kind) -> str:
+    return " or ".join(k.__name__ for k in getattr(kind, "__args__", (kind,)))

@@ -2,9 +2,10 @@
 
 A family is recognised from an experiment and its env (the env's task, whether it is a
 PettingZoo parallel env, the experiment's keys); it supplies the task's planner, follows an
-episode to give its metrics, says which columns the printed table shows (and which as
-mean ± std), and draws the family's plots. `FAMILIES` lists them in the order they are tried; a
-new family is one module in `experiments.families` plus one line here.
+episode to give its metrics, says which columns the printed table shows (and which of them
+describe the row rather than measure it), which column ranks policies, and draws the family's
+plots. `FAMILIES` lists them in the order they are tried; a new family is one module in
+`experiments.families` plus one line here.
 """
 
 from __future__ import annotations

@@ -1,6 +1,20 @@
-"""Reporting an evaluation: the per-(experiment, policy) summary, the printed tables, the CSV and
-JSON files and the plots. Which table a row goes to, its columns and which of them show
-mean ± std come from the experiment's family (`experiments.registry`)."""
+"""Reporting an evaluation: the per-(experiment, policy) summary with its intervals, the printed
+tables, the CSV and JSON files and the plots. Which table a row goes to and its columns come from
+the experiment's family (`experiments.registry`).
+
+Every measured column of a summary row is an estimate (`experiments.stats`) stored as
+``<col>`` (the value), ``<col>_lo`` and ``<col>_hi`` (its 95% interval; ``None`` when there is
+none) and ``<col>_n`` (how many values it rests on):
+
+* a yes/no column (``success``, ``feasible``, ``full``, …) is a rate with its Wilson interval;
+* any other number is a mean with its bootstrap interval, over the episodes that have it —
+  ``ticks_to_goal`` exists only for successful episodes, ``steps_to_full`` only for those that
+  reached full coverage, ``success_feasible`` only for feasible ones — so ``_n`` says how many;
+* a family's labels (e.g. ``robots``) are shown as they are.
+
+Trained models' rows are then aggregated over training seeds (`experiments.aggregate`). A table
+cell reads ``value [lo, hi] n=count``.
+"""
 
 from __future__ import annotations
 
@@ -13,10 +27,14 @@ from pathlib import Path
 import numpy as np
 
 from bounce_gym.files import atomic_write
+from experiments import stats
+from experiments.aggregate import aggregate_training_seeds
 from experiments.families.base import Family
+from experiments.plots.profiles import plot_profiles
 from experiments.plots.trajectories import plot_trajectories
-from experiments.registry import FAMILIES
 from experiments.runner import EpisodeResult
+
+_NOT_MEASURED = frozenset({"experiment", "policy", "seed", "group"})
 
 
 def families_of(plots: Mapping) -> dict[str, Family]:
@@ -24,94 +42,133 @@ def families_of(plots: Mapping) -> dict[str, Family]:
     return {name: data["family"] for name, data in plots.items() if "family" in data}
 
 
+def notes_of(plots: Mapping) -> list[str]:
+    """The experiments' notes (e.g. model folders without models), from the plot data."""
+    return [note for data in plots.values() for note in data.get("notes", [])]
+
+
 def summarise(rows: list[EpisodeResult], families: Mapping[str, Family] | None = None
               ) -> list[dict]:
-    """Per (experiment, policy): the mean and the population standard deviation (``<key>_std``)
-    of every numeric column, over the episodes that have it (``ticks_to_goal`` exists only for
-    successful episodes, ``steps_to_full`` only for episodes that reached full coverage), then
-    the family's extra columns (e.g. ``full``).
-
-    A column whose values are all the same integer (``robots``) stays that integer.
-    """
+    """Per (experiment, policy): ``episodes`` and every measured column as an estimate (see
+    the module), in the order the rows came."""
     families = families or {}
     groups: dict[tuple[str, str], list[dict]] = {}
     for r in rows:
         groups.setdefault((r.experiment, r.policy), []).append(r.row())
     out = []
     for (exp, policy), items in groups.items():
+        labels = families[exp].labels if exp in families else frozenset()
         entry = {"experiment": exp, "policy": policy, "episodes": len(items)}
         keys = list(dict.fromkeys(k for item in items for k in item))
         for key in keys:
-            if key in ("experiment", "policy", "seed"):
+            if key in _NOT_MEASURED:
                 continue
-            values = [i[key] for i in items if key in i and i[key] is not None]
-            if values and all(isinstance(v, bool | int | float | np.floating) for v in values):
-                numbers = np.array([float(v) for v in values])
-                constant_int = all(isinstance(v, int) and not isinstance(v, bool) and v == values[0]
-                                   for v in values)
-                entry[key] = values[0] if constant_int else float(numbers.mean())
-                entry[f"{key}_std"] = float(numbers.std())
-        if exp in families:
-            families[exp].summarise(entry, items)
+            values = [i[key] for i in items if i.get(key) is not None]
+            if not values or not all(isinstance(v, bool | int | float | np.number | np.bool_)
+                                     for v in values):
+                continue
+            if key in labels and all(v == values[0] for v in values):
+                entry[key] = values[0]
+            elif all(isinstance(v, bool | np.bool_) for v in values):
+                stats.rate(values).store(entry, key)
+            else:
+                stats.mean(values).store(entry, key)
         out.append(entry)
     return out
 
 
+def table_rows(summary: list[dict], rows: list[EpisodeResult]) -> tuple[list[dict], list[dict]]:
+    """The rows the tables show (trained models aggregated over their training seeds) and the
+    per-seed rows of the aggregated policies (`experiments.aggregate`)."""
+    groups = {(r.experiment, r.policy): r.group for r in rows if r.group is not None}
+    return aggregate_training_seeds(summary, groups)
+
+
+def number(value) -> str:
+    """A plain number as the tables print it."""
+    if isinstance(value, float):
+        return f"{value:.3f}" if abs(value) < 1000 else f"{value:.0f}"
+    return str(value)
+
+
+def estimate_text(value: float, lo: float | None, hi: float | None, n: int) -> str:
+    """``value [lo, hi] n=count``, with as many decimals as the value's size calls for."""
+    size = abs(float(value))
+    digits = 0 if size >= 100 else 1 if size >= 10 else 3
+    interval = "-, -" if lo is None or hi is None else f"{lo:.{digits}f}, {hi:.{digits}f}"
+    return f"{float(value):.{digits}f} [{interval}] n={n}"
+
+
+def cell(row: dict, column: str) -> str:
+    """One table cell: an estimate with its interval and count, a plain value, or ``-``."""
+    value = row.get(column)
+    if value is None:
+        return "-"
+    if f"{column}_n" in row:
+        return estimate_text(value, row[f"{column}_lo"], row[f"{column}_hi"], row[f"{column}_n"])
+    return number(value)
+
+
+def tables(summary: list[dict], families: Mapping[str, Family]) -> list[tuple[str, list[str],
+                                                                              list[dict]]]:
+    """``(heading, columns, rows)`` per table, in the order the experiments came; families with
+    the same heading share a table (columns merged in order), columns no row has are left out."""
+    grouped: dict[str, tuple[list[Family], list[dict]]] = {}
+    for row in summary:
+        family = families.get(row["experiment"])
+        if family is None:
+            continue
+        members, rows = grouped.setdefault(family.heading, ([], []))
+        if family not in members:
+            members.append(family)
+        rows.append(row)
+    out = []
+    for heading, (members, rows) in grouped.items():
+        columns = list(dict.fromkeys(c for f in members for c in f.columns))
+        out.append((heading, [c for c in columns if any(c in r for r in rows)], rows))
+    return out
+
+
 def format_table(summary: list[dict], families: Mapping[str, Family]) -> str:
-    """Plain-text tables of the summary, one per family table heading (families sharing a
-    heading share a table; the untitled one first)."""
-    tables: dict[str, list[Family]] = {}
-    for family in FAMILIES:
-        tables.setdefault(family.table, []).append(family)
+    """Plain-text tables of the summary rows, one per family heading (see `tables`)."""
     blocks = []
-    for title, members in tables.items():
-        rows = [r for r in summary if families.get(r["experiment"]) in members]
-        if rows:
-            columns = list(dict.fromkeys(c for f in members for c in f.columns))
-            spread = frozenset().union(*(f.spread for f in members))
-            counts = frozenset().union(*(f.counts for f in members))
-            blocks.append((title + "\n" if title else "")
-                          + _table(columns, rows, spread, counts))
+    for heading, columns, rows in tables(summary, families):
+        cells = [[cell(r, c) for c in columns] for r in rows]
+        widths = [max(len(c), *(len(r[i]) for r in cells)) for i, c in enumerate(columns)]
+        lines = [heading, "  ".join(c.ljust(w) for c, w in zip(columns, widths, strict=True)),
+                 "  ".join("-" * w for w in widths)]
+        lines += ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)).rstrip()
+                  for r in cells]
+        blocks.append("\n".join(lines))
     return "\n\n".join(blocks)
 
 
-def _table(columns: list[str], summary: list[dict], spread: frozenset, counts: frozenset) -> str:
-    present = [c for c in columns if any(c in row for row in summary)]
-
-    def number(value) -> str:
-        if isinstance(value, float):
-            return f"{value:.3f}" if abs(value) < 1000 else f"{value:.0f}"
-        return str(value)
-
-    def cell(row: dict, column: str) -> str:
-        value = row.get(column)
-        if value is None:
-            return "-"
-        if column in counts:
-            return f"{value}/{row['episodes']}"
-        if column in spread and f"{column}_std" in row:
-            digits = 0 if abs(value) >= 100 else 1 if abs(value) >= 10 else 3
-            return f"{value:.{digits}f} ± {row[f'{column}_std']:.{digits}f}"
-        return number(value)
-
-    rows = [[cell(r, c) for c in present] for r in summary]
-    widths = [max(len(c), *(len(r[i]) for r in rows)) for i, c in enumerate(present)]
-    lines = ["  ".join(c.ljust(w) for c, w in zip(present, widths, strict=True))]
-    lines.append("  ".join("-" * w for w in widths))
-    lines += ["  ".join(v.ljust(w) for v, w in zip(r, widths, strict=True)) for r in rows]
-    return "\n".join(lines)
-
-
-def write_results(folder: Path, rows: list[dict], summary: list[dict], config: dict) -> None:
-    """``episodes.csv`` (one row per episode) and ``results.json`` (config, summary, episodes)."""
-    keys = sorted({k for r in rows for k in r}, key=lambda k: (k not in ("experiment", "policy",
-                                                                         "seed"), k))
+def csv_text(rows: list[dict], first: tuple[str, ...] = ()) -> str:
+    """Rows as CSV: the ``first`` columns, then the others in order of appearance."""
+    keys = list(dict.fromkeys([*(k for k in first if any(k in r for r in rows)),
+                               *(k for r in rows for k in r)]))
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=keys)
     writer.writeheader()
     writer.writerows(rows)
-    atomic_write(folder / "episodes.csv", buf.getvalue().encode())
-    payload = {"config": config, "summary": summary, "episodes": rows}
+    return buf.getvalue()
+
+
+def write_results(folder: Path, rows: list[dict], summary: list[dict], config: dict,
+                  per_seed: list[dict] | None = None, notes: list[str] | None = None,
+                  provenance: dict | None = None) -> None:
+    """``episodes.csv`` (one row per episode), ``summary.csv`` (the table rows, every estimate
+    with ``_lo``, ``_hi`` and ``_n``) and ``results.json``: provenance, the validated config,
+    the seeds per experiment, the summary, the per-seed rows of trained models, notes and the
+    episodes."""
+    atomic_write(folder / "episodes.csv",
+                 csv_text(rows, ("experiment", "policy", "seed")).encode())
+    atomic_write(folder / "summary.csv",
+                 csv_text(summary, ("experiment", "policy", "episodes", "seeds")).encode())
+    payload = {"provenance": provenance or {}, "config": config,
+               "seeds": {exp["name"]: exp["seeds"] for exp in config["experiments"]},
+               "summary": summary, "per_seed": per_seed or [], "notes": notes or [],
+               "episodes": rows}
     atomic_write(folder / "results.json", json.dumps(payload, indent=2, default=_jsonable).encode())
 
 
@@ -123,9 +180,11 @@ def _jsonable(value):
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
-def write_plots(folder: Path, plots: Mapping, summary: list[dict] | None = None) -> list[Path]:
+def write_plots(folder: Path, plots: Mapping, summary: list[dict] | None = None,
+                per_seed: list[dict] | None = None) -> list[Path]:
     """Every experiment's trajectories and its family's plots; given the summary, each family's
-    plots across experiments (e.g. steps to full coverage against the number of robots)."""
+    plots across experiments (e.g. steps to full coverage against the number of robots); given
+    per-seed rows of trained models, their performance profiles."""
     written = []
     for name, data in plots.items():
         written += plot_trajectories(folder, name, data)
@@ -134,4 +193,6 @@ def write_plots(folder: Path, plots: Mapping, summary: list[dict] | None = None)
     if summary is not None:
         for family in dict.fromkeys(families_of(plots).values()):
             written += family.summary_plots(folder, plots, summary)
+    if per_seed:
+        written += plot_profiles(folder, per_seed, families_of(plots))
     return written

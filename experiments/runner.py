@@ -6,7 +6,14 @@ policy (the env is reset with the seed, and each policy restarts its own random 
 `start_options`, so an episode never depends on the ones before it). The experiment's family
 (`experiments.registry`) supplies the planner, follows the episode for its metrics and collects
 the first seed's plot data. Results are one `EpisodeResult` per (experiment, policy, seed):
-steps, ticks, the return (summed over robots) and the family's metrics.
+steps, ticks, the return (summed over robots) and the family's metrics; with two or more fixed
+angles, also the best of them per seed in hindsight (`experiments.oracle`).
+
+Trained models are loaded from the experiment's ``rl_models`` folders; a folder with other
+observation options runs its models on its own copy of the env (same world, same seeds, same
+episodes). Each model is one policy (``rl <algo>_seed<N>``, ``rl <folder>/<algo>_seed<N>`` when
+there are several folders) whose rows carry the ``group`` they are aggregated into
+(``rl <algo>``: one row per algorithm over its training seeds, `experiments.aggregate`).
 """
 
 from __future__ import annotations
@@ -20,16 +27,19 @@ import gymnasium as gym
 import numpy as np
 
 from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
+from baselines.rl.model_files import MODEL_NAME, model_files
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError, config_errors
 from experiments.config import validate_config
 from experiments.families.base import Episode, Family
+from experiments.oracle import best_fixed_in_hindsight
 from experiments.registry import family_for
 
 
 @dataclass
 class EpisodeResult:
-    """One row of the results table."""
+    """One row of the results table; ``group`` names the row it is aggregated into (trained
+    models: ``rl <algo>``, over training seeds), ``None`` for a row of its own."""
 
     experiment: str
     policy: str
@@ -38,34 +48,35 @@ class EpisodeResult:
     ticks: int
     episode_return: float
     metrics: dict = field(default_factory=dict)
+    group: str | None = None
 
     def row(self) -> dict:
-        return {"experiment": self.experiment, "policy": self.policy, "seed": self.seed,
-                "steps": self.steps, "ticks": self.ticks, "return": self.episode_return,
-                **self.metrics}
+        out = {"experiment": self.experiment, "policy": self.policy, "seed": self.seed,
+               "steps": self.steps, "ticks": self.ticks, "return": self.episode_return,
+               **self.metrics}
+        if self.group is not None:
+            out["group"] = self.group
+        return out
 
 
-def make_env(experiment: Mapping, where: str = "env_kwargs"):
-    """The experiment's env: ``gym.make``, or for a PettingZoo id the parallel env with
-    ``max_cycles = max_steps``. Bad ``env_kwargs`` raise `ConfigError` naming ``where``."""
+def make_env(experiment: Mapping, where: str = "env_kwargs", overrides: Mapping | None = None):
+    """The experiment's env with its horizon ``max_steps`` as the env's own limit:
+    ``gym.make(..., max_episode_steps=max_steps)``, or for a PettingZoo id the parallel env with
+    ``max_cycles = max_steps``. ``overrides`` are env options set over ``env_kwargs``. Bad
+    ``env_kwargs`` raise `ConfigError` naming ``where``."""
+    kwargs = {**experiment["env_kwargs"], **(overrides or {})}
     with config_errors(where):
         if is_pettingzoo_id(experiment["env"]):
             import pettingzoo
 
             return pettingzoo.make("parallel", experiment["env"],
-                                   max_cycles=experiment["max_steps"], **experiment["env_kwargs"])
-        return gym.make(experiment["env"], **experiment["env_kwargs"])
+                                   max_cycles=experiment["max_steps"], **kwargs)
+        return gym.make(experiment["env"], max_episode_steps=experiment["max_steps"], **kwargs)
 
 
-def policies_for(experiment: Mapping, env, family: Family, setup: object,
-                 models_dir: Path) -> list[Policy]:
-    """The experiment's policies that apply to its env.
-
-    The random policy of a single-robot experiment draws from the stream of seed 0 in every
-    episode; with several robots it draws from the episode's seed.
-    """
-    from baselines.rl.policies import sb3_policies
-
+def policies_for(experiment: Mapping, env, family: Family, setup: object) -> list[Policy]:
+    """The experiment's planner, random and fixed policies that apply to its env (trained
+    models: `model_policies`)."""
     parallel = is_parallel_env(env)
     options = env.unwrapped.options
     discrete = options.action_type == "discrete"
@@ -78,13 +89,24 @@ def policies_for(experiment: Mapping, env, family: Family, setup: object,
             planner = family.planner(env, experiment, setup)
             out += [planner] if planner is not None else []
         elif kind == "random":
-            out.append(RandomAnglePolicy(seed=None if parallel else 0))
+            out.append(RandomAnglePolicy())
         elif kind == "fixed" and discrete:
             n = min(len(phi) for phi in options.angles)
             out += [FixedAnglePolicy(i, math.degrees(options.angles[0][i])) for i in range(n)]
-        elif kind == "rl":
-            folder = models_dir / experiment.get("rl_models", experiment["name"])
-            out += sb3_policies(folder, env)
+    return out
+
+
+def model_policies(folder: Path, env, label: str) -> list[tuple[Policy, str]]:
+    """Every trusted model of ``folder`` as a policy for ``env`` (none if there are none), with
+    the group it is aggregated into; ``label`` prefixes the names (``""`` or ``"<folder>/"``)."""
+    from baselines.rl.policies import SB3Policy, SharedSB3Policy
+
+    kind = SharedSB3Policy if is_parallel_env(env) else SB3Policy
+    out = []
+    for path in model_files(folder):
+        policy = kind(path, env)
+        policy.name = f"rl {label}{path.stem}"
+        out.append((policy, f"rl {label}{MODEL_NAME.fullmatch(path.name).group(1)}"))
     return out
 
 
@@ -135,14 +157,27 @@ def _positions(env, infos: dict) -> np.ndarray:
 
 
 @dataclass
+class Entrant:
+    """A policy of an experiment, the env it runs in, the family's setup on that env, and the
+    row it is aggregated into (``None``: its own)."""
+
+    policy: Policy
+    env: object
+    setup: object
+    group: str | None = None
+
+
+@dataclass
 class Prepared:
-    """A validated experiment with its env, family, the family's setup and its policies."""
+    """A validated experiment with its env, family, the family's setup, its entrants and notes
+    for the report (e.g. a model folder with no models)."""
 
     experiment: Mapping
     env: object
     family: Family
     setup: object
-    policies: list[Policy]
+    entrants: list[Entrant]
+    notes: list[str]
 
 
 def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Prepared:
@@ -152,35 +187,58 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
     env = make_env(experiment, f"{where}.env_kwargs")
     family = family_for(experiment, env)
     setup = family.prepare(env, experiment)
-    return Prepared(experiment, env, family, setup,
-                    policies_for(experiment, env, family, setup, models_dir))
+    entrants = [Entrant(p, env, setup) for p in policies_for(experiment, env, family, setup)]
+    notes = []
+    if "rl" in experiment["policies"]:
+        folders = experiment["rl_models"]
+        for k, entry in enumerate(folders):
+            folder = models_dir / entry["folder"]
+            own_env, own_setup = env, setup
+            if entry["env_kwargs"]:
+                own_env = make_env(experiment, f"{where}.rl_models[{k}].env_kwargs",
+                                   entry["env_kwargs"])
+                own_setup = family.prepare(own_env, experiment)
+            label = f"{entry['folder']}/" if len(folders) > 1 else ""
+            found = model_policies(folder, own_env, label)
+            entrants += [Entrant(p, own_env, own_setup, group) for p, group in found]
+            if not found:
+                notes.append(f"{experiment['name']}: no trained models in {folder} "
+                             "(<algo>_seed<N>.zip), so no rl rows")
+    return Prepared(experiment, env, family, setup, entrants, notes)
 
 
 def run_experiment(prepared: Prepared, on_seed: Callable[[], None]
                    ) -> tuple[list[EpisodeResult], dict]:
-    """Every policy on every seed of a prepared experiment (`prepare_experiment`).
+    """Every policy on every seed of a prepared experiment (`prepare_experiment`), then the
+    best fixed angle per seed in hindsight.
 
-    Returns the rows and the plot data: ``world``, ``family``, each policy's first-seed
-    positions (``paths``) and what the family collects. ``on_seed`` is called after each seed
-    (a progress bar).
+    Returns the rows and the experiment's data: ``world``, ``family``, ``notes``, each policy's
+    first-seed positions (``paths``) and what the family collects for its plots. ``on_seed`` is
+    called after each seed (a progress bar).
     """
     rows: list[EpisodeResult] = []
-    experiment, env, family = prepared.experiment, prepared.env, prepared.family
-    setup, policies = prepared.setup, prepared.policies
-    data: dict = {"paths": {}, "world": env.unwrapped.options.world, "family": family}
+    experiment, family = prepared.experiment, prepared.family
+    data: dict = {"paths": {}, "world": prepared.env.unwrapped.options.world, "family": family,
+                  "notes": list(prepared.notes)}
     for k, seed in enumerate(experiment["seeds"]):
-        for policy in policies:
-            episode = family.episode(env, policy, setup)
-            summary, path = run_episode(env, policy, seed, experiment["max_steps"], episode,
-                                        record=k == 0)
-            rows.append(EpisodeResult(experiment["name"], policy.name, seed, summary["steps"],
-                                      summary["ticks"], summary["return"],
-                                      family.row_metrics(episode, summary["info"], policy)))
+        for one in prepared.entrants:
+            episode = family.episode(one.env, one.policy, one.setup)
+            summary, path = run_episode(one.env, one.policy, seed, experiment["max_steps"],
+                                        episode, record=k == 0)
+            rows.append(EpisodeResult(experiment["name"], one.policy.name, seed,
+                                      summary["steps"], summary["ticks"], summary["return"],
+                                      family.row_metrics(episode, summary["info"], one.policy),
+                                      one.group))
             if k == 0:
-                data["paths"][policy.name] = path
-                family.collect(data, env, policy, setup)
+                data["paths"][one.policy.name] = path
+                family.collect(data, one.env, one.policy, one.setup)
         on_seed()
-    env.close()
+    fixed = [e.policy.name for e in prepared.entrants if isinstance(e.policy, FixedAnglePolicy)]
+    rows += best_fixed_in_hindsight(rows, fixed, family)
+    envs = {id(e.env): e.env for e in prepared.entrants}
+    envs[id(prepared.env)] = prepared.env
+    for env in envs.values():
+        env.close()
     return rows, data
 
 
@@ -188,7 +246,7 @@ def run(config: Mapping, progress: bool = True) -> tuple[list[EpisodeResult], di
     """Run every experiment of a configuration (validated here). Every experiment is prepared
     (`prepare_experiment`) before the first one runs.
 
-    Returns the result rows and, per experiment name, its plot data (see `run_experiment`).
+    Returns the result rows and, per experiment name, its data (see `run_experiment`).
     """
     from tqdm import tqdm
 

@@ -1,11 +1,13 @@
 """Trained Stable-Baselines3 models as policies (`baselines.policy.Policy`).
 
-`sb3_policies` loads every model file of a folder (as `baselines.rl.train` saves them,
-``<algo>_seed<seed>.zip``; only trusted files, `baselines.rl.model_files`) as the policy that
-fits the env:
+A model file (as `baselines.rl.train` saves them, ``<algo>[-<variant>]_seed<seed>.zip``; only
+trusted files, `baselines.rl.model_files`) becomes the policy that fits the env
+(`experiments.runner.model_policies` picks the kind):
 
 * Gymnasium env — `SB3Policy`: the model's deterministic action (PPO, DQN or RecurrentPPO, with
-  the recurrent state carried through the episode);
+  the recurrent state carried through the episode), on the observations passed through the
+  wrappers it was trained behind (frame stack, VecNormalize statistics), rebuilt from its file
+  (`baselines.rl.wrappers`);
 * PettingZoo parallel env — `SharedSB3Policy`: one PPO model shared by every robot, each robot's
   action **sampled** from the model's distribution for its own observation.
 """
@@ -16,24 +18,22 @@ from pathlib import Path
 
 import numpy as np
 
-from baselines.policy import MultiPolicy, Policy, is_parallel_env
-from baselines.rl.model_files import load_model, model_files
+from baselines.policy import MultiPolicy, Policy
+from baselines.rl.model_files import read_model
 from bounce_gym.errors import ConfigError
 
 
-def sb3_policies(folder: Path, env) -> list[Policy]:
-    """One policy per saved model in ``folder`` (none if it does not exist) for ``env``:
-    `SharedSB3Policy` for a parallel env, `SB3Policy` otherwise. Each model is checked (trusted,
-    loadable, trained for the env's spaces) here, before any episode runs."""
-    kind = SharedSB3Policy if is_parallel_env(env) else SB3Policy
-    return [kind(path, env) for path in model_files(folder)]
-
-
 class SB3Policy(Policy):
-    """A trained Stable-Baselines3 model as a policy (deterministic actions)."""
+    """A trained Stable-Baselines3 model as a policy (deterministic actions), behind the
+    observation wrappers it was trained with."""
 
     def __init__(self, path: Path, env) -> None:
-        self.model = load_model(path, env.observation_space, env.action_space)
+        from baselines.rl.wrappers import ObservationPipeline
+
+        trained = read_model(path)
+        self.pipeline = ObservationPipeline(trained.metadata.get("wrappers", {}),
+                                            env.observation_space, env.action_space, path)
+        self.model = trained.load(self.pipeline.observation_space, env.action_space)
         self.name = f"rl {path.stem}"
 
     def reset(self, env) -> None:
@@ -44,7 +44,9 @@ class SB3Policy(Policy):
         self.discrete = isinstance(env.action_space, gym.spaces.Discrete)
 
     def act(self, observation, info):
-        action, self.state = self.model.predict(observation, state=self.state,
+        seen = self.pipeline.first(observation) if self.start[0] else \
+            self.pipeline.next(observation)
+        action, self.state = self.model.predict(seen, state=self.state,
                                                 episode_start=self.start, deterministic=True)
         self.start = np.zeros((1,), dtype=bool)
         return int(np.asarray(action).item()) if self.discrete else np.asarray(action)
@@ -63,11 +65,12 @@ class SharedSB3Policy(MultiPolicy):
     """
 
     def __init__(self, path: Path, env) -> None:
-        if not path.name.startswith("ppo_"):
+        trained = read_model(path)
+        if trained.algo != "ppo":
             raise ConfigError(f"model {path}: a multi-robot shared policy must be a PPO model "
-                              "(file name ppo_seed<N>.zip, as train.py saves it)")
+                              "(file name ppo[-<variant>]_seed<N>.zip, as train.py saves it)")
         agent = env.possible_agents[0]
-        self.model = load_model(path, env.observation_space(agent), env.action_space(agent))
+        self.model = trained.load(env.observation_space(agent), env.action_space(agent))
         self.name = f"rl {path.stem}"
 
     def start_options(self, env, seed: int) -> None:

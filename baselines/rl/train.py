@@ -1,241 +1,262 @@
 """Reinforcement-learning baselines: Stable-Baselines3 agents trained on the bounce_gym envs.
 
-A training configuration (YAML, see ``configs/train_*.yaml``)::
+A training configuration (YAML, see ``configs/train_*.yaml``; checked by
+`baselines.rl.train_config`)::
 
-    name: navigation-lab             # the evaluate.py experiment the model is for
+    name: navigation-lab             # the evaluation experiment the models are for
     env: bounce_gym/BounceNavigation-v0
     env_kwargs: {backend: cell, angles: [45, 90, 135]}
     algo: ppo                        # ppo | dqn | recurrentppo (sb3-contrib; memory for a robot
                                      # that senses only contact and time)
-    total_timesteps: 20000
-    seed: 0
-    n_envs: 4                        # parallel episodes (DQN uses 1)
+    variant: stack4                  # optional: files ppo-stack4_seed<N>.zip (several variants
+                                     # of one algorithm side by side in models/<name>/)
+    hyperparams_file: hyperparams/ppo.yaml  # optional, rl-zoo style, keyed by env id; relative
+                                     # to this file's folder
+    total_timesteps: 200000          # per seed (default: the file's n_timesteps)
+    seeds: [0, 1, 2, 3, 4]           # or seed: 0; env i of seed s is seeded with s + i
+    n_envs: 8                        # parallel episodes (default 4; DQN and multi-robot 1)
+    n_stack: 1                       # frame stacking (VecFrameStack) when > 1
+    normalize: false                 # VecNormalize: true, or {norm_obs, norm_reward, clip_obs,
+                                     # clip_reward}
     vec_env: native                  # native | sync | subproc (see below)
-    hyperparams: {learning_rate: 0.0003}
-    checkpoint_every: 5000           # 0 = none
-    tensorboard: false
-    models: models                   # saved as models/<name>/<algo>_seed<seed>.zip
-    torch_threads: 1                 # torch intra-op threads of this process (default 1)
+    hyperparams: {learning_rate: 0.0003}   # over the file's; lin_<x>: linear decay from x
+    checkpoint_every: 50000          # env steps between checkpoints (0: only the final one)
+    tensorboard: false               # logs in models/<name>/tensorboard (pip install
+                                     # bounce-gym[tensorboard])
+    models: models
+    torch_threads: 1                 # torch intra-op threads while training (default 1)
 
-Training resumes from the saved model of the same name when ``resume: true`` (an error if there
-is none). Every file it writes — checkpoints (``checkpoints/<algo>_seed<seed>_<N>_steps.zip``)
-and the final model — is written atomically and listed with its sha256 in its folder's
-``manifest.json`` (`baselines.rl.model_files`): a crash at any instant leaves complete files only.
-Mistakes (a bad key, env argument or hyperparameter, a ``name`` that is not one folder name, a
-models folder that cannot be written) raise `ConfigError` before training starts.
+**What a run writes** into ``<models>/<name>/`` for each seed: the model
+``<run>_seed<seed>.zip`` (``<run>`` = ``<algo>[-<variant>]``), where the evaluation finds it;
+checkpoints ``checkpoints/<run>_seed<seed>_<steps>_steps.zip`` (every ``checkpoint_every`` steps,
+at the start of an iteration, and at the end), never overwritten; the per-episode monitor file
+``<run>_seed<seed>.monitor.csv`` (`baselines.rl.monitor`), from which ``bounce-gym train`` and
+``bounce-gym curves`` draw the learning curves (`baselines.rl.curves`). Model files are
+written atomically and listed with their sha256 in the folder's ``manifest.json``
+(`baselines.rl.model_files`); each carries its configuration and the wrappers the evaluation
+must rebuild (frame stack, VecNormalize statistics; `baselines.rl.wrappers`).
+
+**Resuming** (``resume: true``, ``--resume``) continues every seed from its newest checkpoint —
+weights, optimiser, step count, random streams and the envs mid-episode (`baselines.rl.resume`)
+— up to ``total_timesteps``, with the monitor file cut back to the checkpoint: the result is the
+run that was never interrupted. A seed without a checkpoint starts afresh; a configuration that
+differs from the checkpoint's (other than budget, checkpoint interval and logging) or no
+checkpoint for any seed is a `ConfigError`. Without ``resume`` a seed with checkpoints is a
+`ConfigError` too: nothing is overwritten. Same configuration and seed, same weights, bit for
+bit (torch on the CPU).
 
 **Batched episodes.** ``vec_env: native`` (the default for ids with a Gymnasium
 ``vector_entry_point``: free, navigation, coverage) steps the ``n_envs`` episodes as one batch
-(`bounce_gym.envs.vector_env.BounceVectorEnv` seen through `baselines.rl.vector_vec_env`); env i
-is seeded with seed + i, as SB3 seeds its copies, so it runs the same episodes as ``sync`` (SB3's
-DummyVecEnv of ``gym.make`` copies, the default for the other ids) — only faster. ``subproc``
-runs the copies in SB3's SubprocVecEnv. Options the batch cannot run (``step_mode: tick``, the
-pymunk backend, noise) raise `ConfigError` with ``native``: choose ``sync`` for them.
+(`baselines.rl.train_env`); it runs the same episodes as ``sync`` (SB3's DummyVecEnv of
+``gym.make`` copies, the default for the other ids), only faster. ``subproc`` runs the copies in
+SB3's SubprocVecEnv. Options the batch cannot run (``step_mode: tick``, the pymunk backend,
+noise) raise `ConfigError` with ``native``: choose ``sync`` for them.
 
 **Several robots.** With a PettingZoo id (``bounce_gym/MultiBounceCoverage-v0``, …) the robots
 share one policy (parameter sharing): the parallel env becomes one SB3 VecEnv with a slot per
-robot (`baselines.rl.parallel_vec_env.ParallelToVecEnv`, wrapped in ``VecMonitor``), so
-``n_envs`` must stay 1 and ``algo`` must be ``ppo``; ``env_kwargs`` may set ``max_cycles`` (the
-episode length; see ``configs/train_multirobot_coverage.yaml``). The evaluation runs the saved
-model as one policy for every robot (`baselines.rl.policies.SharedSB3Policy`); ``rl_models:
-<name>`` lets several evaluation experiments (e.g. m = 2..5) use it.
+robot (`baselines.rl.parallel_vec_env.ParallelToVecEnv`), so ``n_envs`` must stay 1, ``algo``
+must be ``ppo`` and there is no frame stack or VecNormalize; ``env_kwargs`` may set
+``max_cycles`` (the episode length; see ``configs/train_multirobot_coverage.yaml``). The
+evaluation runs the saved model as one policy for every robot
+(`baselines.rl.policies.SharedSB3Policy`); ``rl_models: <name>`` lets several evaluation
+experiments (e.g. m = 2..5) use it.
 """
 
 from __future__ import annotations
 
-import copy
 import importlib.util
-from collections.abc import Mapping
+import json
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
-import gymnasium as gym
-
 import bounce_gym  # noqa: F401  (registers the environments)
-from baselines.rl.model_files import check_folder_name, load_model, save_model
-from bounce_gym.envs.registration import PETTINGZOO_ENVS, is_pettingzoo_id
-from bounce_gym.errors import ConfigError, config_errors
+from baselines.rl.model_files import read_model, run_name, save_model
+from baselines.rl.monitor import SUFFIX
+from baselines.rl.train_config import (
+    POLICIES,
+    algo_kwargs,
+    check_hyperparams,
+    validate_train_config,
+)
+from baselines.rl.train_env import attach_monitor_file, make_train_env
+from bounce_gym.errors import ConfigError
 from bounce_gym.files import check_writable
 
-ALGOS = ("ppo", "dqn", "recurrentppo")
-MULTI_ALGOS = ("ppo",)
-_KEYS = {"name": str, "env": str, "env_kwargs": dict, "algo": str, "total_timesteps": int,
-         "seed": int, "n_envs": int, "hyperparams": dict, "checkpoint_every": int,
-         "tensorboard": bool, "models": str, "resume": bool, "vec_env": str,
-         "torch_threads": int}
-VEC_ENVS = ("native", "sync", "subproc")
+__all__ = ["Run", "make_train_env", "train", "validate_train_config"]
+
+#: Keys a resumed run may change: the budget, checkpointing, logging, and which seeds run.
+RESUMABLE_CHANGES = ("total_timesteps", "checkpoint_every", "tensorboard", "resume", "seeds",
+                     "torch_threads", "models", "hyperparams_file")
 
 
-def validate_train_config(config: object) -> dict:
-    if not isinstance(config, Mapping):
-        raise ConfigError(f"config: expected a mapping, got {type(config).__name__}")
-    unknown = sorted(set(config) - set(_KEYS))
-    if unknown:
-        raise ConfigError(f"config: unknown keys {unknown}; allowed are {sorted(_KEYS)}")
-    for key in ("name", "env", "algo", "total_timesteps"):
-        if key not in config:
-            raise ConfigError(f"config: missing key {key!r}")
-    for key, kind in _KEYS.items():
-        if key in config and (not isinstance(config[key], kind)
-                              or kind is int and isinstance(config[key], bool)):
-            raise ConfigError(f"config.{key}: expected {kind.__name__}, got "
-                              f"{type(config[key]).__name__}")
-    config = copy.deepcopy(dict(config))
-    if config["algo"] not in ALGOS:
-        raise ConfigError(f"config.algo: expected one of {ALGOS}, got {config['algo']!r}")
-    multi = is_pettingzoo_id(config["env"])
-    if not multi and config["env"] not in gym.registry:
-        raise ConfigError(f"config.env: unknown environment id {config['env']!r}; multi-robot "
-                          f"ids are {list(PETTINGZOO_ENVS)}")
-    if multi and config["algo"] not in MULTI_ALGOS:
-        raise ConfigError(f"config.algo: a multi-robot env trains one shared policy with one of "
-                          f"{MULTI_ALGOS}, got {config['algo']!r}")
-    if config.get("vec_env", "native") not in VEC_ENVS:
-        raise ConfigError(f"config.vec_env: expected one of {VEC_ENVS}, got {config['vec_env']!r}")
-    if multi and config.get("vec_env", "native") != "native":
-        raise ConfigError("config.vec_env: a multi-robot env is one VecEnv with a slot per robot; "
-                          "leave vec_env unset")
-    if config.get("vec_env") == "native" and not multi \
-            and gym.spec(config["env"]).vector_entry_point is None:
-        raise ConfigError(f"config.vec_env: {config['env']} has no native batched env; use "
-                          "'sync' or 'subproc'")
-    if config["total_timesteps"] < 1:
-        raise ConfigError(f"config.total_timesteps: expected an integer >= 1, got "
-                          f"{config['total_timesteps']}")
-    check_folder_name("config.name", config["name"])
-    native = multi or gym.spec(config["env"]).vector_entry_point is not None
-    defaults = {"vec_env": "native" if native else "sync", "env_kwargs": {}, "seed": 0,
-                "n_envs": 1 if multi else 4, "hyperparams": {},
-                "checkpoint_every": 0, "tensorboard": False, "models": "models", "resume": False,
-                "torch_threads": 1}
-    for key, value in defaults.items():
-        config.setdefault(key, value)
-    for key, least in (("n_envs", 1), ("seed", 0), ("checkpoint_every", 0),
-                       ("torch_threads", 1)):
-        if config[key] < least:
-            raise ConfigError(f"config.{key}: expected an integer >= {least}, got {config[key]}")
-    if multi and config["n_envs"] != 1:
-        raise ConfigError("config.n_envs: a multi-robot env is one VecEnv with a slot per robot; "
-                          "n_envs must be 1")
-    return config
+class Run:
+    """The files of one seed's run of a validated configuration."""
+
+    def __init__(self, config: Mapping, seed: int) -> None:
+        self.config = {**config, "seeds": [seed]}
+        self.seed = seed
+        self.run = run_name(config["algo"], config["variant"])
+        self.stem = f"{self.run}_seed{seed}"
+        self.folder = Path(config["models"]) / config["name"]
+        self.model = self.folder / f"{self.stem}.zip"
+        self.monitor = self.folder / f"{self.stem}{SUFFIX}"
+        self.checkpoint_folder = self.folder / "checkpoints"
+
+    def checkpoint(self, steps: int) -> Path:
+        return self.checkpoint_folder / f"{self.stem}_{steps}_steps.zip"
+
+    def checkpoints(self) -> dict[int, Path]:
+        """This run's checkpoints by step count."""
+        from baselines.rl.resume import checkpoints
+
+        return checkpoints(self.checkpoint_folder, self.run, self.seed)
 
 
-def make_train_env(config: Mapping):
-    """The VecEnv to train on: the native batch, SB3's ``make_vec_env`` copies (``vec_env``),
-    or for a PettingZoo id the
-    parameter-sharing adapter (one slot per robot) under ``VecMonitor``. Bad ``env_kwargs``
-    raise `ConfigError`."""
-    with config_errors("config.env_kwargs"):
-        return _make_train_env(config)
-
-
-def _make_train_env(config: Mapping):
-    if is_pettingzoo_id(config["env"]):
-        import pettingzoo
-        from stable_baselines3.common.vec_env import VecMonitor
-
-        from baselines.rl.parallel_vec_env import ParallelToVecEnv
-
-        return VecMonitor(ParallelToVecEnv(pettingzoo.make("parallel", config["env"],
-                                                           **config["env_kwargs"])))
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import SubprocVecEnv, VecMonitor
-
-    n_envs = 1 if config["algo"] == "dqn" else config["n_envs"]
-    if config["vec_env"] == "native":
-        from baselines.rl.vector_vec_env import VectorToVecEnv
-
-        env = VecMonitor(VectorToVecEnv(gym.make_vec(
-            config["env"], num_envs=n_envs, vectorization_mode="vector_entry_point",
-            **config["env_kwargs"])))
-        env.seed(config["seed"])
-        return env
-    return make_vec_env(config["env"], n_envs=n_envs, seed=config["seed"],
-                        env_kwargs=config["env_kwargs"],
-                        vec_env_cls=SubprocVecEnv if config["vec_env"] == "subproc" else None)
-
-
-def model_path(config: Mapping) -> Path:
-    return Path(config["models"]) / config["name"] / f"{config['algo']}_seed{config['seed']}.zip"
-
-
-def check_hyperparams(algo_class, hyperparams: Mapping) -> None:
-    """Each hyperparameter must be an argument of the algorithm, and a number where its default
-    is one (SB3 itself checks the values of some, e.g. ``n_steps``, when the model is built)."""
-    import inspect
-
-    arguments = inspect.signature(algo_class).parameters
-    for key, value in hyperparams.items():
-        if key not in arguments or key in ("policy", "env", "device", "seed", "verbose",
-                                           "tensorboard_log"):
-            raise ConfigError(f"config.hyperparams.{key}: not a hyperparameter of "
-                              f"{algo_class.__name__}")
-        default = arguments[key].default
-        number = (int, float)
-        if isinstance(default, number) and not isinstance(default, bool) and (
-                not isinstance(value, number) or isinstance(value, bool)):
-            raise ConfigError(f"config.hyperparams.{key}: expected a number, got {value!r}")
-
-
-def train(config: Mapping, progress: bool = True) -> Path:
-    """Train (or resume) an agent and save it where `evaluate.py` finds it; returns the path."""
-    config = validate_train_config(config)  # the quick checks first, before importing torch
-    out = model_path(config)
-    check_writable("config.models", out.parent)
-    if config["resume"] and not out.is_file():
-        raise ConfigError(f"config.resume: no saved model {out} to resume from; train without "
-                          "--resume first")
+def train(config: Mapping, progress: bool = True, callbacks: Sequence = (),
+          folder: Path | None = None, log: Callable[[str], None] | None = None) -> list[Path]:
+    """Train (or resume) an agent for every seed of ``config`` and save each where the
+    evaluation finds it; returns the model paths. ``callbacks`` are SB3 callbacks added to
+    every run; ``folder`` is where a relative ``hyperparams_file`` is read from; ``log`` gets
+    one line per seed saying what happens to it."""
+    config = validate_train_config(config, folder)  # the quick checks first, before torch
+    runs = [Run(config, seed) for seed in config["seeds"]]
+    check_writable("config.models", runs[0].folder)
+    _check_checkpoints(config, runs)
     if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError("config.tensorboard: needs the tensorboard package "
-                          "(pip install tensorboard), or set tensorboard: false")
+                          "(pip install -e .[tensorboard]), or set tensorboard: false")
     import torch
-    from gymnasium import spaces
+
+    check_hyperparams(_algo_class(config["algo"]), config["hyperparams"])
+    _check_action_space(config)
+    threads = torch.get_num_threads()
+    # small MLPs on tiny batches: more intra-op threads only contend with the env processes
+    torch.set_num_threads(config["torch_threads"])
+    try:
+        paths = [_train_run(run, progress, list(callbacks), log or (lambda line: None))
+                 for run in runs]
+    finally:
+        torch.set_num_threads(threads)
+    return paths
+
+
+def _check_checkpoints(config: Mapping, runs: list[Run]) -> None:
+    """Resume only from checkpoints of this configuration, and never start afresh over one."""
+    found = {run.stem: run.checkpoints() for run in runs}
+    folder = runs[0].checkpoint_folder
+    if config["resume"] and not any(found.values()):
+        raise ConfigError(f"config.resume: nothing to resume: {folder} holds no checkpoint of "
+                          f"{', '.join(found)}; train without --resume first")
+    if not config["resume"] and any(found.values()):
+        stem, steps = next((stem, max(c)) for stem, c in found.items() if c)
+        raise ConfigError(f"config.resume: {folder} already holds checkpoints of {stem} (the "
+                          f"newest at {steps} steps); pass --resume to continue them, or delete "
+                          "them to start again (a checkpoint is never overwritten)")
+    for run in runs:
+        if found[run.stem]:
+            path = found[run.stem][max(found[run.stem])]
+            _check_same_config(read_model(path).metadata.get("config", {}), run.config, path)
+
+
+def _check_action_space(config: Mapping) -> None:
+    """DQN needs discrete actions (a multi-robot env trains PPO only)."""
+    import gymnasium as gym
+
+    from bounce_gym.errors import config_errors
+
+    if config["algo"] != "dqn":
+        return
+    with config_errors("config.env_kwargs"):
+        space = gym.make(config["env"], **config["env_kwargs"]).action_space
+    if not isinstance(space, gym.spaces.Discrete):
+        raise ConfigError(f"config.algo: dqn needs discrete actions, but the env's are {space} "
+                          "(set env_kwargs.action_type: discrete, or use ppo or recurrentppo)")
+
+
+def _algo_class(algo: str):
     from sb3_contrib import RecurrentPPO
     from stable_baselines3 import DQN, PPO
 
-    # small MLPs on tiny batches: more intra-op threads only contend with the env processes
-    torch.set_num_threads(config["torch_threads"])
-
-    algo_class = {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[config["algo"]]
-    check_hyperparams(algo_class, config["hyperparams"])
-    env = make_train_env(config)
-    if config["algo"] == "dqn" and not isinstance(env.action_space, spaces.Discrete):
-        raise ConfigError(f"config.algo: dqn needs discrete actions, but the env's are "
-                          f"{env.action_space} (set env_kwargs.action_type: discrete, or use "
-                          "ppo or recurrentppo)")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    log_dir = str(out.parent / "tensorboard") if config["tensorboard"] else None
-    if config["resume"]:
-        model = load_model(out, env.observation_space, env.action_space, env=env)
-        reset = False
-    else:
-        policy = "MlpLstmPolicy" if config["algo"] == "recurrentppo" else "MlpPolicy"
-        try:
-            model = algo_class(policy, env, seed=config["seed"], device="cpu", verbose=0,
-                               tensorboard_log=log_dir, **config["hyperparams"])
-        except (AssertionError, TypeError, ValueError) as exc:  # SB3's checks of the values
-            raise ConfigError(f"config.hyperparams: {exc}") from None
-        reset = True
-    callbacks = []
-    if config["checkpoint_every"]:
-        callbacks.append(atomic_checkpoint(max(config["checkpoint_every"] // env.num_envs, 1),
-                                           out.parent / "checkpoints", out.stem))
-    model.learn(config["total_timesteps"], callback=callbacks or None, progress_bar=progress,
-                reset_num_timesteps=reset)
-    save_model(model, out)
-    env.close()
-    return out
+    return {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[algo]
 
 
-def atomic_checkpoint(every: int, folder: Path, prefix: str):
-    """A callback saving the model every ``every`` calls as
-    ``<folder>/<prefix>_<timesteps>_steps.zip`` with `save_model` (atomic, listed in the
-    manifest), where SB3's ``CheckpointCallback`` writes the zip in place."""
-    from stable_baselines3.common.callbacks import BaseCallback
+def _comparable(config: Mapping) -> dict:
+    return json.loads(json.dumps({k: v for k, v in config.items()
+                                  if k not in RESUMABLE_CHANGES}))
 
-    class _AtomicCheckpoint(BaseCallback):
-        def _on_step(self) -> bool:
-            if self.n_calls % every == 0:
-                save_model(self.model, folder / f"{prefix}_{self.num_timesteps}_steps.zip")
-            return True
 
-    return _AtomicCheckpoint()
+def _check_same_config(saved: Mapping, config: Mapping, path: Path) -> None:
+    theirs, ours = _comparable(saved), _comparable(config)
+    changed = sorted(k for k in {*theirs, *ours} if theirs.get(k) != ours.get(k))
+    if changed:
+        key = changed[0]
+        raise ConfigError(f"config.{key}: the checkpoint {path} was trained with "
+                          f"{theirs.get(key)!r}, this configuration says {ours.get(key)!r}; "
+                          "resume with the configuration it was trained with")
+
+
+def _train_run(run: Run, progress: bool, extra_callbacks: list, log) -> Path:
+    from baselines.rl.resume import capture, checkpoint_callback
+    from baselines.rl.wrappers import describe
+
+    config = run.config
+    env = make_train_env(config, run.seed)
+    try:
+        found = run.checkpoints() if config["resume"] else {}
+        model = _resumed(run, env, found, log) if found else _fresh(run, env, log)
+
+        def metadata() -> dict:
+            return {"config": config, "wrappers": describe(env)}
+
+        def save_checkpoint(model) -> None:
+            save_model(model, run.checkpoint(model.num_timesteps), metadata(),
+                       resume=capture(model), overwrite=False)
+
+        if model.num_timesteps < config["total_timesteps"]:
+            model.learn(config["total_timesteps"] - model.num_timesteps,
+                        callback=[checkpoint_callback(config["checkpoint_every"],
+                                                      save_checkpoint), *extra_callbacks],
+                        progress_bar=progress, reset_num_timesteps=not found)
+        if model.num_timesteps not in run.checkpoints():
+            save_checkpoint(model)
+        save_model(model, run.model, metadata())
+    finally:
+        env.close()
+    return run.model
+
+
+def _log_dir(run: Run) -> str | None:
+    return str(run.folder / "tensorboard") if run.config["tensorboard"] else None
+
+
+def _fresh(run: Run, env, log):
+    """A new model of the run's algorithm on ``env``, its monitor file started."""
+    config = run.config
+    kwargs = algo_kwargs(config["hyperparams"])
+    try:
+        model = _algo_class(config["algo"])(
+            POLICIES[config["algo"]], env, seed=run.seed, device="cpu", verbose=0,
+            tensorboard_log=_log_dir(run), **kwargs)
+    except (AssertionError, TypeError, ValueError) as exc:  # SB3's checks of the values
+        raise ConfigError(f"config.hyperparams: {exc}") from None
+    attach_monitor_file(env, run.monitor, config["env"])
+    log(f"{run.stem}: training {config['total_timesteps']} steps")
+    return model
+
+
+def _resumed(run: Run, env, found: dict[int, Path], log):
+    """The model of the newest checkpoint in ``found``, with everything restored into it and
+    into ``env``, its monitor file cut back to the checkpoint."""
+    from baselines.rl.resume import restore
+
+    steps, path = max(found.items())
+    checkpoint = read_model(path)
+    state = checkpoint.resume_state()
+    model = checkpoint.load(env.observation_space, env.action_space, env=env,
+                            tensorboard_log=_log_dir(run))
+    restore(model, state)
+    attach_monitor_file(env, run.monitor, run.config["env"], keep_rows=state["episodes"])
+    total = run.config["total_timesteps"]
+    log(f"{run.stem}: resumed from {path} ({steps} of {total} steps)" if steps < total
+        else f"{run.stem}: already trained for {steps} steps ({path})")
+    return model

@@ -55,6 +55,26 @@ def king_offset(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return snap(np.cos(theta)), snap(np.sin(theta))
 
 
+def _is_free(free: np.ndarray, row: np.ndarray, col: np.ndarray) -> np.ndarray:
+    rows, cols = free.shape
+    inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+    ok = np.zeros(len(row), dtype=bool)
+    ok[inside] = free[row[inside], col[inside]]
+    return ok
+
+
+def king_move_allowed(free: np.ndarray, row: np.ndarray, col: np.ndarray, drow: int, dcol: int,
+                      corner_rule: str) -> np.ndarray:
+    """Whether the king move (``drow``, ``dcol``) from each cell (``row``, ``col``) of the
+    occupancy grid ``free`` (True = free; cells outside the grid are blocked) lands on a free
+    cell and, for a diagonal move, passes ``corner_rule`` (see the module docstring)."""
+    ok = _is_free(free, row + drow, col + dcol)
+    if drow and dcol and corner_rule != "target_only":
+        side_a, side_b = _is_free(free, row + drow, col), _is_free(free, row, col + dcol)
+        ok &= (side_a | side_b) if corner_rule == "no_squeeze" else (side_a & side_b)
+    return ok
+
+
 class CellModel:
     """Position cells x orientation bins of a world, with the deterministic and stochastic maps.
 
@@ -144,20 +164,10 @@ class CellModel:
             out[k] = self._target(row, col, int(drow[k]), int(dcol[k]))
         return out
 
-    def _is_free(self, row: np.ndarray, col: np.ndarray) -> np.ndarray:
-        inside = (row >= 0) & (row < self.rows) & (col >= 0) & (col < self.cols)
-        ok = np.zeros(len(row), dtype=bool)
-        ok[inside] = self.free[row[inside], col[inside]]
-        return ok
-
     def _target(self, row, col, drow: int, dcol: int) -> np.ndarray:
-        tr, tc = row + drow, col + dcol
-        ok = self._is_free(tr, tc)
-        if drow and dcol and self.corner_rule != "target_only":
-            side_a, side_b = self._is_free(row + drow, col), self._is_free(row, col + dcol)
-            ok &= (side_a | side_b) if self.corner_rule == "no_squeeze" else (side_a & side_b)
+        ok = king_move_allowed(self.free, row, col, drow, dcol, self.corner_rule)
         out = np.full(len(row), -1, dtype=np.int64)
-        out[ok] = self.position_index[tr[ok], tc[ok]]
+        out[ok] = self.position_index[row[ok] + drow, col[ok] + dcol]
         return out
 
     def next_cell(self, z: np.ndarray, phi: float) -> tuple[np.ndarray, np.ndarray]:

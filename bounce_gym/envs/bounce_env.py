@@ -35,16 +35,21 @@ class BounceEnv(EnvBase, gym.Env):
 
     ## Observation Space
 
-    A flat ``Box`` of float32: ``contact`` (bump sensor pressed), ``clock`` (ticks since the last
-    bump / max_clock), then the optional sensing history, privileged pose and task features — see
+    A flat ``Box`` of float32: in tick mode ``contact`` (bump sensor pressed) — not in bounce
+    mode, where every step ends in contact — then ``clock`` (ticks since the last bump /
+    max_clock), then the optional sensing history, privileged pose and task features — see
     `bounce_gym.envs.core`. The true pose, cell, contact edge and task diagnostics are in ``info``.
 
     ## Rewards
 
-    From the task: ``free`` — 0; ``navigation`` — −w1 per tick, −(w2 − w1) per change of bounce
-    angle, +goal_bonus at the goal; ``coverage`` — newly covered cells and the decrease of the L2
-    distance between visit histogram and target; ``localization`` — the drop in log2(candidate
-    configurations) when a filter is plugged in, else 0.
+    From the task: ``free`` — 0; ``navigation`` — by its ``reward`` option: ``progress``
+    (default: +1 at the goal plus potential-based shaping by the geodesic distance to it),
+    ``sparse`` or the papers' ``plan_cost`` (−w1 per tick, −(w2 − w1) per change of bounce
+    angle, +goal_bonus at the goal), with the plan cost so far in ``info["plan_cost"]``;
+    ``coverage`` — newly covered cells and the decrease of the L2 distance between visit
+    histogram and target; ``localization`` — the drop in log2(candidate configurations) minus
+    ``tick_cost`` per tick until localized, when a filter is plugged in, else 0. Each registered
+    id's observation, reward and horizon: `bounce_gym.envs.registration`.
 
     ## Starting State
 
@@ -55,7 +60,8 @@ class BounceEnv(EnvBase, gym.Env):
     ## Episode End
 
     Terminated when the task says so (navigation: goal reached; localization: localized, with a
-    filter). Truncated by the registered ``max_episode_steps``.
+    filter). Truncated by the registered ``max_episode_steps``, the one horizon of training and
+    evaluation.
 
     ## Arguments
 

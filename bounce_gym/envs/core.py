@@ -3,7 +3,11 @@
 Per robot the observation is what the robot senses (all values in [0, 1] unless noted):
 
 * ``contact`` — 1 if the bump sensor is pressed now (the robot touches what it faces, so its next
-  tick is a bump and the angle it is given will be used), else 0;
+  tick is a bump and the angle it is given will be used), else 0. Offered only where it can be
+  0 at the start of a step: in tick mode, with several robots (a bounce-mode step ends when one
+  of them needs an angle; the others may be driving) and with turn commands. A lone robot in
+  bounce mode ends every step against a wall, so there the observation starts with ``clock``
+  (`BounceCore.observes_contact`);
 * ``clock`` — ticks since its last bump, divided by `EnvOptions.max_clock`;
 * with ``history = k``: the k most recent (segment ticks / max_clock, angle / 360°) pairs, newest
   first, zero-padded — one pair per bump: the clock reading just before it and the angle used;
@@ -44,9 +48,14 @@ class BounceCore:
         )
         self._cell_models: dict[tuple[int, str], CellModel] = {}
         task.configure(self)
+        #: whether the observation starts with ``contact``: not for a lone robot in bounce mode
+        #: without turn commands, whose every step ends in contact (it would always read 1)
+        self.observes_contact = (options.step_mode == "tick" or options.n_robots > 1
+                                 or len(options.turn_angles) > 0)
         k = options.history
-        low = [0.0, 0.0] + [0.0] * (2 * k)
-        high = [1.0, 1.0] + [1.0] * (2 * k)
+        sensed = 2 if self.observes_contact else 1
+        low = [0.0] * sensed + [0.0] * (2 * k)
+        high = [1.0] * sensed + [1.0] * (2 * k)
         if options.privileged:
             low += [0.0, 0.0, -1.0, -1.0]
             high += [1.0, 1.0, 1.0, 1.0]
@@ -214,8 +223,9 @@ class BounceCore:
         """(m, d) float32 observations, a fresh array every call."""
         state = self.dynamics.state
         opts = self.options
-        parts = [state.blocked[:, None].astype(np.float32),
-                 (state.clock / opts.max_clock)[:, None]]
+        parts = [(state.clock / opts.max_clock)[:, None]]
+        if self.observes_contact:
+            parts.insert(0, state.blocked[:, None].astype(np.float32))
         if opts.history:
             parts.append(self.history.reshape(opts.n_robots, -1))
         if opts.privileged:
@@ -237,7 +247,9 @@ class BounceCore:
         if opts.privileged or self.task.observation_size:
             return self.observation()[0]
         state = self.dynamics.state
-        values = [float(state.blocked[0]), int(state.clock[0]) / opts.max_clock]
+        values = [int(state.clock[0]) / opts.max_clock]
+        if self.observes_contact:
+            values.insert(0, float(state.blocked[0]))
         if opts.history:
             values += self.history[0].ravel().tolist()
         return np.array(values, dtype=np.float32)

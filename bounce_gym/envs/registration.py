@@ -1,21 +1,62 @@
 """Registration of the environments with Gymnasium and PettingZoo (done on ``import bounce_gym``).
 
+Each id is a task an agent can be scored on: what it observes, what its reward makes optimal,
+and ONE horizon — the registered ``max_episode_steps`` (``max_cycles`` for the PettingZoo ids),
+which training and evaluation both use. Defaults: kinematic backend, bounce mode (one step =
+the bump, then the drive to the next contact), Φ = {45°, 90°, 135°}, unless the table says
+otherwise. The observation is ``clock`` (ticks since the last bump / max_clock), preceded by
+``contact`` only where it can be 0 (tick mode, several robots, turn commands; see
+`bounce_gym.envs.core`), then the optional ``history`` and ``privileged`` pose, then the task's
+features.
+
 Gymnasium ids (``gym.make(id, **overrides)``):
 
-| id | world | task | max_episode_steps |
-|---|---|---|---|
-| ``bounce_gym/Bounce-v0`` | two_rooms | free | 500 |
-| ``bounce_gym/BounceNavigation-v0`` | lab_navigation | navigation (random start and goal) | 200 |
-| ``bounce_gym/BounceCoverage-v0`` | lab_fig1 | coverage (uniform target) | 500 |
-| ``bounce_gym/BounceLocalization-v0`` | lab_localization_a, φ = 45°, cell backend | localization with the combinatorial filter | 200 |
+* ``bounce_gym/Bounce-v0`` — two_rooms, task ``free``; horizon 500 steps. Observation: clock.
+  Reward 0 and no end: a sandbox for rollouts and speed, not a task to learn.
+* ``bounce_gym/BounceNavigation-v0`` — lab_navigation, task ``navigation`` (random start and
+  goal pose per episode), ``history=4``; horizon 200 steps. Observation: clock, the last 4
+  (clock, angle) pairs, the start and goal poses. The pose is not observed: on the noise-free
+  cell backend it follows from the start pose and every (clock, angle) pair since the start
+  (what the roadmap planner tracks), so a policy needs memory of the whole episode — a
+  recurrent policy (RecurrentPPO) or ``history`` as long as the episode's bounces; with 4 pairs
+  a memoryless policy sees only the recent past. ``privileged=True`` adds the true pose (an
+  oracle that needs no memory). Reward ``progress`` (default): +1 on reaching the goal plus
+  potential-based shaping by the geodesic distance to the goal, so its optimal policies are
+  those of the sparse success reward: reach the goal;
+  ``reward="sparse"`` and the papers' ``reward="plan_cost"`` are options
+  (`bounce_gym.envs.tasks.navigation`). ``info["plan_cost"]`` is the papers' w1/w2 cost so far,
+  whatever the reward.
+* ``bounce_gym/BounceCoverage-v0`` — lab_fig1, task ``coverage`` (uniform target); horizon
+  500 steps. Observation: clock. Reward: newly covered cells plus the decrease of the L2
+  distance between the visit histogram and the target; the (undiscounted) return is the final
+  coverage plus the total decrease of that distance, so its optimum covers every cell and ends
+  closest to the target. A memoryless stochastic policy (angle i with probability α_i at every
+  bump) realises the papers' mixtures of bounce policies; doing better than a mixture needs
+  memory.
+* ``bounce_gym/BounceLocalization-v0`` — lab_localization_a, cell backend, Φ = {45°, 135°}
+  (``Discrete(2)``: the angles the active filter chooses between), task ``localization`` with
+  the combinatorial filter; horizon 200 steps. Observation: clock. Reward: the drop in
+  log2(candidate configurations) minus 0.1 per tick until localized, so of two episodes that
+  localize the faster scores higher; ends when localized. The candidate set — the filter's
+  state — depends on the whole observation history, so a policy needs memory (RecurrentPPO, or
+  ``history`` as long as the episode).
 
 The free, navigation and coverage ids also have a ``vector_entry_point``: ``gym.make_vec(id,
-num_envs=N)`` builds a `bounce_gym.envs.vector_env.BounceVectorEnv` (N robots stepped as one batch).
+num_envs=N)`` builds a `bounce_gym.envs.vector_env.BounceVectorEnv` (N robots stepped as one
+batch, every task option above included).
 
-PettingZoo ids (``pettingzoo.make("parallel" | "aec", id, **overrides)``), ``max_cycles`` 500:
-``bounce_gym/MultiBounce-v0`` (grid_15x15, 4 robots, free), ``bounce_gym/MultiBounceCoverage-v0``
-(grid_15x15, 4 robots, shared coverage) and ``bounce_gym/MultiBounceMonitoring-v0`` (grid_20x12,
-4 robots, one region each).
+PettingZoo ids (``pettingzoo.make("parallel" | "aec", id, **overrides)``), horizon
+``max_cycles`` = 500 steps, 4 robots of radius 0.3 that bump into each other; each robot
+observes contact and clock:
+
+* ``bounce_gym/MultiBounce-v0`` — grid_15x15, ``free``: reward 0, a sandbox.
+* ``bounce_gym/MultiBounceCoverage-v0`` — grid_15x15, shared ``coverage``: the coverage reward
+  above, split evenly between the robots.
+* ``bounce_gym/MultiBounceMonitoring-v0`` — grid_20x12, ``monitoring``, one region each: per
+  step the share of the step's ticks a robot spent in its own region minus a penalty per robot
+  contact. In tick mode (how the configs run it) the return counts the ticks spent in the own
+  region, so its optimum keeps every robot in its region without contacts; in bounce mode every
+  step weighs the same whatever its ticks.
 
 Drifters (thesis ch. 5, `bounce_gym.envs.drifters`): the Gymnasium id ``bounce_gym/Drifter-v0``
 (one profiling drifter, scb_like flow, cell backend, reach task; max_episode_steps 200) and the
@@ -33,7 +74,7 @@ GYM_ENVS = {
         {"world": "lab_navigation", "task": "navigation", "history": 4}, 200),
     "bounce_gym/BounceCoverage-v0": ({"world": "lab_fig1", "task": "coverage"}, 500),
     "bounce_gym/BounceLocalization-v0": (
-        {"world": "lab_localization_a", "task": "localization", "angles": (45.0,),
+        {"world": "lab_localization_a", "task": "localization", "angles": (45.0, 135.0),
          "backend": "cell",
          "task_kwargs": {"filter_factory": "combinatorial"}}, 200),
 }

@@ -248,9 +248,9 @@ class BounceVectorEnv(VectorEnv):
         n = self.num_envs
         core = self.single.core
         obs = np.empty((n, len(core.obs_low)), dtype=np.float32)
-        obs[:, 0] = state.blocked
-        obs[:, 1] = state.clock / opts.max_clock
-        col = 2
+        # bounce mode, one robot per env: every step ends in contact, so no contact column
+        obs[:, 0] = state.clock / opts.max_clock
+        col = 1
         if opts.history:
             obs[:, col:col + 2 * opts.history] = self._history.reshape(n, -1)
             col += 2 * opts.history
@@ -376,7 +376,8 @@ class _FreeBatch:
 
 
 class _NavigationBatch(_FreeBatch):
-    """`NavigationTask` for N robots: goals, arrival and the tick and angle-change costs."""
+    """`NavigationTask` for N robots: goals, arrival, the rewards (`NavigationTask.step_rewards`,
+    every ``reward`` option) and the plan cost."""
 
     def __init__(self, task: NavigationTask, n: int) -> None:
         super().__init__(task, n)
@@ -384,20 +385,30 @@ class _NavigationBatch(_FreeBatch):
         self.goal_position = np.zeros((n, 2))
         self.goal_heading = np.zeros(n)
         self.reached = np.zeros(n, dtype=bool)
+        self.plan_cost = np.zeros(n)
         self.features = np.zeros((n, task.observation_size), dtype=np.float32)
+        self.rows = np.arange(n)
+        if task.geodesic is not None:  # the progress reward: Φ of every grid node, per env
+            self.potentials = np.zeros((n, task.geodesic.n_nodes))
+            self.potential_now = np.zeros(n)
 
     def load(self, i, task):
         self.goal_position[i] = task.goal[0][0]
         self.goal_heading[i] = task.goal[1][0]
         self.reached[i] = False
+        self.plan_cost[i] = task.plan_cost
         self.features[i] = task.observation(None)[0] if task.observe_task else 0.0
+        if task.geodesic is not None:
+            self.potentials[i] = task.potentials
+            self.potential_now[i] = task.potential_now
 
     def info(self, state):
         gap = state.position - self.goal_position
         return {"goal_position": self.goal_position.copy(),
                 "goal_heading": self.goal_heading.copy(),
                 "distance_to_goal": np.hypot(gap[:, 0], gap[:, 1]),
-                "is_success": self.reached.copy()}
+                "is_success": self.reached.copy(),
+                "plan_cost": self.plan_cost.copy()}
 
     def observation(self):
         return self.features if self.single.observe_task else None
@@ -421,18 +432,20 @@ class _NavigationBatch(_FreeBatch):
                 arrive[i] = found
         hit = ~np.isnan(arrive)
         changed = events.angle_changed
+        spent = np.where(hit, np.minimum(events.ticks, arrive), events.ticks).astype(np.float64)
+        before = after = None
+        if single.geodesic is not None:
+            before = self.potential_now
+            after = self.potentials[self.rows, single.geodesic.node_of(events.end)]
+            self.potential_now = np.where(hit, 0.0, after)
+        reward = single.step_rewards(spent, changed, hit, before, after)
+        self.plan_cost = self.plan_cost + single.plan_cost_of(spent, changed)
+        self.reached |= hit
         info = self.info(state)
         info["angle_changed"] = changed
-        if not hit.any():
-            return -single.w1 * events.ticks - (single.w2 - single.w1) * changed, \
-                self.reached.copy(), info
-        spent = np.where(hit, np.minimum(events.ticks, arrive), events.ticks)
-        reward = -single.w1 * spent - (single.w2 - single.w1) * changed
-        reward[hit] += single.goal_bonus
-        self.reached |= hit
-        info["is_success"] = self.reached.copy()
-        to_goal = np.where(hit, ticks - events.ticks + np.nan_to_num(arrive), 0).astype(np.int64)
-        info["ticks_to_goal"] = (to_goal, hit)
+        if hit.any():
+            to_goal = np.where(hit, ticks - events.ticks + np.nan_to_num(arrive), 0)
+            info["ticks_to_goal"] = (to_goal.astype(np.int64), hit)
         return reward, self.reached.copy(), info
 
     def _near_goal(self, events: StepEvents) -> np.ndarray:

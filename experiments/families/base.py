@@ -44,20 +44,36 @@ class Family:
     """An experiment family: recognised by the env's task (and parallel or not), with the task's
     planner, per-episode metrics, table columns and plots.
 
-    ``table`` is the heading of the printed table its rows go to (families with the same heading
-    share one table, columns merged in registry order); ``spread`` are the columns printed as
-    mean ± std; ``counts`` those printed as ``count/episodes``. ``planner_attributes`` are the
-    planner's predictions copied into its rows when set.
+    ``table`` is the heading of the printed table its rows go to (default: the family's name;
+    families with the same heading share one table, columns merged in registry order). Every
+    measured column is shown as its estimate with a 95% interval and count
+    (`experiments.report`); ``labels`` are columns that describe the row instead (the same in
+    every episode, e.g. the number of robots) and are shown as they are. ``score`` is the column
+    that ranks policies (in leaderboards, performance profiles and the hindsight oracle),
+    ``higher_is_better`` its direction. ``planner_attributes`` are the planner's predictions
+    copied into its rows when set.
     """
 
     name = "family"
     task = "free"
     parallel = False
-    table = ""
-    columns: tuple[str, ...] = ("experiment", "policy", "episodes", "return", "ticks")
-    spread: frozenset[str] = frozenset()
-    counts: frozenset[str] = frozenset()
+    table: str | None = None
+    columns: tuple[str, ...] = ("experiment", "policy", "episodes", "seeds", "return", "ticks")
+    labels: frozenset[str] = frozenset()
+    score = "return"
+    higher_is_better = True
     planner_attributes: tuple[str, ...] = ()
+
+    @property
+    def heading(self) -> str:
+        """The heading of the table the family's rows go to."""
+        return self.name if self.table is None else self.table
+
+    def rank(self, row: dict) -> tuple:
+        """How good one episode is, for comparing episodes of the same seed: the score (in its
+        direction), then fewer ticks."""
+        score = float(row[self.score])
+        return (score if self.higher_is_better else -score, -row["ticks"])
 
     def recognises(self, experiment: Mapping, env) -> bool:
         return (is_parallel_env(env) == self.parallel and "visibility" not in experiment
@@ -85,9 +101,6 @@ class Family:
 
     def collect(self, data: dict, env, policy: Policy, setup: object) -> None:
         """Plot data after a first-seed episode (``data`` holds world, paths, family)."""
-
-    def summarise(self, entry: dict, rows: list[dict]) -> None:
-        """Extra summary columns of one (experiment, policy) from its episode rows."""
 
     def plots(self, folder: Path, name: str, data: dict) -> list[Path]:
         """The family's plots of one experiment."""

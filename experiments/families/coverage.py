@@ -18,6 +18,8 @@ from experiments.plots.figures import pyplot, save_figure
 class Coverage(SingleRobotFamily):
     name = task = "coverage"
     columns = (*SingleRobotFamily.columns, "coverage", "distance")
+    score = "distance"
+    higher_is_better = False
 
     def make_planner(self, env):
         from baselines.coverage import MixturePolicy

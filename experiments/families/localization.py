@@ -12,6 +12,7 @@ from experiments.families.base import SingleRobotFamily
 class Localization(SingleRobotFamily):
     name = task = "localization"
     columns = (*SingleRobotFamily.columns, "success", "candidates")
+    score = "success"
 
     def make_planner(self, env):
         from baselines.localization import AngleSwitchPolicy

@@ -37,8 +37,8 @@ class MultiRobot(Family):
     name = "multirobot"
     parallel = True
     table = "multi-robot bouncing"
-    columns = ("experiment", "policy", "robots", "episodes", "robot_contacts", "ticks")
-    spread = frozenset({"robot_contacts", "ticks"})
+    columns = ("experiment", "policy", "robots", "episodes", "seeds", "robot_contacts", "ticks")
+    labels = frozenset({"robots"})
     #: the planner's class in `baselines.multirobot.policies`
     planner_class = ""
 

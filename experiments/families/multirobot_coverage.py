@@ -5,9 +5,9 @@
 Per episode, besides the team columns: ``steps_to_full`` — env steps until ``info["coverage"]``
 first reaches 1 (every free cell at cell size = step length visited; a turn command counts as
 one step), ``None`` if not within ``max_steps``; the episode stops there — and the final
-``coverage``; the planner also reports ``predicted_steps_to_full``. The summary counts the
-episodes that reached full coverage (``full``). Plots: visit counts per cell, and steps to full
-coverage against the number of robots.
+``coverage``, and ``full`` (whether it was reached); the planner also reports
+``predicted_steps_to_full``. Policies rank by coverage, then fewer steps. Plots: visit counts per
+cell, and steps to full coverage against the number of robots.
 """
 
 from __future__ import annotations
@@ -35,19 +35,17 @@ class CoverageEpisode(TeamEpisode):
         return self.steps_to_full is not None
 
     def metrics(self, info):
-        return {**super().metrics(info), "steps_to_full": self.steps_to_full,
-                "coverage": float(info["coverage"])}
+        return {**super().metrics(info), "full": self.steps_to_full is not None,
+                "steps_to_full": self.steps_to_full, "coverage": float(info["coverage"])}
 
 
 class MultiRobotCoverage(MultiRobot):
     name = "multirobot coverage"
     task = "coverage"
     table = "multi-robot coverage"
-    columns = ("experiment", "policy", "robots", "episodes", "full", "steps_to_full",
+    columns = ("experiment", "policy", "robots", "episodes", "seeds", "full", "steps_to_full",
                "predicted_steps_to_full", "coverage", "ticks", "robot_contacts")
-    spread = frozenset({"steps_to_full", "predicted_steps_to_full", "coverage", "ticks",
-                        "robot_contacts"})
-    counts = frozenset({"full"})
+    score = "coverage"
     planner_attributes = ("predicted_steps_to_full",)
     planner_class = "CoveragePlanPolicy"
 
@@ -59,9 +57,6 @@ class MultiRobotCoverage(MultiRobot):
         task = env.unwrapped.task
         data.setdefault("visits", {})[policy.name] = task.visits.copy()
         data["free"] = task.free
-
-    def summarise(self, entry, rows):
-        entry["full"] = sum(r.get("steps_to_full") is not None for r in rows)
 
     def plots(self, folder, name, data):
         if not data.get("visits"):
@@ -78,8 +73,9 @@ class MultiRobotCoverage(MultiRobot):
         return [save_figure(fig, folder / f"{name}-visits.png")]
 
     def summary_plots(self, folder, plots, summary):
-        """Steps to full coverage (mean ± std over the episodes that reached it) against the
-        number of robots, one figure per (world, backend) with at least two team sizes."""
+        """Steps to full coverage (mean over the episodes that reached it, with its 95%
+        interval) against the number of robots, one figure per (world, backend) with at least
+        two team sizes."""
         by_world: dict[str, list[dict]] = {}
         for row in summary:
             data = plots.get(row["experiment"], {})
@@ -95,13 +91,17 @@ class MultiRobotCoverage(MultiRobot):
             for policy in dict.fromkeys(r["policy"] for r in rows):
                 mine = sorted((r for r in rows if r["policy"] == policy),
                               key=lambda r: r["robots"])
-                ax.errorbar([r["robots"] for r in mine], [r["steps_to_full"] for r in mine],
-                            yerr=[r["steps_to_full_std"] for r in mine], marker="o", capsize=3,
-                            label=policy)
+                values = np.array([r["steps_to_full"] for r in mine], dtype=float)
+                bounds = np.array([[r.get("steps_to_full_lo"), r.get("steps_to_full_hi")]
+                                   for r in mine], dtype=float)  # None (one episode) -> nan
+                bounds = np.where(np.isnan(bounds), values[:, None], bounds)
+                ax.errorbar([r["robots"] for r in mine], values,
+                            yerr=[values - bounds[:, 0], bounds[:, 1] - values], marker="o",
+                            capsize=3, label=policy)
             ax.set_xticks(sorted({r["robots"] for r in rows}))
             ax.set_xlabel("robots m")
             ax.set_ylabel("steps to full coverage")
-            ax.set_title(f"{world}: mean ± std over covered episodes", fontsize=9)
+            ax.set_title(f"{world}: mean over covered episodes, 95% CI", fontsize=9)
             ax.legend(fontsize=7)
             written.append(save_figure(fig, folder / f"steps-vs-robots-{world}.png"))
         return written

@@ -34,9 +34,10 @@ class MultiRobotMonitoring(MultiRobot):
     name = "multirobot monitoring"
     task = "monitoring"
     table = "multi-robot monitoring"
-    columns = ("experiment", "policy", "robots", "episodes", "in_region", "encounters",
+    columns = ("experiment", "policy", "robots", "episodes", "seeds", "in_region", "encounters",
                "robot_contacts", "r", "period", "ticks")
-    spread = frozenset({"in_region", "encounters", "robot_contacts", "ticks"})
+    labels = frozenset({"robots", "r"})
+    score = "in_region"
     planner_attributes = ("r", "period")
     planner_class = "MonitoringPlanPolicy"
 

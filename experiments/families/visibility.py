@@ -34,6 +34,7 @@ class ScenarioEpisode(Episode):
 class Visibility(Family):
     name = "visibility"
     columns = (*Family.columns, "success")
+    score = "success"
 
     def recognises(self, experiment, env):
         return "visibility" in experiment

@@ -382,21 +382,27 @@ def test_step_before_reset_raises():
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("env_id", IDS)
 def test_bounce_mode_every_step_ends_in_contact(env_id, backend):
+    """Every bounce-mode step ends against a wall — so a lone robot's observation leaves out
+    ``contact`` (it would always read 1) and starts with the clock."""
     env = gym.make(env_id, backend=backend)
+    base = env.unwrapped
+    assert not base.core.observes_contact
     obs, info = env.reset(seed=11)
-    assert obs[0] == 1.0
+    assert base.robot_state.blocked[0]
+    assert obs[0] == np.float32(info["clock"] / base.options.max_clock)
     rows, cols = env.unwrapped.world.occupancy(1.0).shape
     env.action_space.seed(11)
     for _ in range(60):
         bumps = info["bumps"]
         obs, _, terminated, truncated, info = env.step(env.action_space.sample())
-        assert obs[0] == 1.0
+        assert base.robot_state.blocked[0]
+        assert obs[0] == np.float32(info["clock"] / base.options.max_clock)
         assert 0 <= info["cell"][0] < rows and 0 <= info["cell"][1] < cols
         assert info["bumps"] == bumps + 1  # exactly one bump per bounce-mode step
         assert info["step_ticks"] == 1 + info["clock"]
         if terminated or truncated:
             obs, info = env.reset()
-            assert obs[0] == 1.0
+            assert base.robot_state.blocked[0]
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -412,7 +418,7 @@ def test_square_wall_loop_clock_bounce_mode(backend):
     np.testing.assert_allclose(info["position"], [10.0, 0.5], atol=1e-9)
     assert (info["clock"], info["ticks"], info["bumps"]) == (9, 9, 0)
     assert info["cell"] == (0, 9)  # (row, col) of the 10 x 10 grid, even on the right wall
-    assert obs[0] == 1.0 and obs[1] == np.float32(9 / MAX_CLOCK_SQUARE)
+    assert obs.shape == (1,) and obs[0] == np.float32(9 / MAX_CLOCK_SQUARE)  # clock only
     corners = [(10, 10), (0, 10), (0, 0), (10, 0), (10, 10), (0, 10)]
     cells = [(9, 9), (9, 0), (0, 0), (0, 9), (9, 9), (9, 0)]
     ticks = 9
@@ -424,7 +430,7 @@ def test_square_wall_loop_clock_bounce_mode(backend):
         assert info["heading"] == pytest.approx(math.radians(90 * (k + 1) % 360), abs=1e-9)
         assert (info["clock"], info["step_ticks"], info["ticks"], info["bumps"]) == (
             10, 11, ticks, k + 1)
-        assert obs[0] == 1.0 and obs[1] == np.float32(10 / MAX_CLOCK_SQUARE)
+        assert obs[0] == np.float32(10 / MAX_CLOCK_SQUARE)
         assert reward == 0.0 and not terminated and not truncated
 
 
@@ -480,44 +486,48 @@ def test_history_holds_last_pairs_newest_first(step_mode):
     env = square_env(angles=[90.0, 135.0, 180.0], history=k, step_mode=step_mode)
     obs, info = env.reset(seed=4)
     max_clock = env.options.max_clock
-    assert obs.shape == (2 + 2 * k,)
-    np.testing.assert_array_equal(obs[2:], 0.0)
+    sensed = 2 if step_mode == "tick" else 1  # contact (tick mode only) and clock
+    assert obs.shape == (sensed + 2 * k,)
+    np.testing.assert_array_equal(obs[sensed:], 0.0)
     expected = []
     degrees = [90.0, 135.0, 180.0]
     rng = np.random.default_rng(0)
     for _ in range(40):
         action = int(rng.integers(3))
-        if obs[0] == 1.0:  # this step starts with a bump: one new pair
+        if env.robot_state.blocked[0]:  # this step starts with a bump: one new pair
             expected.insert(0, (info["clock"] / max_clock, degrees[action] / 360.0))
         obs, _, _, _, info = env.step(action)
         want = np.zeros(2 * k, dtype=np.float32)
         flat = np.array(expected[:k], dtype=np.float32).ravel()
         want[:len(flat)] = flat
-        np.testing.assert_allclose(obs[2:], want, rtol=1e-6, atol=0)
+        np.testing.assert_allclose(obs[sensed:], want, rtol=1e-6, atol=0)
     assert len(expected) > k
 
 
 def test_privileged_appends_true_pose():
     env = BounceEnv(world="square", privileged=True)
-    assert env.observation_space.shape == (6,)
+    assert env.observation_space.shape == (5,)
     obs, info = env.reset(seed=2)
     for _ in range(10):
         x, y = info["position"]
         h = info["heading"]
-        np.testing.assert_allclose(obs[2:], [x / 10, y / 10, math.cos(h), math.sin(h)],
+        np.testing.assert_allclose(obs[1:], [x / 10, y / 10, math.cos(h), math.sin(h)],
                                    atol=1e-6)
         obs, _, _, _, info = env.step(env.action_space.sample())
-    # layout: contact, clock, history, pose, task features
+    # layout: contact (tick mode only), clock, history, pose, task features
     nav = gym.make("bounce_gym/BounceNavigation-v0", privileged=True).unwrapped
-    assert nav.observation_space.shape == (2 + 2 * 4 + 4 + 8,)
-    assert BounceEnv(world="square").observation_space.shape == (2,)
+    assert nav.observation_space.shape == (1 + 2 * 4 + 4 + 8,)
+    nav = gym.make("bounce_gym/BounceNavigation-v0", privileged=True, step_mode="tick")
+    assert nav.unwrapped.observation_space.shape == (2 + 2 * 4 + 4 + 8,)
+    assert BounceEnv(world="square").observation_space.shape == (1,)
+    assert BounceEnv(world="square", step_mode="tick").observation_space.shape == (2,)
 
 
 # -- behaviour: tasks ---------------------------------------------------------------------------
 
 def test_navigation_tick_mode_reaches_goal_and_charges_ticks():
     """(1.5, 5) East to the goal disc of radius 1 about (5, 5): entered at x = 4, in tick 3."""
-    env = square_env(task="navigation", step_mode="tick")
+    env = square_env(task="navigation", step_mode="tick", task_kwargs={"reward": "plan_cost"})
     env.reset(seed=0, options={"start": {"position": [1.5, 5.0], "heading": 0.0},
                                "goal": {"position": [5.0, 5.0], "heading": 0.0}})
     rewards = []
@@ -526,6 +536,7 @@ def test_navigation_tick_mode_reaches_goal_and_charges_ticks():
         rewards.append(reward)
     assert rewards == [-1.0, -1.0, -1.0 + 100.0]
     assert terminated and not truncated and info["is_success"] is True
+    assert info["plan_cost"] == 3.0
     np.testing.assert_allclose(info["goal_position"], [5.0, 5.0])
 
 
@@ -535,11 +546,14 @@ def test_navigation_bounce_mode_terminates_on_first_step(backend):
     of radius 1 about (9.5, 5) after 4.5 - sqrt(0.75) = 3.63 units: 1 bump + 4 drive ticks."""
     env = square_env(task="navigation", backend=backend,
                      task_kwargs={"goal": {"position": [9.5, 5.0], "heading": math.pi / 2},
-                                  "w1": 1.0, "w2": 100.0, "goal_bonus": 50.0})
+                                  "reward": "plan_cost", "w1": 1.0, "w2": 100.0,
+                                  "goal_bonus": 50.0})
     _, info = env.reset(seed=0, options={"start": SQUARE_LOOP_START})
     assert info["is_success"] is False
+    assert info["plan_cost"] == 9.0  # the reset's drive: 9 ticks, not charged by the reward
     _, reward, terminated, truncated, info = env.step(0)
     assert reward == -5.0 + 50.0
+    assert info["plan_cost"] == 9.0 + 5.0
     assert terminated and not truncated and info["is_success"] is True
     assert info["angle_changed"] is False  # the first angle is free
 
@@ -547,13 +561,17 @@ def test_navigation_bounce_mode_terminates_on_first_step(backend):
 def test_navigation_angle_change_costs_w2_minus_w1():
     env = square_env(angles=[90.0, 135.0], task="navigation",
                      task_kwargs={"goal": {"position": [5.0, 5.0], "heading": 0.3},
-                                  "heading_tolerance_deg": 1.0, "w1": 2.0, "w2": 30.0})
-    env.reset(seed=0, options={"start": SQUARE_LOOP_START})
+                                  "heading_tolerance_deg": 1.0, "reward": "plan_cost",
+                                  "w1": 2.0, "w2": 30.0})
+    _, info = env.reset(seed=0, options={"start": SQUARE_LOOP_START})
+    cost = info["plan_cost"]
     for action, changed in zip([0, 0, 1, 1, 0, 1], [False, False, True, False, True, True],
                                strict=True):
         _, reward, terminated, _, info = env.step(action)
         assert info["angle_changed"] is changed
         assert reward == -2.0 * info["step_ticks"] - 28.0 * changed
+        assert info["plan_cost"] - cost == -reward  # the papers' cost, as the reward charges it
+        cost = info["plan_cost"]
         assert not terminated
 
 
@@ -682,7 +700,9 @@ class HalvingFilter:
 
 
 @pytest.mark.parametrize("step_mode", STEP_MODES)
-def test_localization_with_filter_rewards_log2_drop(step_mode):
+def test_localization_with_filter_rewards_log2_drop_minus_ticks(step_mode):
+    """Reward = drop in log2(candidates) − tick_cost per tick up to the tick the filter first
+    reports ``localized`` (``info["ticks_to_localize"]``, counted from the episode start)."""
     filters = []
 
     def factory(options):
@@ -690,23 +710,33 @@ def test_localization_with_filter_rewards_log2_drop(step_mode):
         return filters[-1]
 
     env = BounceEnv(world="lab_localization_a", angles=[45.0], task="localization",
-                    task_kwargs={"filter_factory": factory}, step_mode=step_mode)
+                    task_kwargs={"filter_factory": factory, "tick_cost": 0.25},
+                    step_mode=step_mode)
     assert len(filters) == 1 and filters[0].options.world.name == "lab_localization_a"
     _, info = env.reset(seed=1)
     assert (info["candidates"], info["localized"]) == (12, False)
-    sizes, rewards, bumps = [12], [], 0
+    assert "ticks_to_localize" not in info
+    start_ticks = info["ticks"]
+    sizes, rewards, bumps, charged = [12], [], 0, []
     terminated = False
     while not terminated:
+        before = info["ticks"]
         _, reward, terminated, truncated, info = env.step(0)
         rewards.append(reward)
         sizes.append(info["candidates"])
         bumps += info["observation"][0]
+        charged.append(info.get("ticks_to_localize", info["ticks"]) - before)
         assert len(rewards) < 500 and not truncated
     assert sizes[-1] == 1 and info["localized"] is True
     assert list(dict.fromkeys(sizes)) == [12, 6, 3, 1]
-    for reward, before, after in zip(rewards, sizes[:-1], sizes[1:], strict=True):
-        assert reward == pytest.approx(math.log2(before) - math.log2(after))
-    assert sum(rewards) == pytest.approx(math.log2(12))
+    # localized on the bump tick that halved 3 to 1: the first tick of the last step
+    assert info["ticks_to_localize"] == info["ticks"] - info["step_ticks"] + 1
+    assert charged[-1] == 1
+    for reward, before, after, ticks in zip(rewards, sizes[:-1], sizes[1:], charged,
+                                            strict=True):
+        assert reward == pytest.approx(math.log2(before) - math.log2(after) - 0.25 * ticks)
+    assert sum(rewards) == pytest.approx(
+        math.log2(12) - 0.25 * (info["ticks_to_localize"] - start_ticks))
     updates = filters[0].updates
     # one symbol per tick since reset (incl. the drive to the first contact in bounce mode);
     # bumps carry the angle used, forward ticks none
@@ -729,9 +759,10 @@ def test_localization_filter_without_termination():
                                  "terminate_when_localized": False})
     env.reset(seed=0)
     for _ in range(5):
-        _, _, terminated, _, info = env.step(0)
+        _, reward, terminated, _, info = env.step(0)
         assert not terminated
     assert info["localized"] is True
+    assert reward == 0.0  # nothing left to learn, no more ticks charged
 
 
 @pytest.mark.parametrize("action", [True, None, "x", [object()]])

@@ -87,6 +87,28 @@ def test_navigation_goals_are_reached_identically(n, kwargs):
     assert hits > 0
 
 
+@pytest.mark.parametrize("backend", ["kinematic", "cell"])
+@pytest.mark.parametrize("reward", [{"reward": "progress", "gamma": 0.9},
+                                    {"reward": "sparse", "tick_cost": 0.01},
+                                    {"reward": "plan_cost"}], ids=repr)
+def test_every_navigation_reward_is_batched_identically(reward, backend):
+    """Each ``reward`` option (the default, progress with γ = 1, runs in the tests above):
+    the same rewards, ``plan_cost`` infos and terminations as N single envs."""
+    native, sync = _pair("bounce_gym/BounceNavigation-v0", 8, max_episode_steps=50,
+                         backend=backend, task_kwargs={"goal_radius": 1.5,
+                                                       "heading_tolerance_deg": 90, **reward})
+    a, b = native.reset(seed=21), sync.reset(seed=21)
+    _same_infos(a[1], b[1], "reset")
+    native.action_space.seed(3)
+    hits = 0
+    for t in range(120):
+        actions = native.action_space.sample()
+        out, ref = native.step(actions), sync.step(actions)
+        _same_step(out, ref, t)
+        hits += int(out[2].sum())
+    assert hits > 0
+
+
 def test_history_and_privileged_observations():
     native, sync = _pair("bounce_gym/Bounce-v0", 4, history=3, privileged=True)
     native.reset(seed=1)
@@ -104,7 +126,7 @@ def test_vector_env_api():
     assert env.single_action_space == gym.spaces.Discrete(3)
     assert env.action_space == gym.spaces.MultiDiscrete([3, 3, 3])
     obs, info = env.reset(seed=0)
-    assert obs in env.observation_space and obs.shape == (3, 2)
+    assert obs in env.observation_space and obs.shape == (3, 1)  # the clock (bounce mode)
     assert info["_ticks"].all()
     obs2, _ = env.reset(seed=0)
     assert np.array_equal(obs, obs2)  # seeding is deterministic

@@ -31,8 +31,11 @@ def _one_error(capsys, argv: list[str]) -> str:
 
 
 def _experiment(**overrides) -> dict:
-    return {"name": "a", "env": "bounce_gym/BounceNavigation-v0", "env_kwargs": NAV,
-            "seeds": [0], "max_steps": 5, "policies": ["random"], **overrides}
+    """A small navigation experiment; an override of None leaves the key out."""
+    exp = {"name": "a", "env": "bounce_gym/BounceNavigation-v0", "env_kwargs": NAV,
+           "seeds": [10_000], "max_steps": 5, "horizon_reason": "a quick test",
+           "policies": ["random"], **overrides}
+    return {k: v for k, v in exp.items() if v is not None}
 
 
 @pytest.mark.parametrize(("experiment", "message"), [
@@ -42,7 +45,15 @@ def _experiment(**overrides) -> dict:
      "config.experiments[1].env_kwargs: "),
     (_experiment(env_kwargs={"world": "MAP"}),
      "config.experiments[1].env_kwargs: "),
-    (_experiment(seeds=[-1]), "config.experiments[1].seeds: expected a list of integers >= 0"),
+    (_experiment(seeds=[-1]), "config.experiments[1].seeds: evaluation seeds must be >= 10000"),
+    (_experiment(seeds=[3, 10_001]),
+     "config.experiments[1].seeds: evaluation seeds must be >= 10000 (training uses the seeds "
+     "below it, baselines.seeds), got [3]"),
+    (_experiment(seeds={"start": 0, "count": 200}),
+     "config.experiments[1].seeds.start: expected an integer >= 10000, got 0"),
+    (_experiment(max_steps=7, horizon_reason=None),
+     "config.experiments[1].max_steps: 7 differs from the horizon 200 that "
+     "bounce_gym/BounceNavigation-v0 registers"),
     (_experiment(policies=["rl"], name="../x"),
      "config.experiments[1].name (the folder of its rl models): expected the name of a folder"),
     (_experiment(policies=["rl"], rl_models="../x"),
@@ -110,15 +121,50 @@ def _train(**overrides) -> dict:
     (_train(hyperparams={"colour": 1}), [], "config.hyperparams.colour: not a hyperparameter"),
     (_train(algo="dqn", env_kwargs={"action_type": "continuous"}, hyperparams={}), [],
      "config.algo: dqn needs discrete actions"),
-    (_train(), ["--resume"], "config.resume: no saved model"),
+    (_train(), ["--resume"], "config.resume: nothing to resume: "),
+    (_train(seeds=[0, 10000]), [], "config.seeds: seed 10000 with n_envs 1 would seed envs up "
+                                   "to 10000"),
+    (_train(n_envs=3, seeds=[9998]), [], "config.seeds: seed 9998 with n_envs 3 would seed "
+                                         "envs up to 10000; training env seeds must stay below "
+                                         "10000"),
+    (_train(seed=0, seeds=[1]), [], "config.seeds: give either seed"),
+    (_train(seeds=[1, 1]), [], "config.seeds: expected a non-empty list of distinct integers"),
+    (_train(n_stack=0), [], "config.n_stack: expected an integer >= 1, got 0"),
+    (_train(normalize={"norm_obs": 1}), [], "config.normalize.norm_obs: expected true or false"),
+    (_train(normalize={"clip": 1}), [], "config.normalize: unknown keys ['clip']"),
+    (_train(variant="Stack 4"), [], "config.variant: expected lower-case letters and digits"),
+    (_train(hyperparams={"learning_rate": "lin_x"}), [],
+     "config.hyperparams.learning_rate: expected lin_<number>, got 'lin_x'"),
+    (_train(hyperparams={"n_epochs": "lin_1"}), [],
+     "config.hyperparams.n_epochs: a lin_ schedule is allowed only for"),
+    (_train(hyperparams={"policy_kwargs": {"activation_fn": "sigmoid"}}), [],
+     "config.hyperparams.policy_kwargs.activation_fn: expected one of"),
+    (_train(hyperparams_file="missing.yaml"), [], "config.hyperparams_file: file '"),
+    (_train(hyperparams_file="hp.yaml"), [], "config.hyperparams_file: "),
+    (_train(algo="dqn", hyperparams_file="hp.yaml"), [],
+     "config.hyperparams_file: bounce_gym/BounceNavigation-v0 names policy 'MlpLstmPolicy', but "
+     "dqn trains 'MlpPolicy'"),
     (_train(models="FILE/x"), [], "config.models: cannot write into"),
 ])
 def test_train_reports_each_mistake_in_one_line(tmp_path, capsys, monkeypatch, config, extra,
                                                 message):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "FILE").write_text("not a folder")
+    _write(tmp_path / "hp.yaml", {"bounce_gym/BounceNavigation-v0": {"policy": "MlpLstmPolicy"}}
+           if isinstance(config, dict) and config.get("algo") == "dqn"
+           else {"bounce_gym/Bounce-v0": {}})
     if config is not None:
         _write(tmp_path / "t.yaml", config)
     line = _one_error(capsys, ["train", "t.yaml", "--no-progress", *extra])
     assert line.startswith(f"error: {message}")
-    assert not list(tmp_path.glob("**/*.zip"))
+    assert not (tmp_path / "models").exists()  # nothing written, not even an empty folder
+
+
+@pytest.mark.skipif(__import__("importlib").util.find_spec("tensorboard") is not None,
+                    reason="tensorboard is installed")
+def test_tensorboard_logs_name_the_extra_to_install(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    _write(tmp_path / "t.yaml", _train(tensorboard=True))
+    line = _one_error(capsys, ["train", "t.yaml", "--no-progress"])
+    assert line == ("error: config.tensorboard: needs the tensorboard package "
+                    "(pip install -e .[tensorboard]), or set tensorboard: false")

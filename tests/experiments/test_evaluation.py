@@ -41,6 +41,8 @@ def _write(path: Path, data: dict) -> Path:
         ({"experiments": [{"name": "a", "env": "bounce_gym/Nope-v0"}]}, "unknown environment"),
         ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "seeds": [0.5]}]},
          "seeds"),
+        ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "seeds": [9_999]}]},
+         r"config.experiments\[0\].seeds: evaluation seeds must be >= 10000"),
         ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "policies": ["oracle"]}]},
          "policies"),
         ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "max_steps": "10"}]},
@@ -78,14 +80,15 @@ def test_bad_training_configs_raise(config, message):
 
 def test_evaluate_cli_writes_table_csv_json_and_plots(tmp_path, capsys):
     config = {"name": "loc", "output": str(tmp_path / "runs"), "experiments": [
-        dict(_experiment("localization-lab"), seeds=[0, 1])]}
+        dict(_experiment("localization-lab"), seeds=[10_000, 10_001])]}
     assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
     out = capsys.readouterr().out
     assert "planner (angle switching)" in out and "fixed 45°" in out
     (folder,) = (tmp_path / "runs").iterdir()
     results = json.loads((folder / "results.json").read_text())
-    assert len(results["episodes"]) == 2 * 4  # planner, random, two fixed angles
-    assert (folder / "episodes.csv").read_text().count("\n") == 1 + 8
+    # planner, random, two fixed angles, and the best fixed angle in hindsight (derived rows)
+    assert len(results["episodes"]) == 2 * 5
+    assert (folder / "episodes.csv").read_text().count("\n") == 1 + 10
     assert list(folder.glob("*.png"))
     assert evaluate.main([str(tmp_path / "missing.yaml")]) == 2
 
@@ -102,11 +105,13 @@ def test_rl_smoke_train_then_evaluate_scores_the_model(tmp_path):
     assert (tmp_path / "models/nav-small/ppo_seed0.zip").is_file()
     config = {"name": "smoke", "output": str(tmp_path / "runs"), "models": str(tmp_path / "models"),
               "experiments": [{"name": "nav-small", "env": "bounce_gym/BounceNavigation-v0",
-                               "env_kwargs": env_kwargs, "seeds": [0, 1], "max_steps": 30,
+                               "env_kwargs": env_kwargs, "seeds": [10_000, 10_001],
+                               "max_steps": 30, "horizon_reason": "a quick test",
                                "policies": ["rl", "random"]}]}
     rows, _ = run(config, progress=False)
     scored = [r for r in rows if r.policy.startswith("rl ")]
-    assert [r.seed for r in scored] == [0, 1] and all(r.steps >= 1 for r in scored)
+    assert [r.seed for r in scored] == [10_000, 10_001] and all(r.steps >= 1 for r in scored)
+    assert {r.group for r in scored} == {"rl ppo"}
     summary = {s["policy"]: s for s in summarise(rows)}
     assert "rl ppo_seed0" in summary and "success" in summary["rl ppo_seed0"]
 
@@ -115,7 +120,7 @@ def test_visibility_scenario_runs_the_safe_plan(tmp_path):
     """Issue 6: the two_rooms plan e0→e16 as a policy in BounceEnv(fixed rule) reaches segment 16
     in every episode; random angles do not; plots of P', G_safe and the plan's cone are written."""
     config = {"name": "vis", "output": str(tmp_path / "runs"), "experiments": [
-        dict(_experiment("visibility-two-rooms"), seeds=[0, 1, 2, 3, 4])]}
+        dict(_experiment("visibility-two-rooms"), seeds={"start": 10_000, "count": 5})]}
     assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
     (folder,) = (tmp_path / "runs").iterdir()
     summary = {s["policy"]: s for s in json.loads((folder / "results.json").read_text())["summary"]}
@@ -130,7 +135,7 @@ def test_patrol_scenario_converges_to_the_limit_cycle(tmp_path):
     C(F) = 5.0864e-6, Nilles et al. 2021, Theorem 1) — the robot ends on the predicted limit cycle;
     random angles do not; the limit cycle is plotted."""
     config = {"name": "patrol", "output": str(tmp_path / "runs"), "experiments": [
-        dict(_experiment("visibility-patrol-heptagon"), seeds=[0, 1, 2])]}
+        dict(_experiment("visibility-patrol-heptagon"), seeds=[10_000, 10_001, 10_002])]}
     assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
     (folder,) = (tmp_path / "runs").iterdir()
     summary = {s["policy"]: s for s in json.loads((folder / "results.json").read_text())["summary"]}
@@ -148,14 +153,15 @@ def test_patrol_scenario_converges_to_the_limit_cycle(tmp_path):
     ({"start": 7, "goal": 14}, "no safe fewest plan"),
 ])
 def test_bad_visibility_blocks_raise(block, message):
-    exp = dict(_experiment("visibility-two-rooms"), visibility=block, seeds=[0])
+    exp = dict(_experiment("visibility-two-rooms"), visibility=block, seeds=[10_000])
     with pytest.raises(ConfigError, match=message):
         run({"experiments": [exp]}, progress=False)
 
 
 def _tiny_config(tmp_path: Path) -> Path:
     config = {"name": "tiny", "output": str(tmp_path / "runs"), "experiments": [
-        dict(_experiment("localization-lab"), seeds=[0], policies=["random"], max_steps=20)]}
+        dict(_experiment("localization-lab"), seeds=[10_000], policies=["random"], max_steps=20,
+             horizon_reason="a quick test")]}
     return _write(tmp_path / "tiny.yaml", config)
 
 

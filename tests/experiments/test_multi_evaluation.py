@@ -14,8 +14,10 @@ from baselines.policy import FixedAnglePolicy, RandomAnglePolicy
 from baselines.rl.train import validate_train_config
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
 from bounce_gym.errors import ConfigError
+from experiments import stats
 from experiments.config import validate_config
-from experiments.families import multirobot_coverage
+from experiments.families import multirobot_coverage, multirobot_monitoring
+from experiments.oracle import ORACLE_NAME
 from experiments.report import format_table, summarise
 from experiments.runner import EpisodeResult, make_env, run, run_episode
 
@@ -30,12 +32,14 @@ MONITORING = "bounce_gym/MultiBounceMonitoring-v0"
 GRID = {"world": "grid_10x10", "backend": "cell", "step_mode": "tick", "angles": [45, 90, 135],
         "corner_rule": "no_squeeze", "turn_angles": [45, -45]}
 HALVES = [[[0, 0], [5, 0], [5, 10], [0, 10]], [[5, 0], [10, 0], [10, 10], [5, 10]]]
+REASON = "sized for a quick test"
 
 
 def coverage_exp(name="cov", m=2, **extra) -> dict:
     exp = {"name": name, "env": COVERAGE,
            "env_kwargs": dict(GRID, n_robots=m, robot_collisions="bounce"),
-           "seeds": [0, 1], "max_steps": 3000, "policies": ["random", "fixed"]}
+           "seeds": [10_000, 10_001], "max_steps": 3000, "horizon_reason": REASON,
+           "policies": ["random", "fixed"]}
     exp.update(extra)
     return exp
 
@@ -44,7 +48,8 @@ def monitoring_exp(**extra) -> dict:
     exp = {"name": "mon", "env": MONITORING,
            "env_kwargs": dict(GRID, n_robots=2, robot_collisions="ignore",
                               task_kwargs={"regions": HALVES}),
-           "seeds": [0, 1, 2], "max_steps": 200, "policies": ["planner", "random"],
+           "seeds": [10_000, 10_001, 10_002], "max_steps": 200, "horizon_reason": REASON,
+           "policies": ["planner", "random"],
            "planner_kwargs": {"phi": 90}}
     exp.update(extra)
     return exp
@@ -65,7 +70,10 @@ def _write(path: Path, data: dict) -> Path:
          r"\.planner_kwargs: only for multi-robot"),
         (coverage_exp(planner_kwargs=[135]), r"\.planner_kwargs: expected dict"),
         (coverage_exp(rl_models="../elsewhere"), r"\.rl_models: expected the name of a folder"),
-        (coverage_exp(rl_models=3), r"\.rl_models: expected str"),
+        (coverage_exp(rl_models=3), r"\.rl_models: expected str or list"),
+        (coverage_exp(rl_models=["a", {"folder": "b", "env_kwargs": {"world": "square"}}]),
+         r"\.rl_models\[1\]\.env_kwargs: only observation options"),
+        (coverage_exp(rl_models=["a", "a"]), r"\.rl_models: a folder is named twice"),
         (coverage_exp(visibility={"start": 0, "goal": 1}), r"\.visibility: only for single"),
         (coverage_exp(env_kwargs=dict(GRID, max_cycles=10)), r"env_kwargs\.max_cycles"),
         (coverage_exp(policies=["oracle"]), r"\.policies: unknown"),
@@ -116,8 +124,14 @@ def test_bad_multi_training_configs_raise(config, message):
 def test_random_and_fixed_rows_on_a_small_coverage_experiment():
     exp = coverage_exp(m=3, max_steps=800)
     rows, plots = run({"experiments": [exp]}, progress=False)
+    fixed = ("fixed 45°", "fixed 90°", "fixed 135°")
     assert [(r.policy, r.seed) for r in rows] == [
-        (p, s) for s in (0, 1) for p in ("random", "fixed 45°", "fixed 90°", "fixed 135°")]
+        (p, s) for s in (10_000, 10_001) for p in ("random", *fixed)] + [
+        (ORACLE_NAME, s) for s in (10_000, 10_001)]
+    for r in rows[-2:]:  # the best fixed angle of the seed: most coverage, then fewest steps
+        mine = [q for q in rows if q.seed == r.seed and q.policy in fixed]
+        best = max(mine, key=lambda q: (q.metrics["coverage"], -q.steps))
+        assert r.metrics["oracle_choice"] == best.policy and r.steps == best.steps
     for r in rows:
         assert r.metrics["robots"] == 3 and 0 < r.metrics["coverage"] <= 1.0
         full = r.metrics["steps_to_full"]
@@ -141,11 +155,11 @@ def test_random_bouncing_never_sends_a_turn_command():
 
 
 def test_steps_to_full_matches_a_hand_run_episode():
-    exp = coverage_exp(m=3, seeds=[4], policies=["fixed"])
+    exp = coverage_exp(m=3, seeds=[10_005], policies=["fixed"])
     rows, _ = run({"experiments": [exp]}, progress=False)
     row = next(r for r in rows if r.policy == "fixed 135°")
     env = make_env(validate_config({"experiments": [exp]})["experiments"][0])
-    env.reset(seed=4)
+    env.reset(seed=10_005)
     first, contacts = None, 0
     for step in range(1, 3001):
         _, _, _, _, infos = env.step(dict.fromkeys(env.agents, 2))
@@ -158,19 +172,25 @@ def test_steps_to_full_matches_a_hand_run_episode():
     assert row.metrics["robot_contacts"] == contacts
 
 
-def test_summary_gives_mean_std_and_the_count_of_covered_episodes():
+def test_summary_gives_intervals_and_the_count_of_covered_episodes():
     rows = [EpisodeResult("e", "p", s, steps, steps, 0.0,
-                          {"robots": 3, "steps_to_full": full, "coverage": cov})
+                          {"robots": 3, "full": full is not None, "steps_to_full": full,
+                           "coverage": cov})
             for s, (steps, full, cov) in enumerate([(10, 10, 1.0), (30, 30, 1.0), (50, None, 0.5)])]
     families = {"e": multirobot_coverage.FAMILY}
     (entry,) = summarise(rows, families)
-    assert entry["robots"] == 3 and isinstance(entry["robots"], int)
-    assert entry["steps_to_full"] == 20.0 and entry["steps_to_full_std"] == 10.0
-    assert entry["coverage"] == pytest.approx(2.5 / 3)
-    assert entry["coverage_std"] == pytest.approx(np.std([1.0, 1.0, 0.5]))
-    assert entry["full"] == 2 and entry["episodes"] == 3
+    assert entry["robots"] == 3 and isinstance(entry["robots"], int) and "robots_n" not in entry
+    # a conditional mean: over the two covered episodes only, and it says so
+    assert (entry["steps_to_full"], entry["steps_to_full_n"]) == (20.0, 2)
+    assert (entry["steps_to_full_lo"], entry["steps_to_full_hi"]) == (10.0, 30.0)
+    assert entry["coverage"] == pytest.approx(2.5 / 3) and entry["coverage_n"] == 3
+    # full coverage is a rate: 2 of 3, Wilson interval (statsmodels: 0.2077, 0.9385)
+    assert (entry["full"], entry["full_n"]) == (pytest.approx(2 / 3), 3)
+    assert entry["full_lo"] == pytest.approx(0.20765, abs=1e-4)
+    assert entry["full_hi"] == pytest.approx(0.93851, abs=1e-4)
     table = format_table([entry], families)
-    assert "multi-robot coverage" in table and "20.0 ± 10.0" in table and "2/3" in table
+    assert "multi-robot coverage" in table and "20.0 [10.0, 30.0] n=2" in table
+    assert "0.667 [0.208, 0.939] n=3" in table and "±" not in table
 
 
 def test_encounters_count_pairs_together_at_the_end_of_a_step():
@@ -191,14 +211,15 @@ def test_monitoring_rows_report_region_time_encounters_and_r():
     for r in planner:  # an accepted group of Algorithm 2: collision-free, every period
         assert r.metrics["r"] > 0 and r.metrics["encounters"] == 0 and r.metrics["period"] > 0
         assert 0 < r.metrics["in_region"] <= 1 and r.steps == 200
-    summary = {s["policy"]: s for s in summarise(rows)}
-    assert "in_region_std" in summary["random"] and "r" not in summary["random"]
+    summary = {s["policy"]: s for s in summarise(rows, {"mon": multirobot_monitoring.FAMILY})}
+    assert "in_region_lo" in summary["random"] and "r" not in summary["random"]
+    assert summary["planner"]["r"] == planner[0].metrics["r"] and "r_n" not in summary["planner"]
 
 
 def test_coverage_planner_rows_reproduce_the_predicted_steps():
     """On the cell backend the env executes Algorithm 1's joint trajectory exactly: the env's
     first full-coverage step is the plan's steps_to_full."""
-    exp = coverage_exp(m=3, seeds=[0, 1, 2], max_steps=5000, policies=["planner"],
+    exp = coverage_exp(m=3, seeds=[10_000, 10_001, 10_002], max_steps=5000, policies=["planner"],
                        planner_kwargs={"phi": 135})
     rows, _ = run({"experiments": [exp]}, progress=False)
     assert len(rows) == 3
@@ -217,7 +238,7 @@ def test_shared_ppo_trained_by_train_py_is_scored_by_evaluate(tmp_path):
                     "models": str(tmp_path / "models")}
     assert train.main([str(_write(tmp_path / "t.yaml", train_config)), "--no-progress"]) == 0
     assert (tmp_path / "models/shared/ppo_seed0.zip").is_file()
-    experiments = [coverage_exp(f"m{m}", m=m, seeds=[0, 1], max_steps=800,
+    experiments = [coverage_exp(f"m{m}", m=m, seeds=[10_000, 10_001], max_steps=800,
                                 policies=["rl", "random"], rl_models="shared")
                    for m in (3, 4)]
     config = {"name": "rl", "output": str(tmp_path / "runs"), "models": str(tmp_path / "models"),
@@ -226,11 +247,18 @@ def test_shared_ppo_trained_by_train_py_is_scored_by_evaluate(tmp_path):
     (folder,) = (tmp_path / "runs").iterdir()
     results = json.loads((folder / "results.json").read_text())
     scored = [e for e in results["episodes"] if e["policy"] == "rl ppo_seed0"]
-    assert [(e["experiment"], e["seed"]) for e in scored] == [
-        ("m3", 0), ("m3", 1), ("m4", 0), ("m4", 1)]
+    assert [(e["experiment"], e["seed"], e["group"]) for e in scored] == [
+        ("m3", 10_000, "rl ppo"), ("m3", 10_001, "rl ppo"), ("m4", 10_000, "rl ppo"),
+        ("m4", 10_001, "rl ppo")]
     summary = {(s["experiment"], s["policy"]): s for s in results["summary"]}
-    assert {"coverage", "coverage_std", "full"} <= set(summary[("m3", "rl ppo_seed0")])
-    assert all(summary[(m, "random")]["full"] == 2 for m in ("m3", "m4"))
+    # the table shows one row per algorithm over its training seeds (here one seed)
+    ppo = summary[("m3", "rl ppo")]
+    assert ppo["seeds"] == 1 and ppo["episodes"] == 2 and ppo["coverage_n"] == 1
+    assert ("m3", "rl ppo_seed0") not in summary
+    per_seed = {(s["experiment"], s["policy"]): s for s in results["per_seed"]}
+    assert ppo["coverage"] == per_seed[("m3", "rl ppo_seed0")]["coverage"]
+    assert all((summary[(m, "random")]["full"], summary[(m, "random")]["full_n"]) == (1.0, 2)
+               for m in ("m3", "m4"))
     for name in ("m3-trajectories", "m3-visits", "steps-vs-robots-grid_10x10-cell"):
         assert (folder / f"{name}.png").stat().st_size > 1000
     # a model for other action spaces is refused with the field named
@@ -239,21 +267,24 @@ def test_shared_ppo_trained_by_train_py_is_scored_by_evaluate(tmp_path):
         run({"models": str(tmp_path / "models"), "experiments": [wrong]}, progress=False)
 
 
-def test_evaluate_cli_prints_multi_tables_with_std(tmp_path, capsys):
+def test_evaluate_cli_prints_multi_tables_with_intervals(tmp_path, capsys):
     config = {"name": "multi", "output": str(tmp_path / "runs"),
-              "experiments": [coverage_exp(seeds=[0, 1, 2], policies=["random"]),
-                              monitoring_exp(seeds=[0])]}
+              "experiments": [coverage_exp(seeds=[10_000, 10_001, 10_002], policies=["random"]),
+                              monitoring_exp(seeds=[10_000])]}
     assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
     out = capsys.readouterr().out
-    assert "multi-robot coverage" in out and "multi-robot monitoring" in out and "±" in out
+    assert "multi-robot coverage" in out and "multi-robot monitoring" in out
+    assert "n=3" in out and "n=1" in out and "±" not in out
     (folder,) = (tmp_path / "runs").iterdir()
     summary = json.loads((folder / "results.json").read_text())["summary"]
     cov = next(s for s in summary if s["experiment"] == "cov")
     steps = [e for e in json.loads((folder / "results.json").read_text())["episodes"]
              if e["experiment"] == "cov"]
     values = [e["steps_to_full"] for e in steps]
-    assert cov["steps_to_full_std"] == pytest.approx(float(np.std(values)))
-    assert cov["full"] == 3 and math.isclose(cov["steps_to_full"], np.mean(values))
+    assert (cov["steps_to_full_lo"], cov["steps_to_full_hi"]) == stats.bootstrap_mean_interval(
+        values)
+    assert cov["full"] == 1.0 and cov["full_n"] == 3
+    assert math.isclose(cov["steps_to_full"], np.mean(values))
     assert (folder / "mon-trajectories.png").is_file()
 
 

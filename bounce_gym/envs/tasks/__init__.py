@@ -5,15 +5,18 @@ The environment owns physics, observation and rendering; after every step it han
 drives straight, so its path is the segment ``start → end``; tasks integrate over it.
 
 * `FreeTask` — no reward, never ends (rollouts, demos).
-* `NavigationTask` — reach a goal pose; −w1 per tick, −(w2 − w1) per change of bounce angle, a
-  bonus at the goal: the weights of the roadmap of Alam et al. (navigation paper Alg. 1, w1 = 1,
-  w2 = 100).
+* `NavigationTask` — reach a goal pose; reward ``progress`` (default: success plus
+  potential-based shaping by the geodesic distance to the goal), ``sparse`` or ``plan_cost``
+  (−w1 per tick, −(w2 − w1) per change of bounce angle, a bonus at the goal: the weights of the
+  roadmap of Alam, Bobadilla & Shell 2017, Alg. 1, w1 = 1, w2 = 100); ``info["plan_cost"]``
+  reports the papers' cost whatever the reward.
 * `CoverageTask` — match a target distribution over cells (uniform by default): reward for newly
   covered cells and for reducing the L2 distance between the visit histogram (time spent per cell)
   and the target (thesis §3.4.3, Eq. 3.8's objective; Alam, Bobadilla & Shell 2017, Eq. 5).
 * `LocalizationTask` — the robot starts at an unknown pose; a localization filter plugged in
   through ``filter_factory`` (``"combinatorial"``: the built-in one, on the env's cell model)
-  reports how much the robot can know.
+  reports how much the robot can know; reward: bits of uncertainty removed minus a cost per
+  tick until localized.
 * `MonitoringTask` (multi-robot) — each robot keeps to its own region; robot–robot contacts cost.
 """
 

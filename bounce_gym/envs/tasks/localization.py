@@ -10,7 +10,7 @@ import numpy as np
 from bounce_gym.envs.tasks.base import Task
 from bounce_gym.errors import ConfigError
 from bounce_gym.markov.filters import ActiveLocalizationFilter, LocalizationFilter
-from bounce_gym.validate import flag
+from bounce_gym.validate import flag, number
 
 #: The ``filter_factory`` that selects the built-in filter (`combinatorial_filter`).
 COMBINATORIAL = "combinatorial"
@@ -28,29 +28,44 @@ class LocalizationTask(Task):
             accepted: an env's arguments often come from a configuration file, which is data
             and may not name code to import and run. A filter has ``reset()``,
             ``update(symbol, angle)`` — symbol 1 for a bump tick (``angle`` the bounce angle
-            used, radians), 0 for a forward tick — and the attributes ``size`` (candidate configurations) and ``localized`` (in a knowledge
-            cycle: localized up to the world's symmetry); optionally ``colour`` and ``trapped``.
+            used, radians), 0 for a forward tick — and the attributes ``size`` (candidate
+            configurations) and ``localized`` (in a knowledge cycle: localized up to the
+            world's symmetry); optionally ``colour`` and ``trapped``.
         terminate_when_localized: end the episode once the filter reports ``localized``.
+        tick_cost: cost per tick until the filter first reports ``localized`` (default 0.1,
+            in the reward's unit, bits; must be > 0).
 
     The task feeds the filter the tick stream: the forward ticks of the drive that ``reset`` made
     (bounce mode), then per step its bump tick first and its forward ticks after. Without a
     filter it gives no reward. Either way ``info`` carries what the robot sensed in the step just
     taken, ``info["observation"]`` = (bump ticks, clock, angle or None), None after ``reset``,
     and ``info["observation_count"]``, the steps taken since ``reset``; a user who wants the whole
-    history collects it (the task keeps none, so a long episode costs the same per step). With one, ``info`` carries ``candidates``,
-    ``localized`` (and ``colour``, ``trapped``) and the reward is the drop in log2(candidates).
+    history collects it (the task keeps none, so a long episode costs the same per step).
+
+    With a filter, ``info`` carries ``candidates``, ``localized`` (and ``colour``, ``trapped``),
+    and from the tick the filter first reports ``localized`` on, ``ticks_to_localize`` (ticks
+    since the episode began, the drive of a bounce-mode reset included). The reward of a step
+    is the drop in log2(candidates) minus ``tick_cost`` per tick of the step up to that tick.
+    The information term sums to log2(N_0 / N_T) whatever the policy (it is a potential
+    difference), so the return of an episode that localizes is log2(N_0 / N_T) − tick_cost ×
+    (its ticks to localize after the reset): of two episodes that localize from the same start,
+    the faster one scores strictly higher. An episode that does not localize ends with at least
+    two candidates (one bit short) and pays for every tick; in bounce mode every step takes at
+    least one tick, so within the registered horizon of H steps every episode that localizes
+    in fewer than H + 1 / tick_cost ticks outscores every episode that does not.
     """
 
     name = "localization"
 
     def __init__(self, filter_factory: Callable | str | None = None,
-                 terminate_when_localized: bool = True) -> None:
+                 terminate_when_localized: bool = True, tick_cost: float = 0.1) -> None:
         if filter_factory is not None and filter_factory != COMBINATORIAL \
                 and (isinstance(filter_factory, str) or not callable(filter_factory)):
             raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, None or (from "
                               f"Python) a callable, got {filter_factory!r}")
         self.filter_factory = filter_factory
         self.terminate_when_localized = flag("terminate_when_localized", terminate_when_localized)
+        self.tick_cost = number("tick_cost", tick_cost, minimum=0.0, strict=True)
 
     def configure(self, core) -> None:
         super().configure(core)
@@ -69,11 +84,18 @@ class LocalizationTask(Task):
     def reset(self, state, rng, options):
         self.observation: tuple[int, int, float | None] | None = None
         self.observation_count = 0
+        self.ticks_to_localize: int | None = None
         if self.filter is not None:
             self.filter.reset()
-            for _ in range(int(state.clock[0])):  # the drive to the first contact (bounce mode)
-                self.filter.update(0, None)
+            for tick in range(int(state.clock[0])):  # the drive to the first contact (bounce)
+                self._feed(0, None, tick + 1)
         return self._info()
+
+    def _feed(self, symbol: int, angle: float | None, ticks: int) -> None:
+        """One tick for the filter; ``ticks``: the episode's ticks once it is consumed."""
+        self.filter.update(symbol, angle)
+        if self.ticks_to_localize is None and self.filter.localized:
+            self.ticks_to_localize = ticks
 
     def _info(self) -> dict:
         info = {"observation": self.observation, "observation_count": self.observation_count}
@@ -82,6 +104,8 @@ class LocalizationTask(Task):
             for extra in ("colour", "trapped"):
                 if hasattr(self.filter, extra):
                     info[extra] = getattr(self.filter, extra)
+            if self.ticks_to_localize is not None:
+                info["ticks_to_localize"] = self.ticks_to_localize
         return info
 
     def step(self, state, events):
@@ -92,11 +116,19 @@ class LocalizationTask(Task):
         reward, done = 0.0, False
         if self.filter is not None:
             before = max(self.filter.size, 1)
-            for _ in range(bumps):
-                self.filter.update(1, angle)
-            for _ in range(events.ticks - bumps):
-                self.filter.update(0, None)
-            reward = math.log2(before) - math.log2(max(self.filter.size, 1))
+            first = int(state.ticks) - events.ticks  # the episode's ticks before this step
+            localized_before = self.ticks_to_localize is not None
+            for tick in range(events.ticks):
+                self._feed(1 if tick < bumps else 0, angle if tick < bumps else None,
+                           first + tick + 1)
+            if localized_before:
+                charged = 0
+            elif self.ticks_to_localize is None:
+                charged = events.ticks
+            else:  # localized in this step: the ticks up to and including that one
+                charged = self.ticks_to_localize - first
+            reward = (math.log2(before) - math.log2(max(self.filter.size, 1))
+                      - self.tick_cost * charged)
             done = self.terminate_when_localized and bool(self.filter.localized)
         return np.array([reward]), np.array([done]), self._info()
 

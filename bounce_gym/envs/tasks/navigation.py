@@ -7,9 +7,15 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from bounce_gym.cells.geodesic import GridGeodesic
 from bounce_gym.envs.tasks.base import StepEvents, Task, _normalised, pose_option, tick_length
 from bounce_gym.errors import ConfigError
 from bounce_gym.validate import flag, number
+
+#: the ``reward`` option of `NavigationTask`
+REWARDS = ("progress", "sparse", "plan_cost")
+#: the default discount of the ``progress`` shaping: none, as the episode return is reported
+DEFAULT_GAMMA = 1.0
 
 
 class NavigationTask(Task):
@@ -22,11 +28,47 @@ class NavigationTask(Task):
             Both can also be given per episode through ``reset(options={"start": ..., "goal": ...})``.
         goal_radius: size of the goal region (default: one step length).
         heading_tolerance_deg: heading tolerance at the goal (default 22.5°, half a 45° bin).
-        w1: cost per tick; w2: cost of a bump that changes the bounce angle (charged instead of
-            w1). The first angle is free. Defaults are the paper's w1 = 1, w2 = 100.
-        goal_bonus: reward on arrival.
+        reward: ``"progress"`` (default), ``"sparse"`` or ``"plan_cost"`` — see below.
+        goal_bonus: reward on arrival (default 1 for ``sparse`` and ``progress``; 100 for
+            ``plan_cost``, the value that reward always had).
+        tick_cost: ``sparse`` and ``progress`` only: cost per tick until the goal (default 0).
+        gamma: ``progress`` only: the discount γ of the shaping term, in (0, 1] (default 1:
+            the shaping is exact for the undiscounted episode return, which evaluation reports;
+            an agent's own discount makes it exact for that agent's discounted return instead).
+        w1, w2: the plan-cost weights of Alam, Bobadilla & Shell (2017), Sec. IV-A, Alg. 1
+            (thesis §3.4.1, Alg. 3.1): w1 per tick, w2 instead of w1 for a bump that changes the
+            bounce angle; the first angle is free. Defaults are the papers' w1 = 1, w2 = 100
+            (Sec. V-A).
         observe_task: append the start and goal poses (normalised) to the observation — the
             planners of the papers know both, so a fair RL agent needs them too.
+
+    Rewards (per env step; "ticks" are the ticks of the step up to the goal):
+
+    * ``"sparse"``: ``goal_bonus`` on arrival, minus ``tick_cost`` per tick.
+    * ``"progress"``: the sparse reward plus potential-based shaping
+      F = γ·Φ(s') − Φ(s) (Ng, Harada & Russell 1999, Theorem 1), which leaves the optimal
+      policies of the sparse reward unchanged: a return discounted by γ differs from the sparse
+      one by γ^T·Φ(s_T) − Φ(s_0), where Φ(s_0) does not depend on the policy and Φ(s_T) = 0 at
+      the goal; with γ = 1 the undiscounted returns differ by exactly Φ(s_T) − Φ(s_0), so on
+      the same start an episode that reaches the goal (1 − Φ(s_0)) always outscores one that
+      does not (at most −Φ(s_0)).
+      Φ(s) = −d(s) / d_max ∈ [−1, 0], where d is the geodesic distance from the robot's
+      position to the goal point through the free cells of the env's grid (cell size =
+      ``step_length``, king moves under the env's ``corner_rule``, `GridGeodesic`) and d_max the
+      largest such distance of the episode's goal; cells the goal cannot be reached from have
+      Φ = −1, and Φ = 0 once the goal is reached (the terminal state). On the cell backend
+      that grid is the one the robot moves on; on the continuous backends a point maps to the
+      cell that holds it (or the nearest free cell), so Φ is the cell-level approximation of the
+      continuous geodesic distance.
+    * ``"plan_cost"``: minus the papers' plan cost — −w1 per tick and −(w2 − w1) more per change
+      of bounce angle — plus ``goal_bonus`` on arrival. Not the default: its optimum depends on
+      the bonus and on the horizon rather than on the goal (docs/choices.md, "The navigation
+      reward").
+
+    Whatever the reward, ``info["plan_cost"]`` is the papers' cost of the trajectory so far,
+    w1 per tick since the episode began (the drive of a bounce-mode reset included) plus
+    (w2 − w1) per change of bounce angle, up to the goal: on arrival it equals the roadmap
+    weight of the path taken, so the planner's is its plan's weight.
 
     The goal counts as reached when the robot's straight path of a step passes through the goal
     region while its heading is within tolerance; only the ticks up to that point are charged.
@@ -37,8 +79,9 @@ class NavigationTask(Task):
 
     def __init__(self, start: Mapping | None = None, goal: Mapping | None = None,
                  goal_radius: float | None = None, heading_tolerance_deg: float = 22.5,
-                 w1: float = 1.0, w2: float = 100.0, goal_bonus: float = 100.0,
-                 observe_task: bool = True) -> None:
+                 reward: str = "progress", goal_bonus: float | None = None,
+                 tick_cost: float = 0.0, gamma: float | None = None,
+                 w1: float = 1.0, w2: float = 100.0, observe_task: bool = True) -> None:
         self._fixed = {"start": start, "goal": goal}
         for key in ("start", "goal"):
             if self._fixed[key] is not None:
@@ -52,10 +95,25 @@ class NavigationTask(Task):
         w1, w2 = number("w1", w1), number("w2", w2)
         if not (w1 >= 0 and w2 >= w1):
             raise ConfigError(f"w1, w2: expected 0 <= w1 <= w2, got w1={w1}, w2={w2}")
+        if not isinstance(reward, str) or reward not in REWARDS:
+            raise ConfigError(f"reward: expected one of {list(REWARDS)}, got {reward!r}")
+        self.reward = reward
         self.goal_radius_arg = goal_radius
         self.heading_tolerance = math.radians(heading_tolerance_deg)
         self.w1, self.w2 = w1, w2
-        self.goal_bonus = number("goal_bonus", goal_bonus)
+        self.goal_bonus = (number("goal_bonus", goal_bonus) if goal_bonus is not None
+                           else 100.0 if reward == "plan_cost" else 1.0)
+        self.tick_cost = number("tick_cost", tick_cost, minimum=0.0)
+        if reward == "plan_cost" and self.tick_cost:
+            raise ConfigError("tick_cost: the 'plan_cost' reward charges w1 per tick; tick_cost "
+                              "is for the 'sparse' and 'progress' rewards")
+        if gamma is not None and reward != "progress":
+            raise ConfigError(f"gamma: only the 'progress' reward discounts (its shaping); got "
+                              f"gamma={gamma!r} with reward={reward!r}")
+        self.gamma = number("gamma", DEFAULT_GAMMA if gamma is None else gamma,
+                            minimum=0.0, strict=True)
+        if self.gamma > 1.0:
+            raise ConfigError(f"gamma: expected a number in (0, 1], got {self.gamma!r}")
         self.observe_task = flag("observe_task", observe_task)
 
     def configure(self, core) -> None:
@@ -73,6 +131,16 @@ class NavigationTask(Task):
                 if not options.world.contains(position, options.robot_radius).all():
                     raise ConfigError(f"task_kwargs.{key}: position {position[0].tolist()} is "
                                       "not in the free space")
+        #: the grid Φ is measured on (``progress`` only)
+        self.geodesic = None
+        if self.reward == "progress":
+            free = options.world.occupancy(options.step_length, options.robot_radius)
+            if not free.any():
+                raise ConfigError("reward: 'progress' measures distances between cells of size "
+                                  "step_length, and no such cell is free for this robot; use "
+                                  "'sparse' or a smaller step_length")
+            self.geodesic = GridGeodesic(free, options.step_length, options.world.bounds[:2],
+                                         options.corner_rule)
 
     @property
     def observation_size(self) -> int:
@@ -95,14 +163,55 @@ class NavigationTask(Task):
         return self.start
 
     def reset(self, state, rng, options):
-        self.last_angle = math.nan
         self.reached = False
+        self.plan_cost = self.w1 * int(state.ticks)  # the drive of a bounce-mode reset
+        if self.geodesic is not None:
+            distance = self.geodesic.distances_to(self.goal[0][0])
+            finite = np.isfinite(distance)
+            scale = float(distance[finite].max())
+            #: Φ of every node of the grid for this episode's goal
+            self.potentials = np.full(len(distance), -1.0)
+            self.potentials[finite] = -distance[finite] / scale if scale > 0 else 0.0
+            #: Φ(s) of the robot's current state
+            self.potential_now = self.potential(state.position[0])
         return self._info(state)
+
+    def potential(self, position: np.ndarray) -> float:
+        """Φ of a robot at ``position`` that has not reached the goal, for this episode's goal
+        (``progress`` reward; see the class docstring)."""
+        if self.geodesic is None:
+            raise ConfigError(f"potential: only the 'progress' reward has one (reward is "
+                              f"{self.reward!r})")
+        x, y = position
+        return float(self.potentials[self.geodesic.node_at(float(x), float(y))])
+
+    def step_rewards(self, ticks: np.ndarray, changed: np.ndarray, hit: np.ndarray,
+                     potential_before: np.ndarray | None, potential_after: np.ndarray | None
+                     ) -> np.ndarray:
+        """Rewards of steps (arrays, one entry per robot or env) that charged ``ticks``, changed
+        the bounce angle where ``changed`` and reached the goal where ``hit``; ``potential_*``
+        (``progress`` only) is Φ before and after the step (where not ``hit``). The single and
+        the batched env both compute their rewards here, so they agree to the last bit."""
+        if self.reward == "plan_cost":
+            reward = -self.w1 * ticks - (self.w2 - self.w1) * changed
+        else:
+            reward = -self.tick_cost * ticks
+        reward = reward + self.goal_bonus * hit
+        if self.reward == "progress":
+            reward = reward + (self.gamma * np.where(hit, 0.0, potential_after)
+                               - potential_before)
+        return reward
+
+    def plan_cost_of(self, ticks: np.ndarray, changed: np.ndarray) -> np.ndarray:
+        """The papers' plan cost of steps that charged ``ticks`` and changed the angle where
+        ``changed`` (arrays; what ``info["plan_cost"]`` adds up)."""
+        return self.w1 * ticks + (self.w2 - self.w1) * changed
 
     def _info(self, state) -> dict:
         gap = float(np.hypot(*(state.position[0] - self.goal[0][0])))
         return {"goal_position": self.goal[0][0].copy(), "goal_heading": float(self.goal[1][0]),
-                "distance_to_goal": gap, "is_success": self.reached}
+                "distance_to_goal": gap, "is_success": self.reached,
+                "plan_cost": self.plan_cost}
 
     def _ticks_to_goal(self, events: StepEvents) -> float | None:
         """Ticks into the step at which the robot first enters the goal region, else None."""
@@ -131,17 +240,25 @@ class NavigationTask(Task):
         return float(events.bumps[0] + drive)
 
     def step(self, state, events):
-        changed = bool(events.angle_changed[0])
+        changed = np.array([bool(events.angle_changed[0])])
         arrive = self._ticks_to_goal(events)
-        ticks = events.ticks if arrive is None else min(events.ticks, arrive)
-        reward = -self.w1 * ticks - (self.w2 - self.w1) * changed
-        info = self._info(state)
+        hit = np.array([arrive is not None])
+        ticks = np.array([events.ticks if arrive is None else min(events.ticks, arrive)],
+                         dtype=np.float64)
+        before = after = None
+        if self.geodesic is not None:
+            before = np.array([self.potential_now])
+            after = np.array([self.potential(state.position[0])])
+            self.potential_now = 0.0 if arrive is not None else float(after[0])
+        reward = self.step_rewards(ticks, changed, hit, before, after)
+        self.plan_cost = self.plan_cost + float(self.plan_cost_of(ticks, changed)[0])
         if arrive is not None:
             self.reached = True
-            reward += self.goal_bonus
-            info.update(is_success=True, ticks_to_goal=int(state.ticks - events.ticks + arrive))
-        info["angle_changed"] = changed
-        return np.array([reward]), np.array([self.reached]), info
+        info = self._info(state)
+        if arrive is not None:
+            info["ticks_to_goal"] = int(state.ticks - events.ticks + arrive)
+        info["angle_changed"] = bool(changed[0])
+        return reward, np.array([self.reached]), info
 
     def observation(self, state):
         if not self.observe_task:

@@ -372,8 +372,10 @@ def test_fig7_histogram_on_the_reconstruction(lab):
 # -- execution in the env ---------------------------------------------------------------------
 
 def nav_env(world="lab_navigation") -> BounceEnv:
+    """The lab on the cell backend with the papers' cost as the reward."""
     return BounceEnv(world=world, backend="cell", task="navigation", angles=list(PHI),
-                     task_kwargs={"goal_radius": 0.3, "heading_tolerance_deg": 10})
+                     task_kwargs={"goal_radius": 0.3, "heading_tolerance_deg": 10,
+                                  "reward": "plan_cost"})
 
 
 def pose(model: CellModel, z: int) -> dict:

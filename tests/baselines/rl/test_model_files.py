@@ -13,10 +13,13 @@ import pytest
 
 import bounce_gym  # noqa: F401
 from baselines.rl.model_files import (
+    CHECKPOINT_NAME,
     MANIFEST,
+    MODEL_NAME,
     check_folder_name,
     load_model,
     model_files,
+    read_model,
     save_model,
     trust,
 )
@@ -130,3 +133,37 @@ def test_model_folder_names_are_one_plain_component(name):
     with pytest.raises(ConfigError, match="config.name: expected the name of a folder"):
         check_folder_name("config.name", name)
     check_folder_name("config.name", "navigation-lab")
+
+
+@pytest.mark.parametrize(("name", "kind"), [
+    ("ppo_seed0.zip", "model"), ("ppo-stack4_seed10.zip", "model"),
+    ("recurrentppo-a-b2_seed3.zip", "model"), ("dqn_seed0_640_steps.zip", "checkpoint"),
+    ("ppo-stack4_seed0_2048_steps.zip", "checkpoint"), ("ppo-_seed0.zip", None),
+    ("ppo-Stack_seed0.zip", None), ("a2c_seed0.zip", None), ("ppo_seed0_steps.zip", None),
+])
+def test_model_and_checkpoint_names(name, kind):
+    assert bool(MODEL_NAME.fullmatch(name)) == (kind == "model")
+    assert bool(CHECKPOINT_NAME.fullmatch(name)) == (kind == "checkpoint")
+
+
+def test_metadata_and_resume_state_travel_in_the_trusted_zip(tmp_path, ppo, env):
+    path = tmp_path / "m" / "checkpoints" / "ppo-x_seed0_64_steps.zip"
+    save_model(ppo, path, {"wrappers": {"n_stack": 2}}, resume={"episodes": 3},
+               overwrite=False)
+    trusted = read_model(path)
+    assert (trusted.algo, trusted.metadata) == ("ppo", {"wrappers": {"n_stack": 2}})
+    assert trusted.resume_state() == {"episodes": 3}
+    with pytest.raises(ConfigError, match="a checkpoint is never overwritten"):
+        save_model(ppo, path, overwrite=False)
+    plain = tmp_path / "m" / "ppo_seed0.zip"
+    save_model(ppo, plain)
+    assert read_model(plain).metadata == {}
+    with pytest.raises(ConfigError, match="holds no resume state"):
+        read_model(plain).resume_state()
+    copy = tmp_path / "other" / path.name  # a checkpoint obtained elsewhere: trusted once listed
+    copy.parent.mkdir()
+    copy.write_bytes(path.read_bytes())
+    with pytest.raises(ConfigError, match="is not listed in"):
+        read_model(copy)
+    trust(copy)
+    assert read_model(copy).resume_state() == {"episodes": 3}

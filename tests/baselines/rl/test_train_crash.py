@@ -68,7 +68,8 @@ def test_sigkill_at_any_instant_leaves_only_complete_listed_models(tmp_path):
                     and not p.name.startswith(("ppo_seed0", "."))]
     config = {"models": str(tmp_path / f"run{len(delays) - 1}" / "models"),
               "experiments": [{"name": "nav", "env": "bounce_gym/BounceNavigation-v0",
-                               "env_kwargs": NAV, "seeds": [0], "max_steps": 5,
+                               "env_kwargs": NAV, "seeds": [10_000], "max_steps": 5,
+                               "horizon_reason": "a quick test",
                                "policies": ["rl"]}]}
     rows, _ = run(config, progress=False)
     assert [r.policy for r in rows] == ["rl ppo_seed0"]

@@ -63,23 +63,36 @@ def test_tiny_ppo_training_through_the_native_view(tmp_path):
     config = {"name": "tiny", "env": ENV, "env_kwargs": {"backend": "cell"}, "algo": "ppo",
               "total_timesteps": 256, "n_envs": 4, "models": str(tmp_path),
               "hyperparams": {"n_steps": 32, "batch_size": 64, "n_epochs": 1}}
-    path = train(config, progress=False)
+    (path,) = train(config, progress=False)
     assert path.is_file()
 
 
-def test_training_sets_torch_to_the_configured_threads(tmp_path):
+@pytest.mark.parametrize("threads", [None, 2])
+def test_torch_runs_the_configured_threads_while_training(tmp_path, threads):
+    """One intra-op thread unless the configuration says otherwise, while the model learns;
+    the caller's setting is back afterwards."""
     import torch
+    from stable_baselines3.common.callbacks import BaseCallback
 
-    config = {"name": "x", "env": ENV, "algo": "ppo", "total_timesteps": 10}
-    assert validate_train_config(config)["torch_threads"] == 1
+    seen = []
+
+    class Threads(BaseCallback):
+        def _on_step(self) -> bool:
+            seen.append(torch.get_num_threads())
+            return True
+
+    config = {"name": "x", "env": ENV, "algo": "ppo", "env_kwargs": {"backend": "cell"},
+              "total_timesteps": 64, "n_envs": 2, "models": str(tmp_path),
+              "hyperparams": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
+    if threads is not None:
+        config["torch_threads"] = threads
     with pytest.raises(ConfigError, match="torch_threads"):
         validate_train_config({**config, "torch_threads": 0})
     before = torch.get_num_threads()
     try:
-        torch.set_num_threads(2)
-        train({**config, "env_kwargs": {"backend": "cell"}, "total_timesteps": 64, "n_envs": 2,
-               "models": str(tmp_path), "hyperparams": {"n_steps": 32, "batch_size": 32,
-                                                        "n_epochs": 1}}, progress=False)
-        assert torch.get_num_threads() == 1
+        torch.set_num_threads(3)
+        train(config, progress=False, callbacks=[Threads()])
+        assert torch.get_num_threads() == 3
     finally:
         torch.set_num_threads(before)
+    assert seen and set(seen) == {threads or 1}

@@ -1,0 +1,87 @@
+"""Per-episode monitor files: SB3's ``monitor.csv`` format, one per training run.
+
+``models/<name>/<run>_seed<seed>.monitor.csv`` holds a first line ``#{"t_start": ..., "env_id":
+...}``, a header ``r,l,t[,<outcome>...]`` and one row per finished episode in the order they
+finished: return ``r`` (the env's own reward, before any normalisation), length ``l`` (env
+steps), wall-clock seconds ``t`` since the run started, and the task's outcome keys the env
+reports (``is_success``, ``localized``, ``coverage``; `baselines.rl.train_env.MONITOR_KEYS`). SB3's
+``stable_baselines3.common.monitor.load_results`` reads it, and so does `read_monitor`.
+
+The file is a log, appended to (and flushed) at the end of every episode while training runs, so
+that it can be watched; a crash may leave a partial last line. A resumed run first rewrites it
+(atomically) with exactly the episodes finished before its checkpoint, then appends: the file
+never counts an episode twice.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from bounce_gym.errors import ConfigError
+from bounce_gym.files import atomic_write
+
+SUFFIX = ".monitor.csv"
+
+
+def open_monitor_file(path: Path, t_start: float, env_id: str, keys: tuple[str, ...],
+                      keep_rows: int | None = None):
+    """An SB3 ``ResultsWriter`` on ``path``: a new file (``keep_rows`` None), or the first
+    ``keep_rows`` episodes of the existing one, appended to."""
+    from stable_baselines3.common.monitor import ResultsWriter
+
+    if keep_rows is not None:
+        _truncate(path, keep_rows)
+    else:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    return ResultsWriter(str(path), header={"t_start": t_start, "env_id": env_id},
+                         extra_keys=keys, override_existing=keep_rows is None)
+
+
+def _truncate(path: Path, rows: int) -> None:
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True) if path.is_file() else []
+    complete = [line for line in lines[2:] if line.endswith("\n")]
+    if len(lines) < 2 or len(complete) < rows:
+        raise ConfigError(f"config.resume: the monitor file {path} holds "
+                          f"{max(len(complete), 0)} episodes, but the checkpoint was taken after "
+                          f"{rows}; restore the file or train without --resume")
+    atomic_write(path, "".join(lines[:2] + complete[:rows]).encode())
+
+
+def read_monitor(path: Path) -> dict[str, np.ndarray]:
+    """The columns of a monitor file as float arrays (``True``/``False`` as 1/0), plus
+    ``steps``: the env steps of the run when each episode ended, counted as SB3's plots count
+    them (the cumulative sum of the lengths). A partial last line is left out."""
+    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+    if not lines or not lines[0].startswith("#"):
+        raise ConfigError(f"monitor file {path}: expected a first line '#{{...}}' (SB3's "
+                          "monitor format)")
+    try:
+        json.loads(lines[0][1:])
+    except ValueError as exc:
+        raise ConfigError(f"monitor file {path}: its first line is not JSON ({exc})") from None
+    body = [line for line in lines[1:] if line.endswith("\n")]
+    reader = csv.DictReader(io.StringIO("".join(body)))
+    columns: dict[str, list[float]] = {name: [] for name in reader.fieldnames or []}
+    if not {"r", "l", "t"} <= set(columns):
+        raise ConfigError(f"monitor file {path}: expected the columns r, l, t")
+    for row in reader:
+        for name, value in row.items():
+            columns[name].append(_number(path, name, value))
+    out = {name: np.asarray(values, dtype=np.float64) for name, values in columns.items()}
+    out["steps"] = np.cumsum(out["l"])
+    return out
+
+
+def _number(path: Path, name: str, value: str) -> float:
+    if value in ("True", "False"):
+        return float(value == "True")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"monitor file {path}: column {name} holds {value!r}, not a "
+                          "number") from None

@@ -1,0 +1,291 @@
+"""Training configurations: keys, defaults, hyperparameter files and their checks.
+
+A configuration is a mapping (YAML; format in `baselines.rl.train`). `validate_train_config`
+checks it, merges the hyperparameter file it names and fills in the defaults, so training starts
+only from a complete configuration; every mistake is a `ConfigError` naming the key.
+
+**Hyperparameter files** (``hyperparams_file``) follow rl-baselines3-zoo's layout: one YAML file
+per algorithm, keyed by env id, each entry holding the algorithm's keyword arguments plus
+``n_timesteps`` (the training budget), ``n_envs``, ``policy``, ``normalize`` (VecNormalize: a
+bool, or a mapping of ``norm_obs``, ``norm_reward``, ``clip_obs``, ``clip_reward``) and
+``frame_stack``. Unlike rl-zoo, ``policy_kwargs`` and ``normalize`` are YAML mappings, never
+Python strings to evaluate; ``activation_fn`` is a name (`ACTIVATIONS`), and ``lin_<x>`` for a
+schedulable value (`SCHEDULED`) is rl-zoo's linear decay from x to 0 over training. What the
+configuration sets itself wins over the file (``total_timesteps`` over ``n_timesteps``,
+``n_stack`` over ``frame_stack``, each ``hyperparams`` key over the file's).
+"""
+
+from __future__ import annotations
+
+import copy
+import re
+from collections.abc import Mapping
+from pathlib import Path
+
+import gymnasium as gym
+import yaml
+
+import bounce_gym  # noqa: F401  (registers the environments)
+from baselines.rl.model_files import ALGOS, VARIANT, check_folder_name
+from baselines.seeds import EVALUATION_SEEDS_START
+from bounce_gym.envs.registration import PETTINGZOO_ENVS, is_pettingzoo_id
+from bounce_gym.errors import ConfigError
+
+MULTI_ALGOS = ("ppo",)
+VEC_ENVS = ("native", "sync", "subproc")
+#: The SB3 policy each algorithm trains (a hyperparameter file's ``policy`` must say the same).
+POLICIES = {"ppo": "MlpPolicy", "dqn": "MlpPolicy", "recurrentppo": "MlpLstmPolicy"}
+#: Hyperparameters that may be ``lin_<x>`` (linear decay from x to 0 over the run).
+SCHEDULED = ("learning_rate", "clip_range", "clip_range_vf")
+#: ``policy_kwargs.activation_fn`` names and the torch.nn classes they stand for.
+ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leaky_relu": "LeakyReLU",
+               "gelu": "GELU"}
+NORMALIZE_DEFAULTS = {"norm_obs": True, "norm_reward": True, "clip_obs": 10.0,
+                      "clip_reward": 10.0}
+_KEYS = {"name": str, "env": str, "env_kwargs": dict, "algo": str, "variant": str,
+         "total_timesteps": int, "seed": int, "seeds": list, "n_envs": int, "n_stack": int,
+         "normalize": (bool, dict), "hyperparams_file": str, "hyperparams": dict,
+         "checkpoint_every": int, "tensorboard": bool, "models": str, "resume": bool,
+         "vec_env": str, "torch_threads": int}
+#: rl-zoo keys of a hyperparameter file entry, and the configuration keys they fill.
+_FILE_KEYS = {"n_timesteps": "total_timesteps", "n_envs": "n_envs", "frame_stack": "n_stack",
+              "normalize": "normalize"}
+_LINEAR = re.compile(r"lin_(\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)")
+
+
+def _kind_name(kind) -> str:
+    return " or ".join(k.__name__ for k in kind) if isinstance(kind, tuple) else kind.__name__
+
+
+def _check_types(config: Mapping) -> None:
+    for key, kind in _KEYS.items():
+        value = config.get(key)
+        if key in config and (not isinstance(value, kind)
+                              or kind is int and isinstance(value, bool)):
+            raise ConfigError(f"config.{key}: expected {_kind_name(kind)}, got "
+                              f"{type(value).__name__}")
+
+
+def validate_train_config(config: object, folder: Path | None = None) -> dict:
+    """The checked, complete configuration: the hyperparameter file merged in (a relative
+    ``hyperparams_file`` is read from ``folder``, the configuration file's folder, or the
+    current one), defaults filled in, ``seed``/``seeds`` turned into the list ``seeds``."""
+    if not isinstance(config, Mapping):
+        raise ConfigError(f"config: expected a mapping, got {type(config).__name__}")
+    unknown = sorted(set(config) - set(_KEYS))
+    if unknown:
+        raise ConfigError(f"config: unknown keys {unknown}; allowed are {sorted(_KEYS)}")
+    for key in ("name", "env", "algo"):
+        if key not in config:
+            raise ConfigError(f"config: missing key {key!r}")
+    _check_types(config)
+    config = copy.deepcopy(dict(config))
+    if config["algo"] not in ALGOS:
+        raise ConfigError(f"config.algo: expected one of {ALGOS}, got {config['algo']!r}")
+    multi = is_pettingzoo_id(config["env"])
+    if not multi and config["env"] not in gym.registry:
+        raise ConfigError(f"config.env: unknown environment id {config['env']!r}; multi-robot "
+                          f"ids are {list(PETTINGZOO_ENVS)}")
+    if "hyperparams_file" in config:
+        _merge_file(config, folder)
+        _check_types(config)
+    if "total_timesteps" not in config:
+        raise ConfigError("config: missing key 'total_timesteps' (or n_timesteps in the "
+                          "hyperparams_file entry)")
+    if multi and config["algo"] not in MULTI_ALGOS:
+        raise ConfigError(f"config.algo: a multi-robot env trains one shared policy with one of "
+                          f"{MULTI_ALGOS}, got {config['algo']!r}")
+    _check_vec_env(config, multi)
+    if config["total_timesteps"] < 1:
+        raise ConfigError(f"config.total_timesteps: expected an integer >= 1, got "
+                          f"{config['total_timesteps']}")
+    check_folder_name("config.name", config["name"])
+    if "variant" in config and not VARIANT.fullmatch(config["variant"]):
+        raise ConfigError(f"config.variant: expected lower-case letters and digits in parts "
+                          f"joined by '-' (e.g. stack4), got {config['variant']!r}")
+    native = multi or gym.spec(config["env"]).vector_entry_point is not None
+    defaults = {"vec_env": "native" if native else "sync", "env_kwargs": {}, "variant": None,
+                "n_envs": 1 if multi or config["algo"] == "dqn" else 4, "n_stack": 1,
+                "normalize": False, "hyperparams": {}, "checkpoint_every": 0,
+                "tensorboard": False, "models": "models", "resume": False, "torch_threads": 1}
+    for key, value in defaults.items():
+        config.setdefault(key, value)
+    for key, least in (("n_envs", 1), ("n_stack", 1), ("checkpoint_every", 0),
+                       ("torch_threads", 1)):
+        if config[key] < least:
+            raise ConfigError(f"config.{key}: expected an integer >= {least}, got {config[key]}")
+    config["seeds"] = _seeds(config)
+    config.pop("seed", None)
+    config["normalize"] = _normalize(config["normalize"])
+    if multi:
+        _check_multi(config)
+    _check_seed_range(config)
+    _check_schedules(config["hyperparams"])
+    _check_policy_kwargs(config["hyperparams"])
+    return config
+
+
+def _check_vec_env(config: dict, multi: bool) -> None:
+    if config.get("vec_env", "native") not in VEC_ENVS:
+        raise ConfigError(f"config.vec_env: expected one of {VEC_ENVS}, got {config['vec_env']!r}")
+    if multi and config.get("vec_env", "native") != "native":
+        raise ConfigError("config.vec_env: a multi-robot env is one VecEnv with a slot per robot; "
+                          "leave vec_env unset")
+    if config.get("vec_env") == "native" and not multi \
+            and gym.spec(config["env"]).vector_entry_point is None:
+        raise ConfigError(f"config.vec_env: {config['env']} has no native batched env; use "
+                          "'sync' or 'subproc'")
+
+
+def _check_multi(config: dict) -> None:
+    if config["n_envs"] != 1:
+        raise ConfigError("config.n_envs: a multi-robot env is one VecEnv with a slot per robot; "
+                          "n_envs must be 1")
+    if config["n_stack"] != 1 or config["normalize"] is not None:
+        key = "n_stack" if config["n_stack"] != 1 else "normalize"
+        raise ConfigError(f"config.{key}: frame stacking and VecNormalize are for single-robot "
+                          "envs; the shared multi-robot policy runs without them")
+
+
+def _seeds(config: dict) -> list[int]:
+    if "seed" in config and "seeds" in config:
+        raise ConfigError("config.seeds: give either seed (one run) or seeds (several), not both")
+    if "seeds" not in config:
+        seed = config.get("seed", 0)
+        if seed < 0:
+            raise ConfigError(f"config.seed: expected an integer >= 0, got {seed}")
+        return [seed]
+    seeds = config["seeds"]
+    if not seeds or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0
+                            for s in seeds) or len(set(seeds)) != len(seeds):
+        raise ConfigError(f"config.seeds: expected a non-empty list of distinct integers >= 0, "
+                          f"got {seeds!r}")
+    return list(seeds)
+
+
+def _check_seed_range(config: dict) -> None:
+    """Env i of the run with seed s is seeded with s + i: every such seed stays below the
+    evaluation seeds (`baselines.seeds`)."""
+    for seed in config["seeds"]:
+        if seed + config["n_envs"] > EVALUATION_SEEDS_START:
+            raise ConfigError(
+                f"config.seeds: seed {seed} with n_envs {config['n_envs']} would seed envs up to "
+                f"{seed + config['n_envs'] - 1}; training env seeds must stay below "
+                f"{EVALUATION_SEEDS_START}, where the evaluation seeds start (baselines.seeds)")
+
+
+def _normalize(value: bool | dict) -> dict | None:
+    """The VecNormalize settings (``None``: no VecNormalize)."""
+    if value is False:
+        return None
+    settings = dict(NORMALIZE_DEFAULTS)
+    if isinstance(value, dict):
+        unknown = sorted(set(value) - set(NORMALIZE_DEFAULTS))
+        if unknown:
+            raise ConfigError(f"config.normalize: unknown keys {unknown}; allowed are "
+                              f"{sorted(NORMALIZE_DEFAULTS)}")
+        for key, default in NORMALIZE_DEFAULTS.items():
+            item = value.get(key, default)
+            if isinstance(default, bool) and not isinstance(item, bool) or \
+                    isinstance(default, float) and (isinstance(item, bool) or
+                                                    not isinstance(item, int | float) or
+                                                    item <= 0):
+                kind = "true or false" if isinstance(default, bool) else "a number > 0"
+                raise ConfigError(f"config.normalize.{key}: expected {kind}, got {item!r}")
+            settings[key] = item if isinstance(default, bool) else float(item)
+    if not settings["norm_obs"] and not settings["norm_reward"]:
+        return None
+    return settings
+
+
+def _check_schedules(hyperparams: dict) -> None:
+    for key, value in hyperparams.items():
+        if isinstance(value, str) and value.startswith("lin_"):
+            if key not in SCHEDULED:
+                raise ConfigError(f"config.hyperparams.{key}: a lin_ schedule is allowed only "
+                                  f"for {SCHEDULED}")
+            if not _LINEAR.fullmatch(value):
+                raise ConfigError(f"config.hyperparams.{key}: expected lin_<number>, got "
+                                  f"{value!r}")
+
+
+def _check_policy_kwargs(hyperparams: dict) -> None:
+    policy_kwargs = hyperparams.get("policy_kwargs", {})
+    if not isinstance(policy_kwargs, dict):
+        raise ConfigError(f"config.hyperparams.policy_kwargs: expected a mapping, got "
+                          f"{policy_kwargs!r}")
+    name = policy_kwargs.get("activation_fn", "tanh")
+    if name not in ACTIVATIONS:
+        raise ConfigError(f"config.hyperparams.policy_kwargs.activation_fn: expected one of "
+                          f"{sorted(ACTIVATIONS)}, got {name!r}")
+
+
+def _merge_file(config: dict, folder: Path | None) -> None:
+    """Merge the ``config["env"]`` entry of the hyperparameter file into ``config``."""
+    path = Path(config["hyperparams_file"])
+    if not path.is_absolute():
+        path = (folder or Path.cwd()) / path
+    config["hyperparams_file"] = str(path)
+    field = "config.hyperparams_file"
+    if not path.is_file():
+        raise ConfigError(f"{field}: file {str(path)!r} does not exist")
+    try:
+        entries = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{field}: {path} is not valid YAML ({str(exc).splitlines()[0]})") \
+            from None
+    if not isinstance(entries, dict) or config["env"] not in entries:
+        ids = sorted(entries) if isinstance(entries, dict) else []
+        raise ConfigError(f"{field}: {path} has no entry for {config['env']}; it has {ids}")
+    entry = entries[config["env"]]
+    if not isinstance(entry, dict):
+        raise ConfigError(f"{field}: the entry {config['env']} of {path} is not a mapping")
+    entry = dict(entry)
+    policy = entry.pop("policy", POLICIES[config["algo"]])
+    if policy != POLICIES[config["algo"]]:
+        raise ConfigError(f"{field}: {config['env']} names policy {policy!r}, but "
+                          f"{config['algo']} trains {POLICIES[config['algo']]!r}")
+    timesteps = entry.get("n_timesteps")
+    if isinstance(timesteps, float) and timesteps.is_integer():  # rl-zoo writes !!float 1e5
+        entry["n_timesteps"] = int(timesteps)
+    for file_key, key in _FILE_KEYS.items():
+        if file_key in entry:
+            config.setdefault(key, entry.pop(file_key))
+    config["hyperparams"] = {**entry, **config.get("hyperparams", {})}
+
+
+def check_hyperparams(algo_class, hyperparams: Mapping) -> None:
+    """Each hyperparameter must be an argument of the algorithm, and a number where its default
+    is one (a ``lin_`` schedule where `SCHEDULED` allows it); SB3 itself checks the values of
+    some, e.g. ``n_steps``, when the model is built."""
+    import inspect
+
+    arguments = inspect.signature(algo_class).parameters
+    for key, value in hyperparams.items():
+        if key not in arguments or key in ("policy", "env", "device", "seed", "verbose",
+                                           "tensorboard_log"):
+            raise ConfigError(f"config.hyperparams.{key}: not a hyperparameter of "
+                              f"{algo_class.__name__}")
+        default = arguments[key].default
+        number = (int, float)
+        scheduled = isinstance(value, str) and value.startswith("lin_")  # _check_schedules
+        if isinstance(default, number) and not isinstance(default, bool) and not scheduled and (
+                not isinstance(value, number) or isinstance(value, bool)):
+            raise ConfigError(f"config.hyperparams.{key}: expected a number, got {value!r}")
+
+
+def algo_kwargs(hyperparams: Mapping) -> dict:
+    """The SB3 keyword arguments of the validated ``hyperparams``: ``lin_<x>`` becomes a linear
+    schedule, ``policy_kwargs.activation_fn`` the torch.nn class it names."""
+    from stable_baselines3.common.utils import LinearSchedule
+    from torch import nn
+
+    kwargs = copy.deepcopy(dict(hyperparams))
+    for key in SCHEDULED:
+        value = kwargs.get(key)
+        if isinstance(value, str):
+            kwargs[key] = LinearSchedule(float(_LINEAR.fullmatch(value).group(1)), 0.0, 1.0)
+    policy_kwargs = kwargs.get("policy_kwargs")
+    if policy_kwargs and "activation_fn" in policy_kwargs:
+        policy_kwargs["activation_fn"] = getattr(nn, ACTIVATIONS[policy_kwargs["activation_fn"]])
+    return kwargs

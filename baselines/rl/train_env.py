@@ -1,0 +1,134 @@
+"""The VecEnv an agent trains on: the envs, the monitor, and the observation/reward wrappers.
+
+From the bottom up:
+
+1. the envs (``vec_env``): the native batch (`bounce_gym.envs.vector_env.BounceVectorEnv` seen
+   through `baselines.rl.vector_vec_env.VectorToVecEnv`), or SB3's ``DummyVecEnv``
+   (``sync``) / ``SubprocVecEnv`` (``subproc``) of ``gym.make`` copies, each inside
+   `SnapshotEnv`; for a PettingZoo id the parameter-sharing adapter
+   (`baselines.rl.parallel_vec_env.ParallelToVecEnv`, one slot per robot). Env i is seeded with
+   seed + i.
+2. ``VecMonitor``: episode return and length, plus the task's outcome (`MONITOR_KEYS` the env
+   reports), in ``info["episode"]`` and, when given a file, one CSV row per episode
+   (`baselines.rl.monitor`). It sees the env's own rewards, before any normalisation.
+3. ``VecNormalize`` (``normalize``): running mean/std of observations and/or of the discounted
+   return, as rl-baselines3-zoo puts it (below the frame stack).
+4. ``VecFrameStack`` (``n_stack`` > 1): the last n observations, concatenated.
+
+Every layer can be captured and restored exactly (`baselines.rl.resume`): the copies of ``sync``
+and ``subproc`` through `SnapshotEnv`, the others as plain objects.
+"""
+
+from __future__ import annotations
+
+import pickle
+from collections.abc import Mapping
+from pathlib import Path
+
+import gymnasium as gym
+
+from baselines.rl.monitor import open_monitor_file
+from bounce_gym.envs.registration import is_pettingzoo_id
+from bounce_gym.errors import config_errors
+
+#: Per-episode outcomes the monitor records when the env's ``info`` has them.
+MONITOR_KEYS = ("is_success", "localized", "coverage")
+
+
+class SnapshotEnv(gym.Wrapper):
+    """An env whose whole state (everything it wraps) can be taken and put back, also from
+    another process: what resuming a ``sync`` or ``subproc`` run restores."""
+
+    def snapshot(self) -> bytes:
+        return pickle.dumps(self.env, protocol=pickle.HIGHEST_PROTOCOL)
+
+    def restore(self, data: bytes) -> None:
+        """Put back a `snapshot` (taken by this package and read from a trusted checkpoint)."""
+        self.env = pickle.loads(data)  # noqa: S301
+
+
+def _make_copy(env_id: str, env_kwargs: dict) -> gym.Env:
+    return SnapshotEnv(gym.make(env_id, **env_kwargs))
+
+
+class _CopyMaker:
+    """A picklable env factory for SB3's ``SubprocVecEnv``."""
+
+    def __init__(self, env_id: str, env_kwargs: Mapping) -> None:
+        self.env_id, self.env_kwargs = env_id, dict(env_kwargs)
+
+    def __call__(self) -> gym.Env:
+        return _make_copy(self.env_id, self.env_kwargs)
+
+
+def base_env(config: Mapping):
+    """The envs of a validated configuration, unseeded, as an SB3 VecEnv (bad ``env_kwargs``
+    raise `ConfigError`)."""
+    with config_errors("config.env_kwargs"):
+        if is_pettingzoo_id(config["env"]):
+            import pettingzoo
+
+            from baselines.rl.parallel_vec_env import ParallelToVecEnv
+
+            return ParallelToVecEnv(pettingzoo.make("parallel", config["env"],
+                                                    **config["env_kwargs"]))
+        if config["vec_env"] == "native":
+            from baselines.rl.vector_vec_env import VectorToVecEnv
+
+            return VectorToVecEnv(gym.make_vec(
+                config["env"], num_envs=config["n_envs"],
+                vectorization_mode="vector_entry_point", **config["env_kwargs"]))
+        from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+        kind = SubprocVecEnv if config["vec_env"] == "subproc" else DummyVecEnv
+        return kind([_CopyMaker(config["env"], config["env_kwargs"])
+                     for _ in range(config["n_envs"])])
+
+
+def monitor_keys(config: Mapping) -> tuple[str, ...]:
+    """The `MONITOR_KEYS` that the env of ``config`` reports in every step's ``info``."""
+    with config_errors("config.env_kwargs"):
+        if is_pettingzoo_id(config["env"]):
+            import pettingzoo
+
+            env = pettingzoo.make("parallel", config["env"], **config["env_kwargs"])
+            env.reset(seed=0)
+            agent = env.possible_agents[0]
+            info = env.step({a: env.action_space(a).sample() for a in env.agents})[4][agent]
+        else:
+            env = gym.make(config["env"], **config["env_kwargs"])
+            env.reset(seed=0)
+            info = env.step(env.action_space.sample())[4]
+    env.close()
+    return tuple(key for key in MONITOR_KEYS if key in info)
+
+
+def make_train_env(config: Mapping, seed: int | None = None):
+    """The training VecEnv of a validated configuration (module docstring), seeded with ``seed``
+    (default: the first of ``config["seeds"]``) at its first reset; its monitor writes no file
+    until `attach_monitor_file`."""
+    from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor, VecNormalize
+
+    env = VecMonitor(base_env(config), info_keywords=monitor_keys(config))
+    if config["normalize"] is not None:
+        env = VecNormalize(env, gamma=config["hyperparams"].get("gamma", 0.99),
+                           **config["normalize"])
+    if config["n_stack"] > 1:
+        env = VecFrameStack(env, config["n_stack"])
+    env.seed(config["seeds"][0] if seed is None else seed)
+    return env
+
+
+def attach_monitor_file(env, path: Path, env_id: str, keep_rows: int | None = None) -> None:
+    """Let the monitor of a training VecEnv write its episodes to ``path``: a new file, or with
+    ``keep_rows`` the first ``keep_rows`` episodes of the existing one, appended to (a resumed
+    run; `baselines.rl.monitor`)."""
+    from stable_baselines3.common.vec_env import VecMonitor
+    from stable_baselines3.common.vec_env.base_vec_env import VecEnvWrapper
+
+    layer = env
+    while not isinstance(layer, VecMonitor):
+        assert isinstance(layer, VecEnvWrapper), "a training env has a VecMonitor"
+        layer = layer.venv
+    layer.results_writer = open_monitor_file(path, layer.t_start, env_id, layer.info_keywords,
+                                             keep_rows)

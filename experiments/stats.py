@@ -1,0 +1,181 @@
+"""Interval estimates for evaluation tables: 95% intervals for rates, means and, across RL training
+seeds, the interquartile mean (IQM) and performance profiles.
+
+* A **rate** (a yes/no outcome per episode, e.g. success) gets the Wilson score interval
+  (Wilson 1927), through `scipy.stats.binomtest`; unlike the normal approximation it stays
+  inside [0, 1] and is not empty at 0 or n successes.
+* A **mean** gets a bootstrap interval: `scipy.stats.bootstrap`, bias-corrected and accelerated
+  (BCa), 9,999 resamples, from a fixed seed, so the same values give the same interval. Where
+  BCa is undefined (its acceleration is 0/0 for some small or lopsided samples) the percentile
+  interval is used instead.
+* Across **training seeds** (Agarwal et al., "Deep RL at the edge of the statistical precipice",
+  NeurIPS 2021): the IQM — the mean of the middle 50% of the per-run scores (25% trimmed from
+  each end, `scipy.stats.trim_mean`) — with a *stratified* percentile bootstrap: every task's runs
+  are resampled separately. `scipy.stats.bootstrap` given one sample per task does exactly that
+  (it resamples each sample independently). The performance profile is, per threshold τ, the
+  fraction of runs scoring above τ (averaged over tasks), with the same bootstrap.
+
+These are the estimators of the `rliable` package (checked against its values in the tests);
+they are computed with scipy because rliable 1.2.0 pulls in arch, statsmodels, pandas and
+seaborn, fails to import with pandas 3 (arch's decorators), and seeds its bootstrap only through
+numpy's legacy global state.
+
+Every interval is ``None`` where there is nothing to resample (fewer than two values).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+#: Confidence level of every interval.
+CONFIDENCE = 0.95
+#: Bootstrap resamples.
+N_RESAMPLES = 9999
+#: Seed of every bootstrap: the same values give the same interval.
+SEED = 0
+#: Fraction trimmed from each end for the interquartile mean.
+IQM_TRIM = 0.25
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A point estimate, its 95% interval (``None`` if there is none) and the count it rests on."""
+
+    value: float
+    lo: float | None
+    hi: float | None
+    n: int
+
+    def store(self, entry: dict, key: str) -> None:
+        """Write it into a summary row as ``key``, ``key_lo``, ``key_hi`` and ``key_n``."""
+        entry.update({key: self.value, f"{key}_lo": self.lo, f"{key}_hi": self.hi,
+                      f"{key}_n": self.n})
+
+
+def wilson_interval(successes: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float]:
+    """The Wilson score interval of ``successes`` out of ``n`` (n >= 1)."""
+    ci = stats.binomtest(int(successes), int(n)).proportion_ci(confidence_level=confidence,
+                                                               method="wilson")
+    return float(ci.low), float(ci.high)
+
+
+def rate(outcomes: Sequence[bool]) -> Estimate:
+    """The fraction of true outcomes with its Wilson interval."""
+    n = len(outcomes)
+    if n == 0:
+        raise ValueError("rate of no outcomes")
+    k = int(np.count_nonzero(outcomes))
+    lo, hi = wilson_interval(k, n)
+    return Estimate(k / n, lo, hi, n)
+
+
+def bootstrap_mean_interval(values: Sequence[float], confidence: float = CONFIDENCE,
+                            n_resamples: int = N_RESAMPLES, seed: int = SEED
+                            ) -> tuple[float, float] | None:
+    """The BCa bootstrap interval of the mean of ``values`` (``None`` for fewer than two values;
+    a point interval when they are all equal, where BCa is undefined)."""
+    x = np.asarray(values, dtype=float)
+    if x.size < 2:
+        return None
+    if np.ptp(x) == 0:
+        return float(x[0]), float(x[0])
+    for method in ("BCa", "percentile"):
+        with warnings.catch_warnings():  # BCa's own warning when it is undefined: fall back
+            warnings.simplefilter("ignore", stats.DegenerateDataWarning)
+            warnings.simplefilter("ignore", RuntimeWarning)
+            ci = stats.bootstrap((x,), np.mean, n_resamples=n_resamples,
+                                 confidence_level=confidence, method=method, vectorized=True,
+                                 rng=np.random.default_rng(seed)).confidence_interval
+        if np.isfinite(ci.low) and np.isfinite(ci.high):
+            break
+    return float(ci.low), float(ci.high)
+
+
+def mean(values: Sequence[float]) -> Estimate:
+    """The mean of ``values`` with its bootstrap interval."""
+    x = np.asarray(values, dtype=float)
+    if x.size == 0:
+        raise ValueError("mean of no values")
+    ci = bootstrap_mean_interval(x)
+    return Estimate(float(x.mean()), *(ci or (None, None)), int(x.size))
+
+
+def _tasks(scores) -> list[np.ndarray]:
+    """Per-task score arrays from a (runs, tasks) array or a list of per-task run scores."""
+    if isinstance(scores, np.ndarray) or not isinstance(scores, list | tuple):
+        array = np.asarray(scores, dtype=float)
+        array = array[:, None] if array.ndim == 1 else array
+        if array.ndim != 2:
+            raise ValueError(f"scores: expected (runs, tasks), got shape {array.shape}")
+        return [array[:, j] for j in range(array.shape[1])]
+    return [np.asarray(task, dtype=float).ravel() for task in scores]
+
+
+def iqm(scores) -> float:
+    """The interquartile mean of all runs of all tasks: ``scipy.stats.trim_mean(·, 0.25)``."""
+    return float(stats.trim_mean(np.concatenate(_tasks(scores)), IQM_TRIM))
+
+
+def _stratified(tasks: list[np.ndarray], statistic, seed: int, n_resamples: int,
+                confidence: float):
+    return stats.bootstrap(tasks, statistic, n_resamples=n_resamples,
+                           confidence_level=confidence, method="percentile", vectorized=True,
+                           rng=np.random.default_rng(seed)).confidence_interval
+
+
+def iqm_estimate(scores, confidence: float = CONFIDENCE, n_resamples: int = N_RESAMPLES,
+                 seed: int = SEED) -> Estimate:
+    """The IQM of the runs' scores with its stratified-bootstrap percentile interval.
+
+    ``scores``: a (runs, tasks) array (a 1-D array is one task) or a list of per-task run scores
+    (tasks may have different numbers of runs). ``n`` is the number of runs of all tasks.
+    """
+    tasks = _tasks(scores)
+    n = sum(t.size for t in tasks)
+    value = iqm(tasks)
+    if all(t.size < 2 for t in tasks):
+        return Estimate(value, None, None, n)
+
+    def statistic(*samples, axis=-1):
+        return stats.trim_mean(np.concatenate(samples, axis=axis), IQM_TRIM, axis=axis)
+
+    ci = _stratified(tasks, statistic, seed, n_resamples, confidence)
+    return Estimate(value, float(ci.low), float(ci.high), n)
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A performance profile: per threshold, the fraction of runs above it, with its interval."""
+
+    taus: np.ndarray
+    fraction: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    n: int
+
+
+def performance_profile(scores, taus: Sequence[float], confidence: float = CONFIDENCE,
+                        n_resamples: int = N_RESAMPLES, seed: int = SEED) -> Profile:
+    """The score distribution of the runs: for each τ of ``taus`` the fraction of runs scoring
+    above τ (per task, then averaged over tasks), with a stratified-bootstrap percentile band
+    (the band is the point value itself when no task has two runs)."""
+    tasks = _tasks(scores)
+    thresholds = np.asarray(taus, dtype=float)
+
+    def statistic(*samples, axis=-1):
+        above = [np.mean(np.expand_dims(s, -2) > thresholds[:, None], axis=-1)
+                 for s in (np.moveaxis(x, axis, -1) for x in samples)]
+        return np.moveaxis(np.mean(above, axis=0), -1, 0)
+
+    fraction = statistic(*tasks)
+    if all(t.size < 2 for t in tasks):
+        lo = hi = fraction
+    else:
+        ci = _stratified(tasks, statistic, seed, n_resamples, confidence)
+        lo, hi = np.asarray(ci.low, dtype=float), np.asarray(ci.high, dtype=float)
+    return Profile(thresholds, fraction, lo, hi, sum(t.size for t in tasks))

@@ -1,0 +1,85 @@
+"""Monitor files and learning curves: SB3's format read back, a resumed run's file cut to its
+checkpoint, per-seed moving means, the across-seed mean with its 95% interval, and the
+``bounce-gym curves`` command."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import stats
+
+pytest.importorskip("stable_baselines3")
+
+from baselines.rl.curves import learning_curves, smoothed  # noqa: E402
+from baselines.rl.monitor import open_monitor_file, read_monitor  # noqa: E402
+from bounce_gym.errors import ConfigError  # noqa: E402
+from experiments.cli import main  # noqa: E402
+
+
+def _monitor(path: Path, rows: list[tuple], partial: str = "") -> Path:
+    lines = [f"#{json.dumps({'t_start': 0.0, 'env_id': 'x'})}", "r,l,t,is_success"]
+    lines += [",".join(str(v) for v in row) for row in rows]
+    path.write_text("\n".join(lines) + "\n" + partial)
+    return path
+
+
+def test_smoothed_is_the_mean_of_the_last_window_values():
+    assert smoothed(np.array([1.0, 3.0, 5.0, 7.0]), 2).tolist() == [1.0, 2.0, 4.0, 6.0]
+    assert smoothed(np.array([2.0, 4.0]), 100).tolist() == [2.0, 3.0]
+
+
+def test_monitor_files_are_read_as_sb3_writes_them(tmp_path):
+    from stable_baselines3.common.monitor import load_results
+
+    rows = [(-5.0, 10, 0.1, True), (-7.5, 20, 0.2, False)]
+    path = _monitor(tmp_path / "ppo_seed0.monitor.csv", rows)
+    theirs = load_results(str(tmp_path))
+    ours = read_monitor(path)
+    assert ours["r"].tolist() == theirs["r"].tolist() == [-5.0, -7.5]
+    assert ours["l"].tolist() == theirs["l"].tolist() and ours["steps"].tolist() == [10, 30]
+    assert ours["is_success"].tolist() == [1.0, 0.0]
+    _monitor(path, rows, partial="-1.0,3")  # a crash mid-line: the partial row is left out
+    assert read_monitor(path)["r"].tolist() == [-5.0, -7.5]
+
+
+def test_a_resumed_run_keeps_exactly_the_episodes_before_its_checkpoint(tmp_path):
+    path = _monitor(tmp_path / "m.monitor.csv", [(-1.0, 1, 0.1, True)] * 5, partial="-2.0,")
+    writer = open_monitor_file(path, 0.0, "x", ("is_success",), keep_rows=3)
+    writer.write_row({"r": -9.0, "l": 4, "t": 1.0, "is_success": False})
+    writer.close()
+    assert read_monitor(path)["r"].tolist() == [-1.0, -1.0, -1.0, -9.0]
+    with pytest.raises(ConfigError, match=r"holds 4 episodes, but the checkpoint was taken "
+                                          r"after 6"):
+        open_monitor_file(path, 0.0, "x", ("is_success",), keep_rows=6)
+
+
+def test_curves_per_seed_and_across_seeds(tmp_path):
+    for seed, value in ((0, 1.0), (10, 3.0)):
+        _monitor(tmp_path / f"ppo_seed{seed}.monitor.csv",
+                 [(value, 10, 0.1, value > 2)] * 20)
+    _monitor(tmp_path / "dqn_seed0.monitor.csv", [(0.0, 5, 0.1, False)] * 3)
+    (dqn, ppo) = learning_curves(tmp_path, window=5)
+    assert (dqn.name, ppo.name, list(ppo.seeds)) == ("dqn", "ppo", [0, 10])
+    assert ppo.final(10) == {"episodes": 20, "env_steps": 200, "return": 3.0, "success": 1.0}
+    steps, mean, low, high = ppo.across_seeds("return")
+    half = stats.t.ppf(0.975, 1) * np.std([1.0, 3.0], ddof=1) / np.sqrt(2)
+    assert steps[-1] == 200 and np.isnan(mean[0])  # before the first episode ends
+    assert mean[-1] == pytest.approx(2.0) and high[-1] - mean[-1] == pytest.approx(half)
+    assert np.isnan(dqn.across_seeds("return")[2]).all()  # one seed: no interval
+
+
+def test_the_curves_command_draws_a_models_folder(tmp_path, capsys):
+    folder = tmp_path / "nav"
+    folder.mkdir()
+    assert main(["curves", str(folder)]) == 2
+    assert "holds no monitor file with a finished episode" in capsys.readouterr().err
+    for seed in (0, 1, 2):
+        _monitor(folder / f"ppo_seed{seed}.monitor.csv",
+                 [(-float(seed + k), 10, 0.1, k % 2 == 0) for k in range(30)])
+    assert main(["curves", str(folder), "--window", "10"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("ppo: 3 seeds, at 300 env steps: return ")
+    assert (folder / "learning_curves.png").stat().st_size > 0
+    rows = (folder / "learning_curves.csv").read_text().splitlines()
+    assert rows[0] == "run,seed,episodes,env_steps,return,success" and len(rows) == 4

@@ -1,0 +1,80 @@
+"""Training configurations: the shipped configs and rl-zoo style hyperparameter files are
+valid, the file merges under the configuration, and schedules and activations map to SB3's."""
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+pytest.importorskip("stable_baselines3")
+
+from baselines.rl.model_files import ALGOS  # noqa: E402
+from baselines.rl.train import _algo_class  # noqa: E402
+from baselines.rl.train_config import (  # noqa: E402
+    POLICIES,
+    algo_kwargs,
+    check_hyperparams,
+    validate_train_config,
+)
+from baselines.rl.train_env import make_train_env  # noqa: E402
+from baselines.seeds import EVALUATION_SEEDS_START  # noqa: E402
+
+CONFIGS = Path(__file__).parents[3] / "configs"
+TRAIN_CONFIGS = sorted(CONFIGS.glob("train_*.yaml"))
+HYPERPARAMS = sorted((CONFIGS / "hyperparams").glob("*.yaml"))
+
+
+@pytest.mark.parametrize("path", TRAIN_CONFIGS, ids=[p.name for p in TRAIN_CONFIGS])
+def test_shipped_training_configs_build_their_model(path):
+    config = validate_train_config(yaml.safe_load(path.read_text()), path.parent)
+    assert config["total_timesteps"] >= 10_000 and len(config["seeds"]) >= 1
+    assert max(config["seeds"]) + config["n_envs"] <= EVALUATION_SEEDS_START
+    algo_class = _algo_class(config["algo"])
+    check_hyperparams(algo_class, config["hyperparams"])
+    env = make_train_env({**config, "n_envs": min(config["n_envs"], 2),
+                          "vec_env": "sync" if config["vec_env"] == "subproc" else
+                          config["vec_env"]})
+    model = algo_class(POLICIES[config["algo"]], env, device="cpu",
+                       **algo_kwargs(config["hyperparams"]))
+    assert model.policy is not None
+    env.close()
+
+
+@pytest.mark.parametrize("path", HYPERPARAMS, ids=[p.name for p in HYPERPARAMS])
+def test_every_hyperparameter_entry_states_a_budget_and_real_hyperparameters(path):
+    algo = path.stem
+    assert algo in ALGOS
+    for env_id, entry in yaml.safe_load(path.read_text()).items():
+        assert entry["n_timesteps"] >= 10_000, env_id  # the stated training budget
+        config = validate_train_config({"name": "x", "env": env_id, "algo": algo,
+                                        "hyperparams_file": str(path)})
+        assert config["total_timesteps"] == entry["n_timesteps"]
+        check_hyperparams(_algo_class(algo), config["hyperparams"])
+
+
+def test_the_configuration_wins_over_its_hyperparameter_file(tmp_path):
+    (tmp_path / "hp.yaml").write_text(
+        "bounce_gym/Bounce-v0:\n  n_timesteps: !!float 2e5\n  n_envs: 8\n  frame_stack: 4\n"
+        "  normalize: true\n  n_steps: 64\n  gamma: 0.9\n  policy: MlpPolicy\n")
+    base = {"name": "x", "env": "bounce_gym/Bounce-v0", "algo": "ppo",
+            "hyperparams_file": "hp.yaml"}
+    config = validate_train_config(base, tmp_path)
+    assert (config["total_timesteps"], config["n_envs"], config["n_stack"]) == (200_000, 8, 4)
+    assert config["normalize"]["norm_obs"] and config["normalize"]["norm_reward"]
+    assert config["hyperparams"] == {"n_steps": 64, "gamma": 0.9}
+    assert config["hyperparams_file"] == str(tmp_path / "hp.yaml")
+    ours = validate_train_config({**base, "total_timesteps": 10, "n_envs": 2, "n_stack": 1,
+                                  "normalize": False, "hyperparams": {"gamma": 0.5}}, tmp_path)
+    assert (ours["total_timesteps"], ours["n_envs"], ours["n_stack"]) == (10, 2, 1)
+    assert ours["normalize"] is None and ours["hyperparams"] == {"n_steps": 64, "gamma": 0.5}
+
+
+def test_linear_schedules_and_activation_names():
+    from torch import nn
+
+    kwargs = algo_kwargs({"learning_rate": "lin_1e-3", "clip_range": 0.2,
+                          "policy_kwargs": {"activation_fn": "relu", "net_arch": [8]}})
+    assert kwargs["learning_rate"](1.0) == pytest.approx(1e-3)
+    assert kwargs["learning_rate"](0.25) == pytest.approx(2.5e-4)
+    assert kwargs["clip_range"] == 0.2
+    assert kwargs["policy_kwargs"] == {"activation_fn": nn.ReLU, "net_arch": [8]}

@@ -1,0 +1,114 @@
+"""The README's training commands run exactly as written (with the documented budget cap,
+``BOUNCE_GYM_MAX_TIMESTEPS``), and every module they import comes from a declared dependency."""
+
+import importlib.metadata
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
+
+tomllib = pytest.importorskip("tomllib", reason="reading pyproject.toml needs Python >= 3.11")
+
+ROOT = Path(__file__).parents[1]
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+#: training commands, in ```bash blocks or inline code: python train.py …, bounce-gym train|curves …
+#: (not the templates, such as ``bounce-gym curves models/<name>``)
+COMMANDS = [c.strip() for c in re.findall(
+    r"(?:^|`)((?:\.venv/bin/)?(?:python train\.py|bounce-gym (?:train|curves)) [^#`\n]*)",
+    README, re.M) if "<" not in c]
+#: the extras `make install` installs besides the core dependencies (dev only adds test tools)
+EXTRAS = ("rl",)
+OURS = {"bounce_gym", "baselines", "experiments", "train", "evaluate"}
+#: optional imports that libraries try and do without (imported only because they happen to be
+#: installed here)
+OPTIONAL = {"charset_normalizer": "numpy.f2py.crackfortran: try/except ImportError",
+            "tabulate": "torch._dynamo.utils.tabulate: try/except ImportError, at exit"}
+
+
+def _argv(command: str) -> list[str]:
+    """The command's words; only the interpreter and the console script are found in the
+    environment running the tests (the README assumes it is activated). Where the console
+    script is not installed, its entry point (pyproject.toml) is run as the script would."""
+    words = command.split()
+    program = words[0].removeprefix(".venv/bin/")
+    if program == "python":
+        return [sys.executable, *words[1:]]
+    script = Path(sys.executable).parent / program
+    if script.is_file():
+        return [str(script), *words[1:]]
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    module, function = project["scripts"][program].split(":")
+    return [sys.executable, "-c", f"import sys; sys.argv[0] = {program!r}; "
+            f"from {module} import {function}; sys.exit({function}())", *words[1:]]
+
+
+def _imported(stderr: str) -> set[str]:
+    """Top-level names of the modules a run imported (from ``PYTHONPROFILEIMPORTTIME``)."""
+    names = re.findall(r"^import time:\s+\d+ \|\s+\d+ \|\s+(\S+)", stderr, re.M)
+    return {name.split(".")[0] for name in names}
+
+
+def _declared() -> set[str]:
+    """The distributions the declared requirements pull in (transitively, markers evaluated)."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    todo = [Requirement(r) for r in project["dependencies"]]
+    for extra in EXTRAS:
+        todo += [Requirement(r) for r in project["optional-dependencies"][extra]]
+    seen: set[str] = set()
+    while todo:
+        requirement = todo.pop()
+        name = canonicalize_name(requirement.name)
+        if name in seen or name == "bounce-gym":
+            continue
+        seen.add(name)
+        for line in importlib.metadata.requires(name) or []:
+            sub = Requirement(line)
+            extras = ("", *requirement.extras)
+            if sub.marker is None or any(sub.marker.evaluate({"extra": e}) for e in extras):
+                todo.append(sub)
+    return seen
+
+
+def test_the_readme_documents_training_commands():
+    assert any(c.startswith("python train.py configs/train_navigation.yaml") for c in COMMANDS)
+    assert any("--resume" in c for c in COMMANDS) and any(" curves " in c for c in COMMANDS)
+
+
+def test_readme_training_commands_run_as_written(tmp_path):
+    for name in ("train.py", "configs"):
+        (tmp_path / name).symlink_to(ROOT / name)
+    env = {**os.environ, "BOUNCE_GYM_MAX_TIMESTEPS": "512", "PYTHONPROFILEIMPORTTIME": "1",
+           "PYTHONPATH": str(ROOT), "SDL_VIDEODRIVER": "dummy"}
+    imported: set[str] = set()
+    for command in COMMANDS:
+        done = subprocess.run(_argv(command), cwd=tmp_path, env=env, capture_output=True,
+                              text=True, timeout=600, check=False)
+        errors = [line for line in done.stderr.splitlines()
+                  if not line.startswith("import time:")]
+        assert done.returncode == 0, f"{command}\n" + "\n".join(errors[-20:])
+        imported |= _imported(done.stderr)
+    assert (tmp_path / "models/navigation-lab/learning_curves.png").is_file()
+    assert (tmp_path / "models/navigation-lab/ppo_seed0.monitor.csv").is_file()
+    distributions = importlib.metadata.packages_distributions()
+    declared = _declared()
+    undeclared = {}
+    for module in sorted(imported - OURS - set(OPTIONAL) - set(sys.stdlib_module_names)):
+        owners = {canonicalize_name(d) for d in distributions.get(module, [])}
+        if owners and not owners & (declared | {"bounce-gym", "setuptools"}):
+            undeclared[module] = sorted(owners)
+    assert not undeclared, f"imported but not declared in pyproject.toml: {undeclared}"
+
+
+@pytest.mark.parametrize("cap", ["0", "many", "-5"])
+def test_a_bad_budget_cap_is_one_error(tmp_path, cap):
+    done = subprocess.run([sys.executable, "train.py", "configs/train_navigation.yaml"],
+                          cwd=ROOT, env={**os.environ, "BOUNCE_GYM_MAX_TIMESTEPS": cap},
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 2
+    assert done.stderr.splitlines() == [f"error: BOUNCE_GYM_MAX_TIMESTEPS: expected an integer "
+                                        f">= 1, got {cap!r}"]
