@@ -8,7 +8,8 @@
 * `value_iteration` — Alg. 5.5, the navigation policy to a goal, `reach_probability` of a policy,
   and `ValueIterationPolicy`, which runs it in ``bounce_gym/Drifter-v0`` (with the
   `AlwaysDriftPolicy` and `RandomLayerPolicy` baselines); `deploy_cells` turns a deployment
-  into the ``deploy`` argument of ``bounce_gym/MultiDrifter-v0``.
+  into the ``deploy`` argument of ``bounce_gym/MultiDrifter-v0``, and `DeploymentPolicy`
+  releases that env's fleet at a deployment and lets it drift.
 
 Every planner returns plain data (numpy arrays of model states in small frozen dataclasses).
 """
@@ -21,10 +22,12 @@ from baselines.drifters.deployment import (
     group_coverage,
 )
 from baselines.drifters.deployment_baselines import (
+    expected_coverage,
     greedy_deployment,
     random_deployment,
     visit_probabilities,
 )
+from baselines.drifters.fleet import DEPLOYMENT_METHODS, DeploymentPolicy
 from baselines.drifters.policy import AlwaysDriftPolicy, RandomLayerPolicy, ValueIterationPolicy
 from baselines.drifters.reachability import Reachability, persistent_reachability, three_d_graph
 from baselines.drifters.value_iteration import (
@@ -40,9 +43,10 @@ from baselines.drifters.visibility import (
     visible_cells,
 )
 
-__all__ = ["AlwaysDriftPolicy", "Deployment", "PersistentBehavior", "RandomLayerPolicy",
-           "Reachability", "ValueIterationPolicy", "ValueIterationResult",
-           "VisibilityDeployment", "deploy_cells", "deployment_locations", "goal_states", "greedy_deployment",
+__all__ = ["DEPLOYMENT_METHODS", "AlwaysDriftPolicy", "Deployment", "DeploymentPolicy",
+           "PersistentBehavior", "RandomLayerPolicy", "Reachability", "ValueIterationPolicy",
+           "ValueIterationResult", "VisibilityDeployment", "deploy_cells",
+           "deployment_locations", "expected_coverage", "goal_states", "greedy_deployment",
            "group_coverage", "persistent_behavior", "persistent_reachability", "policy_matrix",
            "random_deployment", "reach_probability", "three_d_graph", "value_iteration",
            "visibility_deployment", "visible_cells", "visit_probabilities"]

@@ -106,6 +106,11 @@ def is_pettingzoo_id(env_id: str) -> bool:
     return env_id in PETTINGZOO_ENVS or env_id in DRIFTER_PETTINGZOO_ENVS
 
 
+def is_drifter_id(env_id: str) -> bool:
+    """Whether ``env_id`` is one of the drifter ids (Gymnasium or PettingZoo)."""
+    return env_id in DRIFTER_GYM_ENVS or env_id in DRIFTER_PETTINGZOO_ENVS
+
+
 _ENTRY = {
     "parallel": "bounce_gym.envs.multi_bounce_v0:parallel_env",
     "aec": "bounce_gym.envs.multi_bounce_v0:env",

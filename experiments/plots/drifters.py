@@ -1,6 +1,7 @@
 """Figures of the drifter planners (Alam 2018, thesis ch. 5, Figs. 5.6-5.16): the flow field,
 persistent groups and their basins, absorption times, deployment cells, the visibility cover,
-reachable sets and the value-iteration policy.
+reachable sets and the value-iteration policy; and of their evaluation: drifter paths, and
+coverage against steps with its interval band.
 
 Maps are drawn on the cell grid (column i east, row j north, one unit per cell), land grey.
 Every function renders with matplotlib (Agg), writes the PNG atomically
@@ -24,8 +25,9 @@ from bounce_gym.cells import DOWN, DRIFT, UP, DrifterCells
 from bounce_gym.flows import FlowField
 from experiments.plots.figures import pyplot, save_figure
 
-__all__ = ["plot_absorption_times", "plot_behavior", "plot_deployment", "plot_flow",
-           "plot_policy", "plot_reachability", "plot_visibility_deployment"]
+__all__ = ["plot_absorption_times", "plot_behavior", "plot_coverage_curves", "plot_deployment",
+           "plot_flow", "plot_paths", "plot_policy", "plot_reachability",
+           "plot_visibility_deployment"]
 
 _LAND = "#bdbdbd"
 _GROUP_COLOURS = ("#2ca02c", "#d62728", "#1f77b4", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
@@ -249,4 +251,63 @@ def plot_policy(model: DrifterCells, result: ValueIterationResult, path: Path | 
     fig.colorbar(shown, ax=axes[0][-1], shrink=0.8, label="value")
     fig.suptitle(title or f"Alg. 5.5 policy ({result.form} form, gamma = {result.gamma:g})",
                  fontsize=10)
+    return save_figure(fig, path)
+
+
+def _grid_coordinates(field: FlowField, x, y) -> tuple[np.ndarray, np.ndarray]:
+    """Positions in the field's coordinates as fractional columns i and rows j of its grid."""
+    out = []
+    for nodes, values in ((field.x, x), (field.y, y)):
+        index = np.arange(len(nodes), dtype=np.float64)
+        if nodes[0] > nodes[-1]:
+            nodes, index = nodes[::-1], index[::-1]
+        out.append(np.interp(values, nodes, index))
+    return out[0], out[1]
+
+
+def plot_paths(model: DrifterCells, paths: dict[str, np.ndarray], path: Path | str,
+               goal=None, title: str | None = None) -> Path:
+    """Drifter paths on the surface map, one panel per label: ``paths`` maps a label to the
+    positions (steps + 1, drifters, 2) in the field's coordinates; start ``o``, end ``x``;
+    ``goal`` states as gold stars."""
+    plt = pyplot()
+    items = list(paths.items())
+    fig, axes = plt.subplots(1, len(items), figsize=(3.4 * len(items), 3.0), squeeze=False)
+    colours = plt.get_cmap("tab10")
+    for ax, (label, points) in zip(axes[0], items, strict=True):
+        _draw_land(ax, model.index[0] < 0)
+        if goal is not None:
+            _mark(ax, model, goal, marker="*", markersize=9, color="gold",
+                  markeredgecolor="black")
+        for k in range(points.shape[1]):
+            i, j = _grid_coordinates(model.field, points[:, k, 0], points[:, k, 1])
+            ax.plot(i, j, lw=0.8, color=colours(k % 10))
+            ax.plot(i[0], j[0], "o", ms=3, color=colours(k % 10))
+            ax.plot(i[-1], j[-1], "x", ms=4, color=colours(k % 10))
+        ax.set_title(f"{label} ({len(points) - 1} steps)", fontsize=8)
+    fig.suptitle(title or "drifter paths", fontsize=9)
+    return save_figure(fig, path)
+
+
+def plot_coverage_curves(steps, bands: dict, path: Path | str, predicted: dict | None = None,
+                         title: str | None = None) -> Path:
+    """Coverage against steps: per label the mean curve with its 95% band (``bands``: label ->
+    an `experiments.stats.Band` over the episodes, on the points ``steps``), and the model's
+    predicted coverage at the last step as a marker (``predicted``: label -> value)."""
+    plt = pyplot()
+    steps = np.asarray(steps)
+    fig, ax = plt.subplots(figsize=(5.2, 3.4))
+    colours = plt.get_cmap("tab10")
+    for k, (label, band) in enumerate(bands.items()):
+        ax.plot(steps, band.mean, color=colours(k), label=f"{label} (n={band.n})")
+        ax.fill_between(steps, band.lo, band.hi, color=colours(k), alpha=0.2, lw=0)
+        if predicted and label in predicted:
+            ax.plot(steps[-1], predicted[label], marker="<", ms=7, color=colours(k),
+                    linestyle="none")
+    ax.set_xlabel("steps")
+    ax.set_ylabel("surface cells visited (fraction)")
+    ax.set_ylim(bottom=0)
+    ax.legend(fontsize=7)
+    ax.set_title(title or "coverage: mean and 95% CI (triangles: model's prediction)",
+                 fontsize=9)
     return save_figure(fig, path)

@@ -15,6 +15,7 @@ from baselines.drifters import (
 )
 from bounce_gym.cells import DrifterCells
 from bounce_gym.flows import get
+from experiments import stats
 from experiments.plots import drifters as plots
 
 
@@ -34,6 +35,11 @@ def test_every_drifter_figure_is_written(tmp_path):
         plots.plot_reachability(model, persistent_reachability(model, int(b.groups[0][0])),
                                 tmp_path / "reach.png"),
         plots.plot_policy(model, value_iteration(model, goal), tmp_path / "policy.png"),
+        plots.plot_paths(model, {"a": np.stack([np.column_stack(model.centre(dep.states))] * 3),
+                                 "b": np.zeros((1, 1, 2))}, tmp_path / "paths.png", goal=[goal]),
+        plots.plot_coverage_curves([0, 1, 2], {"a": stats.mean_band([[0.1, 0.2, 0.3],
+                                                                     [0.1, 0.3, 0.4]])},
+                                   tmp_path / "coverage.png", predicted={"a": 0.33}),
     ]
     for path in written:
         with Image.open(path) as image:
