@@ -129,8 +129,8 @@ class DrifterDeployment(DrifterFamily):
                      for policy, values in setup.predicted.items()}
         return [
             plot_coverage_curves(points, bands, folder / f"{name}-coverage.png", predicted,
-                                 title=f"{name}: surface coverage, mean and 95% CI "
-                                       "(triangles: the model's expectation)"),
+                                 title=f"{name}: surface coverage\nmean and 95% CI over "
+                                       "the episodes; triangles: the model's expectation"),
             plot_deployment(data["model"], setup.behavior, data["deployments"],
                             folder / f"{name}-deployment.png",
                             title=f"{name}: deployment cells (first seed)"),
