@@ -40,7 +40,8 @@ of the planner's ``for_env`` (e.g. ``{phi: 135}``); ``difficulty`` (``easy``, ``
 ``hard``) labels the experiment in a leaderboard. A top-level ``leaderboard: true`` makes the
 evaluation write ``leaderboard.md`` and ``leaderboard.csv`` (`experiments.leaderboard`).
 
-A relative map file in ``env_kwargs.world`` (``*.yaml``, ``*.yml``, ``*.json``) of a
+A relative map file in ``env_kwargs.world`` (``*.yaml``, ``*.yml``, ``*.json``) or flow file
+in ``env_kwargs.flow`` (a path with a suffix, e.g. ``*.nc``; zoo names have none) of a
 configuration file is read relative to that file's folder.
 
 The default configuration is the packaged ``eval_default.yaml`` (the top-level ``configs/``
@@ -116,10 +117,14 @@ def _resolve_map_files(config: object, folder: Path) -> None:
     experiments = config.get("experiments") if isinstance(config, dict) else None
     for exp in experiments if isinstance(experiments, list) else []:
         kwargs = exp.get("env_kwargs") if isinstance(exp, dict) else None
-        world = kwargs.get("world") if isinstance(kwargs, dict) else None
+        if not isinstance(kwargs, dict):
+            continue
+        world, flow = kwargs.get("world"), kwargs.get("flow")
         if isinstance(world, str) and world.endswith(_MAP_SUFFIXES) \
                 and not Path(world).is_absolute():
             kwargs["world"] = str(folder / world)
+        if isinstance(flow, str) and Path(flow).suffix and not Path(flow).is_absolute():
+            kwargs["flow"] = str(folder / flow)
 
 
 def validate_config(config: object) -> dict:

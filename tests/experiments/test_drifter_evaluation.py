@@ -23,7 +23,7 @@ from bounce_gym.cells import DrifterCells
 from bounce_gym.errors import ConfigError
 from bounce_gym.flows import get
 from experiments import stats
-from experiments.config import configs_folder, load_config, validate_config
+from experiments.config import configs_folder, load_config, validate_config, world_name
 from experiments.families import drifter_deployment, drifters
 from experiments.report import families_of, summarise
 from experiments.runner import prepare_experiment, run
@@ -203,8 +203,6 @@ def test_the_families_are_the_drifter_ones_and_the_leaderboard_names_the_flow(tm
         validate_config(config(tmp_path, deployment()))["experiments"][0], tmp_path, "x")
     assert prepared.family is drifter_deployment.FAMILY
     prepared.env.close()
-    from experiments.config import world_name
-
     assert world_name(reach()) == "scb_like"
     assert world_name(deployment()) == "two_sink"
 
@@ -233,3 +231,19 @@ def test_a_drifter_agent_trains_with_the_shipped_config_and_joins_the_table(tmp_
     rows, _ = run(config(tmp_path, exp), progress=False)
     assert [r.policy for r in rows] == ["rl ppo_seed0"] * 2
     assert all("success" in r.metrics and "predicted_success" not in r.metrics for r in rows)
+
+
+def test_a_relative_flow_file_is_read_next_to_the_config(tmp_path):
+    from bounce_gym.flows import save_flow
+
+    (tmp_path / "fields").mkdir()
+    save_flow(get("two_sink"), tmp_path / "fields" / "basin.nc")
+    exp = {**reach(count=1), "env_kwargs": {"flow": "fields/basin.nc", "goal": (0, 10, 10)},
+           "policies": ["planner"]}
+    path = tmp_path / "c.yaml"
+    path.write_text(yaml.safe_dump(config(tmp_path, exp)), encoding="utf-8")
+    loaded = load_config(path)
+    assert loaded["experiments"][0]["env_kwargs"]["flow"] == str(tmp_path / "fields/basin.nc")
+    rows, _ = run(loaded, progress=False)
+    assert len(rows) == 1 and "predicted_success" in rows[0].metrics
+    assert world_name(loaded["experiments"][0]) == "basin.nc"
