@@ -13,7 +13,10 @@ Cell-model rows (issue #4): `benchmarks.scm_gcm` (SCM on ~9 M cells, GCM on 65 8
 `benchmarks.navigation` (all-pairs plans) and `benchmarks.coverage` (α and simulated coverage);
 issue #6: `benchmarks.visibility` (partition + safe graph, random-polygon reachability);
 issue #7: `benchmarks.multirobot` (steps to coverage vs m, planning time and memory for
-m = 2..10, the m = 2 monitoring joint map).
+m = 2..10, the m = 2 monitoring joint map); issue #15: `benchmarks.drifters` (the GCM of a
+10^6-cell drifter layer, continuous advection against OceanParcels in the same run) and
+`benchmarks.drifter_env` (``Drifter-v0`` steps/s against CartPole-v1 in the same run) and
+`benchmarks.drifter_planners` (value iteration on 3 x 10^5 states, deployment counts).
 """
 
 from __future__ import annotations
@@ -184,6 +187,19 @@ def main(argv: list[str] | None = None) -> None:
     multirobot_scaling.main(["--steps", "4000"] if args.quick else [])
     print()
     planners.main(quick=args.quick, repeats=args.repeats)
+    # drifters (issue #15): GCM of a 10^6-cell layer, advection vs Parcels, Drifter-v0 steps/s
+    from benchmarks import drifter_env, drifters
+
+    print()
+    drifters.main((["--quick"] if args.quick else []) + ["--repeats", str(args.repeats)])
+    print()
+    drifter_env.main(["--steps", "2000", "--rounds", "3"] if args.quick else [])
+
+    # drifter planners: value iteration on 3 x 10^5 states, deployment counts
+    from benchmarks import drifter_planners
+
+    print()
+    drifter_planners.main((["--quick"] if args.quick else []) + ["--repeats", str(args.repeats)])
 
 
 if __name__ == "__main__":

@@ -26,6 +26,15 @@ class ConfigError(BounceGymError):
     """A constructor argument, rule, noise model or backend option is not allowed."""
 
 
+class InvalidFlowError(BounceGymError):
+    """A flow field (velocities, coordinates, land mask) is not valid."""
+
+
+class FlowFileError(InvalidFlowError):
+    """A flow file (NetCDF) is unreadable, or its variables, dimensions or units do not describe
+    a valid flow field."""
+
+
 class ActionError(BounceGymError):
     """An action passed to ``step`` has the wrong type, shape or value."""
 

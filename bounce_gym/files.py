@@ -14,25 +14,29 @@ from bounce_gym.errors import ConfigError
 
 
 @contextlib.contextmanager
-def atomic_file(path: Path) -> Iterator[BinaryIO]:
-    """A binary file (opened for writing and reading) that becomes ``path`` only once the
-    ``with`` block has finished: written to a hidden temporary file in the same folder
-    (``.<name>.<random>.tmp``), flushed to disk, then renamed over ``path``. A crash at any
-    instant leaves either the old ``path`` or the new one, never a partial file under its name;
-    an exception in the block removes the temporary file."""
+def atomic_path(path: Path) -> Iterator[Path]:
+    """A temporary path that becomes ``path`` only once the ``with`` block has finished, for
+    writers that need a file name rather than an open file (e.g. a NetCDF library).
+
+    The block writes the file at the yielded path: a hidden name in the same folder
+    (``.<name>.<random>.tmp``, created empty). The file is then flushed to disk and renamed over
+    ``path``, so a crash at any instant leaves either the old ``path`` or the new one, never a
+    partial file under its name; an exception in the block removes the temporary file."""
+    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    tmp = Path(name)
     try:
-        with os.fdopen(fd, "w+b") as fh:
-            yield fh
-            fh.flush()
+        yield tmp
+        with open(tmp, "rb+") as fh:  # the writer may have replaced the file: sync what is there
             os.fsync(fh.fileno())
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes files private; results are not
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
     with contextlib.suppress(OSError):  # make the rename itself durable where the OS allows
         folder = os.open(path.parent, os.O_RDONLY)
@@ -40,6 +44,16 @@ def atomic_file(path: Path) -> Iterator[BinaryIO]:
             os.fsync(folder)
         finally:
             os.close(folder)
+
+
+@contextlib.contextmanager
+def atomic_file(path: Path) -> Iterator[BinaryIO]:
+    """A binary file (opened for writing and reading) that becomes ``path`` only once the
+    ``with`` block has finished (`atomic_path`: a temporary file in the same folder, flushed to
+    disk, then renamed over ``path``; an exception in the block removes it)."""
+    with atomic_path(path) as tmp, open(tmp, "w+b") as fh:
+        yield fh
+        fh.flush()
 
 
 def atomic_write(path: Path, data: bytes) -> None:

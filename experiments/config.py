@@ -1,9 +1,9 @@
 """Evaluation configurations: loading YAML, the default configuration, and validation.
 
 A configuration lists *experiments*; each names a registered environment id — a Gymnasium id
-(``bounce_gym/BounceNavigation-v0``, …) or a multi-robot PettingZoo id
-(``bounce_gym/MultiBounceCoverage-v0``, …) — with overrides, the seeds, and which policies to
-run:
+(``bounce_gym/BounceNavigation-v0``, ``bounce_gym/Drifter-v0``, …) or a multi-robot PettingZoo
+id (``bounce_gym/MultiBounceCoverage-v0``, ``bounce_gym/MultiDrifter-v0``, …) — with
+overrides, the seeds, and which policies to run:
 
 * ``planner`` — the analytic planner of the experiment's family (`experiments.registry`);
 * ``random`` — a random angle of Φ at every bump (every robot its own), drawn from the
@@ -13,6 +13,11 @@ run:
   (`experiments.oracle`);
 * ``rl`` — every Stable-Baselines3 model ``<algo>_seed<N>.zip`` found in the experiment's model
   folders (what ``bounce-gym train`` saves); for several robots one PPO model shared by all.
+
+The drifter families read the kinds their own way (`experiments.families.drifters`): a random
+legal layer move per step for ``random`` and always drift for ``fixed``; the deployment family
+runs ``planner`` (Alg. 5.2 and the greedy deployment) and ``random`` (random cells). A kind a
+family does not run is an error naming ``policies``.
 
 **Seeds.** Evaluation seeds are disjoint from training seeds (`baselines.seeds`): every seed
 must be at least ``EVALUATION_SEEDS_START`` (10,000). ``seeds`` is a list of distinct integers
@@ -35,7 +40,8 @@ of the planner's ``for_env`` (e.g. ``{phi: 135}``); ``difficulty`` (``easy``, ``
 ``hard``) labels the experiment in a leaderboard. A top-level ``leaderboard: true`` makes the
 evaluation write ``leaderboard.md`` and ``leaderboard.csv`` (`experiments.leaderboard`).
 
-A relative map file in ``env_kwargs.world`` (``*.yaml``, ``*.yml``, ``*.json``) of a
+A relative map file in ``env_kwargs.world`` (``*.yaml``, ``*.yml``, ``*.json``) or flow file
+in ``env_kwargs.flow`` (a path with a suffix, e.g. ``*.nc``; zoo names have none) of a
 configuration file is read relative to that file's folder.
 
 The default configuration is the packaged ``eval_default.yaml`` (the top-level ``configs/``
@@ -55,7 +61,13 @@ import yaml
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.model_files import check_folder_name
 from baselines.seeds import EVALUATION_SEEDS_START
-from bounce_gym.envs.registration import PETTINGZOO_ENVS, is_pettingzoo_id
+from bounce_gym.envs.drifters.options import ARGUMENTS as DRIFTER_ARGUMENTS
+from bounce_gym.envs.registration import (
+    DRIFTER_PETTINGZOO_ENVS,
+    PETTINGZOO_ENVS,
+    is_drifter_id,
+    is_pettingzoo_id,
+)
 from bounce_gym.errors import ConfigError
 from bounce_gym.validate import integer
 
@@ -65,6 +77,8 @@ DEFAULT_CONFIG_NAME = "eval_default.yaml"
 #: env options a model folder of ``rl_models`` may set differently (observation only)
 OBSERVATION_OPTIONS = frozenset({"privileged", "history"})
 _MAP_SUFFIXES = (".yaml", ".yml", ".json")
+#: the PettingZoo ids (several robots or drifters)
+_PARALLEL_IDS = [*PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]
 
 _TOP_KEYS = {"name": str, "output": str, "models": str, "experiments": list, "leaderboard": bool}
 _EXPERIMENT_KEYS = {"name": str, "env": str, "env_kwargs": dict, "seeds": list | dict,
@@ -103,10 +117,14 @@ def _resolve_map_files(config: object, folder: Path) -> None:
     experiments = config.get("experiments") if isinstance(config, dict) else None
     for exp in experiments if isinstance(experiments, list) else []:
         kwargs = exp.get("env_kwargs") if isinstance(exp, dict) else None
-        world = kwargs.get("world") if isinstance(kwargs, dict) else None
+        if not isinstance(kwargs, dict):
+            continue
+        world, flow = kwargs.get("world"), kwargs.get("flow")
         if isinstance(world, str) and world.endswith(_MAP_SUFFIXES) \
                 and not Path(world).is_absolute():
             kwargs["world"] = str(folder / world)
+        if isinstance(flow, str) and Path(flow).suffix and not Path(flow).is_absolute():
+            kwargs["flow"] = str(folder / flow)
 
 
 def validate_config(config: object) -> dict:
@@ -138,10 +156,10 @@ def validate_config(config: object) -> dict:
         elif exp["env"] not in gym.registry:
             known = sorted(i for i in gym.registry if i.startswith("bounce_gym/"))
             raise ConfigError(f"{where}.env: unknown environment id {exp['env']!r}; registered: "
-                              f"{known + list(PETTINGZOO_ENVS)}")
+                              f"{known + _PARALLEL_IDS}")
         elif "planner_kwargs" in exp:
             raise ConfigError(f"{where}.planner_kwargs: only for multi-robot experiments "
-                              f"(env one of {list(PETTINGZOO_ENVS)})")
+                              f"(env one of {_PARALLEL_IDS})")
         if "max_episode_steps" in exp["env_kwargs"]:
             raise ConfigError(f"{where}.env_kwargs.max_episode_steps: not allowed; the "
                               "experiment's horizon is max_steps (see horizon_reason)")
@@ -168,7 +186,11 @@ def registered_horizon(env_id: str) -> int | None:
 
 def world_name(experiment: Mapping) -> str:
     """The world an experiment runs on: its ``env_kwargs.world`` (a map file by its file name)
-    or the one its env id registers."""
+    or the one its env id registers; for a drifter env the flow (``env_kwargs.flow``: a zoo
+    name, a NetCDF file by its file name or a field by its name; else the env's default)."""
+    if is_drifter_id(experiment["env"]):
+        world = experiment["env_kwargs"].get("flow", DRIFTER_ARGUMENTS["flow"])
+        return Path(world).name if isinstance(world, str) else getattr(world, "name", "?")
     world = experiment["env_kwargs"].get("world")
     if world is None:
         spec = (pettingzoo.parallel_registry[experiment["env"]]

@@ -16,6 +16,8 @@ from bounce_gym.errors import ConfigError
 from experiments.families import (
     bouncing,
     coverage,
+    drifter_deployment,
+    drifters,
     localization,
     multirobot,
     multirobot_coverage,
@@ -26,6 +28,8 @@ from experiments.families import (
 from experiments.families.base import Family
 
 FAMILIES: tuple[Family, ...] = (
+    drifters.FAMILY,
+    drifter_deployment.FAMILY,
     visibility.FAMILY,
     navigation.FAMILY,
     coverage.FAMILY,

@@ -187,9 +187,11 @@ def write_plots(folder: Path, plots: Mapping, summary: list[dict] | None = None,
     per-seed rows of trained models, their performance profiles."""
     written = []
     for name, data in plots.items():
-        written += plot_trajectories(folder, name, data)
         if "family" in data:
+            written += data["family"].trajectory_plots(folder, name, data)
             written += data["family"].plots(folder, name, data)
+        else:
+            written += plot_trajectories(folder, name, data)
     if summary is not None:
         for family in dict.fromkeys(families_of(plots).values()):
             written += family.summary_plots(folder, plots, summary)

@@ -4,10 +4,11 @@ and PettingZoo parallel envs (several robots).
 An experiment builds its env and its policies once; every seed then runs one episode of each
 policy (the env is reset with the seed, and each policy restarts its own random stream in
 `start_options`, so an episode never depends on the ones before it). The experiment's family
-(`experiments.registry`) supplies the planner, follows the episode for its metrics and collects
-the first seed's plot data. Results are one `EpisodeResult` per (experiment, policy, seed):
-steps, ticks, the return (summed over robots) and the family's metrics; with two or more fixed
-angles, also the best of them per seed in hindsight (`experiments.oracle`).
+(`experiments.registry`) supplies the policies of each kind (the planner, the random and fixed
+baselines), follows the episode for its metrics and clock, and collects the first seed's plot
+data; nothing here assumes bouncing robots. Results are one `EpisodeResult` per (experiment,
+policy, seed): steps, ticks, the return (summed over robots) and the family's metrics; with two
+or more fixed angles, also the best of them per seed in hindsight (`experiments.oracle`).
 
 Trained models are loaded from the experiment's ``rl_models`` folders; a folder with other
 observation options runs its models on its own copy of the env (same world, same seeds, same
@@ -18,7 +19,6 @@ there are several folders) whose rows carry the ``group`` they are aggregated in
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +26,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
+from baselines.policy import FixedAnglePolicy, Policy, is_parallel_env
 from baselines.rl.model_files import MODEL_NAME, model_files, run_name
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError, config_errors
@@ -75,25 +75,10 @@ def make_env(experiment: Mapping, where: str = "env_kwargs", overrides: Mapping 
 
 
 def policies_for(experiment: Mapping, env, family: Family, setup: object) -> list[Policy]:
-    """The experiment's planner, random and fixed policies that apply to its env (trained
-    models: `model_policies`)."""
-    parallel = is_parallel_env(env)
-    options = env.unwrapped.options
-    discrete = options.action_type == "discrete"
-    if parallel and not discrete:
-        raise ConfigError("env_kwargs.action_type: multi-robot experiments choose angles by index; "
-                          "use 'discrete'")
-    out: list[Policy] = []
-    for kind in experiment["policies"]:
-        if kind == "planner":
-            planner = family.planner(env, experiment, setup)
-            out += [planner] if planner is not None else []
-        elif kind == "random":
-            out.append(RandomAnglePolicy())
-        elif kind == "fixed" and discrete:
-            n = min(len(phi) for phi in options.angles)
-            out += [FixedAnglePolicy(i, math.degrees(options.angles[0][i])) for i in range(n)]
-    return out
+    """The experiment's planner, random and fixed policies, as its family builds them for its
+    env (trained models: `model_policies`)."""
+    return [policy for kind in experiment["policies"] if kind != "rl"
+            for policy in family.policies(kind, env, experiment, setup)]
 
 
 def model_policies(folder: Path, env, label: str) -> list[tuple[Policy, str]]:
@@ -142,7 +127,8 @@ def run_episode(env, policy: Policy, seed: int, max_steps: int, episode: Episode
         if record:
             path.append(_positions(env, infos))
         over = episode.step(info)
-    summary = {"steps": steps, "ticks": int(info["ticks"]), "return": float(total), "info": info}
+    summary = {"steps": steps, "ticks": episode.ticks(info, steps), "return": float(total),
+               "info": info}
     return summary, None if path is None else np.array(path)
 
 
@@ -187,6 +173,11 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
     experiment in errors."""
     env = make_env(experiment, f"{where}.env_kwargs")
     family = family_for(experiment, env)
+    unsupported = [k for k in experiment["policies"] if k not in family.policy_kinds]
+    if unsupported:
+        env.close()
+        raise ConfigError(f"{where}.policies: {family.name} experiments run "
+                          f"{list(family.policy_kinds)}, not {unsupported}")
     setup = family.prepare(env, experiment)
     entrants = [Entrant(p, env, setup) for p in policies_for(experiment, env, family, setup)]
     notes = []
@@ -219,7 +210,7 @@ def run_experiment(prepared: Prepared, on_seed: Callable[[], None]
     """
     rows: list[EpisodeResult] = []
     experiment, family = prepared.experiment, prepared.family
-    data: dict = {"paths": {}, "world": prepared.env.unwrapped.options.world, "family": family,
+    data: dict = {"paths": {}, "world": family.world(prepared.env), "family": family,
                   "notes": list(prepared.notes)}
     for k, seed in enumerate(experiment["seeds"]):
         for one in prepared.entrants:

@@ -7,7 +7,8 @@ seeds, the interquartile mean (IQM) and performance profiles.
 * A **mean** gets a bootstrap interval: `scipy.stats.bootstrap`, bias-corrected and accelerated
   (BCa), 9,999 resamples, from a fixed seed, so the same values give the same interval. Where
   BCa is undefined (its acceleration is 0/0 for some small or lopsided samples) the percentile
-  interval is used instead.
+  interval is used instead. A **band** (a curve per episode, e.g. coverage against steps) is
+  that interval at every point of the curve (`mean_band`).
 * Across **training seeds** (Agarwal et al., "Deep RL at the edge of the statistical precipice",
   NeurIPS 2021): the IQM — the mean of the middle 50% of the per-run scores (25% trimmed from
   each end, `scipy.stats.trim_mean`) — with a *stratified* percentile bootstrap: every task's runs
@@ -103,6 +104,52 @@ def mean(values: Sequence[float]) -> Estimate:
         raise ValueError("mean of no values")
     ci = bootstrap_mean_interval(x)
     return Estimate(float(x.mean()), *(ci or (None, None)), int(x.size))
+
+
+@dataclass(frozen=True)
+class Band:
+    """Mean curves with their 95% intervals, point by point, over ``n`` curves."""
+
+    mean: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    n: int
+
+
+#: Resamples per batch of `mean_band` (bounds its memory: batch x curves x points floats).
+BAND_BATCH = 500
+
+
+def mean_band(curves, confidence: float = CONFIDENCE, n_resamples: int = N_RESAMPLES,
+              seed: int = SEED) -> Band:
+    """The mean of ``curves`` ((n, points): one curve per row) at every point with the interval
+    of `bootstrap_mean_interval` (BCa, percentile where BCa is undefined, a point interval where
+    all values are equal): one resampling of the rows, the one `bootstrap_mean_interval` draws,
+    serves every point. (With tied values BCa's bias correction may then differ by rounding.)
+    With fewer than two curves the band is the mean itself."""
+    x = np.asarray(curves, dtype=float)
+    if x.ndim != 2 or x.shape[0] == 0:
+        raise ValueError(f"curves: expected (n >= 1, points), got shape {x.shape}")
+    centre = x.mean(axis=0)
+    if x.shape[0] < 2:
+        return Band(centre, centre.copy(), centre.copy(), x.shape[0])
+    lo, hi = centre.copy(), centre.copy()
+    todo = np.flatnonzero(np.ptp(x, axis=0) > 0)
+    for method in ("BCa", "percentile"):
+        if not len(todo):
+            break
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", stats.DegenerateDataWarning)
+            warnings.simplefilter("ignore", RuntimeWarning)
+            ci = stats.bootstrap((x[:, todo],), np.mean, n_resamples=n_resamples,
+                                 confidence_level=confidence, method=method, vectorized=True,
+                                 axis=0, batch=BAND_BATCH,
+                                 rng=np.random.default_rng(seed)).confidence_interval
+        low, high = np.atleast_1d(ci.low), np.atleast_1d(ci.high)
+        ok = np.isfinite(low) & np.isfinite(high)
+        lo[todo[ok]], hi[todo[ok]] = low[ok], high[ok]
+        todo = todo[~ok]
+    return Band(centre, lo, hi, x.shape[0])
 
 
 def _tasks(scores) -> list[np.ndarray]:

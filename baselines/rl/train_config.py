@@ -28,7 +28,11 @@ import yaml
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.model_files import ALGOS, VARIANT, check_folder_name
 from baselines.seeds import EVALUATION_SEEDS_START
-from bounce_gym.envs.registration import PETTINGZOO_ENVS, is_pettingzoo_id
+from bounce_gym.envs.registration import (
+    DRIFTER_PETTINGZOO_ENVS,
+    PETTINGZOO_ENVS,
+    is_pettingzoo_id,
+)
 from bounce_gym.errors import ConfigError
 
 MULTI_ALGOS = ("ppo",)
@@ -85,7 +89,7 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     multi = is_pettingzoo_id(config["env"])
     if not multi and config["env"] not in gym.registry:
         raise ConfigError(f"config.env: unknown environment id {config['env']!r}; multi-robot "
-                          f"ids are {list(PETTINGZOO_ENVS)}")
+                          f"ids are {[*PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]}")
     if "hyperparams_file" in config:
         _merge_file(config, folder)
         _check_types(config)

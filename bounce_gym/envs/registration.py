@@ -57,6 +57,10 @@ observes contact and clock:
   contact. In tick mode (how the configs run it) the return counts the ticks spent in the own
   region, so its optimum keeps every robot in its region without contacts; in bounce mode every
   step weighs the same whatever its ticks.
+
+Drifters (thesis ch. 5, `bounce_gym.envs.drifters`): the Gymnasium id ``bounce_gym/Drifter-v0``
+(one profiling drifter, scb_like flow, cell backend, reach task; max_episode_steps 200) and the
+PettingZoo id ``bounce_gym/MultiDrifter-v0`` (4 drifters covering the surface; max_cycles 500).
 """
 
 from __future__ import annotations
@@ -87,9 +91,24 @@ PETTINGZOO_ENVS = {
 }
 
 
+#: drifter ids (thesis ch. 5): Gymnasium id -> (entry point, max_episode_steps)
+DRIFTER_GYM_ENVS = {
+    "bounce_gym/Drifter-v0": ("bounce_gym.envs.drifters.env:DrifterEnv", 200),
+}
+#: drifter PettingZoo ids -> the module with ``parallel_env`` and ``env``
+DRIFTER_PETTINGZOO_ENVS = {
+    "bounce_gym/MultiDrifter-v0": "bounce_gym.envs.drifters.multi_drifter_v0",
+}
+
+
 def is_pettingzoo_id(env_id: str) -> bool:
     """Whether ``env_id`` is one of the multi-robot PettingZoo ids (not a Gymnasium id)."""
-    return env_id in PETTINGZOO_ENVS
+    return env_id in PETTINGZOO_ENVS or env_id in DRIFTER_PETTINGZOO_ENVS
+
+
+def is_drifter_id(env_id: str) -> bool:
+    """Whether ``env_id`` is one of the drifter ids (Gymnasium or PettingZoo)."""
+    return env_id in DRIFTER_GYM_ENVS or env_id in DRIFTER_PETTINGZOO_ENVS
 
 
 _ENTRY = {
@@ -105,9 +124,17 @@ def register_envs() -> None:
             gym.register(env_id, entry_point="bounce_gym.envs.bounce_env:BounceEnv",
                          vector_entry_point=VECTOR_ENTRY_POINT if env_id in VECTOR_IDS else None,
                          kwargs=kwargs, max_episode_steps=steps)
+    for env_id, (entry_point, steps) in DRIFTER_GYM_ENVS.items():
+        if env_id not in gym.registry:
+            gym.register(env_id, entry_point=entry_point, max_episode_steps=steps)
     for env_type, registry in (("parallel", pettingzoo.parallel_registry),
                                ("aec", pettingzoo.aec_registry)):
         for env_id, kwargs in PETTINGZOO_ENVS.items():
             if env_id not in registry:
                 pettingzoo.register(env_type, env_id, entry_point=_ENTRY[env_type],
                                     max_cycles=500, kwargs=kwargs)
+        for env_id, module in DRIFTER_PETTINGZOO_ENVS.items():
+            if env_id not in registry:
+                function = "parallel_env" if env_type == "parallel" else "env"
+                pettingzoo.register(env_type, env_id, entry_point=f"{module}:{function}",
+                                    max_cycles=500)

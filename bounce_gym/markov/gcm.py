@@ -56,11 +56,12 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components
 from scipy.sparse.linalg import splu
 
 from bounce_gym.errors import ConfigError
+from bounce_gym.markov.ordering import grid_dissection
 
 if TYPE_CHECKING:
-    from bounce_gym.cells import CellModel
+    from bounce_gym.cells import CellModel, DrifterCells
 
-__all__ = ["MODES", "GCMResult", "gcm", "generalized_cell_mapping"]
+__all__ = ["MODES", "GCMResult", "gcm", "generalized_cell_mapping", "layer_gcm"]
 
 #: Initial distributions of the limiting distribution (see the module docstring).
 MODES = ("all", "persistent", "group")
@@ -84,6 +85,9 @@ class GCMResult:
         limiting: (N,) π = Σ_g w_g π_g, the Cesàro-limit (long-run) distribution under ``mode``.
         mode: the initial distribution of ``weights`` / ``limiting``: a name in `MODES`, or
             ``"custom"`` for a given p(0).
+        component: (N,) the strongly connected component of every cell (None if unknown).
+        order: (N,) a fill-reducing order of the cells for the sparse LU of I - Q, or None for
+            SuperLU's own (COLAMD).
     """
 
     P: sp.csr_matrix
@@ -94,6 +98,8 @@ class GCMResult:
     weights: np.ndarray
     limiting: np.ndarray
     mode: str
+    component: np.ndarray | None = None
+    order: np.ndarray | None = None
 
     @property
     def n_cells(self) -> int:
@@ -135,7 +141,7 @@ class GCMResult:
 
     @cached_property
     def _solver(self):
-        return _transient_lu(self.P, self.transient)
+        return _transient_lu(self.P, self.transient, self.order)
 
     @cached_property
     def absorption(self) -> np.ndarray:
@@ -163,25 +169,41 @@ class GCMResult:
     def domiciles(self) -> sp.csr_matrix:
         """(n_transient, n_groups) bool CSR: entry (i, g) iff ``transient[i]`` leads to group g.
 
-        Exact reachability (one breadth-first search per group on the reversed transient graph),
-        not a threshold on `absorption`."""
+        Exact reachability, not a threshold on `absorption`: one breadth-first search per group
+        on the reversed graph of the transient strongly connected components (every cell of a
+        component reaches the same groups)."""
         n_t, n_g = len(self.transient), self.n_groups
         if n_t == 0 or n_g == 0:
             return sp.csr_matrix((n_t, n_g), dtype=bool)
-        # reversed graph on the transient cells plus one node per group: u -> t iff t -> u
+        component = self.component
+        if component is None:
+            _, component = connected_components(self.P, directed=True, connection="strong")
+        # number the transient components 0..k-1
+        comp_ids, comp = np.unique(component[self.transient], return_inverse=True)
+        k = len(comp_ids)
         q = self.P[self.transient][:, self.transient].tocoo()
         r = self._to_groups.tocoo()
-        rows = np.concatenate((q.col, r.col + n_t))
-        cols = np.concatenate((q.row, r.row))
-        rev = sp.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)),
-                            shape=(n_t + n_g, n_t + n_g))
-        hit_rows, hit_cols = [], []
+        src = np.concatenate((comp[q.row], comp[r.row]))
+        dst = np.concatenate((comp[q.col], r.col + k))
+        keep = src != dst
+        # reversed condensed graph: u -> c iff c -> u
+        rev = sp.csr_matrix((np.ones(int(keep.sum()), dtype=np.int8), (dst[keep], src[keep])),
+                            shape=(k + n_g, k + n_g))
+        pair_comp, pair_group = [], []
         for g in range(n_g):
-            reach = breadth_first_order(rev, n_t + g, directed=True, return_predecessors=False)
-            reach = reach[reach < n_t]
-            hit_rows.append(reach)
-            hit_cols.append(np.full(len(reach), g))
-        rows, cols = np.concatenate(hit_rows), np.concatenate(hit_cols)
+            reach = breadth_first_order(rev, k + g, directed=True, return_predecessors=False)
+            reach = reach[reach < k]
+            pair_comp.append(reach)
+            pair_group.append(np.full(len(reach), g))
+        pair_comp, pair_group = np.concatenate(pair_comp), np.concatenate(pair_group)
+        # expand (component, group) pairs to (cell, group) entries
+        by_comp = np.argsort(comp, kind="stable")
+        starts = np.searchsorted(comp[by_comp], np.arange(k))
+        counts = np.bincount(comp, minlength=k)
+        reps = counts[pair_comp]
+        offsets = np.repeat(starts[pair_comp] - np.cumsum(reps) + reps, reps)
+        rows = by_comp[np.arange(int(reps.sum())) + offsets]
+        cols = np.repeat(pair_group, reps)
         return sp.csr_matrix((np.ones(len(rows), dtype=bool), (rows, cols)), shape=(n_t, n_g))
 
     def domiciles_of(self, z: int) -> tuple[int, ...]:
@@ -195,15 +217,25 @@ class GCMResult:
     def domicile_groups(self) -> dict[frozenset[int], np.ndarray]:
         """Transient cells grouped by their domicile set (thesis §5.4 'transient groups'):
         single-domicile sets {g} are the domains of attraction B(g), larger sets the boundary
-        regions B(g, h, ...)."""
+        regions B(g, h, ...). Sets are ordered by size, then by their sorted groups; cells
+        ascending."""
         d = self.domiciles
-        keys = [frozenset(d.indices[d.indptr[i]:d.indptr[i + 1]].tolist())
-                for i in range(len(self.transient))]
-        out: dict[frozenset[int], list[int]] = {}
-        for cell, key in zip(self.transient.tolist(), keys, strict=True):
-            out.setdefault(key, []).append(cell)
-        return {k: np.array(v, dtype=np.int64) for k, v in sorted(
-            out.items(), key=lambda kv: (len(kv[0]), sorted(kv[0])))}
+        d.sort_indices()
+        counts = np.diff(d.indptr)
+        out: dict[frozenset[int], np.ndarray] = {}
+        for size in np.unique(counts):  # rows with `size` domiciles: an (n, size) index table
+            rows = np.flatnonzero(counts == size)
+            table = np.ascontiguousarray(d.indices[d.indptr[rows][:, None] + np.arange(size)],
+                                         dtype=np.int32)
+            # one opaque key per row: rows of equal bytes are equal sets (indices are sorted)
+            _, first, inverse = np.unique(table.view(np.dtype((np.void, 4 * size))).ravel(),
+                                          return_index=True, return_inverse=True)
+            keys = table[first]
+            by_key = np.argsort(inverse, kind="stable")
+            splits = np.cumsum(np.bincount(inverse, minlength=len(keys)))[:-1]
+            for key, members in zip(keys, np.split(rows[by_key], splits), strict=True):
+                out[frozenset(key.tolist())] = self.transient[members]
+        return dict(sorted(out.items(), key=lambda kv: (len(kv[0]), sorted(kv[0]))))
 
     # -- limiting distribution --------------------------------------------------------------
     def group_weights(self, start: str | np.ndarray = "all") -> np.ndarray:
@@ -242,7 +274,8 @@ class GCMResult:
         return _mix(self.stationary, self.group_of, self.group_weights(start))
 
 
-def generalized_cell_mapping(P, mode: str | np.ndarray = "all") -> GCMResult:
+def generalized_cell_mapping(P, mode: str | np.ndarray = "all",
+                             order: np.ndarray | None = None) -> GCMResult:
     """Persistent groups, stationary distributions and the limiting distribution of ``P``.
 
     Args:
@@ -250,6 +283,9 @@ def generalized_cell_mapping(P, mode: str | np.ndarray = "all") -> GCMResult:
         mode: initial distribution of ``weights`` / ``limiting``: ``"all"`` (uniform over all
             cells, docs/choices.md, "The limiting distribution starts anywhere"), ``"persistent"``,
             ``"group"``, or an (N,) probability vector.
+        order: optional permutation of the N cells to eliminate I - Q in (a fill-reducing
+            order such as `bounce_gym.markov.ordering.grid_dissection` of cells on a grid);
+            None lets SuperLU choose (COLAMD).
 
     Raises:
         ConfigError: P is not square, has negative or non-finite entries, or a row that does not
@@ -257,6 +293,11 @@ def generalized_cell_mapping(P, mode: str | np.ndarray = "all") -> GCMResult:
     """
     P = _check_stochastic(P)
     n = P.shape[0]
+    if order is not None:
+        order = np.asarray(order)
+        if order.shape != (n,) or order.dtype.kind not in "iu" or not np.array_equal(
+                np.sort(order), np.arange(n)):
+            raise ConfigError(f"order: expected a permutation of the {n} cells")
     if isinstance(mode, str) and mode not in MODES:
         raise ConfigError(f"mode: expected one of {MODES} or an (N,) array, got {mode!r}")
     # strongly connected components; closed ones (no edge leaving) are the persistent groups
@@ -270,20 +311,21 @@ def generalized_cell_mapping(P, mode: str | np.ndarray = "all") -> GCMResult:
     pers = np.flatnonzero(persistent)
     # number the groups by their smallest cell (pers is ascending, so first occurrence)
     closed_labels, first = np.unique(labels[pers], return_index=True)
-    order = np.argsort(pers[first], kind="stable")
+    by_first = np.argsort(pers[first], kind="stable")
     group_of_label = np.full(n_scc, -1, dtype=np.int32)
-    group_of_label[closed_labels[order]] = np.arange(len(order), dtype=np.int32)
+    group_of_label[closed_labels[by_first]] = np.arange(len(by_first), dtype=np.int32)
     group_of = np.full(n, -1, dtype=np.int32)
     group_of[pers] = group_of_label[labels[pers]]
-    sizes = np.bincount(group_of[pers], minlength=len(order))
+    sizes = np.bincount(group_of[pers], minlength=len(by_first))
     by_group = pers[np.argsort(group_of[pers], kind="stable")]
-    groups = np.split(by_group, np.cumsum(sizes)[:-1]) if len(order) else []
+    groups = np.split(by_group, np.cumsum(sizes)[:-1]) if len(by_first) else []
     transient = np.flatnonzero(~persistent)
 
     stationary = _stationary(P, pers, group_of[pers], groups)
     result = GCMResult(P=P, group_of=group_of, groups=groups, transient=transient,
                        stationary=stationary, weights=np.zeros(len(groups)),
-                       limiting=np.zeros(n), mode="custom" if not isinstance(mode, str) else mode)
+                       limiting=np.zeros(n), mode="custom" if not isinstance(mode, str) else mode,
+                       component=labels, order=order)
     result.weights = result.group_weights(mode)
     result.limiting = _mix(stationary, group_of, result.weights)
     return result
@@ -294,6 +336,17 @@ def gcm(model: CellModel, phi: float, eps: float = 0.0, r: float = 1.0,
     """The GCM analysis of ``model.transition_matrix(phi, eps, r)`` (angles in radians, r the
     probability of the nominal rotation)."""
     return generalized_cell_mapping(model.transition_matrix(phi, eps, r), mode=mode)
+
+
+def layer_gcm(model: DrifterCells, layer: int, mode: str | np.ndarray = "all") -> GCMResult:
+    """The GCM analysis of one layer of a drifter model (thesis Alg. 5.1 PERSISTENTBEHAVIOR):
+    persistent groups, transient groups by domicile set (`GCMResult.domicile_groups`),
+    absorption times and probabilities. Cell k of the result is state
+    ``model.offsets[layer] + k``. I - Q is eliminated in the nested-dissection order of the
+    layer's grid (`grid_dissection`), which keeps the sparse LU of a 10^6-cell layer small."""
+    cells = model.cells[model.layer_states(layer)]
+    order = grid_dissection(cells[:, 1], cells[:, 2], width=2)
+    return generalized_cell_mapping(model.transition_matrix(layer), mode=mode, order=order)
 
 
 # -- internals --------------------------------------------------------------------------------
@@ -356,12 +409,35 @@ def _stationary(P: sp.csr_matrix, pers: np.ndarray, gid: np.ndarray,
     return out
 
 
-def _transient_lu(P: sp.csr_matrix, transient: np.ndarray):
+def _transient_lu(P: sp.csr_matrix, transient: np.ndarray, order: np.ndarray | None = None):
     """Sparse LU of (I - Q), Q the transient-to-transient block (regular: every transient cell
-    leads to a persistent group, so Q^n -> 0)."""
+    leads to a persistent group, so Q^n -> 0).
+
+    With a cell ``order``, the transient cells are eliminated in that order without pivoting:
+    I - Q is a nonsingular M-matrix, whose Gaussian elimination keeps positive pivots."""
     q = P[transient][:, transient]
     eye = sp.identity(len(transient), format="csc")
-    return splu((eye - q).tocsc())
+    if order is None:
+        return splu((eye - q).tocsc())
+    position = np.full(P.shape[0], -1, dtype=np.int64)
+    position[transient] = np.arange(len(transient))
+    perm = position[order]
+    perm = perm[perm >= 0]
+    lu = splu((eye - q)[perm][:, perm].tocsc(), permc_spec="NATURAL", diag_pivot_thresh=0.0,
+              options=dict(SymmetricMode=True))
+    return _PermutedLU(lu, perm)
+
+
+class _PermutedLU:
+    """``solve`` of A from the LU of A[perm][:, perm]."""
+
+    def __init__(self, lu, perm: np.ndarray) -> None:
+        self.lu, self.perm = lu, perm
+
+    def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
+        out = np.empty_like(b, dtype=np.float64)
+        out[self.perm] = self.lu.solve(np.ascontiguousarray(b[self.perm]), trans=trans)
+        return out
 
 
 def _mix(stationary: np.ndarray, group_of: np.ndarray, weights: np.ndarray) -> np.ndarray:

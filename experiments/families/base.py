@@ -3,11 +3,13 @@ follows one episode."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from pathlib import Path
 
-from baselines.policy import Policy, is_parallel_env
+from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
 from bounce_gym.errors import ConfigError
+from experiments.config import POLICY_KINDS
 
 
 class Episode:
@@ -28,6 +30,11 @@ class Episode:
     def metrics(self, info: dict) -> dict:
         """The family's columns of the episode's row (``info``: the last step's)."""
         return {}
+
+    def ticks(self, info: dict, steps: int) -> int:
+        """The clock ticks the episode lasted (``info``: the last step's; ``steps``: env steps
+        taken): the bouncing robots' ``info["ticks"]``."""
+        return int(info["ticks"])
 
 
 class LastInfo(Episode):
@@ -51,7 +58,9 @@ class Family:
     every episode, e.g. the number of robots) and are shown as they are. ``score`` is the column
     that ranks policies (in leaderboards, performance profiles and the hindsight oracle),
     ``higher_is_better`` its direction. ``planner_attributes`` are the planner's predictions
-    copied into its rows when set.
+    copied into its rows when set. ``policy_kinds`` are the kinds of policy of a
+    configuration's ``policies`` (`experiments.config`) the family runs; `policies` builds
+    them (``rl``: the runner loads the trained models).
     """
 
     name = "family"
@@ -63,6 +72,7 @@ class Family:
     score = "return"
     higher_is_better = True
     planner_attributes: tuple[str, ...] = ()
+    policy_kinds: tuple[str, ...] = POLICY_KINDS
 
     @property
     def heading(self) -> str:
@@ -82,6 +92,29 @@ class Family:
     def prepare(self, env, experiment: Mapping) -> object:
         """Per-experiment set-up on a fresh env, handed to `planner` and `episode`."""
         return None
+
+    def world(self, env) -> object:
+        """What the experiment's plots draw the robots in: the env's world."""
+        return env.unwrapped.options.world
+
+    def policies(self, kind: str, env, experiment: Mapping, setup: object) -> list[Policy]:
+        """The policies of one kind (not ``rl``) for a bouncing robot or team: ``planner`` the
+        family's (`planner`), ``random`` a random angle of Φ at every bump, ``fixed`` one policy
+        per angle of Φ (discrete actions only)."""
+        options = env.unwrapped.options
+        discrete = options.action_type == "discrete"
+        if is_parallel_env(env) and not discrete:
+            raise ConfigError("env_kwargs.action_type: multi-robot experiments choose angles by "
+                              "index; use 'discrete'")
+        if kind == "planner":
+            planner = self.planner(env, experiment, setup)
+            return [] if planner is None else [planner]
+        if kind == "random":
+            return [RandomAnglePolicy()]
+        if kind == "fixed" and discrete:
+            n = min(len(phi) for phi in options.angles)
+            return [FixedAnglePolicy(i, math.degrees(options.angles[0][i])) for i in range(n)]
+        return []
 
     def planner(self, env, experiment: Mapping, setup: object) -> Policy | None:
         """The task's analytic planner (``None``: none applies to this env)."""
@@ -105,6 +138,12 @@ class Family:
     def plots(self, folder: Path, name: str, data: dict) -> list[Path]:
         """The family's plots of one experiment."""
         return []
+
+    def trajectory_plots(self, folder: Path, name: str, data: dict) -> list[Path]:
+        """The first seed's trajectories of every policy in the world (``data["paths"]``)."""
+        from experiments.plots.trajectories import plot_trajectories
+
+        return plot_trajectories(folder, name, data)
 
     def summary_plots(self, folder: Path, plots: Mapping, summary: list[dict]) -> list[Path]:
         """Plots across the family's experiments (called once per family that ran)."""

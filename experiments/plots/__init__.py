@@ -1,2 +1,3 @@
 """Figures of an evaluation run: the shared helpers (`figures`), every experiment's trajectories
-(`trajectories`) and the bounce-visibility figures (`visibility`); the families draw the rest."""
+(`trajectories`), the bounce-visibility figures (`visibility`) and the drifter planners' figures
+(`drifters`); the families draw the rest."""

@@ -30,14 +30,18 @@ def test_the_benchmark_covers_every_task_with_200_held_out_episodes():
     assert {env for env, _ in tasks} == {
         "bounce_gym/BounceNavigation-v0", "bounce_gym/BounceLocalization-v0",
         "bounce_gym/BounceCoverage-v0", "bounce_gym/MultiBounceCoverage-v0",
-        "bounce_gym/MultiBounceMonitoring-v0"}
+        "bounce_gym/MultiBounceMonitoring-v0", "bounce_gym/Drifter-v0",
+        "bounce_gym/MultiDrifter-v0"}
     navigation = [w for env, w in tasks if env == "bounce_gym/BounceNavigation-v0"]
     assert len(navigation) == 2 and any(w.endswith("bench_grid_14x22.yaml") for w in navigation)
     for exp in experiments:
         assert exp["difficulty"] in ("easy", "medium", "hard")
         assert exp["seeds"] == list(range(10_000, 10_200))
         assert "horizon_reason" not in exp  # every task at its registered horizon
-        assert "rl" in exp["policies"] and "fixed" in exp["policies"]
+        if exp["env"] == "bounce_gym/MultiDrifter-v0":  # deployments: all the family runs
+            assert exp["policies"] == ["planner", "random"]
+        else:
+            assert "rl" in exp["policies"] and "fixed" in exp["policies"]
 
 
 def test_the_generated_map_is_what_its_description_says():
@@ -64,6 +68,7 @@ def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
     board = (folder / "leaderboard.md").read_text(encoding="utf-8")
     assert board.startswith("# benchmark: leaderboard")
     assert "on lab_navigation;" in board and "on bench_grid_14x22.yaml;" in board
+    assert "on scb_like;" in board and "on two_sink;" in board
     for exp in config["experiments"]:
         assert f"## {exp['name']} ({exp['difficulty']})" in board
     rows = [line for line in board.splitlines() if line.startswith("| ") and "policy" not in line]

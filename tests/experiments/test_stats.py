@@ -105,3 +105,19 @@ def test_an_estimate_is_stored_with_its_interval_and_count():
     stats.rate([True, False, True]).store(row, "success")
     assert set(row) == {"success", "success_lo", "success_hi", "success_n"}
     assert row["success_n"] == 3 and row["success_lo"] < row["success"] < row["success_hi"]
+
+
+def test_a_band_is_the_mean_interval_at_every_point():
+    rng = np.random.default_rng(0)
+    curves = rng.gamma(2.0, size=(15, 30)).cumsum(axis=1)
+    curves[:, 0] = 0.3  # all equal: a point interval
+    band = stats.mean_band(curves)
+    assert band.n == 15 and np.allclose(band.mean, curves.mean(axis=0))
+    assert band.lo[0] == band.hi[0] == pytest.approx(0.3)
+    for j in range(1, curves.shape[1]):
+        assert (band.lo[j], band.hi[j]) == pytest.approx(
+            stats.bootstrap_mean_interval(curves[:, j]))
+    one = stats.mean_band(curves[:1])
+    assert np.array_equal(one.lo, curves[0]) and np.array_equal(one.hi, curves[0])
+    with pytest.raises(ValueError, match="curves"):
+        stats.mean_band(np.zeros(3))

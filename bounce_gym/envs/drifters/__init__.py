@@ -1,0 +1,3 @@
+"""Profiling drifters in layered ocean currents (Alam 2018, thesis ch. 5) as environments:
+`DrifterEnv` (Gymnasium, ``bounce_gym/Drifter-v0``) and `MultiDrifterEnv` (PettingZoo,
+``bounce_gym/MultiDrifter-v0``)."""

@@ -1,0 +1,157 @@
+"""A fleet of profiling drifters covering the surface, as a PettingZoo parallel environment.
+
+| | |
+|---|---|
+| Import | ``pettingzoo.make("parallel", "bounce_gym/MultiDrifter-v0")`` or ``from bounce_gym.envs.drifters import multi_drifter_v0`` (``parallel_env()``, ``env()``) |
+| Agents | ``drifter_0`` … ``drifter_{n-1}`` |
+| Actions | ``Discrete(3)`` per drifter: 0 drift, 1 up, 2 down |
+| Observations | per drifter: layer, clock (steps / ``max_cycles``), optional surface fix and pose (`bounce_gym.envs.drifters.core`) |
+| State | ``state()``: every drifter's (x, y, layer), each in [0, 1] |
+
+## Description
+
+n drifters are deployed at chosen cells (thesis ch. 5, problem 1: deployment cells whose
+drifters visit every surface cell) and carried by the currents; each can rise, sink or drift
+(`DrifterEnv` has the details, backends and arguments). All act at once every step. The
+**AEC form** (``env()``) is PettingZoo's ``parallel_to_aec`` conversion of this env: the
+drifters choose in turn and the fleet moves once all have chosen.
+
+## Rewards
+
+Shared surface coverage: the number of surface cells that some drifter visits for the first
+time in the step (a drifter is at the surface and in that cell at the end of the step; the
+deployment cells count as visited at reset), split evenly over the drifters.
+``info["coverage"]`` is the fraction of surface water cells visited so far.
+
+## Episode End
+
+All drifters terminate when the whole surface is visited; all are truncated after
+``max_cycles`` steps.
+
+## Arguments
+
+``n_drifters`` (default 4, or the length of ``deploy``), ``deploy`` (None: each drifter at a
+uniformly random surface cell, distinct while there are enough; or a list with one region per
+drifter, see `bounce_gym.envs.drifters.regions`; per episode with
+``reset(options={"deploy": [...]})``),
+``max_cycles`` (default 500), ``render_mode``, ``field_style``, and the flow, backend and
+sensing arguments of `DrifterEnv` (``flow``, ``flow_kwargs``, ``backend``, ``rho``,
+``cell_map``, ``start_time``, ``step_seconds``, ``substeps``, ``diffusivity``, ``land_rule``,
+``illegal_action``, ``observe_fix``, ``observe_pose``). Each agent's info holds its own
+``cell``, ``state``, ``position``, ``layer``, ``action_mask``, ``illegal_action`` and the
+shared ``coverage``, ``new_cells``, ``steps``.
+
+## Version History
+
+* v0: initial release.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from pettingzoo import ParallelEnv
+
+from bounce_gym.envs.drifters.base import DrifterEnvBase
+from bounce_gym.envs.drifters.core import PER_DRIFTER, action_code
+from bounce_gym.errors import ActionError, ConfigError
+from bounce_gym.validate import integer
+
+#: arguments of `bounce_gym.envs.drifters.options` the fleet does not take (it covers the
+#: surface; its clock runs to max_cycles)
+SINGLE_ONLY = ("task", "goal", "region", "reward", "start", "clock_steps")
+
+
+class MultiDrifterEnv(DrifterEnvBase, ParallelEnv):
+    """The parallel form; see the module docstring."""
+
+    metadata = {**DrifterEnvBase.metadata, "name": "multi_drifter_v0",
+                "is_parallelizable": True}
+
+    def __init__(self, max_cycles: int = 500, render_mode: str | None = None,
+                 field_style: str = "arrows", **options: object) -> None:
+        self.max_cycles = integer("max_cycles", max_cycles, 1)
+        deploy = options.get("deploy")
+        if "n_drifters" not in options and isinstance(deploy, list | tuple):
+            options = {**options, "n_drifters": len(deploy)}  # one drifter per deploy entry
+        self._build(options, render_mode, field_style, n_drifters=None,
+                    clock_steps=self.max_cycles, start_key="deploy",
+                    defaults={"task": "cover"}, fixed=SINGLE_ONLY)
+        n = self.options.n_drifters
+        self.possible_agents = [f"drifter_{k}" for k in range(n)]
+        self.agent_index = {a: k for k, a in enumerate(self.possible_agents)}
+        self._obs_space = spaces.Box(self.core.obs_low, self.core.obs_high, dtype=np.float32)
+        self._action_space = spaces.Discrete(3)
+        self.state_space = spaces.Box(0.0, 1.0, (3 * n,), dtype=np.float32)
+        self.agents: list[str] = []
+        self.np_random = None
+        self.np_random_seed = None
+
+    def observation_space(self, agent: str) -> spaces.Space:
+        """The same (shared) space object on every call, as PettingZoo's API test requires."""
+        return self._obs_space
+
+    def action_space(self, agent: str) -> spaces.Space:
+        return self._action_space
+
+    def reset(self, seed: int | None = None, options: dict | None = None):
+        if seed is not None or self.np_random is None:
+            self.np_random, self.np_random_seed = seeding.np_random(seed)
+        obs, info = self.core.reset(self.np_random, options, strict=False)
+        self.agents = list(self.possible_agents)
+        self.cycles = 0
+        if self.render_mode == "human":
+            self.render()
+        return self._per_agent(obs), self._agent_infos(info, self.agents)
+
+    def step(self, actions: Mapping):
+        if not self.agents:
+            raise ConfigError("step() called with no live agents: call reset() first")
+        if not isinstance(actions, Mapping):
+            raise ActionError(f"actions: expected a dict agent -> action, got "
+                              f"{type(actions).__name__}")
+        unknown = sorted(set(actions) - set(self.agents))
+        missing = [a for a in self.agents if a not in actions]
+        if unknown or missing:
+            raise ActionError(f"actions: need exactly one action per live agent "
+                              f"(unknown {unknown}, missing {missing})")
+        codes = np.array([action_code(actions[a], f"action of {a}") for a in self.possible_agents])
+        obs, rewards, terminated, info = self.core.step(codes, self.np_random)
+        self.cycles += 1
+        truncated = self.cycles >= self.max_cycles
+        live = list(self.agents)
+        result = (
+            self._per_agent(obs),
+            {a: float(rewards[self.agent_index[a]]) for a in live},
+            {a: bool(terminated[self.agent_index[a]]) for a in live},
+            dict.fromkeys(live, truncated),
+            self._agent_infos(info, live),
+        )
+        self.agents = [a for a in live if not (result[2][a] or truncated)]
+        if self.render_mode == "human":
+            self.render()
+        return result
+
+    def action_mask(self, agent: str) -> np.ndarray:
+        """(3,) int8, the legal actions of ``agent`` now."""
+        return self.core.legal()[self.agent_index[agent]].astype(np.int8)
+
+    def state(self) -> np.ndarray:
+        positions = self.core.fleet.positions()
+        x, y = self.core.normalise(positions[:, 0], positions[:, 1])
+        layer = self.core.fleet.layers() / max(self.core.model.n_layers - 1, 1)
+        flat = np.column_stack((x, y, layer)).ravel().astype(np.float32)
+        return np.clip(flat, 0.0, 1.0)
+
+    def _per_agent(self, obs: np.ndarray) -> dict[str, np.ndarray]:
+        return {a: obs[self.agent_index[a]] for a in self.agents}
+
+    def _agent_infos(self, info: dict, agents) -> dict[str, dict]:
+        """Each agent's info: the shared entries and its own row of every per-drifter one."""
+        shared = {k: v for k, v in info.items() if k not in PER_DRIFTER}
+        rows = {k: info[k] for k in PER_DRIFTER if k in info}
+        return {a: {**shared, **{k: v[self.agent_index[a]] for k, v in rows.items()}}
+                for a in agents}
