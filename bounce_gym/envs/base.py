@@ -10,13 +10,14 @@ from gymnasium import logger
 from bounce_gym.cells import CellModel
 from bounce_gym.envs.core import BounceCore
 from bounce_gym.envs.options import parse_options
+from bounce_gym.envs.render.owner import RendererOwner
 from bounce_gym.envs.tasks import make_task
 from bounce_gym.errors import ConfigError
 
 RENDER_MODES = ["human", "rgb_array"]
 
 
-class EnvBase:
+class EnvBase(RendererOwner):
     """Mixin of `BounceEnv` and the multi-robot envs; it comes before the Gymnasium or
     PettingZoo base class so that its ``render``, ``close`` and ``metadata`` win."""
 
@@ -75,12 +76,3 @@ class EnvBase:
             return None
         return frame
 
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __getstate__(self):
-        state = self.__dict__.copy()
-        state["_renderer"] = None  # pygame objects are rebuilt on the next render()
-        return state

@@ -20,7 +20,6 @@ The true state goes to ``info`` only.
 from __future__ import annotations
 
 import math
-import warnings
 from collections import deque
 from collections.abc import Mapping
 
@@ -29,8 +28,8 @@ import numpy as np
 from bounce_gym.cells import CellModel
 from bounce_gym.dynamics import BounceDynamics
 from bounce_gym.envs.options import EnvOptions
+from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.envs.tasks.base import StepEvents, Task, pose_option
-from bounce_gym.errors import ConfigError
 
 TRAIL_LENGTH = 64
 
@@ -107,16 +106,7 @@ class BounceCore:
         Unknown option keys raise `ConfigError`; with ``strict=False`` (PettingZoo, whose API
         test passes arbitrary options) they only warn.
         """
-        options = {} if options is None else options
-        if not isinstance(options, Mapping):
-            raise ConfigError(f"reset options: expected a dict, got {type(options).__name__}")
-        unknown = sorted(set(options) - self.option_keys)
-        if unknown:
-            message = (f"reset options: unknown keys {unknown}; allowed are "
-                       f"{sorted(self.option_keys)}")
-            if strict:
-                raise ConfigError(message)
-            warnings.warn(message + " (ignored)", UserWarning, stacklevel=3)
+        options = checked_reset_options(options, self.option_keys, strict)
         m = self.options.n_robots
         poses = self.task.start_poses(rng, options) or pose_option(options, "start", m)
         position, heading = poses if poses is not None else (None, None)

@@ -10,6 +10,7 @@ from gymnasium import logger
 from bounce_gym.cells.drifter import DrifterCells
 from bounce_gym.envs.drifters.core import DrifterCore
 from bounce_gym.envs.drifters.options import parse_options
+from bounce_gym.envs.render.owner import RendererOwner
 from bounce_gym.errors import ConfigError
 from bounce_gym.flows import FlowField
 
@@ -17,7 +18,7 @@ RENDER_MODES = ["human", "rgb_array"]
 FIELD_STYLES = ("arrows", "streamlines")
 
 
-class DrifterEnvBase:
+class DrifterEnvBase(RendererOwner):
     """Mixin of `DrifterEnv` and `MultiDrifterEnv`; it comes before the Gymnasium or PettingZoo
     base class so that its ``render``, ``close`` and ``metadata`` win."""
 
@@ -77,12 +78,3 @@ class DrifterEnvBase:
             return None
         return frame
 
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __getstate__(self):
-        state = self.__dict__.copy()
-        state["_renderer"] = None  # pygame objects are rebuilt on the next render()
-        return state

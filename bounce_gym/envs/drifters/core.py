@@ -16,7 +16,6 @@ The true state is in ``info``.
 
 from __future__ import annotations
 
-import warnings
 from collections import deque
 from collections.abc import Mapping, Sequence
 
@@ -27,6 +26,7 @@ from bounce_gym.envs.drifters.backends import CellFleet, ContinuousFleet
 from bounce_gym.envs.drifters.options import DrifterOptions
 from bounce_gym.envs.drifters.regions import parse_region
 from bounce_gym.envs.drifters.tasks import make_task
+from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.errors import ActionError, ConfigError
 
 TRAIL_LENGTH = 64
@@ -86,16 +86,7 @@ class DrifterCore:
               strict: bool = True) -> tuple[np.ndarray, dict]:
         """Place the fleet and start an episode. Unknown option keys raise `ConfigError`; with
         ``strict=False`` (PettingZoo's API test passes arbitrary options) they only warn."""
-        options = {} if options is None else options
-        if not isinstance(options, Mapping):
-            raise ConfigError(f"reset options: expected a dict, got {type(options).__name__}")
-        unknown = sorted(set(options) - self.option_keys)
-        if unknown:
-            message = (f"reset options: unknown keys {unknown}; allowed are "
-                       f"{sorted(self.option_keys)}")
-            if strict:
-                raise ConfigError(message)
-            warnings.warn(message + " (ignored)", UserWarning, stacklevel=3)
+        options = checked_reset_options(options, self.option_keys, strict)
         self.task.reset(options)
         spec = options.get(self.start_key)
         where = self.start_key if spec is None else f"options.{self.start_key}"
