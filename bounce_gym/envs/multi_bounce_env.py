@@ -61,6 +61,7 @@ from pettingzoo import AECEnv, ParallelEnv
 
 from bounce_gym.envs.actions import action_space, to_angle
 from bounce_gym.envs.base import EnvBase
+from bounce_gym.envs.parallel_step import finish_parallel_step
 from bounce_gym.errors import ActionError, ConfigError
 from bounce_gym.validate import integer
 
@@ -182,20 +183,7 @@ class MultiBounceEnv(_MultiBase, ParallelEnv):
             # a turn step uses no bounce angle; keep a valid one in the unused slots
             angles = np.where(commanded, [phi[0] for phi in self.options.angles], angles)
         obs, rewards, terminated, info = self.core.step(angles, turns)
-        self.cycles += 1
-        truncated = self.cycles >= self.max_cycles
-        live = list(self.agents)
-        result = (
-            self._per_agent(obs),
-            {a: float(rewards[self.agent_index[a]]) for a in live},
-            {a: bool(terminated[self.agent_index[a]]) for a in live},
-            dict.fromkeys(live, truncated),
-            self._agent_infos(info, live),
-        )
-        self.agents = [a for a in live if not (result[2][a] or truncated)]
-        if self.render_mode == "human":
-            self.render()
-        return result
+        return finish_parallel_step(self, obs, rewards, terminated, info)
 
 
 class MultiBounceAEC(_MultiBase, AECEnv):

@@ -57,6 +57,7 @@ from pettingzoo import ParallelEnv
 
 from bounce_gym.envs.drifters.base import DrifterEnvBase
 from bounce_gym.envs.drifters.core import PER_DRIFTER, action_code
+from bounce_gym.envs.parallel_step import finish_parallel_step
 from bounce_gym.errors import ActionError, ConfigError
 from bounce_gym.validate import integer
 
@@ -120,20 +121,7 @@ class MultiDrifterEnv(DrifterEnvBase, ParallelEnv):
                               f"(unknown {unknown}, missing {missing})")
         codes = np.array([action_code(actions[a], f"action of {a}") for a in self.possible_agents])
         obs, rewards, terminated, info = self.core.step(codes, self.np_random)
-        self.cycles += 1
-        truncated = self.cycles >= self.max_cycles
-        live = list(self.agents)
-        result = (
-            self._per_agent(obs),
-            {a: float(rewards[self.agent_index[a]]) for a in live},
-            {a: bool(terminated[self.agent_index[a]]) for a in live},
-            dict.fromkeys(live, truncated),
-            self._agent_infos(info, live),
-        )
-        self.agents = [a for a in live if not (result[2][a] or truncated)]
-        if self.render_mode == "human":
-            self.render()
-        return result
+        return finish_parallel_step(self, obs, rewards, terminated, info)
 
     def action_mask(self, agent: str) -> np.ndarray:
         """(3,) int8, the legal actions of ``agent`` now."""
