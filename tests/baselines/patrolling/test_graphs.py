@@ -8,6 +8,7 @@ import pytest
 
 from baselines.patrolling.graphs import cell_graph
 from bounce_gym.errors import ConfigError
+from bounce_gym.worlds import zoo
 from bounce_gym.worlds.grid import world_from_grid
 
 
@@ -47,3 +48,10 @@ def test_cell_size_scales_positions_and_lengths():
 def test_bad_corner_rule_is_named():
     with pytest.raises(ConfigError, match="corner_rule"):
         cell_graph(world_from_grid(np.ones((2, 2), dtype=bool)), corner_rule="cut")
+
+
+def test_patrol_map_of_the_thesis_has_188_connected_cells():
+    graph = cell_graph(zoo.get("patrol_15x15"))
+    assert graph.number_of_nodes() == 188  # thesis §4.5.3: n = 188 free cells
+    assert nx.is_connected(graph)
+    assert graph.number_of_edges() <= 4 * 188  # at most 4 undirected king edges per cell
