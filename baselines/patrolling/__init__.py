@@ -1,0 +1,35 @@
+"""Stochastic multi-robot patrolling (Alam 2018, thesis ch. 4): the cell graph of a World, random
+walks with their hitting and commute times, MAECT strategies, and the patrolling game (Alg. 4.2
+payoffs, strong Stackelberg equilibrium). Every planner takes a networkx graph and returns plain
+data (edge -> weight, a transition matrix with its node order)."""
+
+from baselines.patrolling.game import (
+    StackelbergResult,
+    payoff_matrices,
+    preferred_all,
+    preferred_subset,
+    preferred_towards,
+    stackelberg,
+)
+from baselines.patrolling.graphs import DEFAULT_CORNER_RULE, cell_graph
+from baselines.patrolling.maect import (
+    SOLVERS,
+    MaectResult,
+    incidence,
+    laplacian,
+    maect_objective,
+    project_simplex,
+    solve_maect,
+)
+from baselines.patrolling.markov import (
+    commute_times,
+    hitting_times,
+    mean_commute_time,
+    transition_matrix,
+)
+
+__all__ = ["DEFAULT_CORNER_RULE", "SOLVERS", "MaectResult", "StackelbergResult", "cell_graph",
+           "commute_times", "hitting_times", "incidence", "laplacian", "maect_objective",
+           "mean_commute_time", "payoff_matrices", "preferred_all", "preferred_subset",
+           "preferred_towards", "project_simplex", "solve_maect", "stackelberg",
+           "transition_matrix"]
