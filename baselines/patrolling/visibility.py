@@ -26,7 +26,8 @@ import shapely
 from bounce_gym import validate
 from bounce_gym.errors import ConfigError
 
-__all__ = ["RULES", "CellVisibility", "cell_visibility", "complete_visibility"]
+__all__ = ["RULES", "CellVisibility", "WatchRegion", "cell_visibility", "complete_visibility",
+           "watch_region"]
 
 #: When a cell counts as seen: corners in range and corner-and-centre line of sight, or the
 #: centre alone.
@@ -172,3 +173,48 @@ def complete_visibility(visibility: CellVisibility, m: int) -> list[list[int]]:
             uncovered[visibility.visible_from(z)] = 0
         covers.append(chosen)
     return covers
+
+
+@dataclass(frozen=True, eq=False)
+class WatchRegion:
+    """The cells around a target cell z used in the vulnerability evaluation (thesis §4.3.5).
+
+    Attributes:
+        target: the target cell z.
+        inside: T, the cells seen from z (inside V(x_z)), ascending.
+        boundary: ∂V(x_z), the cells of T that are 8-adjacent to a free cell outside T.
+        outside: T', the free cells not in T.
+    """
+
+    target: int
+    inside: np.ndarray
+    boundary: np.ndarray
+    outside: np.ndarray
+
+
+def watch_region(visibility: CellVisibility, z: int) -> WatchRegion:
+    """T, ∂V(x_z) and T' for target cell ``z``; ∂V(x_z) is read as the cells of T first
+    reached from T' by an 8-neighbour move.
+
+    Raises:
+        ConfigError: ``z`` is not a cell index of ``visibility``.
+    """
+    if not isinstance(visibility, CellVisibility):
+        raise ConfigError(f"visibility: expected a CellVisibility, got "
+                          f"{type(visibility).__name__}")
+    inside = visibility.visible_from(z)
+    n = len(visibility)
+    in_t = np.zeros(n, dtype=bool)
+    in_t[inside] = True
+    rows, cols = visibility.cells.T
+    shape = (rows.max() + 3, cols.max() + 3)  # one cell of margin on each side
+    outside_grid = np.zeros(shape, dtype=bool)
+    outside_grid[rows[~in_t] + 1, cols[~in_t] + 1] = True
+    near_outside = np.zeros(n, dtype=bool)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            if dr or dc:
+                near_outside |= outside_grid[rows + 1 + dr, cols + 1 + dc]
+    return WatchRegion(target=int(z), inside=inside,
+                       boundary=np.flatnonzero(in_t & near_outside),
+                       outside=np.flatnonzero(~in_t))

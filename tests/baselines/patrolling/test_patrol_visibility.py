@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from baselines.patrolling.visibility import cell_visibility, complete_visibility
+from baselines.patrolling.visibility import cell_visibility, complete_visibility, watch_region
 from bounce_gym.errors import ConfigError
 
 
@@ -92,6 +92,22 @@ def test_greedy_cover_on_an_open_grid_is_within_the_set_cover_bound(shape, sensi
     biggest = int(np.asarray(vis.seen.sum(axis=1)).max())
     bound = (1 + math.log(biggest)) * math.ceil(len(vis) / biggest)
     assert len(complete_visibility(vis, 1)[0]) <= bound
+
+
+def test_watch_region_splits_the_cells_and_rings_the_visible_set():
+    vis = cell_visibility(np.ones((15, 15), dtype=bool), 3)
+    z = int(np.flatnonzero((vis.cells == (7, 7)).all(axis=1))[0])
+    region = watch_region(vis, z)
+    assert np.array_equal(np.sort(np.concatenate((region.inside, region.outside))),
+                          np.arange(len(vis)))
+    assert set(region.boundary) <= set(region.inside) and z not in set(region.boundary)
+    # on an open grid the boundary is the outer ring of the disk: its cells' offsets
+    ring = {(int(r) - 7, int(c) - 7) for r, c in vis.cells[region.boundary]}
+    disk = {(int(r) - 7, int(c) - 7) for r, c in vis.cells[region.inside]}
+    assert ring == {(dy, dx) for dy, dx in disk
+                    if any((dy + a, dx + b) not in disk for a in (-1, 0, 1) for b in (-1, 0, 1))}
+    with pytest.raises(ConfigError, match="z"):
+        watch_region(vis, len(vis))
 
 
 def test_bad_input_raises_config_error():
