@@ -1,7 +1,9 @@
 """Stochastic multi-robot patrolling (Alam 2018, thesis ch. 4): the cell graph of a World, random
 walks with their hitting and commute times, MAECT strategies, and the patrolling game (Alg. 4.2
-payoffs, strong Stackelberg equilibrium). Every planner takes a networkx graph and returns plain
-data (edge -> weight, a transition matrix with its node order)."""
+payoffs, strong Stackelberg equilibrium), limited-range visibility covers (Alg. 4.3), detection
+times with the generalised lambda distribution, and perimeter-patrol baselines (`visibility`,
+`vulnerability`, `perimeter`). Every planner takes a networkx graph and returns plain data
+(edge -> weight, a transition matrix with its node order)."""
 
 from baselines.patrolling.game import (
     StackelbergResult,
