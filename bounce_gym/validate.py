@@ -10,6 +10,7 @@ and what is allowed. The module imports only `bounce_gym.errors`, so any layer m
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -66,3 +67,16 @@ def flag(field: str, value: object) -> bool:
     if not isinstance(value, bool | np.bool_):
         raise ConfigError(f"{field}: expected True or False, got {value!r}")
     return bool(value)
+
+
+def keyword_arguments(table: Mapping, kwargs: Mapping, defaults: Mapping | None = None,
+                      fixed: Sequence[str] = (), who: str = "the environment") -> dict:
+    """The arguments of ``table`` (name -> default) with ``defaults`` and then ``kwargs`` laid
+    over them; a name not in the table, or one of ``fixed``, is the `TypeError` Python raises for
+    an unexpected keyword argument of ``who``."""
+    values = {**table, **(defaults or {})}
+    for name in kwargs:
+        if name not in values or name in fixed:
+            raise TypeError(f"{who}() got an unexpected keyword argument {name!r}")
+    values.update(kwargs)
+    return values

@@ -61,8 +61,8 @@ from pettingzoo import AECEnv, ParallelEnv
 
 from bounce_gym.envs.actions import action_space, to_angle
 from bounce_gym.envs.base import EnvBase
-from bounce_gym.envs.parallel_step import finish_parallel_step
-from bounce_gym.errors import ActionError, ConfigError
+from bounce_gym.envs.parallel_step import check_parallel_actions, finish_parallel_step
+from bounce_gym.errors import ConfigError
 from bounce_gym.validate import integer
 
 MULTI_ROBOT_TASKS = ("free", "coverage", "monitoring")
@@ -163,16 +163,7 @@ class MultiBounceEnv(_MultiBase, ParallelEnv):
         return {a: obs[self.agent_index[a]] for a in self.agents}
 
     def step(self, actions: Mapping):
-        if not getattr(self, "agents", None):
-            raise ConfigError("step() called with no live agents: call reset() first")
-        if not isinstance(actions, Mapping):
-            raise ActionError(f"actions: expected a dict agent -> action, got "
-                              f"{type(actions).__name__}")
-        unknown = sorted(set(actions) - set(self.agents))
-        missing = [a for a in self.agents if a not in actions]
-        if unknown or missing:
-            raise ActionError(f"actions: need exactly one action per live agent "
-                              f"(unknown {unknown}, missing {missing})")
+        check_parallel_actions(self, actions)
         angles = np.array([self._angle(a, actions[a]) for a in self.possible_agents])
         turns = None
         if len(self.options.turn_angles):  # discrete: the actions are valid indices by now

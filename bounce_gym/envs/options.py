@@ -60,7 +60,7 @@ from bounce_gym.dynamics.backends.base import ROBOT_COLLISIONS
 from bounce_gym.dynamics.noise import NoiseModel, make_noise
 from bounce_gym.dynamics.rules import RULES, check_parameters
 from bounce_gym.errors import ConfigError, InvalidWorldError
-from bounce_gym.validate import integer
+from bounce_gym.validate import integer, keyword_arguments
 from bounce_gym.validate import number as _number
 from bounce_gym.worlds import World
 
@@ -233,11 +233,7 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
     keep their default and may not be given (the single-robot env fixes ``n_robots`` and the
     other multi-robot arguments). ``who`` names the env in the error for an unknown argument.
     """
-    values = {**ARGUMENTS, **(defaults or {})}
-    for name in kwargs:
-        if name not in values or name in fixed:
-            raise TypeError(f"{who}() got an unexpected keyword argument {name!r}")
-    values.update(kwargs)
+    values = keyword_arguments(ARGUMENTS, kwargs, defaults, fixed, who)
     backend = _choice("backend", values["backend"], BACKENDS)
     bounce_rule = _choice("bounce_rule", values["bounce_rule"], sorted(RULES))
     n_robots = integer("n_robots", values["n_robots"], 1, MAX_ROBOTS)

@@ -1,6 +1,26 @@
-"""The end of a PettingZoo parallel step, shared by the bouncing and the drifter fleets."""
+"""The checks and the end of a PettingZoo parallel step, shared by the bouncing and the drifter
+fleets."""
 
 from __future__ import annotations
+
+from collections.abc import Mapping
+
+from bounce_gym.errors import ActionError, ConfigError
+
+
+def check_parallel_actions(env, actions) -> None:
+    """``actions`` must map every live agent of ``env`` (and no other) to an action; a step
+    before `reset` is a `ConfigError`."""
+    if not getattr(env, "agents", None):
+        raise ConfigError("step() called with no live agents: call reset() first")
+    if not isinstance(actions, Mapping):
+        raise ActionError(f"actions: expected a dict agent -> action, got "
+                          f"{type(actions).__name__}")
+    unknown = sorted(set(actions) - set(env.agents))
+    missing = [a for a in env.agents if a not in actions]
+    if unknown or missing:
+        raise ActionError(f"actions: need exactly one action per live agent "
+                          f"(unknown {unknown}, missing {missing})")
 
 
 def finish_parallel_step(env, obs, rewards, terminated, info) -> tuple:

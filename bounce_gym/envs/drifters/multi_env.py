@@ -57,8 +57,7 @@ from pettingzoo import ParallelEnv
 
 from bounce_gym.envs.drifters.base import DrifterEnvBase
 from bounce_gym.envs.drifters.core import PER_DRIFTER, action_code
-from bounce_gym.envs.parallel_step import finish_parallel_step
-from bounce_gym.errors import ActionError, ConfigError
+from bounce_gym.envs.parallel_step import check_parallel_actions, finish_parallel_step
 from bounce_gym.validate import integer
 
 #: arguments of `bounce_gym.envs.drifters.options` the fleet does not take (it covers the
@@ -109,16 +108,7 @@ class MultiDrifterEnv(DrifterEnvBase, ParallelEnv):
         return self._per_agent(obs), self._agent_infos(info, self.agents)
 
     def step(self, actions: Mapping):
-        if not self.agents:
-            raise ConfigError("step() called with no live agents: call reset() first")
-        if not isinstance(actions, Mapping):
-            raise ActionError(f"actions: expected a dict agent -> action, got "
-                              f"{type(actions).__name__}")
-        unknown = sorted(set(actions) - set(self.agents))
-        missing = [a for a in self.agents if a not in actions]
-        if unknown or missing:
-            raise ActionError(f"actions: need exactly one action per live agent "
-                              f"(unknown {unknown}, missing {missing})")
+        check_parallel_actions(self, actions)
         codes = np.array([action_code(actions[a], f"action of {a}") for a in self.possible_agents])
         obs, rewards, terminated, info = self.core.step(codes, self.np_random)
         return finish_parallel_step(self, obs, rewards, terminated, info)

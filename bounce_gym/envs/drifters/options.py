@@ -52,7 +52,7 @@ from bounce_gym.cells.drifter import STEPS
 from bounce_gym.dynamics.advection import LAND_RULES
 from bounce_gym.errors import BounceGymError, ConfigError
 from bounce_gym.flows import FlowField
-from bounce_gym.validate import flag, integer, number
+from bounce_gym.validate import flag, integer, keyword_arguments, number
 
 BACKENDS = ("cell", "continuous")
 ILLEGAL_ACTIONS = ("drift", "error")
@@ -185,11 +185,7 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
     """Validate a drifter env's keyword arguments; ``defaults`` replaces some of `ARGUMENTS`,
     the names in ``fixed`` may not be given; ``who`` names the env in the `TypeError` for an
     unknown argument."""
-    values = {**ARGUMENTS, **(defaults or {})}
-    for name in kwargs:
-        if name not in values or name in fixed:
-            raise TypeError(f"{who}() got an unexpected keyword argument {name!r}")
-    values.update(kwargs)
+    values = keyword_arguments(ARGUMENTS, kwargs, defaults, fixed, who)
     backend = _choice("backend", values["backend"], BACKENDS)
     rho = number("rho", values["rho"], minimum=0.0, strict=True)
     if rho > 1:
