@@ -101,10 +101,9 @@ class CentralisedPlan:
 def _check_graph(graph: object, visibility: CellVisibility) -> None:
     if not isinstance(graph, nx.Graph):
         raise ConfigError(f"graph: expected a networkx graph, got {type(graph).__name__}")
-    cells = [graph.nodes[v].get("cell") if v in graph else None for v in range(len(visibility))]
-    if graph.number_of_nodes() != len(visibility) or any(
-            cell is None or tuple(cell) != tuple(vis) for cell, vis in
-            zip(cells, visibility.cells.tolist(), strict=True)):
+    expected = {v: tuple(cell) for v, cell in enumerate(visibility.cells.tolist())}
+    found = {v: data.get("cell") for v, data in graph.nodes(data=True)}
+    if found != expected:
         raise ConfigError("graph: expected the cell_graph of the map the visibility was "
                           "computed on (vertex v at the free cell visibility.cells[v])")
 
@@ -187,11 +186,11 @@ def centralised_plan(graph: nx.Graph, visibility_r: CellVisibility | float,
         ring = np.flatnonzero(own & kept)
         region = np.flatnonzero(own & (~in_comm | kept))
         if len(ring) == 0:
+            why = ("no cells outside" if len(region) == 0 else
+                   "no cell of the overlap ring (for a contact cell) in")
             raise ConfigError(f"m: sector {i} ({i * 360 / m:g}° to {(i + 1) * 360 / m:g}°) has "
-                              f"{'no' if len(region) == 0 else 'only'} cells outside the base "
-                              f"station's range r = {visibility_r.l}"
-                              f"{'' if len(region) == 0 else ' none of them next to it'}; "
-                              f"use fewer robots or a smaller r")
+                              f"{why} the base station's range r = {visibility_r.l}; use fewer "
+                              f"robots or a smaller r")
         cover = _region_cover(visibility_l, region)
         contact = _contact(cells, ring, cover)
         overlap.append(tuple(ring.tolist()))
