@@ -200,3 +200,12 @@ def test_a_comm_cell_next_only_to_another_sectors_outside_cells_is_left_to_the_b
     kept = kept_overlap(cells, sector, np.array([0, 1, 3]))
     # cell 1 touches only cell 2 outside (another sector); cell 3 touches cell 4 (its own)
     assert kept.tolist() == [False, False, False, True, False]
+
+
+def test_a_sector_whose_cells_never_touch_the_base_stations_range_is_refused():
+    free = np.zeros((4, 21), dtype=bool)
+    free[0, :] = True  # a corridor along the bottom row
+    free[1:, 0] = True  # a spur up at its far left end: sector 1 of 4, beyond r = 4
+    graph, vis = _setting(world_from_grid(free))
+    with pytest.raises(ConfigError, match="^m: sector 1 .* overlap ring"):
+        centralised_plan(graph, 4, vis, 4)
