@@ -88,7 +88,7 @@ from bounce_gym.errors import ActionError, ConfigError
 
 ADVERSARY = "adversary"
 RESET_OPTIONS = frozenset({"strategy"})
-#: how many strategies' survival matrices are kept
+#: how many strategies' capture probabilities are kept
 CACHE_SIZE = 16
 
 
@@ -126,7 +126,7 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         self.np_random = None
         self.np_random_seed = None
         self._strategy = self.options.strategy
-        self._survival: dict[bytes, np.ndarray] = {}
+        self._capture: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
         self._pos = np.zeros(m, dtype=np.int64)
         self._start = self._pos.copy()
         self._start_capture = np.zeros(n)
@@ -184,22 +184,24 @@ class PatrolEnv(RendererOwner, ParallelEnv):
             positions: None for the patrollers placed as the env places them at reset
                 (``start``, or distinct uniform vertices); else one vertex per patroller.
         """
-        S = self._survival_matrix()
-        if positions is not None:
-            where = check_start(positions, self.board.n, self.n_patrollers, "positions")
-            return capture.capture_from(S, where)
-        if self.options.start is not None:
-            return capture.capture_from(S, self.options.start)
-        return capture.capture_from_distinct_uniform(S, self.n_patrollers)
+        if positions is None:
+            return self._cached()[1].copy()
+        where = check_start(positions, self.board.n, self.n_patrollers, "positions")
+        return capture.capture_from(self._cached()[0], where)
 
-    def _survival_matrix(self) -> np.ndarray:
+    def _cached(self) -> tuple[np.ndarray, np.ndarray]:
+        """The survival matrix of the current strategy and its capture probabilities from the
+        start placement, computed once per strategy."""
         key = hashlib.blake2b(self._strategy.tobytes(), digest_size=16).digest()
-        if key not in self._survival:
-            if len(self._survival) >= CACHE_SIZE:
-                self._survival.pop(next(iter(self._survival)))
-            self._survival[key] = capture.survival(self._strategy, self.board.seen,
-                                                   self.attack_time)
-        return self._survival[key]
+        if key not in self._capture:
+            if len(self._capture) >= CACHE_SIZE:
+                self._capture.pop(next(iter(self._capture)))
+            S = capture.survival(self._strategy, self.board.seen, self.attack_time)
+            start = (capture.capture_from(S, self.options.start)
+                     if self.options.start is not None
+                     else capture.capture_from_distinct_uniform(S, self.n_patrollers))
+            self._capture[key] = (S, start)
+        return self._capture[key]
 
     # -- PettingZoo API ---------------------------------------------------------------------------
     def observation_space(self, agent: str) -> spaces.Space:
