@@ -442,3 +442,23 @@ def test_rendering_shows_a_moving_patroller():
     env.close()
     with pytest.warns(UserWarning, match="render_mode=None"):
         assert PatrolEnv(world=TINY).render() is None
+
+
+def test_reset_start_option_places_the_patrollers_for_one_episode():
+    env = PatrolEnv(**BLIND, attack_time=1)
+    _, infos = env.reset(seed=0, options={"start": [4, 9]})
+    assert env.positions().tolist() == [4, 9] and infos[P1]["vertex"] == 9
+    p = env.capture_probabilities()
+    np.testing.assert_array_equal(p, env.capture_probabilities([4, 9]))
+    assert p[4] == p[9] == 1.0
+    env.reset(options={"start": np.array([0, 0]), "strategy": env.strategy.copy()})
+    assert env.positions().tolist() == [0, 0]
+    env.reset()
+    assert not np.array_equal(env.capture_probabilities(), p)  # distinct uniform again
+    with pytest.raises(ConfigError, match=r"options.start: expected 2 vertex indices"):
+        env.reset(options={"start": [1]})
+    with pytest.raises(ConfigError, match=r"options.start\[0\]: expected an integer in "
+                                          r"\[0, 27\]"):
+        env.reset(options={"start": [28, 0], "strategy": env.strategy.copy()})
+    with pytest.warns(UserWarning, match="reset options: unknown keys"):
+        env.reset(options={"deploy": [1, 2]})

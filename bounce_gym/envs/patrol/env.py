@@ -53,7 +53,8 @@ step ``max_cycles``). Nothing is truncated: every episode ends by ``max_cycles``
 ``attack_time`` (20), ``adversary_observes`` ("strategy" or "positions"), ``strategy`` (None:
 the uniform random walk; an n×n row-stochastic matrix over the vertices, moving only along
 edges; per episode with ``reset(options={"strategy": P})``, else the constructor's),
-``start`` (None: distinct vertices drawn uniformly each episode; or one vertex per patroller),
+``start`` (None: distinct vertices drawn uniformly each episode; or one vertex per patroller;
+per episode with ``reset(options={"start": [...]})``, else the constructor's),
 ``max_cycles`` (500), ``illegal_action`` ("stay": a move along a missing edge leaves the
 patroller where it is, and an adversary's start after the attack began is a wait, both with
 ``info["illegal_action"]``; "error": `ActionError` naming the agent and its legal actions),
@@ -87,7 +88,7 @@ from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.errors import ActionError, ConfigError
 
 ADVERSARY = "adversary"
-RESET_OPTIONS = frozenset({"strategy"})
+RESET_OPTIONS = frozenset({"strategy", "start"})
 #: how many strategies' capture probabilities are kept
 CACHE_SIZE = 16
 
@@ -128,7 +129,7 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         self._strategy = self.options.strategy
         self._capture: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
         self._pos = np.zeros(m, dtype=np.int64)
-        self._start = self._pos.copy()
+        self._episode_start = self.options.start
         self._start_capture = np.zeros(n)
         self._new_episode()
 
@@ -181,26 +182,27 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         """(n,) probability that an attack on each vertex, started now, is caught (§4.3.5).
 
         Args:
-            positions: None for the patrollers placed as the env places them at reset
-                (``start``, or distinct uniform vertices); else one vertex per patroller.
+            positions: None for the patrollers placed as the env places them at reset (the
+                episode's ``start``, or distinct uniform vertices); else one vertex per
+                patroller.
         """
-        if positions is None:
-            return self._cached()[1].copy()
-        where = check_start(positions, self.board.n, self.n_patrollers, "positions")
-        return capture.capture_from(self._cached()[0], where)
+        S, uniform = self._cached()
+        if positions is not None:
+            where = check_start(positions, self.board.n, self.n_patrollers, "positions")
+            return capture.capture_from(S, where)
+        if self._episode_start is not None:
+            return capture.capture_from(S, self._episode_start)
+        return uniform.copy()
 
     def _cached(self) -> tuple[np.ndarray, np.ndarray]:
-        """The survival matrix of the current strategy and its capture probabilities from the
-        start placement, computed once per strategy."""
+        """The survival matrix of the current strategy and its capture probabilities from
+        distinct uniform start vertices, computed once per strategy."""
         key = hashlib.blake2b(self._strategy.tobytes(), digest_size=16).digest()
         if key not in self._capture:
             if len(self._capture) >= CACHE_SIZE:
                 self._capture.pop(next(iter(self._capture)))
             S = capture.survival(self._strategy, self.board.seen, self.attack_time)
-            start = (capture.capture_from(S, self.options.start)
-                     if self.options.start is not None
-                     else capture.capture_from_distinct_uniform(S, self.n_patrollers))
-            self._capture[key] = (S, start)
+            self._capture[key] = (S, capture.capture_from_distinct_uniform(S, self.n_patrollers))
         return self._capture[key]
 
     # -- PettingZoo API ---------------------------------------------------------------------------
@@ -215,13 +217,15 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
         options = checked_reset_options(options, RESET_OPTIONS, strict=False)
-        self._strategy = (check_strategy(options["strategy"], self.board, "options.strategy")
-                          if "strategy" in options else self.options.strategy)
-        if self.options.start is not None:
-            self._pos = self.options.start.copy()
+        strategy = (check_strategy(options["strategy"], self.board, "options.strategy")
+                    if "strategy" in options else self.options.strategy)
+        start = (check_start(options["start"], self.board.n, self.n_patrollers, "options.start")
+                 if "start" in options else self.options.start)
+        self._strategy, self._episode_start = strategy, start
+        if self._episode_start is not None:
+            self._pos = self._episode_start.copy()
         else:
             self._pos = self.np_random.choice(self.board.n, self.n_patrollers, replace=False)
-        self._start = self._pos.copy()
         self._start_capture = self.capture_probabilities()
         self._new_episode()
         self.agents = list(self.possible_agents)
