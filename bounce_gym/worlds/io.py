@@ -367,13 +367,19 @@ def _check_yaml_depth(text: str, path: Path) -> None:
     """Reject YAML nesting (flow brackets or block indentation) deeper than `MAX_DEPTH`, from the
     parser's event stream, before any object is built."""
     depth = 0
-    for event in yaml.parse(text, Loader=_UniqueKeyLoader):
-        if isinstance(event, yaml.CollectionStartEvent):
-            depth += 1
-            if depth > MAX_DEPTH:
-                raise _too_deep(path, f"more than {MAX_DEPTH}")
-        elif isinstance(event, yaml.CollectionEndEvent):
-            depth -= 1
+    try:
+        for event in yaml.parse(text, Loader=_UniqueKeyLoader):
+            if isinstance(event, yaml.CollectionStartEvent):
+                depth += 1
+                if depth > MAX_DEPTH:
+                    raise _too_deep(path, f"more than {MAX_DEPTH}")
+            elif isinstance(event, yaml.CollectionEndEvent):
+                depth -= 1
+    except yaml.YAMLError as error:
+        # libyaml >= 0.2.6 scans flow brackets ahead of the events and stops at its own limit
+        if "nesting depth" in str(error):
+            raise _too_deep(path, f"more than {MAX_DEPTH}") from error
+        raise
 
 
 def _ring(value: object, field: str, source: str) -> list[list[float]]:
