@@ -7,6 +7,7 @@ detection times with the generalised lambda distribution, and perimeter-patrol b
 plain data (edge -> weight, a transition matrix with its node order)."""
 
 from baselines.patrolling.game import (
+    STACKELBERG_METHODS,
     StackelbergResult,
     payoff_matrices,
     preferred_all,
@@ -43,10 +44,10 @@ from baselines.patrolling.towards import (
     towards_vertex_chains,
 )
 
-__all__ = ["DEFAULT_CORNER_RULE", "DEFAULT_CYCLE_SHARE", "DEFAULT_PATHS", "SOLVERS", "MaectResult",
-           "StackelbergResult", "cell_graph", "commute_times", "cycle_order", "hitting_times",
-           "incidence", "laplacian", "maect_objective", "mean_commute_time", "payoff_matrices",
-           "preferred_all", "preferred_subset", "preferred_towards", "project_simplex",
-           "project_subset_simplex", "solve_maect", "solve_subset_maect", "stackelberg",
-           "subset_cycle_edges", "towards_vertex_chain", "towards_vertex_chains",
-           "transition_matrix"]
+__all__ = ["DEFAULT_CORNER_RULE", "DEFAULT_CYCLE_SHARE", "DEFAULT_PATHS", "SOLVERS",
+           "STACKELBERG_METHODS", "MaectResult", "StackelbergResult", "cell_graph", "commute_times",
+           "cycle_order", "hitting_times", "incidence", "laplacian", "maect_objective",
+           "mean_commute_time", "payoff_matrices", "preferred_all", "preferred_subset",
+           "preferred_towards", "project_simplex", "project_subset_simplex", "solve_maect",
+           "solve_subset_maect", "stackelberg", "subset_cycle_edges", "towards_vertex_chain",
+           "towards_vertex_chains", "transition_matrix"]
