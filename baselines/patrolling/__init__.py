@@ -4,8 +4,8 @@ walks with their hitting and commute times, MAECT strategies over all vertices a
 (Alg. 4.2 payoffs, strong Stackelberg equilibrium by LPs or DOBSS) and its n + 2 strategies end
 to end (`strategies`), limited-range visibility covers (Alg. 4.3), detection times with the
 generalised lambda distribution, and perimeter-patrol baselines (`visibility`, `vulnerability`,
-`perimeter`). Every planner takes a networkx graph and returns
-plain data (edge -> weight, a transition matrix with its node order)."""
+`perimeter`). Every planner takes a networkx graph and returns plain data (edge -> weight, a
+transition matrix with its node order)."""
 
 from baselines.patrolling.game import (
     STACKELBERG_METHODS,
