@@ -19,10 +19,10 @@ nothing. Times are the best of ``--repeats`` runs (at least 10 for the covers al
   VisiLibity, an i7 at 3.6 GHz), so both covers compare with 2 x 2.8 ms.
 * **Patrol-v0** agent-steps/s (one agent-step = one agent's share of a parallel step) with every
   agent drawing a uniformly random legal action from its action mask (so the adversary mostly
-  attacks at once and episodes are short: resets are part of the work), against PettingZoo's
-  ``pistonball_v6`` (20 pistons, random actions) measured in the same run, the anchor of
-  `benchmarks.multirobot_scaling`. Skipped, with a line saying so, while the env is not
-  registered.
+  attacks at once and episodes last about 10 steps: resets are part of the work), against
+  PettingZoo's ``pistonball_v6`` (20 pistons, random actions) measured in the same run, the
+  anchor of `benchmarks.multirobot_scaling`. Skipped, with a line saying so, while the env is
+  not registered.
 """
 
 from __future__ import annotations
