@@ -13,13 +13,14 @@ has λ_2 = 0 and an infinite objective, so the optimum stays connected.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import networkx as nx
 import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import lapack
+from scipy.sparse.csgraph import connected_components
 
 from baselines.patrolling.markov import transition_matrix
 from bounce_gym.errors import ConfigError
@@ -32,6 +33,8 @@ SOLVERS = ("gradient", "cvxpy")
 _ZERO_EIG = 1e-12
 # relative rounding error allowed in the line search's sufficient-decrease test
 _ROUNDOFF = 1e-12
+# objective values the non-monotone line search looks back on
+_MEMORY = 10
 
 
 @dataclass(frozen=True)
@@ -89,10 +92,13 @@ def _objective_and_gradient(A: sp.csr_array, w: np.ndarray) -> tuple[float, np.n
     """Eq. 4.3 via ``sum 1/λ_i = tr((L + J/n)⁻¹) - 1`` and its gradient
     ``-2/(n-1) ‖L⁺ a_e‖²`` (Ghosh, Boyd & Saberi 2008, §3).
 
-    The inverse comes from a Cholesky factorisation (LAPACK potrf + potri, half the work of an LU
-    inverse); ``L + J/n`` is positive definite iff the weights keep the graph connected, so a
-    failed factorisation means a disconnected graph and an infinite objective."""
+    The objective is infinite when the edges of positive weight do not connect the graph (then
+    λ_2 = 0); otherwise ``L + J/n`` is positive definite and its inverse comes from a Cholesky
+    factorisation (LAPACK potrf + potri, half the work of an LU inverse)."""
     n = A.shape[0]
+    support = abs(A[:, w > 0])
+    if connected_components(support @ support.T, directed=False, return_labels=False) > 1:
+        return float("inf"), np.zeros_like(w)
     factor, info = lapack.dpotrf(laplacian(A, w) + 1.0 / n, lower=True, clean=False,
                                  overwrite_a=True)
     if info == 0:
@@ -107,30 +113,33 @@ def _objective_and_gradient(A: sp.csr_array, w: np.ndarray) -> tuple[float, np.n
     return float(value), -2.0 / (n - 1) * np.einsum("ij,ij->i", columns, columns)
 
 
-def _relative_gap(f: float, g: np.ndarray) -> float:
-    """A certified bound on ``(f(w) - f*) / f(w)``: ``1 - f(w) / max_e(-g_e)``.
+def _relative_gap(f: float, lowest: float) -> float:
+    """A certified bound on ``(f(w) - f*) / f(w)``: ``1 - f(w) / (-lowest)``, where ``lowest`` is
+    the least ``gᵀv`` over the feasible set (``min_e g_e`` on the simplex) and g the gradient.
 
     The objective is convex and homogeneous of degree -1 in w, so ``-gᵀw = f(w)`` and, for every
     feasible v and c > 0, ``f(v) >= 2 f(w)/c + gᵀv/c²`` (the tangent plane at c·w); the best c,
-    ``max_e(-g_e) / f(w)``, gives ``f* >= f(w)² / max_e(-g_e)``. The bound is 0 exactly at the
-    optimum, where ``‖L⁺ a_e‖² <= tr L⁺`` with equality on the support (the optimality
+    ``-lowest / f(w)``, gives ``f* >= f(w)² / (-lowest)``. The bound is 0 exactly at the optimum:
+    on the simplex, where ``‖L⁺ a_e‖² <= tr L⁺`` with equality on the support (the optimality
     condition of Ghosh, Boyd & Saberi 2008)."""
-    return 1.0 - f / float(np.max(-g))
+    return 1.0 - f / -lowest
 
 
-def _projected_gradient(A: sp.csr_array, tol: float, max_iter: int,
-                        memory: int = 10) -> tuple[np.ndarray, int]:
+def _projected_gradient(A: sp.csr_array, tol: float, max_iter: int, *,
+                        lowest: Callable[[np.ndarray], float] = np.min
+                        ) -> tuple[np.ndarray, int]:
     """Spectral projected gradient on the simplex (Birgin, Martínez & Raydan 2000: Barzilai-
-    Borwein steps, non-monotone Armijo backtracking against the largest of the last ``memory``
+    Borwein steps, non-monotone Armijo backtracking against the largest of the last `_MEMORY`
     objective values), started from uniform weights; stops when the certified relative
-    duality gap `_relative_gap` is at most ``tol``."""
+    duality gap `_relative_gap` is at most ``tol``. ``lowest(g)`` is the least ``gᵀv`` over the
+    feasible set."""
     q = A.shape[1]
     w = np.full(q, 1.0 / q)
     f, g = _objective_and_gradient(A, w)
     recent = [f]
     step = 1.0 / max(np.abs(g).max(), 1e-300)
     for iteration in range(max_iter + 1):
-        if _relative_gap(f, g) <= tol:
+        if _relative_gap(f, float(lowest(g))) <= tol:
             return w, iteration
         if iteration == max_iter:
             break
@@ -146,7 +155,7 @@ def _projected_gradient(A: sp.csr_array, tol: float, max_iter: int,
             t *= 0.5
         s, y = candidate - w, g_new - g
         w, f, g = candidate, f_new, g_new
-        recent = (recent + [f])[-memory:]
+        recent = (recent + [f])[-_MEMORY:]
         sy = float(s @ y)
         step = float(s @ s) / sy if sy > 0 else step * 2.0
         step = min(max(step, 1e-12), 1e12)
