@@ -4,7 +4,9 @@
 Run with ``python -m benchmarks.patrolling`` (``--quick``: no 1,000-vertex MAECT, fewer env
 steps; ``--repeats``; ``--steps``: agent-steps per env and timed run). Prints rows; asserts
 nothing. Times are the best of ``--repeats`` runs (at least 10 for the covers alone; the
-1,000-vertex MAECT runs once) with time.perf_counter, in one process.
+1,000-vertex MAECT runs once) with time.perf_counter, in one process. MAECT's time is that of
+dense Cholesky factorisations in OpenBLAS, whose threads slow down badly when other processes
+load the cores; ``OPENBLAS_NUM_THREADS=1 python -m benchmarks.patrolling`` measures one core.
 
 * **MAECT** (problem 4.4, `solve_maect`, projected gradient to a certified relative duality gap
   of 1e-10) on the 188-vertex cell graph of the zoo map ``patrol_15x15`` (`cell_graph`, strict
