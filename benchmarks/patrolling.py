@@ -30,6 +30,7 @@ load the cores; ``OPENBLAS_NUM_THREADS=1 python -m benchmarks.patrolling`` measu
 from __future__ import annotations
 
 import argparse
+import os
 import time
 from collections.abc import Callable
 
@@ -75,7 +76,9 @@ def bench_maect(quick: bool, repeats: int) -> dict:
     graphs = [(MAP, cell_graph(get(MAP)), repeats)]
     if not quick:
         graphs.append(("random_grid_34x34", large_graph(), 1))
-    print("MAECT (problem 4.4), projected gradient, certified relative gap <= 1e-10")
+    print("MAECT (problem 4.4), projected gradient, certified relative gap <= 1e-10 "
+          f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores, "
+          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')})")
     out = {}
     for name, graph, runs in graphs:
         seconds, result = _best(lambda g=graph: solve_maect(g), runs)
