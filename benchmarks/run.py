@@ -16,7 +16,9 @@ issue #7: `benchmarks.multirobot` (steps to coverage vs m, planning time and mem
 m = 2..10, the m = 2 monitoring joint map); issue #15: `benchmarks.drifters` (the GCM of a
 10^6-cell drifter layer, continuous advection against OceanParcels in the same run) and
 `benchmarks.drifter_env` (``Drifter-v0`` steps/s against CartPole-v1 in the same run) and
-`benchmarks.drifter_planners` (value iteration on 3 x 10^5 states, deployment counts).
+`benchmarks.drifter_planners` (value iteration on 3 x 10^5 states, deployment counts); issue #16:
+`benchmarks.patrolling` (MAECT on 188 and 1,025 vertices against Table 4.5, the Alg. 4.3 covers
+against Table 4.4, ``Patrol-v0`` agent-steps/s against pistonball_v6 in the same run).
 """
 
 from __future__ import annotations
@@ -200,6 +202,12 @@ def main(argv: list[str] | None = None) -> None:
 
     print()
     drifter_planners.main((["--quick"] if args.quick else []) + ["--repeats", str(args.repeats)])
+
+    # stochastic patrolling (issue #16): MAECT, Alg. 4.3 covers, Patrol-v0 agent-steps/s
+    from benchmarks import patrolling
+
+    print()
+    patrolling.main((["--quick"] if args.quick else []) + ["--repeats", str(args.repeats)])
 
 
 if __name__ == "__main__":

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import networkx as nx
 import numpy as np
 import scipy.sparse as sp
+from scipy.linalg import lapack
+from scipy.sparse.csgraph import connected_components
 
 from baselines.patrolling.markov import transition_matrix
 from bounce_gym.errors import ConfigError
@@ -31,6 +33,10 @@ SOLVERS = ("gradient", "cvxpy")
 _ZERO_EIG = 1e-12
 # scaled gradient: the metric weight of an edge is w_e + _SCALE_FLOOR / q
 _SCALE_FLOOR = 1e-2
+# relative rounding error allowed in the line search's sufficient-decrease test
+_ROUNDOFF = 1e-12
+# objective values the non-monotone line search looks back on
+_MEMORY = 10
 
 
 @dataclass(frozen=True)
@@ -88,57 +94,85 @@ def project_simplex(v: np.ndarray, scale: np.ndarray | None = None) -> np.ndarra
 
 def _objective_and_gradient(A: sp.csr_array, w: np.ndarray) -> tuple[float, np.ndarray]:
     """Eq. 4.3 via ``sum 1/λ_i = tr((L + J/n)⁻¹) - 1`` and its gradient
-    ``-2/(n-1) ‖L⁺ a_e‖²`` (Ghosh, Boyd & Saberi 2008, §3)."""
+    ``-2/(n-1) ‖L⁺ a_e‖²`` (Ghosh, Boyd & Saberi 2008, §3).
+
+    The objective is infinite when the edges of positive weight do not connect the graph (then
+    λ_2 = 0); otherwise ``L + J/n`` is positive definite and its inverse comes from a Cholesky
+    factorisation (LAPACK potrf + potri, half the work of an LU inverse)."""
     n = A.shape[0]
-    shifted = laplacian(A, w) + 1.0 / n
-    try:
-        inverse = np.linalg.inv(shifted)
-    except np.linalg.LinAlgError:
+    support = abs(A[:, w > 0])
+    if connected_components(support @ support.T, directed=False, return_labels=False) > 1:
         return float("inf"), np.zeros_like(w)
+    factor, info = lapack.dpotrf(laplacian(A, w) + 1.0 / n, lower=True, clean=False,
+                                 overwrite_a=True)
+    if info == 0:
+        inverse, info = lapack.dpotri(factor, lower=True, overwrite_c=True)
+    if info != 0:
+        return float("inf"), np.zeros_like(w)
+    inverse = np.tril(inverse) + np.tril(inverse, -1).T
     value = 2.0 / (n - 1) * (np.trace(inverse) - 1.0)
-    if not np.isfinite(value) or value <= 0 or maect_objective(A, w) == float("inf"):
+    if not np.isfinite(value) or value <= 0:
         return float("inf"), np.zeros_like(w)
     columns = A.T @ inverse  # row e = (L⁺ a_e)ᵀ, since 1ᵀ a_e = 0
     return float(value), -2.0 / (n - 1) * np.einsum("ij,ij->i", columns, columns)
 
 
+def _relative_gap(f: float, lowest: float) -> float:
+    """A certified bound on ``(f(w) - f*) / f(w)``: ``1 - f(w) / (-lowest)``, where ``lowest`` is
+    the least ``gᵀv`` over the feasible set (``min_e g_e`` on the simplex) and g the gradient.
+
+    The objective is convex and homogeneous of degree -1 in w, so ``-gᵀw = f(w)`` and, for every
+    feasible v and c > 0, ``f(v) >= 2 f(w)/c + gᵀv/c²`` (the tangent plane at c·w); the best c,
+    ``-lowest / f(w)``, gives ``f* >= f(w)² / (-lowest)``. The bound is 0 exactly at the optimum:
+    on the simplex, where ``‖L⁺ a_e‖² <= tr L⁺`` with equality on the support (the optimality
+    condition of Ghosh, Boyd & Saberi 2008)."""
+    return 1.0 - f / -lowest
+
+
 def _projected_gradient(A: sp.csr_array, tol: float, max_iter: int,
-                        project: Callable = project_simplex,
-                        scaled: bool = False) -> tuple[np.ndarray, int]:
-    """Spectral projected gradient (Barzilai-Borwein steps, Armijo backtracking) on the convex
-    set that ``project(v, scale)`` projects onto (default: the simplex), started from the
-    projection of uniform weights; stops when the objective changes by less than ``tol``
-    (relative) and the weights by less than ``sqrt(tol)``. ``scaled``: steps and projections in
-    the metric ``sum (Δw_e)² / (w_e + floor)``, which copes with weights of very different sizes
-    (problem 4.5)."""
+                        project: Callable = project_simplex, scaled: bool = False, *,
+                        lowest: Callable[[np.ndarray], float] = np.min
+                        ) -> tuple[np.ndarray, int]:
+    """Spectral projected gradient (Birgin, Martínez & Raydan 2000: Barzilai-Borwein steps,
+    non-monotone Armijo backtracking against the largest of the last `_MEMORY` objective values)
+    on the convex set that ``project(v, scale)`` projects onto (default: the simplex), started
+    from the projection of uniform weights; stops when the certified relative duality gap
+    `_relative_gap` is at most ``tol``. ``lowest(g)`` is the least ``gᵀv`` over the feasible
+    set. ``scaled``: steps and projections in the metric ``sum (Δw_e)² / (w_e + floor)``, which
+    copes with weights of very different sizes (problem 4.5)."""
     q = A.shape[1]
     w = project(np.full(q, 1.0 / q), None)
     f, g = _objective_and_gradient(A, w)
+    recent = [f]
     scale = w + _SCALE_FLOOR / q if scaled else None
     c = 1.0 if scale is None else scale
     step = 1.0 / max(np.abs(c * g).max(), 1e-300)
-    for iteration in range(1, max_iter + 1):
+    for iteration in range(max_iter + 1):
+        if _relative_gap(f, float(lowest(g))) <= tol:
+            return w, iteration
+        if iteration == max_iter:
+            break
         direction = project(w - step * c * g, scale) - w
         slope = float(g @ direction)
+        reference = max(recent)
         t = 1.0
         while True:
             candidate = w + t * direction
             f_new, g_new = _objective_and_gradient(A, candidate)
-            if f_new <= f + 1e-4 * t * slope or t < 1e-20:
+            if f_new <= reference + 1e-4 * t * slope + _ROUNDOFF * abs(f) or t < 1e-20:
                 break
             t *= 0.5
         s, y = candidate - w, g_new - g
-        converged = abs(f - f_new) <= tol * abs(f) and np.abs(s).max() <= np.sqrt(tol)
         w, f, g = candidate, f_new, g_new
-        if converged:
-            return w, iteration
+        recent = (recent + [f])[-_MEMORY:]
         sy = float(s @ y)
         step = float(s @ (s / c)) / sy if sy > 0 else step * 2.0
         if scaled:
             scale = w + _SCALE_FLOOR / q
             c = scale
         step = min(max(step, 1e-12), 1e12)
-    raise ConfigError(f"max_iter: projected gradient did not converge in {max_iter} iterations")
+    raise ConfigError(f"max_iter: projected gradient did not reach the relative duality gap "
+                      f"tol={tol:g} in {max_iter} iterations")
 
 
 def _no_constraints(w) -> list:
@@ -162,14 +196,15 @@ def _cvxpy_weights(A: sp.csr_array, constraints: Callable = _no_constraints,
     return project(np.asarray(w.value, dtype=np.float64), None)
 
 
-def solve_maect(graph: nx.Graph, solver: str = "gradient", tol: float = 1e-12,
+def solve_maect(graph: nx.Graph, solver: str = "gradient", tol: float = 1e-10,
                 max_iter: int = 100_000) -> MaectResult:
     """Optimal MAECT edge weights of a connected graph (thesis problem 4.4).
 
     Args:
         graph: an undirected connected graph with at least one edge.
         solver: ``"gradient"`` (projected gradient, numpy) or ``"cvxpy"`` (SDP cross-check).
-        tol: relative change of the objective at which the gradient solver stops.
+        tol: the gradient solver stops when its certified relative duality gap, an upper bound
+            on ``(objective - optimum) / objective``, is at most ``tol``.
         max_iter: iteration limit of the gradient solver.
     """
     return _solve(graph, solver, tol, max_iter)
@@ -177,10 +212,11 @@ def solve_maect(graph: nx.Graph, solver: str = "gradient", tol: float = 1e-12,
 
 def _solve(graph: nx.Graph, solver: str, tol: float, max_iter: int,
            project: Callable = project_simplex, constraints: Callable = _no_constraints,
-           scaled: bool = False) -> MaectResult:
+           scaled: bool = False, lowest: Callable[[np.ndarray], float] = np.min) -> MaectResult:
     """`solve_maect` over the feasible set that ``project(v, scale)`` projects onto (for the
-    gradient solver, with ``scaled`` steps or not) and that the simplex and ``constraints(w)``
-    describe (for cvxpy); both default to the simplex alone. ``project`` may depend on the edge
+    gradient solver, with ``scaled`` steps or not, and ``lowest(g)``, the least ``gᵀv`` over
+    the set, for its stopping rule) and that the simplex and ``constraints(w)`` describe (for
+    cvxpy); all default to the simplex alone. ``project`` and ``lowest`` may depend on the edge
     order ``list(graph.edges())``."""
     if solver not in SOLVERS:
         raise ConfigError(f"solver: expected one of {SOLVERS}, got {solver!r}")
@@ -189,7 +225,8 @@ def _solve(graph: nx.Graph, solver: str, tol: float, max_iter: int,
     nodes, edges = list(graph), list(graph.edges())
     A = incidence(graph, nodes, edges)
     if solver == "gradient":
-        w, iterations = _projected_gradient(A, tol, max_iter, project, scaled)
+        w, iterations = _projected_gradient(A, tol, max_iter, project, scaled,
+                                             lowest=lowest)
     else:
         w, iterations = _cvxpy_weights(A, constraints, project), 0
     weights = {e: float(x) for e, x in zip(edges, w, strict=True)}

@@ -123,7 +123,7 @@ def project_subset_simplex(v: np.ndarray, mask: np.ndarray, h: float,
 
 def solve_subset_maect(graph: nx.Graph, subset: Sequence[Hashable],
                        h: float = DEFAULT_CYCLE_SHARE, solver: str = "gradient",
-                       tol: float = 1e-12, max_iter: int = 100_000) -> MaectResult:
+                       tol: float = 1e-10, max_iter: int = 100_000) -> MaectResult:
     """Optimal edge weights of problem 4.5 (thesis §4.4.1): MAECT over all edges of ``graph``
     with at least the share ``h`` of the weight on the edges of ShortestCycle(subset).
 
@@ -137,7 +137,8 @@ def solve_subset_maect(graph: nx.Graph, subset: Sequence[Hashable],
         h: the cycle's share of the weight, in (0, 1] (1 only when the cycle passes every
             vertex); default 0.8.
         solver: ``"gradient"`` (projected gradient, numpy) or ``"cvxpy"`` (SDP cross-check).
-        tol: relative change of the objective at which the gradient solver stops.
+        tol: the gradient solver stops when its certified relative duality gap, an upper bound
+            on ``(objective - optimum) / objective``, is at most ``tol``.
         max_iter: iteration limit of the gradient solver.
     """
     if isinstance(h, bool) or not isinstance(h, (int, float)) or not 0.0 < h <= 1.0:
@@ -155,4 +156,9 @@ def solve_subset_maect(graph: nx.Graph, subset: Sequence[Hashable],
     def constraints(w) -> list:
         return [np.ones(len(on_cycle)) @ w[on_cycle] >= h]
 
-    return _solve(graph, solver, tol, max_iter, project, constraints, scaled=True)
+    def lowest(g: np.ndarray) -> float:
+        # the least gᵀv over the feasible set: the share h on the cycle's steepest edge, the
+        # rest on the steepest edge overall
+        return h * float(g[mask].min()) + (1.0 - h) * float(g.min())
+
+    return _solve(graph, solver, tol, max_iter, project, constraints, scaled=True, lowest=lowest)
