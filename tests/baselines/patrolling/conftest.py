@@ -35,9 +35,9 @@ TABLE_4_2 = np.array([
 ])
 
 
-@pytest.fixture
+@pytest.fixture(scope="module")
 def cvx_small_graph() -> nx.Graph:
-    """The small graph on 1..8 with ``pos`` and Euclidean edge ``length``."""
+    """The small graph on 1..8 with ``pos`` and Euclidean edge ``length`` (not to be changed)."""
     graph = nx.Graph()
     for v, xy in CVX_SMALL_XY.items():
         graph.add_node(v, pos=xy)
