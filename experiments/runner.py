@@ -216,7 +216,7 @@ def run_experiment(prepared: Prepared, on_seed: Callable[[], None]
         for one in prepared.entrants:
             episode = family.episode(one.env, one.policy, one.setup)
             summary, path = run_episode(one.env, one.policy, seed, experiment["max_steps"],
-                                        episode, record=k == 0)
+                                        episode, record=k == 0 and family.record_paths)
             rows.append(EpisodeResult(experiment["name"], one.policy.name, seed,
                                       summary["steps"], summary["ticks"], summary["return"],
                                       family.row_metrics(episode, summary["info"], one.policy),

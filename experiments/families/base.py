@@ -55,7 +55,10 @@ class Family:
     families with the same heading share one table, columns merged in registry order). Every
     measured column is shown as its estimate with a 95% interval and count
     (`experiments.report`); ``labels`` are columns that describe the row instead (the same in
-    every episode, e.g. the number of robots) and are shown as they are. ``score`` is the column
+    every episode, e.g. the number of robots) and are shown as they are; ``descriptors`` are
+    per-episode facts that are not measured (e.g. which target was attacked): they stay in the
+    episode rows and are left out of the summary. ``record_paths``: whether the first seed's
+    robot positions are recorded for `trajectory_plots` (from ``info["position"]``). ``score`` is the column
     that ranks policies (in leaderboards, performance profiles and the hindsight oracle),
     ``higher_is_better`` its direction. ``planner_attributes`` are the planner's predictions
     copied into its rows when set. ``policy_kinds`` are the kinds of policy of a
@@ -69,6 +72,8 @@ class Family:
     table: str | None = None
     columns: tuple[str, ...] = ("experiment", "policy", "episodes", "seeds", "return", "ticks")
     labels: frozenset[str] = frozenset()
+    descriptors: frozenset[str] = frozenset()
+    record_paths = True
     score = "return"
     higher_is_better = True
     planner_attributes: tuple[str, ...] = ()
