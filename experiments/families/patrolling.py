@@ -51,6 +51,7 @@ from bounce_gym import validate
 from bounce_gym.envs.patrol import capture
 from bounce_gym.envs.patrol.env import PatrolEnv
 from bounce_gym.errors import ConfigError, config_errors
+from experiments import stats
 from experiments.config import PATROL_POLICY_KINDS
 from experiments.families.base import Episode, Family
 
@@ -78,6 +79,9 @@ class PatrolSetup:
         self.t_a = int(inner.attack_time)
         self.m = inner.n_patrollers
         self.maect = self.equilibrium = None
+        #: per patroller policy, whether each episode against the best response (strategy)
+        #: ended in a capture (the measured points of the p_d(t_a) plot)
+        self.captured: dict[str, list[bool]] = {}
         if "planner" in experiment["policies"]:
             self.maect = solve_maect(self.graph)
             self.equilibrium = self._equilibrium(inner, **experiment["planner_kwargs"])
@@ -99,9 +103,10 @@ class PatrolEpisode(Episode):
     0) from one after its first step (1); the metrics come from the last ``info``; the clock is
     the env's steps."""
 
-    def __init__(self, env, t_a: int) -> None:
+    def __init__(self, env, t_a: int, captures: list[bool] | None = None) -> None:
         self.inner = env.unwrapped
         self.t_a = t_a
+        self.captures = captures
         self.before: np.ndarray | None = None
         self.at_start: np.ndarray | None = None
 
@@ -120,6 +125,8 @@ class PatrolEpisode(Episode):
         target = int(info["attack_target"])
         out = {"captured": outcome == "capture", "deterred": outcome == "deterred",
                "outcome": outcome, "attack_target": target, "t_a": self.t_a}
+        if self.captures is not None:
+            self.captures.append(out["captured"])
         if outcome == "capture":
             seen_at_start = self.inner.board.seen[target, self.at_start].any()
             out["detection_time"] = 0 if seen_at_start else int(info["attack_elapsed"])
@@ -171,7 +178,10 @@ class Patrolling(Family):
                 for adversary in experiment["adversaries"] if adversary in _MODES]
 
     def episode(self, env, policy, setup):
-        return PatrolEpisode(env, setup.t_a)
+        adversary = policy.adversary
+        told = isinstance(adversary, BestResponseAdversary) and adversary.mode == "strategy"
+        captures = setup.captured.setdefault(policy.patrollers.name, []) if told else None
+        return PatrolEpisode(env, setup.t_a, captures)
 
     def collect(self, data, env, policy, setup):
         data["setup"] = setup
@@ -206,10 +216,14 @@ class Patrolling(Family):
                                    title=f"{name}: Alg. 4.3 covers, l = {setup.visibility.l:g}"))
         curves = self.detection_curves(setup, data.get("targets", {}))
         if curves:
+            measured = {}
+            for policy, captures in setup.captured.items():
+                rate = stats.rate(captures)
+                measured[policy] = (setup.t_a, rate.value, rate.lo, rate.hi)
             written.append(plot_detection_curves(
-                curves, folder / f"{name}-pd.png",
+                curves, folder / f"{name}-pd.png", measured,
                 title=f"{name}: p_d(t_a) at each strategy's best-response target\n"
-                      "GλD fit (line), empirical CDF (dashed)"))
+                      "GλD fit (line), empirical CDF (dashed), measured with 95% CI (point)"))
         return written
 
     @staticmethod
