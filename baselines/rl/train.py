@@ -162,12 +162,11 @@ def _check_action_space(config: Mapping) -> None:
     """DQN needs discrete actions (a multi-robot env trains PPO only)."""
     import gymnasium as gym
 
-    from bounce_gym.errors import config_errors
+    from baselines.rl.train_env import make_env
 
     if config["algo"] != "dqn":
         return
-    with config_errors("config.env_kwargs"):
-        space = gym.make(config["env"], **config["env_kwargs"]).action_space
+    space = make_env(config).action_space
     if not isinstance(space, gym.spaces.Discrete):
         raise ConfigError(f"config.algo: dqn needs discrete actions, but the env's are {space} "
                           "(set env_kwargs.action_type: discrete, or use ppo or recurrentppo)")
