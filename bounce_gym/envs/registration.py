@@ -61,6 +61,11 @@ observes contact and clock:
 Drifters (thesis ch. 5, `bounce_gym.envs.drifters`): the Gymnasium id ``bounce_gym/Drifter-v0``
 (one profiling drifter, scb_like flow, cell backend, reach task; max_episode_steps 200) and the
 PettingZoo id ``bounce_gym/MultiDrifter-v0`` (4 drifters covering the surface; max_cycles 500).
+
+Patrolling (Alam 2018 thesis ch. 4, `bounce_gym.envs.patrol`): the PettingZoo id
+``bounce_gym/Patrol-v0`` — patrol_15x15, 2 patrollers with a 6-cell sensor on the cell graph
+and an adversary that needs 20 steps undetected; zero-sum rewards (capture, success, deterred);
+max_cycles 500.
 """
 
 from __future__ import annotations
@@ -99,11 +104,16 @@ DRIFTER_GYM_ENVS = {
 DRIFTER_PETTINGZOO_ENVS = {
     "bounce_gym/MultiDrifter-v0": "bounce_gym.envs.drifters.multi_drifter_v0",
 }
+#: patrol PettingZoo ids (thesis ch. 4) -> the module with ``parallel_env`` and ``env``
+PATROL_PETTINGZOO_ENVS = {
+    "bounce_gym/Patrol-v0": "bounce_gym.envs.patrol.patrol_v0",
+}
 
 
 def is_pettingzoo_id(env_id: str) -> bool:
     """Whether ``env_id`` is one of the multi-robot PettingZoo ids (not a Gymnasium id)."""
-    return env_id in PETTINGZOO_ENVS or env_id in DRIFTER_PETTINGZOO_ENVS
+    return (env_id in PETTINGZOO_ENVS or env_id in DRIFTER_PETTINGZOO_ENVS
+            or env_id in PATROL_PETTINGZOO_ENVS)
 
 
 def is_drifter_id(env_id: str) -> bool:
@@ -133,7 +143,7 @@ def register_envs() -> None:
             if env_id not in registry:
                 pettingzoo.register(env_type, env_id, entry_point=_ENTRY[env_type],
                                     max_cycles=500, kwargs=kwargs)
-        for env_id, module in DRIFTER_PETTINGZOO_ENVS.items():
+        for env_id, module in {**DRIFTER_PETTINGZOO_ENVS, **PATROL_PETTINGZOO_ENVS}.items():
             if env_id not in registry:
                 function = "parallel_env" if env_type == "parallel" else "env"
                 pettingzoo.register(env_type, env_id, entry_point=f"{module}:{function}",
