@@ -5,7 +5,8 @@ one side learns while the other plays a fixed policy inside a wrapper.
   `baselines.rl.parallel_vec_env.ParallelToVecEnv`); the adversary inside is
 
   - ``"random"`` (default): it attacks a uniformly random target at a uniformly random step of
-    ``0 … max_cycles − t_a − 1`` (so it never ends as "deterred"). Non-strategic on purpose: the
+    ``0 … max_cycles − t_a``, the steps at which the env lets an attack start (never
+    "deterred"). Non-strategic on purpose: the
     patrollers see neither the target nor the clock, so what they can learn is a memoryless,
     stochastic patrol — a Markov chain — and against this adversary its return is the capture
     probability averaged over targets and over the (nearly stationary) state the patrol is in
@@ -107,7 +108,7 @@ class PatrollersEnv(ParallelEnv):
         inner = self.env.unwrapped
         if self.adversary == "random":
             self.target = int(self.rng.integers(inner.n_vertices))
-            self.start = int(self.rng.integers(inner.max_cycles - inner.attack_time))
+            self.start = int(self.rng.integers(inner.max_cycles - inner.attack_time + 1))
         else:
             self.target, self.start = int(np.argmin(inner.capture_probabilities())), 0
         self.clock = 0
