@@ -52,7 +52,7 @@ ADVERSARIES = ("random", "best_response")
 #: The chains `AdversaryEnv` can draw for the patrollers.
 STRATEGIES = ("maect", "random_walk")
 #: Second entropy word of the wrappers' random stream, so it differs from the env's.
-STREAM = 0x9A7_01
+STREAM = 0x9A701
 #: Outcomes that count as the patrollers' win.
 PATROLLER_WINS = ("capture", "deterred")
 
