@@ -23,9 +23,9 @@ from bounce_gym import validate
 from bounce_gym.envs.patrol import capture
 from bounce_gym.errors import ConfigError
 
-__all__ = ["ADVERSARY", "BestResponseAdversary", "JointPatrolPolicy", "MarkovPatrolPolicy",
-           "PerimeterPatrolPolicy", "induced_chain", "patrollers_of", "perimeter_walk",
-           "sub_seed"]
+__all__ = ["ADVERSARY", "BestResponseAdversary", "JointPatrolPolicy", "LearnedAdversary",
+           "LearnedPatrollers", "MarkovPatrolPolicy", "PerimeterPatrolPolicy", "induced_chain",
+           "patrollers_of", "perimeter_walk", "sub_seed"]
 
 #: The adversary's agent name in ``Patrol-v0``.
 ADVERSARY = "adversary"
@@ -92,6 +92,13 @@ class MarkovPatrolPolicy(MultiPolicy):
     def told(self, env) -> list[tuple[float, np.ndarray]]:
         """What a Stackelberg adversary knows: every chain of positive weight, with its weight."""
         return [(float(w), c) for w, c in zip(self.weights, self.chains, strict=True) if w > 0]
+
+    def announced(self, env) -> np.ndarray:
+        """The one chain the env is told (``strategy``, what an RL adversary observes): the
+        chain itself, or for a mixture its weighted mean, the mixture's one-step law."""
+        if not hasattr(self, "_mean"):
+            self._mean = sum(w * c for w, c in self.told(env))
+        return self._mean
 
     def start_options(self, env, seed: int) -> None:
         self.rng = episode_rng(self.seed, seed)
@@ -188,6 +195,9 @@ class PerimeterPatrolPolicy(MultiPolicy):
     def told(self, env) -> list[tuple[float, np.ndarray]]:
         return [(1.0, self._walk_and_chain(env)[1])]
 
+    def announced(self, env) -> np.ndarray:
+        return self._walk_and_chain(env)[1]
+
     def start_options(self, env, seed: int) -> dict:
         self.rng = episode_rng(self.seed, seed)
         walk = self.walk(env)
@@ -276,10 +286,10 @@ class JointPatrolPolicy(MultiPolicy):
     """One patroller policy and one adversary policy as the one policy the runner runs.
 
     Per episode: the patrollers' reset options (e.g. their start vertices) with the strategy the
-    env tells the adversary (``{"strategy": P}``: the patrollers' chain, or for a mixture its
-    weighted mean, the one-step law of the mixture — what an RL adversary observes; a
-    `BestResponseAdversary` is given the mixture itself). The two policies draw from independent
-    random streams of the episode's seed (`sub_seed`).
+    env tells the adversary (``{"strategy": P}``, the patrollers' ``announced`` chain — what an
+    RL adversary observes; a `BestResponseAdversary` is given what the patrollers' ``told``
+    says, e.g. a mixture itself). The two policies draw from independent random streams of the
+    episode's seed (`sub_seed`).
     """
 
     def __init__(self, patrollers: MultiPolicy, adversary: MultiPolicy) -> None:
@@ -289,10 +299,9 @@ class JointPatrolPolicy(MultiPolicy):
     def start_options(self, env, seed: int) -> dict:
         options = dict(self.patrollers.start_options(env, sub_seed(seed, 0)) or {})
         options.update(self.adversary.start_options(env, sub_seed(seed, 1)) or {})
-        told = self.patrollers.told(env)
         if isinstance(self.adversary, BestResponseAdversary):
-            self.adversary.told = told
-        options["strategy"] = told[0][1] if len(told) == 1 else sum(w * c for w, c in told)
+            self.adversary.told = self.patrollers.told(env)
+        options["strategy"] = self.patrollers.announced(env)
         return options
 
     def reset(self, env) -> None:
@@ -311,3 +320,85 @@ class JointPatrolPolicy(MultiPolicy):
                                       {a: infos[a] for a in mine}),
                 **self.adversary.act({a: observations[a] for a in theirs},
                                      {a: infos[a] for a in theirs})}
+
+
+class LearnedPatrollers(MultiPolicy):
+    """Patrollers of a trained shared model (`baselines.rl.policies.PatrollerSB3Policy`, its
+    actions sampled) with what a Stackelberg adversary is told about them.
+
+    ``told``: the chain the policy induces at each vertex — its action distribution for the
+    observation of a patroller alone at v (one-hot v, no other patroller in sight), a move along
+    the edge in each direction, a direction without an edge a stay at v (the env's no-op). The
+    patrol is memoryless, but it also reacts to the patrollers it sees, so the best response to
+    this chain is exact only while they stay out of each other's sight. ``announced`` (the env's
+    ``strategy``, which must move along an edge every step): the same chain conditioned on
+    moving.
+    """
+
+    def __init__(self, policy: MultiPolicy) -> None:
+        self.policy = policy
+        self.name = policy.name
+        self._chains: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def _induced(self, env) -> tuple[np.ndarray, np.ndarray]:
+        inner = env.unwrapped
+        if id(inner) not in self._chains:
+            n = inner.n_vertices
+            alone = np.zeros((n, 2 * n), dtype=np.float32)
+            alone[np.arange(n), np.arange(n)] = 1.0
+            probs = action_probabilities(self.policy.model, alone)
+            neighbours = inner.neighbour_table
+            legal = neighbours >= 0
+            told = np.zeros((n, n))
+            rows, dirs = np.nonzero(legal)
+            np.add.at(told, (rows, neighbours[rows, dirs]), probs[rows, dirs])
+            told[np.arange(n), np.arange(n)] += np.where(legal, 0.0, probs).sum(axis=1)
+            moving = told.copy()
+            np.fill_diagonal(moving, 0.0)
+            mass = moving.sum(axis=1, keepdims=True)
+            # a vertex where the policy never moves: the uniform walk (the env's default)
+            moving = np.where(mass > 0, moving / np.where(mass > 0, mass, 1.0),
+                              inner.board.uniform_walk())
+            self._chains[id(inner)] = (told, moving)
+        return self._chains[id(inner)]
+
+    def told(self, env) -> list[tuple[float, np.ndarray]]:
+        return [(1.0, self._induced(env)[0])]
+
+    def announced(self, env) -> np.ndarray:
+        return self._induced(env)[1]
+
+    def start_options(self, env, seed: int):
+        return self.policy.start_options(env, seed)
+
+    def reset(self, env) -> None:
+        self.policy.reset(env)
+
+    def act(self, observations, infos):
+        return self.policy.act(observations, infos)
+
+
+def action_probabilities(model, observations: np.ndarray) -> np.ndarray:
+    """(k, actions): a Stable-Baselines3 model's action distribution for each observation."""
+    import torch
+
+    batch, _ = model.policy.obs_to_tensor(observations)
+    with torch.no_grad():
+        return model.policy.get_distribution(batch).distribution.probs.numpy().astype(np.float64)
+
+
+class LearnedAdversary(MultiPolicy):
+    """An adversary of a trained model (`baselines.rl.policies.AdversarySB3Policy`, its greedy
+    action on its own observation)."""
+
+    def __init__(self, policy) -> None:
+        self.policy = policy
+        self.name = policy.name
+
+    def reset(self, env) -> None:
+        self.policy.reset(env)
+
+    def act(self, observations, infos):
+        if ADVERSARY not in observations:
+            return {}
+        return {ADVERSARY: int(self.policy.act(observations[ADVERSARY], infos[ADVERSARY]))}

@@ -125,6 +125,24 @@ class Family:
         """The task's analytic planner (``None``: none applies to this env)."""
         raise ConfigError(f"policies: no reference planner for task {self.task!r}")
 
+    def trained_policies(self, folder: Path, env, label: str, experiment: Mapping,
+                         setup: object) -> list[tuple[Policy, str]]:
+        """Every trusted model of ``folder`` as a policy for ``env`` (none if there are none),
+        with the group it is aggregated into; ``label`` prefixes the names (``""`` or
+        ``"<folder>/"``). Gymnasium env: `baselines.rl.policies.SB3Policy`; parallel env: one
+        `baselines.rl.policies.SharedSB3Policy` for every robot."""
+        from baselines.rl.model_files import MODEL_NAME, model_files, run_name
+        from baselines.rl.policies import SB3Policy, SharedSB3Policy
+
+        kind = SharedSB3Policy if is_parallel_env(env) else SB3Policy
+        out = []
+        for path in model_files(folder):
+            policy = kind(path, env)
+            policy.name = f"rl {label}{path.stem}"
+            name = MODEL_NAME.fullmatch(path.name)
+            out.append((policy, f"rl {label}{run_name(name['algo'], name['variant'])}"))
+        return out
+
     def episode(self, env, policy: Policy, setup: object) -> Episode:
         return Episode()
 

@@ -34,6 +34,8 @@ from baselines.patrolling.markov import transition_matrix
 from baselines.patrolling.policies import (
     BestResponseAdversary,
     JointPatrolPolicy,
+    LearnedAdversary,
+    LearnedPatrollers,
     MarkovPatrolPolicy,
     PerimeterPatrolPolicy,
 )
@@ -82,6 +84,9 @@ class PatrolSetup:
         #: per patroller policy, whether each episode against the best response (strategy)
         #: ended in a capture (the measured points of the p_d(t_a) plot)
         self.captured: dict[str, list[bool]] = {}
+        #: the trained patrollers and adversaries loaded so far, with their groups
+        self.learned_patrollers: list = []
+        self.learned_adversaries: list = []
         if "planner" in experiment["policies"]:
             self.maect = solve_maect(self.graph)
             self.equilibrium = self._equilibrium(inner, **experiment["planner_kwargs"])
@@ -176,6 +181,48 @@ class Patrolling(Family):
         return [JointPatrolPolicy(patrollers, BestResponseAdversary(_MODES[adversary]))
                 for patrollers in self.patrollers(kind, env, setup)
                 for adversary in experiment["adversaries"] if adversary in _MODES]
+
+    def trained_policies(self, folder, env, label, experiment, setup):
+        """The trained patrollers of ``folder`` against every adversary of the experiment, and
+        its trained adversaries against every patroller (`baselines.rl.policies.patrol_policy`
+        tells which side a model learned). Models of both sides may come from different folders
+        of ``rl_models``: each folder's models also meet those loaded before them (kept in the
+        setup)."""
+        from baselines.rl.model_files import MODEL_NAME, model_files, run_name
+        from baselines.rl.policies import PatrollerSB3Policy, patrol_policy
+
+        patrollers, adversaries = [], []
+        for path in model_files(folder):
+            model = patrol_policy(path, env)
+            model.name = f"rl {label}{path.stem}"
+            name = MODEL_NAME.fullmatch(path.name)
+            group = f"rl {label}{run_name(name['algo'], name['variant'])}"
+            if isinstance(model, PatrollerSB3Policy):
+                patrollers.append((LearnedPatrollers(model), group))
+            else:
+                adversaries.append((LearnedAdversary(model), group))
+        if "rl" not in experiment["policies"]:
+            patrollers = []
+        if "rl" not in experiment["adversaries"]:
+            adversaries = []
+        out = []
+        for learned, group in patrollers:
+            for kind in experiment["adversaries"]:
+                if kind in _MODES:
+                    adversary = BestResponseAdversary(_MODES[kind])
+                    out.append((JointPatrolPolicy(learned, adversary),
+                                f"{group} vs {adversary.name}"))
+            out += [(JointPatrolPolicy(learned, a), f"{group} vs {g}")
+                    for a, g in setup.learned_adversaries]
+        fixed = [p for kind in experiment["policies"] if kind != "rl"
+                 for p in self.patrollers(kind, env, setup)]
+        for learned, group in adversaries:
+            out += [(JointPatrolPolicy(p, learned), f"{p.name} vs {group}") for p in fixed]
+            out += [(JointPatrolPolicy(p, learned), f"{g} vs {group}")
+                    for p, g in setup.learned_patrollers + patrollers]
+        setup.learned_patrollers += patrollers
+        setup.learned_adversaries += adversaries
+        return out
 
     def episode(self, env, policy, setup):
         adversary = policy.adversary

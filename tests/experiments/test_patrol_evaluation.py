@@ -190,3 +190,41 @@ def test_the_family_is_the_patrolling_one(tmp_path):
     assert [e.policy.name for e in prepared.entrants] == [
         "random walk vs best response (strategy)", "random walk vs best response (positions)"]
     prepared.env.close()
+
+
+def test_trained_patrollers_and_adversaries_meet_every_opponent(tmp_path):
+    """Tiny PPO models of both sides (baselines.rl.patrol) in two folders of rl_models: the
+    learned patrollers play the best responses and the learned adversary, which also plays the
+    random walk; the learned patrol is told to the best response as the chain it induces."""
+    from baselines.rl.train import train
+
+    game = {"world": "square", "cell_size": 2.0, "n_patrollers": 2, "sensor_range": 1.5,
+            "attack_time": 4}
+    for role, own in (("patrollers", {"adversary": "random"}),
+                      ("adversary", {"strategies": ["random_walk"]})):
+        train({"name": f"patrol-{role}", "env": PATROL, "role": role,
+               "env_kwargs": {**game, **own, "max_cycles": 40}, "algo": "ppo",
+               "total_timesteps": 64, "hyperparams": {"n_steps": 64, "batch_size": 64,
+                                                      "n_epochs": 1},
+               "seed": 7, "models": str(tmp_path / "models")}, progress=False)
+    exp = {"name": "learned", "env": PATROL, "env_kwargs": game, "max_steps": 40,
+           "horizon_reason": "the models' episodes", "seeds": [10_000, 10_001],
+           "policies": ["random", "rl"], "adversaries": ["best_response", "rl"],
+           "rl_models": ["patrol-patrollers", "patrol-adversary"]}
+    rows, plots = run(config(tmp_path, exp), progress=False)
+    patrollers, adversary = "rl patrol-patrollers/ppo_seed7", "rl patrol-adversary/ppo_seed7"
+    assert {r.policy for r in rows} == {
+        "random walk vs best response (strategy)", "random walk vs " + adversary,
+        f"{patrollers} vs best response (strategy)", f"{patrollers} vs {adversary}"}
+    groups = {r.policy: r.group for r in rows}
+    assert groups[f"{patrollers} vs {adversary}"] == \
+        "rl patrol-patrollers/ppo vs rl patrol-adversary/ppo"
+    assert all(r.metrics["outcome"] in ("capture", "success", "deterred") for r in rows)
+    learned = next(e for e in plots["learned"]["setup"].learned_patrollers)[0]
+    env = make_env(validate_config(config(tmp_path, exp))["experiments"][0])
+    (weight, told), = learned.told(env)
+    announced = learned.announced(env)
+    for chain in (told, announced):
+        assert np.allclose(chain.sum(axis=1), 1.0) and (chain >= 0).all()
+    assert np.allclose(np.diag(announced), 0.0)
+    env.close()
