@@ -44,6 +44,7 @@ from baselines.patrolling.towards import DEFAULT_PATHS
 from baselines.patrolling.visibility import complete_visibility
 from baselines.patrolling.visibility_policies import distributed_subsets
 from baselines.patrolling.vulnerability import (
+    GLD,
     DetectionCurve,
     detection_curve,
     detection_times,
@@ -61,6 +62,8 @@ from experiments.families.base import Episode, Family
 _MODES = {"best_response": "strategy", "best_response_positions": "positions"}
 #: simulated detection times per strategy for the p_d(t_a) curves
 DETECTION_RUNS = 1000
+#: a placeholder distribution for a curve with nothing to fit (its fitted values are not used)
+_NO_FIT = GLD(0.0, 1.0, 0.0, 0.0)
 
 
 class PatrolSetup:
@@ -280,7 +283,8 @@ class Patrolling(Family):
         runs) from uniformly random distinct starts, as the env places them. Runs not detected
         within 20 t_a steps (a chain of Alg. 4.1 may never reach the target) count as never
         detected: the GλD is fitted to the detected ones and both curves are scaled by their
-        share."""
+        share. Without two distinct detection times there is nothing to fit and the empirical
+        curve stands alone (with no detection at all it is 0)."""
         from bounce_gym.cells.visibility import watch_region
 
         curves = {}
@@ -293,12 +297,16 @@ class Patrolling(Family):
                                 distinct_starts=True, max_steps=20 * setup.t_a)
                 for i, (chain, k) in enumerate(zip(policy.chains, runs, strict=True)) if k > 0])
             detected = times[np.isfinite(times)]
+            share = len(detected) / len(times)
             if len(np.unique(detected)) >= 2 and len(detected) >= 5:
                 curve = detection_curve(detected, t_a, fit_gld(detected, bin_width=1.0,
                                                                restarts=1))
-                share = len(detected) / len(times)
-                curves[name] = DetectionCurve(curve.t_a, share * curve.fitted,
-                                              share * curve.empirical, curve.gld)
+                fitted = share * curve.fitted
+            else:  # nothing to fit (e.g. every detection at the start): the ECDF alone
+                curve = detection_curve(np.zeros(1) if len(detected) == 0 else detected, t_a,
+                                        _NO_FIT)
+                fitted = np.full(len(t_a), np.nan)
+            curves[name] = DetectionCurve(curve.t_a, fitted, share * curve.empirical, curve.gld)
         return curves
 
 

@@ -84,12 +84,16 @@ def plot_detection_curves(curves: Mapping[str, DetectionCurve], path: Path | str
     fig, ax = plt.subplots(figsize=(5.8, 3.8))
     for k, (name, curve) in enumerate(curves.items()):
         colour = _COLOURS[k % len(_COLOURS)]
-        ax.plot(curve.t_a, curve.fitted, color=colour, lw=1.5, label=f"{name} (GλD fit)")
-        ax.step(curve.t_a, curve.empirical, where="post", color=colour, lw=0.8, ls="--")
+        fitted = np.isfinite(curve.fitted).any()
+        if fitted:
+            ax.plot(curve.t_a, curve.fitted, color=colour, lw=1.5, label=f"{name} (GλD fit)")
+        ax.step(curve.t_a, curve.empirical, where="post", color=colour, lw=0.8, ls="--",
+                label=None if fitted else f"{name} (empirical; nothing to fit)")
         if measured and name in measured:
             t_a, rate, lo, hi = measured[name]
-            ax.errorbar([t_a], [rate], yerr=[[rate - lo], [hi - rate]], fmt="o", color=colour,
-                        capsize=3, ms=4)
+            shift = (k - (len(curves) - 1) / 2) * 0.01 * float(np.ptp(curve.t_a))  # side by side
+            ax.errorbar([t_a + shift], [rate], yerr=[[rate - lo], [hi - rate]], fmt="o",
+                        color=colour, capsize=3, ms=4)
     ax.set_xlabel("attack time t_a (steps)")
     ax.set_ylabel("p_d(t_a)")
     ax.set_ylim(0, 1.02)
