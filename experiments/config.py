@@ -19,6 +19,14 @@ legal layer move per step for ``random`` and always drift for ``fixed``; the dep
 runs ``planner`` (Alg. 5.2 and the greedy deployment) and ``random`` (random cells). A kind a
 family does not run is an error naming ``policies``.
 
+The patrol experiments (``bounce_gym/Patrol-v0``, `experiments.families.patrolling`) have
+patrollers and an adversary: ``policies`` are the patrollers' kinds, ``planner`` (MAECT and the
+Stackelberg equilibrium mixture), ``random`` (the uniform random walk), ``perimeter`` (the
+perimeter patrols after Agmon et al.) and ``rl`` (default: all four); ``adversaries`` are
+``best_response`` (told the strategy), ``best_response_positions`` (told the positions too) and
+``rl`` (default: the two best responses). Every patroller meets every adversary. No other
+experiment takes ``adversaries``.
+
 **Seeds.** Evaluation seeds are disjoint from training seeds (`baselines.seeds`): every seed
 must be at least ``EVALUATION_SEEDS_START`` (10,000). ``seeds`` is a list of distinct integers
 or ``{start: 10000, count: 200}`` (the seeds start, start + 1, …); the validated configuration

@@ -5,11 +5,14 @@ Patrollers (the experiment's ``policies``): ``planner`` — MAECT over all verti
 `baselines.patrolling.maect.solve_maect`) and the Stackelberg equilibrium mixture (§4.4.2,
 `baselines.patrolling.equilibrium`); ``random`` — the uniform random walk on the cell graph;
 ``perimeter`` — the perimeter patrols after Agmon et al. (p = 1 and p = 1/2; approximations of
-the thesis's BMP/DCP/DNCP, `baselines.patrolling.policies.PerimeterPatrolPolicy`). Adversaries
+the thesis's BMP/DCP/DNCP, `baselines.patrolling.policies.PerimeterPatrolPolicy`); ``rl`` —
+parameter-shared PPO trained with ``role: patrollers`` (`baselines.rl.patrol`). Adversaries
 (the experiment's ``adversaries``): ``best_response`` — the Stackelberg follower told the
 strategy, ``best_response_positions`` — told the patrollers' positions at step 0 too
-(`baselines.patrolling.policies.BestResponseAdversary`). ``planner_kwargs`` set the equilibrium's
-strategy set (`baselines.patrolling.equilibrium.equilibrium_strategy`).
+(`baselines.patrolling.policies.BestResponseAdversary`); ``rl`` — PPO trained with ``role:
+adversary``. Every patroller meets every adversary, one row each (``<patrollers> vs
+<adversary>``). ``planner_kwargs`` set the equilibrium's strategy set (`PatrolSetup`). The
+choices are in docs/choices.md, "The patrol evaluation".
 
 Per episode: ``captured`` (the attack was caught, thesis §4.3.5), ``deterred`` (the adversary
 never attacked), ``outcome``, ``attack_target`` (vertex, -1 for none), ``detection_time`` (steps
@@ -41,7 +44,6 @@ from baselines.patrolling.policies import (
 )
 from baselines.patrolling.subset import DEFAULT_CYCLE_SHARE
 from baselines.patrolling.towards import DEFAULT_PATHS
-from baselines.patrolling.visibility import complete_visibility
 from baselines.patrolling.visibility_policies import distributed_subsets
 from baselines.patrolling.vulnerability import (
     GLD,
@@ -234,6 +236,15 @@ class Patrolling(Family):
         return PatrolEpisode(env, setup.t_a, captures)
 
     def collect(self, data, env, policy, setup):
+        """The setup and each Markov strategy's best-response target for the plots; a note
+        with the equilibrium mixture's weights."""
+        if "setup" not in data and setup.equilibrium is not None:
+            eq = setup.equilibrium
+            weights = ", ".join(f"{name} {w:.3f}" for name, w in zip(eq.names, eq.mixture,
+                                                                      strict=True) if w > 0)
+            data["notes"].append(f"{data['world'].name} t_a = {setup.t_a}: the equilibrium "
+                                 f"mixture is {weights} (the game's attack: vertex "
+                                 f"{eq.attack})")
         data["setup"] = setup
         patrollers = policy.patrollers
         adversary = policy.adversary
@@ -260,7 +271,7 @@ class Patrolling(Family):
             written.append(plot_edge_weights(setup.graph, setup.maect.weights,
                                              folder / f"{name}-maect-weights.png",
                                              title=f"{name}: MAECT edge weights"))
-        covers = complete_visibility(setup.visibility, setup.m)
+        covers = distributed_subsets(setup.visibility, setup.m)
         written.append(plot_covers(setup.graph, setup.visibility.seen, covers,
                                    folder / f"{name}-covers.png",
                                    title=f"{name}: Alg. 4.3 covers, l = {setup.visibility.l:g}"))
