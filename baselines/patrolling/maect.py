@@ -29,6 +29,8 @@ __all__ = ["SOLVERS", "MaectResult", "incidence", "laplacian", "maect_objective"
 SOLVERS = ("gradient", "cvxpy")
 # relative eigenvalue below which λ_2 counts as 0 (disconnected)
 _ZERO_EIG = 1e-12
+# scaled gradient: the metric weight of an edge is w_e + _SCALE_FLOOR / q
+_SCALE_FLOOR = 1e-2
 
 
 @dataclass(frozen=True)
@@ -73,13 +75,15 @@ def maect_objective(A, w) -> float:
     return float(2.0 / (n - 1) * np.sum(1.0 / lam[1:]))
 
 
-def project_simplex(v: np.ndarray) -> np.ndarray:
-    """Euclidean projection of ``v`` onto {w >= 0, sum w = 1} (sort-and-threshold)."""
-    u = np.sort(v)[::-1]
-    cumulative = np.cumsum(u) - 1.0
-    k = np.arange(1, len(v) + 1)
-    rho = np.flatnonzero(u - cumulative / k > 0)[-1]
-    return np.maximum(v - cumulative[rho] / (rho + 1), 0.0)
+def project_simplex(v: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
+    """Projection of ``v`` onto {w >= 0, sum w = 1} (sort-and-threshold): Euclidean, or with
+    ``scale`` (> 0) the nearest point in the metric ``sum (w - v)² / scale``."""
+    c = np.ones_like(v, dtype=np.float64) if scale is None else scale
+    ratio = v / c
+    order = np.argsort(-ratio, kind="stable")
+    threshold = (np.cumsum(v[order]) - 1.0) / np.cumsum(c[order])
+    rho = np.flatnonzero(ratio[order] > threshold)[-1]
+    return np.maximum(v - threshold[rho] * c, 0.0)
 
 
 def _objective_and_gradient(A: sp.csr_array, w: np.ndarray) -> tuple[float, np.ndarray]:
@@ -99,17 +103,22 @@ def _objective_and_gradient(A: sp.csr_array, w: np.ndarray) -> tuple[float, np.n
 
 
 def _projected_gradient(A: sp.csr_array, tol: float, max_iter: int,
-                        project: Callable = project_simplex) -> tuple[np.ndarray, int]:
+                        project: Callable = project_simplex,
+                        scaled: bool = False) -> tuple[np.ndarray, int]:
     """Spectral projected gradient (Barzilai-Borwein steps, Armijo backtracking) on the convex
-    set that ``project`` projects onto (default: the simplex), started from the projection of
-    uniform weights; stops when the objective changes by less than ``tol`` (relative) and the
-    weights by less than ``sqrt(tol)``."""
+    set that ``project(v, scale)`` projects onto (default: the simplex), started from the
+    projection of uniform weights; stops when the objective changes by less than ``tol``
+    (relative) and the weights by less than ``sqrt(tol)``. ``scaled``: steps and projections in
+    the metric ``sum (Δw_e)² / (w_e + floor)``, which copes with weights of very different sizes
+    (problem 4.5)."""
     q = A.shape[1]
-    w = project(np.full(q, 1.0 / q))
+    w = project(np.full(q, 1.0 / q), None)
     f, g = _objective_and_gradient(A, w)
-    step = 1.0 / max(np.abs(g).max(), 1e-300)
+    scale = w + _SCALE_FLOOR / q if scaled else None
+    c = 1.0 if scale is None else scale
+    step = 1.0 / max(np.abs(c * g).max(), 1e-300)
     for iteration in range(1, max_iter + 1):
-        direction = project(w - step * g) - w
+        direction = project(w - step * c * g, scale) - w
         slope = float(g @ direction)
         t = 1.0
         while True:
@@ -124,7 +133,10 @@ def _projected_gradient(A: sp.csr_array, tol: float, max_iter: int,
         if converged:
             return w, iteration
         sy = float(s @ y)
-        step = float(s @ s) / sy if sy > 0 else step * 2.0
+        step = float(s @ (s / c)) / sy if sy > 0 else step * 2.0
+        if scaled:
+            scale = w + _SCALE_FLOOR / q
+            c = scale
         step = min(max(step, 1e-12), 1e12)
     raise ConfigError(f"max_iter: projected gradient did not converge in {max_iter} iterations")
 
@@ -147,7 +159,7 @@ def _cvxpy_weights(A: sp.csr_array, constraints: Callable = _no_constraints,
     problem.solve()
     if problem.status != cp.OPTIMAL:
         raise ConfigError(f"solver: cvxpy ended with status {problem.status!r}")
-    return project(np.asarray(w.value, dtype=np.float64))
+    return project(np.asarray(w.value, dtype=np.float64), None)
 
 
 def solve_maect(graph: nx.Graph, solver: str = "gradient", tol: float = 1e-12,
@@ -164,11 +176,12 @@ def solve_maect(graph: nx.Graph, solver: str = "gradient", tol: float = 1e-12,
 
 
 def _solve(graph: nx.Graph, solver: str, tol: float, max_iter: int,
-           project: Callable = project_simplex,
-           constraints: Callable = _no_constraints) -> MaectResult:
-    """`solve_maect` over the feasible set that ``project`` projects onto (for the gradient
-    solver) and that the simplex and ``constraints(w)`` describe (for cvxpy); both default to the
-    simplex alone. ``project`` may depend on the edge order ``list(graph.edges())``."""
+           project: Callable = project_simplex, constraints: Callable = _no_constraints,
+           scaled: bool = False) -> MaectResult:
+    """`solve_maect` over the feasible set that ``project(v, scale)`` projects onto (for the
+    gradient solver, with ``scaled`` steps or not) and that the simplex and ``constraints(w)``
+    describe (for cvxpy); both default to the simplex alone. ``project`` may depend on the edge
+    order ``list(graph.edges())``."""
     if solver not in SOLVERS:
         raise ConfigError(f"solver: expected one of {SOLVERS}, got {solver!r}")
     if graph.number_of_nodes() < 2 or not nx.is_connected(graph):
@@ -176,7 +189,7 @@ def _solve(graph: nx.Graph, solver: str, tol: float, max_iter: int,
     nodes, edges = list(graph), list(graph.edges())
     A = incidence(graph, nodes, edges)
     if solver == "gradient":
-        w, iterations = _projected_gradient(A, tol, max_iter, project)
+        w, iterations = _projected_gradient(A, tol, max_iter, project, scaled)
     else:
         w, iterations = _cvxpy_weights(A, constraints, project), 0
     weights = {e: float(x) for e, x in zip(edges, w, strict=True)}

@@ -93,17 +93,23 @@ def test_cvxpy_cross_check(cvx_small_graph):
                                [gradient.weights[e] for e in gradient.edges], atol=1e-3)
 
 
-def test_projection_is_the_nearest_feasible_point():
+@pytest.mark.parametrize("scaled", [False, True])
+def test_projection_is_the_nearest_feasible_point(scaled):
     rng = np.random.default_rng(5)
     mask = np.array([True, True, False, False, False])
     for _ in range(20):
         v = rng.normal(size=5)
-        w = project_subset_simplex(v, mask, 0.7)
+        scale = rng.uniform(0.01, 1.0, 5) if scaled else np.ones(5)
+        w = project_subset_simplex(v, mask, 0.7, scale if scaled else None)
         assert w.min() >= 0 and w.sum() == pytest.approx(1.0) and w[mask].sum() >= 0.7 - 1e-12
+
+        def distance(x, v=v, scale=scale):
+            return float(np.sum((x - v) ** 2 / scale))
+
         for _ in range(50):  # no feasible point is closer
             other = rng.dirichlet(np.ones(5))
             if other[mask].sum() >= 0.7:
-                assert np.linalg.norm(other - v) >= np.linalg.norm(w - v) - 1e-12
+                assert distance(other) >= distance(w) - 1e-12
 
 
 def test_tsp_order_of_five_vertices_on_a_grid():
