@@ -76,7 +76,7 @@ class PatrolSetup:
     vertices, MAECT over the subset of robot 1's viewing cells of the distributed visibility
     policy (§4.3.3, `visibility_policies.distributed_subsets`), and the Alg. 4.1 chains towards
     the ``exposed`` targets of least capture probability under MAECT (``planner_kwargs``:
-    ``exposed`` (5), ``h`` (0.8), ``k`` (3), ``tol`` (1e-6) of the subset problem).
+    ``exposed`` (5), ``h`` (0.8), ``k`` (3), ``tol`` (1e-8) of the subset problem).
     """
 
     def __init__(self, env, experiment: Mapping) -> None:
@@ -97,7 +97,7 @@ class PatrolSetup:
             self.equilibrium = self._equilibrium(inner, **experiment["planner_kwargs"])
 
     def _equilibrium(self, inner, exposed: int = 5, h: float = DEFAULT_CYCLE_SHARE,
-                     k: int = DEFAULT_PATHS, tol: float = 1e-6) -> EquilibriumStrategy:
+                     k: int = DEFAULT_PATHS, tol: float = 1e-8) -> EquilibriumStrategy:
         exposed = validate.integer("planner_kwargs.exposed", exposed, 1, inner.n_vertices)
         maect = self.maect.transition.toarray()
         S = capture.survival(maect, inner.board.seen, self.t_a)
