@@ -5,8 +5,11 @@ and the joint policy the experiment runner runs (one patroller policy with one a
 Every patroller policy says what a Stackelberg adversary is told about it (`told`: a mixture of
 row-stochastic chains over the graph's node order, thesis §4.4.2): for `MarkovPatrolPolicy` its
 chains and their weights, exactly; for `PerimeterPatrolPolicy` the vertex chain its walk induces
-(`induced_chain`), which is only an approximation, since the walk remembers its direction. The
-best response of `BestResponseAdversary` is exact against Markov chains and their mixtures only.
+(`induced_chain`), which is only an approximation, since the walk remembers its direction; for
+trained patrollers (`LearnedPatrollers`) the chain their policy induces alone at each vertex.
+The best response of `BestResponseAdversary` is exact against Markov chains and their mixtures
+only. Each also ``announced``: the one chain the env is told (its ``strategy``, what a trained
+adversary observes). docs/choices.md, "The patrol evaluation", gives the reasons.
 """
 
 from __future__ import annotations
@@ -88,6 +91,7 @@ class MarkovPatrolPolicy(MultiPolicy):
         self.rng = np.random.default_rng(seed)
         self.cumulative = [np.cumsum(c, axis=1) for c in self.chains]
         self.chain = 0
+        self._mean: np.ndarray | None = None
 
     def told(self, env) -> list[tuple[float, np.ndarray]]:
         """What a Stackelberg adversary knows: every chain of positive weight, with its weight."""
@@ -96,7 +100,7 @@ class MarkovPatrolPolicy(MultiPolicy):
     def announced(self, env) -> np.ndarray:
         """The one chain the env is told (``strategy``, what an RL adversary observes): the
         chain itself, or for a mixture its weighted mean, the mixture's one-step law."""
-        if not hasattr(self, "_mean"):
+        if self._mean is None:
             self._mean = sum(w * c for w, c in self.told(env))
         return self._mean
 
