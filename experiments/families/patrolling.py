@@ -241,7 +241,7 @@ class Patrolling(Family):
         if "setup" not in data and setup.equilibrium is not None:
             eq = setup.equilibrium
             weights = ", ".join(f"{name} {w:.3f}" for name, w in zip(eq.names, eq.mixture,
-                                                                      strict=True) if w > 0)
+                                                                      strict=True) if w >= 5e-4)
             data["notes"].append(f"{data['world'].name} t_a = {setup.t_a}: the equilibrium "
                                  f"mixture is {weights} (the game's attack: vertex "
                                  f"{eq.attack})")
