@@ -228,3 +228,11 @@ def test_trained_patrollers_and_adversaries_meet_every_opponent(tmp_path):
         assert np.allclose(chain.sum(axis=1), 1.0) and (chain >= 0).all()
     assert np.allclose(np.diag(announced), 0.0)
     env.close()
+
+
+def test_the_shipped_patrol_configuration_is_valid():
+    from experiments.config import configs_folder, load_config
+
+    experiments = validate_config(load_config(configs_folder() / "eval_patrol.yaml"))
+    assert {e["env"] for e in experiments["experiments"]} == {PATROL}
+    assert all(min(e["seeds"]) >= 10_000 for e in experiments["experiments"])
