@@ -53,7 +53,8 @@ step ``max_cycles``). Nothing is truncated: every episode ends by ``max_cycles``
 ``attack_time`` (20), ``adversary_observes`` ("strategy" or "positions"), ``strategy`` (None:
 the uniform random walk; an n×n row-stochastic matrix over the vertices, moving only along
 edges; per episode with ``reset(options={"strategy": P})``, else the constructor's),
-``start`` (None: distinct vertices drawn uniformly each episode; or one vertex per patroller),
+``start`` (None: distinct vertices drawn uniformly each episode; or one vertex per patroller;
+per episode with ``reset(options={"start": [...]})``, else the constructor's),
 ``max_cycles`` (500), ``illegal_action`` ("stay": a move along a missing edge leaves the
 patroller where it is, and an adversary's start after the attack began is a wait, both with
 ``info["illegal_action"]``; "error": `ActionError` naming the agent and its legal actions),
@@ -87,8 +88,8 @@ from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.errors import ActionError, ConfigError
 
 ADVERSARY = "adversary"
-RESET_OPTIONS = frozenset({"strategy"})
-#: how many strategies' survival matrices are kept
+RESET_OPTIONS = frozenset({"strategy", "start"})
+#: how many strategies' capture probabilities are kept
 CACHE_SIZE = 16
 
 
@@ -126,9 +127,9 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         self.np_random = None
         self.np_random_seed = None
         self._strategy = self.options.strategy
-        self._survival: dict[bytes, np.ndarray] = {}
+        self._capture: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
         self._pos = np.zeros(m, dtype=np.int64)
-        self._start = self._pos.copy()
+        self._episode_start = self.options.start
         self._start_capture = np.zeros(n)
         self._new_episode()
 
@@ -181,25 +182,28 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         """(n,) probability that an attack on each vertex, started now, is caught (§4.3.5).
 
         Args:
-            positions: None for the patrollers placed as the env places them at reset
-                (``start``, or distinct uniform vertices); else one vertex per patroller.
+            positions: None for the patrollers placed as the env places them at reset (the
+                episode's ``start``, or distinct uniform vertices); else one vertex per
+                patroller.
         """
-        S = self._survival_matrix()
+        S, uniform = self._cached()
         if positions is not None:
             where = check_start(positions, self.board.n, self.n_patrollers, "positions")
             return capture.capture_from(S, where)
-        if self.options.start is not None:
-            return capture.capture_from(S, self.options.start)
-        return capture.capture_from_distinct_uniform(S, self.n_patrollers)
+        if self._episode_start is not None:
+            return capture.capture_from(S, self._episode_start)
+        return uniform.copy()
 
-    def _survival_matrix(self) -> np.ndarray:
+    def _cached(self) -> tuple[np.ndarray, np.ndarray]:
+        """The survival matrix of the current strategy and its capture probabilities from
+        distinct uniform start vertices, computed once per strategy."""
         key = hashlib.blake2b(self._strategy.tobytes(), digest_size=16).digest()
-        if key not in self._survival:
-            if len(self._survival) >= CACHE_SIZE:
-                self._survival.pop(next(iter(self._survival)))
-            self._survival[key] = capture.survival(self._strategy, self.board.seen,
-                                                   self.attack_time)
-        return self._survival[key]
+        if key not in self._capture:
+            if len(self._capture) >= CACHE_SIZE:
+                self._capture.pop(next(iter(self._capture)))
+            S = capture.survival(self._strategy, self.board.seen, self.attack_time)
+            self._capture[key] = (S, capture.capture_from_distinct_uniform(S, self.n_patrollers))
+        return self._capture[key]
 
     # -- PettingZoo API ---------------------------------------------------------------------------
     def observation_space(self, agent: str) -> spaces.Space:
@@ -213,13 +217,15 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
         options = checked_reset_options(options, RESET_OPTIONS, strict=False)
-        self._strategy = (check_strategy(options["strategy"], self.board, "options.strategy")
-                          if "strategy" in options else self.options.strategy)
-        if self.options.start is not None:
-            self._pos = self.options.start.copy()
+        strategy = (check_strategy(options["strategy"], self.board, "options.strategy")
+                    if "strategy" in options else self.options.strategy)
+        start = (check_start(options["start"], self.board.n, self.n_patrollers, "options.start")
+                 if "start" in options else self.options.start)
+        self._strategy, self._episode_start = strategy, start
+        if self._episode_start is not None:
+            self._pos = self._episode_start.copy()
         else:
             self._pos = self.np_random.choice(self.board.n, self.n_patrollers, replace=False)
-        self._start = self._pos.copy()
         self._start_capture = self.capture_probabilities()
         self._new_episode()
         self.agents = list(self.possible_agents)
