@@ -17,9 +17,13 @@ the hitting time from each vertex to i).
 The leader (patroller) maximises its expected payoff; the follower (adversary) maximises Q, and
 breaks ties in the leader's favour (strong Stackelberg). `stackelberg` solves one linear program
 per adversary response (scipy HiGHS) and keeps the first response, in index order, whose value is
-strictly the best. The optimal mixture is often not unique (on Table 4.2 any α_7 in [2/7, 73/81]
-with α_9 = 1 - α_7 is optimal); ties go to the lexicographically largest mixture (as much weight
-as possible on the lowest-index strategy, then the next, ...), which gives Table 4.3.
+strictly the best; or, with ``method="dobss"``, the DOBSS mixed-integer program of Paruchuri et
+al. (2008) for a single adversary type (scipy `milp`), followed by a second one that picks the
+lowest-index response within ``_MILP_TIE`` of its value, so both methods give the same value and,
+up to that tolerance, the same response (docs/choices.md, "DOBSS and its tie-break"). The
+optimal mixture is often not unique (on Table 4.2 any α_7 in [2/7, 73/81] with α_9 = 1 - α_7 is
+optimal); ties go to the lexicographically largest mixture (as much weight as possible on the
+lowest-index strategy, then the next, ...), which gives Table 4.3.
 """
 
 from __future__ import annotations
@@ -28,19 +32,22 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linprog
+from scipy.optimize import Bounds, LinearConstraint, linprog, milp
 
 from bounce_gym.errors import ConfigError
 
-__all__ = ["StackelbergResult", "payoff_matrices", "preferred_all", "preferred_subset",
-           "preferred_towards", "stackelberg"]
+__all__ = ["STACKELBERG_METHODS", "StackelbergResult", "payoff_matrices", "preferred_all",
+           "preferred_subset", "preferred_towards", "stackelberg"]
 
+STACKELBERG_METHODS = ("lp", "dobss")
 # a later response must beat the best value by more than this to replace it
 _IMPROVEMENT = 1e-9
 # relative difference below which two preferred hitting times tie
 _TIE = 1e-9
 # slack of the optimal value and of the fixed weights in the lexicographic tie-break
 _SLACK = 1e-10
+# DOBSS: responses whose value is within this (relative) of the optimum count as tied
+_MILP_TIE = 1e-7
 
 
 def preferred_all(H: np.ndarray) -> np.ndarray:
@@ -100,13 +107,16 @@ class StackelbergResult:
     follower_value: float
 
 
-def stackelberg(P: np.ndarray, Q: np.ndarray) -> StackelbergResult:
+def stackelberg(P: np.ndarray, Q: np.ndarray, method: str = "lp") -> StackelbergResult:
     """The strong Stackelberg equilibrium of the bimatrix game ``(P, Q)`` (leader = rows).
 
-    For each response j: maximise ``αᵀ P[:, j]`` over the simplex subject to
-    ``αᵀ (Q[:, j'] - Q[:, j]) <= 0`` for all j'. The best feasible j wins; ties go to the lower
-    index.
+    ``method="lp"``: for each response j, maximise ``αᵀ P[:, j]`` over the simplex subject to
+    ``αᵀ (Q[:, j'] - Q[:, j]) <= 0`` for all j'; the best feasible j wins, ties go to the lower
+    index. ``method="dobss"``: the DOBSS MILP (`_dobss`). Either way the mixture is then the
+    lexicographically largest optimal one for that response.
     """
+    if method not in STACKELBERG_METHODS:
+        raise ConfigError(f"method: expected one of {STACKELBERG_METHODS}, got {method!r}")
     P = np.asarray(P, dtype=np.float64)
     Q = np.asarray(Q, dtype=np.float64)
     if P.ndim != 2 or P.shape != Q.shape or P.size == 0:
@@ -114,6 +124,14 @@ def stackelberg(P: np.ndarray, Q: np.ndarray) -> StackelbergResult:
                           f"and {Q.shape}")
     if not (np.isfinite(P).all() and np.isfinite(Q).all()):
         raise ConfigError("P, Q: payoffs must be finite")
+    value, attack = _best_response_lps(P, Q) if method == "lp" else _dobss(P, Q)
+    mixture = _lexicographic_mixture(P, Q, attack, value)
+    return StackelbergResult(mixture=mixture, attack=attack, value=float(mixture @ P[:, attack]),
+                             follower_value=float(mixture @ Q[:, attack]))
+
+
+def _best_response_lps(P: np.ndarray, Q: np.ndarray) -> tuple[float, int]:
+    """The multiple-LP method: the leader's best value and the first response attaining it."""
     k, n = P.shape
     best = None
     for j in range(n):
@@ -124,10 +142,56 @@ def stackelberg(P: np.ndarray, Q: np.ndarray) -> StackelbergResult:
         value = -solution.fun
         if best is None or value > best[0] + _IMPROVEMENT:
             best = (value, j)
-    value, attack = best  # some column is always a best response
-    mixture = _lexicographic_mixture(P, Q, attack, value)
-    return StackelbergResult(mixture=mixture, attack=attack, value=float(mixture @ P[:, attack]),
-                             follower_value=float(mixture @ Q[:, attack]))
+    return best  # some column is always a best response
+
+
+def _dobss(P: np.ndarray, Q: np.ndarray) -> tuple[float, int]:
+    """DOBSS (Paruchuri et al. 2008, problem (7)) for one adversary type, then the lowest-index
+    response whose leader value is within ``_MILP_TIE`` of the optimum.
+
+    Variables ``z[i, j]`` (= α_i q_j, k n of them), the binary response ``q`` (n) and the
+    adversary's value ``a``: maximise ``sum P[i, j] z[i, j]`` subject to ``sum z = 1``,
+    ``q_j <= sum_i z[i, j] <= 1``, ``sum q = 1`` and
+    ``0 <= a - sum_i Q[i, j] α_i <= (1 - q_j) M`` with ``α_i = sum_j z[i, j]`` and ``M`` the
+    range of Q.
+    """
+    k, n = P.shape
+    big = float(Q.max() - Q.min()) + 1.0
+    size = k * n + n + 1  # z (row-major), q, a
+    z_sum = np.zeros((1, size))
+    z_sum[0, :k * n] = 1.0
+    z_columns = np.zeros((n, size))  # sum_i z[i, j]
+    for j in range(n):
+        z_columns[j, j:k * n:n] = 1.0
+    q = np.zeros((n, size))
+    q[:, k * n:k * n + n] = np.eye(n)
+    regret = np.zeros((n, size))  # a - Q[:, j]·α
+    regret[:, :k * n] = -np.repeat(Q.T, n, axis=1)
+    regret[:, -1] = 1.0
+    constraints = [LinearConstraint(z_sum, 1.0, 1.0),
+                   LinearConstraint(z_columns - q, 0.0, np.inf),
+                   LinearConstraint(z_columns, -np.inf, 1.0),
+                   LinearConstraint(q.sum(axis=0, keepdims=True), 1.0, 1.0),
+                   LinearConstraint(regret, 0.0, np.inf),
+                   LinearConstraint(regret + big * q, -np.inf, big)]
+    integrality = np.concatenate([np.zeros(k * n), np.ones(n), [0]])
+    bounds = Bounds(np.concatenate([np.zeros(k * n + n), [-np.inf]]),
+                    np.concatenate([np.full(k * n, np.inf), np.ones(n), [np.inf]]))
+    gain = np.concatenate([P.ravel(), np.zeros(n + 1)])
+    options = {"mip_rel_gap": 0.0}
+    solution = milp(-gain, integrality=integrality, bounds=bounds, constraints=constraints,
+                    options=options)
+    if solution.status != 0:
+        raise ConfigError(f"P, Q: the DOBSS MILP failed ({solution.message})")
+    value = -solution.fun
+    # among the responses within the tie tolerance of the optimum, the lowest index
+    floor = LinearConstraint(gain[None, :], value - _MILP_TIE * max(1.0, abs(value)), np.inf)
+    first = np.concatenate([np.zeros(k * n), np.arange(n, dtype=np.float64), [0]])
+    solution = milp(first, integrality=integrality, bounds=bounds,
+                    constraints=[*constraints, floor], options=options)
+    if solution.status != 0:
+        raise ConfigError(f"P, Q: the DOBSS tie-break MILP failed ({solution.message})")
+    return value, int(np.argmax(solution.x[k * n:k * n + n]))
 
 
 def _lexicographic_mixture(P: np.ndarray, Q: np.ndarray, attack: int, value: float) -> np.ndarray:

@@ -13,7 +13,7 @@ has λ_2 = 0 and an infinite objective, so the optimum stays connected.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import networkx as nx
@@ -29,6 +29,8 @@ __all__ = ["SOLVERS", "MaectResult", "incidence", "laplacian", "maect_objective"
 SOLVERS = ("gradient", "cvxpy")
 # relative eigenvalue below which λ_2 counts as 0 (disconnected)
 _ZERO_EIG = 1e-12
+# scaled gradient: the metric weight of an edge is w_e + _SCALE_FLOOR / q
+_SCALE_FLOOR = 1e-2
 
 
 @dataclass(frozen=True)
@@ -73,13 +75,15 @@ def maect_objective(A, w) -> float:
     return float(2.0 / (n - 1) * np.sum(1.0 / lam[1:]))
 
 
-def project_simplex(v: np.ndarray) -> np.ndarray:
-    """Euclidean projection of ``v`` onto {w >= 0, sum w = 1} (sort-and-threshold)."""
-    u = np.sort(v)[::-1]
-    cumulative = np.cumsum(u) - 1.0
-    k = np.arange(1, len(v) + 1)
-    rho = np.flatnonzero(u - cumulative / k > 0)[-1]
-    return np.maximum(v - cumulative[rho] / (rho + 1), 0.0)
+def project_simplex(v: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
+    """Projection of ``v`` onto {w >= 0, sum w = 1} (sort-and-threshold): Euclidean, or with
+    ``scale`` (> 0) the nearest point in the metric ``sum (w - v)² / scale``."""
+    c = np.ones_like(v, dtype=np.float64) if scale is None else scale
+    ratio = v / c
+    order = np.argsort(-ratio, kind="stable")
+    threshold = (np.cumsum(v[order]) - 1.0) / np.cumsum(c[order])
+    rho = np.flatnonzero(ratio[order] > threshold)[-1]
+    return np.maximum(v - threshold[rho] * c, 0.0)
 
 
 def _objective_and_gradient(A: sp.csr_array, w: np.ndarray) -> tuple[float, np.ndarray]:
@@ -98,16 +102,23 @@ def _objective_and_gradient(A: sp.csr_array, w: np.ndarray) -> tuple[float, np.n
     return float(value), -2.0 / (n - 1) * np.einsum("ij,ij->i", columns, columns)
 
 
-def _projected_gradient(A: sp.csr_array, tol: float, max_iter: int) -> tuple[np.ndarray, int]:
-    """Spectral projected gradient (Barzilai-Borwein steps, Armijo backtracking) on the simplex,
-    started from uniform weights; stops when the objective changes by less than ``tol``
-    (relative) and the weights by less than ``sqrt(tol)``."""
+def _projected_gradient(A: sp.csr_array, tol: float, max_iter: int,
+                        project: Callable = project_simplex,
+                        scaled: bool = False) -> tuple[np.ndarray, int]:
+    """Spectral projected gradient (Barzilai-Borwein steps, Armijo backtracking) on the convex
+    set that ``project(v, scale)`` projects onto (default: the simplex), started from the
+    projection of uniform weights; stops when the objective changes by less than ``tol``
+    (relative) and the weights by less than ``sqrt(tol)``. ``scaled``: steps and projections in
+    the metric ``sum (Δw_e)² / (w_e + floor)``, which copes with weights of very different sizes
+    (problem 4.5)."""
     q = A.shape[1]
-    w = np.full(q, 1.0 / q)
+    w = project(np.full(q, 1.0 / q), None)
     f, g = _objective_and_gradient(A, w)
-    step = 1.0 / max(np.abs(g).max(), 1e-300)
+    scale = w + _SCALE_FLOOR / q if scaled else None
+    c = 1.0 if scale is None else scale
+    step = 1.0 / max(np.abs(c * g).max(), 1e-300)
     for iteration in range(1, max_iter + 1):
-        direction = project_simplex(w - step * g) - w
+        direction = project(w - step * c * g, scale) - w
         slope = float(g @ direction)
         t = 1.0
         while True:
@@ -122,24 +133,33 @@ def _projected_gradient(A: sp.csr_array, tol: float, max_iter: int) -> tuple[np.
         if converged:
             return w, iteration
         sy = float(s @ y)
-        step = float(s @ s) / sy if sy > 0 else step * 2.0
+        step = float(s @ (s / c)) / sy if sy > 0 else step * 2.0
+        if scaled:
+            scale = w + _SCALE_FLOOR / q
+            c = scale
         step = min(max(step, 1e-12), 1e12)
     raise ConfigError(f"max_iter: projected gradient did not converge in {max_iter} iterations")
 
 
-def _cvxpy_weights(A: sp.csr_array) -> np.ndarray:
-    """The same problem as an SDP: minimise ``tr((L + J/n)⁻¹)`` over the simplex (cvxpy)."""
+def _no_constraints(w) -> list:
+    return []
+
+
+def _cvxpy_weights(A: sp.csr_array, constraints: Callable = _no_constraints,
+                   project: Callable = project_simplex) -> np.ndarray:
+    """The same problem as an SDP: minimise ``tr((L + J/n)⁻¹)`` over the simplex and the extra
+    ``constraints(w)`` (cvxpy); the solution is projected (``project``) to clean up round-off."""
     import cvxpy as cp
 
     n, q = A.shape
     w = cp.Variable(q, nonneg=True)
     dense = A.toarray()
     shifted = dense @ cp.diag(w) @ dense.T + np.full((n, n), 1.0 / n)
-    problem = cp.Problem(cp.Minimize(cp.tr_inv(shifted)), [cp.sum(w) == 1])
+    problem = cp.Problem(cp.Minimize(cp.tr_inv(shifted)), [cp.sum(w) == 1, *constraints(w)])
     problem.solve()
     if problem.status != cp.OPTIMAL:
         raise ConfigError(f"solver: cvxpy ended with status {problem.status!r}")
-    return project_simplex(np.asarray(w.value, dtype=np.float64))
+    return project(np.asarray(w.value, dtype=np.float64), None)
 
 
 def solve_maect(graph: nx.Graph, solver: str = "gradient", tol: float = 1e-12,
@@ -152,6 +172,16 @@ def solve_maect(graph: nx.Graph, solver: str = "gradient", tol: float = 1e-12,
         tol: relative change of the objective at which the gradient solver stops.
         max_iter: iteration limit of the gradient solver.
     """
+    return _solve(graph, solver, tol, max_iter)
+
+
+def _solve(graph: nx.Graph, solver: str, tol: float, max_iter: int,
+           project: Callable = project_simplex, constraints: Callable = _no_constraints,
+           scaled: bool = False) -> MaectResult:
+    """`solve_maect` over the feasible set that ``project(v, scale)`` projects onto (for the
+    gradient solver, with ``scaled`` steps or not) and that the simplex and ``constraints(w)``
+    describe (for cvxpy); both default to the simplex alone. ``project`` may depend on the edge
+    order ``list(graph.edges())``."""
     if solver not in SOLVERS:
         raise ConfigError(f"solver: expected one of {SOLVERS}, got {solver!r}")
     if graph.number_of_nodes() < 2 or not nx.is_connected(graph):
@@ -159,9 +189,9 @@ def solve_maect(graph: nx.Graph, solver: str = "gradient", tol: float = 1e-12,
     nodes, edges = list(graph), list(graph.edges())
     A = incidence(graph, nodes, edges)
     if solver == "gradient":
-        w, iterations = _projected_gradient(A, tol, max_iter)
+        w, iterations = _projected_gradient(A, tol, max_iter, project, scaled)
     else:
-        w, iterations = _cvxpy_weights(A), 0
+        w, iterations = _cvxpy_weights(A, constraints, project), 0
     weights = {e: float(x) for e, x in zip(edges, w, strict=True)}
     P, _ = transition_matrix(graph, weights, nodes)
     return MaectResult(weights=weights, objective=maect_objective(A, w), transition=P,
