@@ -81,6 +81,7 @@ class PatrolSetup:
 
     def __init__(self, env, experiment: Mapping) -> None:
         inner = env.unwrapped
+        self.name = experiment["name"]
         self.graph = inner.graph
         self.visibility = inner.visibility
         self.t_a = int(inner.attack_time)
@@ -242,9 +243,8 @@ class Patrolling(Family):
             eq = setup.equilibrium
             weights = ", ".join(f"{name} {w:.3f}" for name, w in zip(eq.names, eq.mixture,
                                                                       strict=True) if w >= 5e-4)
-            data["notes"].append(f"{data['world'].name} t_a = {setup.t_a}: the equilibrium "
-                                 f"mixture is {weights} (the game's attack: vertex "
-                                 f"{eq.attack})")
+            data["notes"].append(f"{setup.name}: the equilibrium mixture is {weights} (the "
+                                 f"game's attack: vertex {eq.attack})")
         data["setup"] = setup
         patrollers = policy.patrollers
         adversary = policy.adversary
