@@ -19,6 +19,14 @@ legal layer move per step for ``random`` and always drift for ``fixed``; the dep
 runs ``planner`` (Alg. 5.2 and the greedy deployment) and ``random`` (random cells). A kind a
 family does not run is an error naming ``policies``.
 
+The patrol experiments (``bounce_gym/Patrol-v0``, `experiments.families.patrolling`) have
+patrollers and an adversary: ``policies`` are the patrollers' kinds, ``planner`` (MAECT and the
+Stackelberg equilibrium mixture), ``random`` (the uniform random walk), ``perimeter`` (the
+perimeter patrols after Agmon et al.) and ``rl`` (default: all four); ``adversaries`` are
+``best_response`` (told the strategy), ``best_response_positions`` (told the positions too) and
+``rl`` (default: the two best responses). Every patroller meets every adversary. No other
+experiment takes ``adversaries``.
+
 **Seeds.** Evaluation seeds are disjoint from training seeds (`baselines.seeds`): every seed
 must be at least ``EVALUATION_SEEDS_START`` (10,000). ``seeds`` is a list of distinct integers
 or ``{start: 10000, count: 200}`` (the seeds start, start + 1, …); the validated configuration
@@ -72,6 +80,13 @@ from bounce_gym.errors import ConfigError
 from bounce_gym.validate import integer
 
 POLICY_KINDS = ("planner", "random", "fixed", "rl")
+#: the env of the patrol experiments (`experiments.families.patrolling`)
+PATROL_ENV = "bounce_gym/Patrol-v0"
+#: the patrollers' policy kinds of a patrol experiment
+PATROL_POLICY_KINDS = ("planner", "random", "perimeter", "rl")
+#: the adversaries of a patrol experiment: the Stackelberg best response told the strategy, or
+#: also the patrollers' positions, and trained models
+ADVERSARY_KINDS = ("best_response", "best_response_positions", "rl")
 DIFFICULTIES = ("easy", "medium", "hard")
 DEFAULT_CONFIG_NAME = "eval_default.yaml"
 #: env options a model folder of ``rl_models`` may set differently (observation only)
@@ -84,7 +99,7 @@ _TOP_KEYS = {"name": str, "output": str, "models": str, "experiments": list, "le
 _EXPERIMENT_KEYS = {"name": str, "env": str, "env_kwargs": dict, "seeds": list | dict,
                     "max_steps": int, "horizon_reason": str, "policies": list,
                     "visibility": dict, "planner_kwargs": dict, "rl_models": str | list,
-                    "difficulty": str}
+                    "difficulty": str, "adversaries": list}
 
 
 def configs_folder() -> Path:
@@ -147,7 +162,8 @@ def validate_config(config: object) -> dict:
             raise ConfigError(f"{where}: expected a mapping, got {type(exp).__name__}")
         _check_keys(where, exp, _EXPERIMENT_KEYS, required=("name", "env"))
         exp.setdefault("env_kwargs", {})
-        exp.setdefault("policies", list(POLICY_KINDS))
+        patrol = exp["env"] == PATROL_ENV
+        exp.setdefault("policies", list(PATROL_POLICY_KINDS if patrol else POLICY_KINDS))
         if exp["name"] in names:
             raise ConfigError(f"{where}.name: {exp['name']!r} is used twice")
         names.add(exp["name"])
@@ -165,10 +181,12 @@ def validate_config(config: object) -> dict:
                               "experiment's horizon is max_steps (see horizon_reason)")
         exp["seeds"] = _seeds(f"{where}.seeds", exp.get("seeds", [EVALUATION_SEEDS_START]))
         _check_horizon(where, exp)
-        unknown = [p for p in exp["policies"] if p not in POLICY_KINDS]
+        kinds = PATROL_POLICY_KINDS if patrol else POLICY_KINDS
+        unknown = [p for p in exp["policies"] if p not in kinds]
         if unknown:
-            raise ConfigError(f"{where}.policies: unknown {unknown}; allowed are {POLICY_KINDS}")
-        if "rl_models" in exp or "rl" in exp["policies"]:
+            raise ConfigError(f"{where}.policies: unknown {unknown}; allowed are {kinds}")
+        _check_adversaries(where, exp, patrol)
+        if "rl_models" in exp or "rl" in exp["policies"] or "rl" in exp.get("adversaries", []):
             exp["rl_models"] = _model_folders(where, exp)
         if "difficulty" in exp and exp["difficulty"] not in DIFFICULTIES:
             raise ConfigError(f"{where}.difficulty: expected one of {DIFFICULTIES}, got "
@@ -274,6 +292,22 @@ def _model_folders(where: str, exp: dict) -> list[dict]:
     if len(set(folders)) != len(folders):
         raise ConfigError(f"{field}: a folder is named twice: {folders}")
     return out
+
+
+def _check_adversaries(where: str, exp: dict, patrol: bool) -> None:
+    """A patrol experiment's ``adversaries`` (default: both best responses); no other
+    experiment has adversaries."""
+    if not patrol:
+        if "adversaries" in exp:
+            raise ConfigError(f"{where}.adversaries: only for {PATROL_ENV} experiments")
+        return
+    exp.setdefault("adversaries", list(ADVERSARY_KINDS[:2]))
+    unknown = [a for a in exp["adversaries"] if a not in ADVERSARY_KINDS]
+    if unknown or not exp["adversaries"]:
+        raise ConfigError(f"{where}.adversaries: expected a non-empty list of {ADVERSARY_KINDS}, "
+                          f"got {exp['adversaries']!r}")
+    if len(set(exp["adversaries"])) != len(exp["adversaries"]):
+        raise ConfigError(f"{where}.adversaries: each adversary once, got {exp['adversaries']!r}")
 
 
 def _check_multi_robot(where: str, exp: dict) -> None:

@@ -23,11 +23,13 @@ from experiments.families import (
     multirobot_coverage,
     multirobot_monitoring,
     navigation,
+    patrolling,
     visibility,
 )
 from experiments.families.base import Family
 
 FAMILIES: tuple[Family, ...] = (
+    patrolling.FAMILY,
     drifters.FAMILY,
     drifter_deployment.FAMILY,
     visibility.FAMILY,

@@ -58,10 +58,11 @@ def summarise(rows: list[EpisodeResult], families: Mapping[str, Family] | None =
     out = []
     for (exp, policy), items in groups.items():
         labels = families[exp].labels if exp in families else frozenset()
+        skipped = _NOT_MEASURED | (families[exp].descriptors if exp in families else frozenset())
         entry = {"experiment": exp, "policy": policy, "episodes": len(items)}
         keys = list(dict.fromkeys(k for item in items for k in item))
         for key in keys:
-            if key in _NOT_MEASURED:
+            if key in skipped:
                 continue
             values = [i[key] for i in items if i.get(key) is not None]
             if not values or not all(isinstance(v, bool | int | float | np.number | np.bool_)

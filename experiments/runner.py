@@ -27,7 +27,6 @@ import gymnasium as gym
 import numpy as np
 
 from baselines.policy import FixedAnglePolicy, Policy, is_parallel_env
-from baselines.rl.model_files import MODEL_NAME, model_files, run_name
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError, config_errors
 from experiments.config import validate_config
@@ -76,24 +75,9 @@ def make_env(experiment: Mapping, where: str = "env_kwargs", overrides: Mapping 
 
 def policies_for(experiment: Mapping, env, family: Family, setup: object) -> list[Policy]:
     """The experiment's planner, random and fixed policies, as its family builds them for its
-    env (trained models: `model_policies`)."""
+    env (trained models: `Family.trained_policies`)."""
     return [policy for kind in experiment["policies"] if kind != "rl"
             for policy in family.policies(kind, env, experiment, setup)]
-
-
-def model_policies(folder: Path, env, label: str) -> list[tuple[Policy, str]]:
-    """Every trusted model of ``folder`` as a policy for ``env`` (none if there are none), with
-    the group it is aggregated into; ``label`` prefixes the names (``""`` or ``"<folder>/"``)."""
-    from baselines.rl.policies import SB3Policy, SharedSB3Policy
-
-    kind = SharedSB3Policy if is_parallel_env(env) else SB3Policy
-    out = []
-    for path in model_files(folder):
-        policy = kind(path, env)
-        policy.name = f"rl {label}{path.stem}"
-        name = MODEL_NAME.fullmatch(path.name)
-        out.append((policy, f"rl {label}{run_name(name['algo'], name['variant'])}"))
-    return out
 
 
 def run_episode(env, policy: Policy, seed: int, max_steps: int, episode: Episode | None = None,
@@ -181,7 +165,7 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
     setup = family.prepare(env, experiment)
     entrants = [Entrant(p, env, setup) for p in policies_for(experiment, env, family, setup)]
     notes = []
-    if "rl" in experiment["policies"]:
+    if "rl" in experiment["policies"] or "rl" in experiment.get("adversaries", ()):
         folders = experiment["rl_models"]
         for k, entry in enumerate(folders):
             folder = models_dir / entry["folder"]
@@ -191,7 +175,7 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
                                    entry["env_kwargs"])
                 own_setup = family.prepare(own_env, experiment)
             label = f"{entry['folder']}/" if len(folders) > 1 else ""
-            found = model_policies(folder, own_env, label)
+            found = family.trained_policies(folder, own_env, label, experiment, own_setup)
             entrants += [Entrant(p, own_env, own_setup, group) for p, group in found]
             if not found:
                 notes.append(f"{experiment['name']}: no trained models in {folder} "
@@ -216,7 +200,7 @@ def run_experiment(prepared: Prepared, on_seed: Callable[[], None]
         for one in prepared.entrants:
             episode = family.episode(one.env, one.policy, one.setup)
             summary, path = run_episode(one.env, one.policy, seed, experiment["max_steps"],
-                                        episode, record=k == 0)
+                                        episode, record=k == 0 and family.record_paths)
             rows.append(EpisodeResult(experiment["name"], one.policy.name, seed,
                                       summary["steps"], summary["ticks"], summary["return"],
                                       family.row_metrics(episode, summary["info"], one.policy),

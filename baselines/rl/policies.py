@@ -9,7 +9,11 @@ trusted files, `baselines.rl.model_files`) becomes the policy that fits the env
   wrappers it was trained behind (frame stack, VecNormalize statistics), rebuilt from its file
   (`baselines.rl.wrappers`);
 * PettingZoo parallel env — `SharedSB3Policy`: one PPO model shared by every robot, each robot's
-  action **sampled** from the model's distribution for its own observation.
+  action **sampled** from the model's distribution for its own observation;
+* the patrol game ``bounce_gym/Patrol-v0`` (`baselines.rl.patrol`) — `PatrollerSB3Policy`, the
+  shared policy of a model trained with ``role: patrollers``, for the patrollers only, and
+  `AdversarySB3Policy`, a model trained with ``role: adversary``, for the adversary;
+  `patrol_policy` picks the one a model file was trained as.
 """
 
 from __future__ import annotations
@@ -28,20 +32,22 @@ class SB3Policy(Policy):
     observation wrappers it was trained with."""
 
     def __init__(self, path: Path, env) -> None:
-        from baselines.rl.wrappers import ObservationPipeline
+        self._load(read_model(path), env.observation_space, env.action_space)
 
-        trained = read_model(path)
-        self.pipeline = ObservationPipeline(trained.metadata.get("wrappers", {}),
-                                            env.observation_space, env.action_space, path)
-        self.model = trained.load(self.pipeline.observation_space, env.action_space)
-        self.name = f"rl {path.stem}"
-
-    def reset(self, env) -> None:
+    def _load(self, trained, observation_space, action_space) -> None:
         import gymnasium as gym
 
+        from baselines.rl.wrappers import ObservationPipeline
+
+        self.pipeline = ObservationPipeline(trained.metadata.get("wrappers", {}),
+                                            observation_space, action_space, trained.path)
+        self.model = trained.load(self.pipeline.observation_space, action_space)
+        self.discrete = isinstance(action_space, gym.spaces.Discrete)
+        self.name = f"rl {trained.path.stem}"
+
+    def reset(self, env) -> None:
         self.state = None
         self.start = np.ones((1,), dtype=bool)
-        self.discrete = isinstance(env.action_space, gym.spaces.Discrete)
 
     def act(self, observation, info):
         seen = self.pipeline.first(observation) if self.start[0] else \
@@ -93,3 +99,58 @@ class SharedSB3Policy(MultiPolicy):
         draws = self.rng.random((len(live), 1)) * cumulative[:, -1:]
         actions = np.minimum((cumulative <= draws).sum(axis=1), probs.shape[1] - 1)
         return {a: int(act) for a, act in zip(live, actions, strict=True)}
+
+
+def _role(path: Path):
+    """The trusted model file at ``path`` and the patrol-game role it was trained as (None for
+    a model of another env)."""
+    from baselines.rl.patrol import PATROL_ID
+
+    trained = read_model(path)
+    config = trained.metadata.get("config", {})
+    return trained, config.get("role") if config.get("env") == PATROL_ID else None
+
+
+def _patrol_model(path: Path, role: str):
+    trained, found = _role(path)
+    if found != role:
+        raise ConfigError(f"model {path}: trained as {found or 'no side of the patrol game'}, "
+                          f"not as its {role} (config.role of train.py)")
+    return trained
+
+
+class PatrollerSB3Policy(SharedSB3Policy):
+    """A model trained with ``role: patrollers`` (`baselines.rl.patrol.PatrollersEnv`) as the
+    patrollers' policy in a Patrol-v0 parallel env: the shared policy, its actions sampled, for
+    every patroller in the observations; the adversary is not its business."""
+
+    def __init__(self, path: Path, env) -> None:
+        _patrol_model(path, "patrollers")
+        super().__init__(path, env)
+
+    def act(self, observations, infos):
+        from baselines.rl.patrol import ADVERSARY
+
+        return super().act({a: o for a, o in observations.items() if a != ADVERSARY}, infos)
+
+
+class AdversarySB3Policy(SB3Policy):
+    """A model trained with ``role: adversary`` (`baselines.rl.patrol.AdversaryEnv`) as the
+    adversary's policy in a Patrol-v0 parallel env: ``act(observation, info)`` takes the
+    adversary's own observation and gives its greedy action."""
+
+    def __init__(self, path: Path, env) -> None:
+        from baselines.rl.patrol import ADVERSARY
+
+        self._load(_patrol_model(path, "adversary"), env.observation_space(ADVERSARY),
+                   env.action_space(ADVERSARY))
+
+
+def patrol_policy(path: Path, env) -> PatrollerSB3Policy | AdversarySB3Policy:
+    """The policy of the side of the patrol game the model at ``path`` was trained as."""
+    _, role = _role(path)
+    if role == "patrollers":
+        return PatrollerSB3Policy(path, env)
+    if role == "adversary":
+        return AdversarySB3Policy(path, env)
+    raise ConfigError(f"model {path}: not trained on the patrol game (config.role of train.py)")

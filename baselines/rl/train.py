@@ -5,6 +5,8 @@ A training configuration (YAML, see ``configs/train_*.yaml``; checked by
 
     name: navigation-lab             # the evaluation experiment the models are for
     env: bounce_gym/BounceNavigation-v0
+    role: patrollers                 # only for bounce_gym/Patrol-v0: the side that learns,
+                                     # patrollers | adversary (`baselines.rl.patrol`)
     env_kwargs: {backend: cell, angles: [45, 90, 135]}
     algo: ppo                        # ppo | dqn | recurrentppo (sb3-contrib; memory for a robot
                                      # that senses only contact and time)
@@ -60,6 +62,12 @@ must be ``ppo`` and there is no frame stack or VecNormalize; ``env_kwargs`` may 
 evaluation runs the saved model as one policy for every robot
 (`baselines.rl.policies.SharedSB3Policy`); ``rl_models: <name>`` lets several evaluation
 experiments (e.g. m = 2..5) use it.
+
+**The patrol game.** ``bounce_gym/Patrol-v0`` has two sides, so its configurations say which one
+learns (``role``) and the other is played inside the env (`baselines.rl.patrol`): the patrollers
+train like the robots above (one shared policy, a slot each), the adversary like a single-robot
+env (``n_envs`` copies); their hyperparameter entries are keyed ``<env id>:<role>``. The
+evaluation loads them with `baselines.rl.policies.patrol_policy`.
 """
 
 from __future__ import annotations
@@ -162,12 +170,11 @@ def _check_action_space(config: Mapping) -> None:
     """DQN needs discrete actions (a multi-robot env trains PPO only)."""
     import gymnasium as gym
 
-    from bounce_gym.errors import config_errors
+    from baselines.rl.train_env import make_env
 
     if config["algo"] != "dqn":
         return
-    with config_errors("config.env_kwargs"):
-        space = gym.make(config["env"], **config["env_kwargs"]).action_space
+    space = make_env(config).action_space
     if not isinstance(space, gym.spaces.Discrete):
         raise ConfigError(f"config.algo: dqn needs discrete actions, but the env's are {space} "
                           "(set env_kwargs.action_type: discrete, or use ppo or recurrentppo)")

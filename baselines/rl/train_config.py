@@ -27,6 +27,7 @@ import yaml
 
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.model_files import ALGOS, VARIANT, check_folder_name
+from baselines.rl.patrol import PATROL_ID, ROLES
 from baselines.seeds import EVALUATION_SEEDS_START
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
@@ -50,7 +51,7 @@ _KEYS = {"name": str, "env": str, "env_kwargs": dict, "algo": str, "variant": st
          "total_timesteps": int, "seed": int, "seeds": list, "n_envs": int, "n_stack": int,
          "normalize": (bool, dict), "hyperparams_file": str, "hyperparams": dict,
          "checkpoint_every": int, "tensorboard": bool, "models": str, "resume": bool,
-         "vec_env": str, "torch_threads": int}
+         "vec_env": str, "torch_threads": int, "role": str}
 #: rl-zoo keys of a hyperparameter file entry, and the configuration keys they fill.
 _FILE_KEYS = {"n_timesteps": "total_timesteps", "n_envs": "n_envs", "frame_stack": "n_stack",
               "normalize": "normalize"}
@@ -86,8 +87,9 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     config = copy.deepcopy(dict(config))
     if config["algo"] not in ALGOS:
         raise ConfigError(f"config.algo: expected one of {ALGOS}, got {config['algo']!r}")
-    multi = is_pettingzoo_id(config["env"])
-    if not multi and config["env"] not in gym.registry:
+    _check_role(config)
+    multi = is_multi(config)
+    if not is_pettingzoo_id(config["env"]) and config["env"] not in gym.registry:
         raise ConfigError(f"config.env: unknown environment id {config['env']!r}; multi-robot "
                           f"ids are {[*PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]}")
     if "hyperparams_file" in config:
@@ -99,7 +101,9 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     if multi and config["algo"] not in MULTI_ALGOS:
         raise ConfigError(f"config.algo: a multi-robot env trains one shared policy with one of "
                           f"{MULTI_ALGOS}, got {config['algo']!r}")
-    _check_vec_env(config, multi)
+    native = multi or "role" not in config and \
+        gym.spec(config["env"]).vector_entry_point is not None
+    _check_vec_env(config, multi, native)
     if config["total_timesteps"] < 1:
         raise ConfigError(f"config.total_timesteps: expected an integer >= 1, got "
                           f"{config['total_timesteps']}")
@@ -107,7 +111,6 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     if "variant" in config and not VARIANT.fullmatch(config["variant"]):
         raise ConfigError(f"config.variant: expected lower-case letters and digits in parts "
                           f"joined by '-' (e.g. stack4), got {config['variant']!r}")
-    native = multi or gym.spec(config["env"]).vector_entry_point is not None
     defaults = {"vec_env": "native" if native else "sync", "env_kwargs": {}, "variant": None,
                 "n_envs": 1 if multi or config["algo"] == "dqn" else 4, "n_stack": 1,
                 "normalize": False, "hyperparams": {}, "checkpoint_every": 0,
@@ -129,14 +132,31 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     return config
 
 
-def _check_vec_env(config: dict, multi: bool) -> None:
+def is_multi(config: Mapping) -> bool:
+    """Whether ``config`` trains one policy shared by several robots (a PettingZoo id, except
+    the adversary of Patrol-v0, which is one agent)."""
+    return is_pettingzoo_id(config["env"]) and config.get("role") != "adversary"
+
+
+def _check_role(config: Mapping) -> None:
+    """``role`` is what a configuration of the patrol game trains (`baselines.rl.patrol`): its
+    patrollers or its adversary; no other env has roles."""
+    role = config.get("role")
+    if config["env"] == PATROL_ID and role not in ROLES:
+        raise ConfigError(f"config.role: {PATROL_ID} is a game of two sides; expected one of "
+                          f"{ROLES} (baselines.rl.patrol), got {role!r}")
+    if config["env"] != PATROL_ID and role is not None:
+        raise ConfigError(f"config.role: only {PATROL_ID} has roles, not {config['env']}; "
+                          "remove the key")
+
+
+def _check_vec_env(config: dict, multi: bool, native: bool) -> None:
     if config.get("vec_env", "native") not in VEC_ENVS:
         raise ConfigError(f"config.vec_env: expected one of {VEC_ENVS}, got {config['vec_env']!r}")
     if multi and config.get("vec_env", "native") != "native":
         raise ConfigError("config.vec_env: a multi-robot env is one VecEnv with a slot per robot; "
                           "leave vec_env unset")
-    if config.get("vec_env") == "native" and not multi \
-            and gym.spec(config["env"]).vector_entry_point is None:
+    if config.get("vec_env") == "native" and not native:
         raise ConfigError(f"config.vec_env: {config['env']} has no native batched env; use "
                           "'sync' or 'subproc'")
 
@@ -225,7 +245,8 @@ def _check_policy_kwargs(hyperparams: dict) -> None:
 
 
 def _merge_file(config: dict, folder: Path | None) -> None:
-    """Merge the ``config["env"]`` entry of the hyperparameter file into ``config``."""
+    """Merge the ``config["env"]`` entry of the hyperparameter file into ``config`` (for the
+    patrol game, ``<env>:<role>``: each side is a training problem of its own)."""
     path = Path(config["hyperparams_file"])
     if not path.is_absolute():
         path = (folder or Path.cwd()) / path
@@ -238,16 +259,17 @@ def _merge_file(config: dict, folder: Path | None) -> None:
     except yaml.YAMLError as exc:
         raise ConfigError(f"{field}: {path} is not valid YAML ({str(exc).splitlines()[0]})") \
             from None
-    if not isinstance(entries, dict) or config["env"] not in entries:
+    key = config["env"] if "role" not in config else f"{config['env']}:{config['role']}"
+    if not isinstance(entries, dict) or key not in entries:
         ids = sorted(entries) if isinstance(entries, dict) else []
-        raise ConfigError(f"{field}: {path} has no entry for {config['env']}; it has {ids}")
-    entry = entries[config["env"]]
+        raise ConfigError(f"{field}: {path} has no entry for {key}; it has {ids}")
+    entry = entries[key]
     if not isinstance(entry, dict):
-        raise ConfigError(f"{field}: the entry {config['env']} of {path} is not a mapping")
+        raise ConfigError(f"{field}: the entry {key} of {path} is not a mapping")
     entry = dict(entry)
     policy = entry.pop("policy", POLICIES[config["algo"]])
     if policy != POLICIES[config["algo"]]:
-        raise ConfigError(f"{field}: {config['env']} names policy {policy!r}, but "
+        raise ConfigError(f"{field}: {key} names policy {policy!r}, but "
                           f"{config['algo']} trains {POLICIES[config['algo']]!r}")
     timesteps = entry.get("n_timesteps")
     if isinstance(timesteps, float) and timesteps.is_integer():  # rl-zoo writes !!float 1e5

@@ -7,7 +7,8 @@ From the bottom up:
    (``sync``) / ``SubprocVecEnv`` (``subproc``) of ``gym.make`` copies, each inside
    `SnapshotEnv`; for a PettingZoo id the parameter-sharing adapter
    (`baselines.rl.parallel_vec_env.ParallelToVecEnv`, one slot per robot). Env i is seeded with
-   seed + i.
+   seed + i. The patrol game's ``role`` (`baselines.rl.patrol`) puts its wrapper in place of
+   the env: the patrollers' parallel env, or copies of the adversary's Gymnasium env.
 2. ``VecMonitor``: episode return and length, plus the task's outcome (`MONITOR_KEYS` the env
    reports), in ``info["episode"]`` and, when given a file, one CSV row per episode
    (`baselines.rl.monitor`). It sees the env's own rewards, before any normalisation.
@@ -28,7 +29,6 @@ from pathlib import Path
 import gymnasium as gym
 
 from baselines.rl.monitor import open_monitor_file
-from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import config_errors
 
 #: Per-episode outcomes the monitor records when the env's ``info`` has them.
@@ -47,31 +47,43 @@ class SnapshotEnv(gym.Wrapper):
         self.env = pickle.loads(data)  # noqa: S301
 
 
-def _make_copy(env_id: str, env_kwargs: dict) -> gym.Env:
-    return SnapshotEnv(gym.make(env_id, **env_kwargs))
+def make_env(config: Mapping):
+    """One env of a validated configuration: a PettingZoo parallel env when its robots share the
+    policy (`baselines.rl.train_config.is_multi`), a Gymnasium env otherwise."""
+    from baselines.rl.train_config import is_multi
+
+    with config_errors("config.env_kwargs"):
+        if config.get("role") is not None:
+            from baselines.rl.patrol import role_env
+
+            return role_env(config["role"], dict(config["env_kwargs"]))
+        if is_multi(config):
+            import pettingzoo
+
+            return pettingzoo.make("parallel", config["env"], **config["env_kwargs"])
+        return gym.make(config["env"], **config["env_kwargs"])
 
 
 class _CopyMaker:
     """A picklable env factory for SB3's ``SubprocVecEnv``."""
 
-    def __init__(self, env_id: str, env_kwargs: Mapping) -> None:
-        self.env_id, self.env_kwargs = env_id, dict(env_kwargs)
+    def __init__(self, config: Mapping) -> None:
+        self.config = {key: config.get(key) for key in ("env", "env_kwargs", "role")}
 
     def __call__(self) -> gym.Env:
-        return _make_copy(self.env_id, self.env_kwargs)
+        return SnapshotEnv(make_env(self.config))
 
 
 def base_env(config: Mapping):
     """The envs of a validated configuration, unseeded, as an SB3 VecEnv (bad ``env_kwargs``
     raise `ConfigError`)."""
+    from baselines.rl.train_config import is_multi
+
+    if is_multi(config):
+        from baselines.rl.parallel_vec_env import ParallelToVecEnv
+
+        return ParallelToVecEnv(make_env(config))
     with config_errors("config.env_kwargs"):
-        if is_pettingzoo_id(config["env"]):
-            import pettingzoo
-
-            from baselines.rl.parallel_vec_env import ParallelToVecEnv
-
-            return ParallelToVecEnv(pettingzoo.make("parallel", config["env"],
-                                                    **config["env_kwargs"]))
         if config["vec_env"] == "native":
             from baselines.rl.vector_vec_env import VectorToVecEnv
 
@@ -81,23 +93,20 @@ def base_env(config: Mapping):
         from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
         kind = SubprocVecEnv if config["vec_env"] == "subproc" else DummyVecEnv
-        return kind([_CopyMaker(config["env"], config["env_kwargs"])
-                     for _ in range(config["n_envs"])])
+        return kind([_CopyMaker(config) for _ in range(config["n_envs"])])
 
 
 def monitor_keys(config: Mapping) -> tuple[str, ...]:
     """The `MONITOR_KEYS` that the env of ``config`` reports in every step's ``info``."""
-    with config_errors("config.env_kwargs"):
-        if is_pettingzoo_id(config["env"]):
-            import pettingzoo
+    from baselines.rl.train_config import is_multi
 
-            env = pettingzoo.make("parallel", config["env"], **config["env_kwargs"])
-            env.reset(seed=0)
+    env = make_env(config)
+    with config_errors("config.env_kwargs"):
+        env.reset(seed=0)
+        if is_multi(config):
             agent = env.possible_agents[0]
             info = env.step({a: env.action_space(a).sample() for a in env.agents})[4][agent]
         else:
-            env = gym.make(config["env"], **config["env_kwargs"])
-            env.reset(seed=0)
             info = env.step(env.action_space.sample())[4]
     env.close()
     return tuple(key for key in MONITOR_KEYS if key in info)

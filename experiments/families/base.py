@@ -55,7 +55,10 @@ class Family:
     families with the same heading share one table, columns merged in registry order). Every
     measured column is shown as its estimate with a 95% interval and count
     (`experiments.report`); ``labels`` are columns that describe the row instead (the same in
-    every episode, e.g. the number of robots) and are shown as they are. ``score`` is the column
+    every episode, e.g. the number of robots) and are shown as they are; ``descriptors`` are
+    per-episode facts that are not measured (e.g. which target was attacked): they stay in the
+    episode rows and are left out of the summary. ``record_paths``: whether the first seed's
+    robot positions are recorded for `trajectory_plots` (from ``info["position"]``). ``score`` is the column
     that ranks policies (in leaderboards, performance profiles and the hindsight oracle),
     ``higher_is_better`` its direction. ``planner_attributes`` are the planner's predictions
     copied into its rows when set. ``policy_kinds`` are the kinds of policy of a
@@ -69,6 +72,8 @@ class Family:
     table: str | None = None
     columns: tuple[str, ...] = ("experiment", "policy", "episodes", "seeds", "return", "ticks")
     labels: frozenset[str] = frozenset()
+    descriptors: frozenset[str] = frozenset()
+    record_paths = True
     score = "return"
     higher_is_better = True
     planner_attributes: tuple[str, ...] = ()
@@ -119,6 +124,24 @@ class Family:
     def planner(self, env, experiment: Mapping, setup: object) -> Policy | None:
         """The task's analytic planner (``None``: none applies to this env)."""
         raise ConfigError(f"policies: no reference planner for task {self.task!r}")
+
+    def trained_policies(self, folder: Path, env, label: str, experiment: Mapping,
+                         setup: object) -> list[tuple[Policy, str]]:
+        """Every trusted model of ``folder`` as a policy for ``env`` (none if there are none),
+        with the group it is aggregated into; ``label`` prefixes the names (``""`` or
+        ``"<folder>/"``). Gymnasium env: `baselines.rl.policies.SB3Policy`; parallel env: one
+        `baselines.rl.policies.SharedSB3Policy` for every robot."""
+        from baselines.rl.model_files import MODEL_NAME, model_files, run_name
+        from baselines.rl.policies import SB3Policy, SharedSB3Policy
+
+        kind = SharedSB3Policy if is_parallel_env(env) else SB3Policy
+        out = []
+        for path in model_files(folder):
+            policy = kind(path, env)
+            policy.name = f"rl {label}{path.stem}"
+            name = MODEL_NAME.fullmatch(path.name)
+            out.append((policy, f"rl {label}{run_name(name['algo'], name['variant'])}"))
+        return out
 
     def episode(self, env, policy: Policy, setup: object) -> Episode:
         return Episode()

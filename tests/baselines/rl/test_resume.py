@@ -27,6 +27,8 @@ from bounce_gym.errors import ConfigError  # noqa: E402
 ROOT = Path(__file__).parents[3]
 NAV = {"world": "square", "backend": "cell", "angles": [90, 135]}
 SMALL = {"n_steps": 32, "batch_size": 32, "n_epochs": 2}
+PATROL = {"world": "square", "cell_size": 2.0, "sensor_range": 1.5, "attack_time": 4,
+          "max_cycles": 40}
 BASE = {"name": "n", "env": "bounce_gym/BounceNavigation-v0", "env_kwargs": NAV,
         "total_timesteps": 640, "checkpoint_every": 128}
 CASES = {
@@ -40,6 +42,10 @@ CASES = {
     "multi-robot": dict(algo="ppo", env="bounce_gym/MultiBounceCoverage-v0",
                         env_kwargs={"world": "grid_10x10", "n_robots": 2, "backend": "cell",
                                     "step_mode": "tick", "max_cycles": 50}, hyperparams=SMALL),
+    "patrol-patrollers": dict(algo="ppo", env="bounce_gym/Patrol-v0", role="patrollers",
+                              env_kwargs=PATROL, hyperparams=SMALL),
+    "patrol-adversary": dict(algo="ppo", env="bounce_gym/Patrol-v0", role="adversary", n_envs=2,
+                             env_kwargs=PATROL, hyperparams=SMALL),
 }
 
 

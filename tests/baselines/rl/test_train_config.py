@@ -44,10 +44,12 @@ def test_shipped_training_configs_build_their_model(path):
 def test_every_hyperparameter_entry_states_a_budget_and_real_hyperparameters(path):
     algo = path.stem
     assert algo in ALGOS
-    for env_id, entry in yaml.safe_load(path.read_text()).items():
-        assert entry["n_timesteps"] >= 10_000, env_id  # the stated training budget
+    for key, entry in yaml.safe_load(path.read_text()).items():
+        assert entry["n_timesteps"] >= 10_000, key  # the stated training budget
+        env_id, _, role = key.partition(":")  # <env>:<role> for a side of the patrol game
         config = validate_train_config({"name": "x", "env": env_id, "algo": algo,
-                                        "hyperparams_file": str(path)})
+                                        "hyperparams_file": str(path),
+                                        **({"role": role} if role else {})})
         assert config["total_timesteps"] == entry["n_timesteps"]
         check_hyperparams(_algo_class(algo), config["hyperparams"])
 
