@@ -14,6 +14,11 @@ load the cores; ``OPENBLAS_NUM_THREADS=1 python -m benchmarks.patrolling`` measu
   in CVX (Table 4.5, means of its five policies; those are the subset problem 4.5 on the same
   graph); the row gives their ratio to ours. And MAECT on about 1,000 vertices: the cell graph of
   ``random_grid(default_rng(0), 34, 34, 20, 4)`` (1,025 free cells), reported.
+* **Visibility policies** (problem 4.5, `solve_subset_maect` per chain, the thesis's Table 4.5
+  rows): the two distributed chains on ``patrol_15x15`` (188 vertices, Fig. 4.9) and the three
+  centralised chains on ``patrol_18x16`` (253 vertices, the whole graph; Fig. 4.13), each timed
+  once, against the thesis's 677-779 s per chain (n = 188). ``--quick`` times the distributed
+  chains only (the centralised ones take minutes).
 * **Alg. 4.3 covers** of the 188 cells of ``patrol_15x15`` with l = 6 and m = 2
   (`complete_visibility`), alone and with the limited-range visibility of every cell
   (`cell_visibility`, rule ``"corners"``) before it. The thesis's Table 4.4 gives 2.8 ms per
@@ -38,7 +43,9 @@ import numpy as np
 
 from baselines.patrolling.graphs import cell_graph
 from baselines.patrolling.maect import solve_maect
+from baselines.patrolling.subset import solve_subset_maect
 from baselines.patrolling.visibility import cell_visibility, complete_visibility
+from baselines.patrolling.visibility_policies import centralised_plan, distributed_subsets
 from bounce_gym.worlds import get
 from bounce_gym.worlds.generators import random_grid
 
@@ -50,6 +57,11 @@ THESIS_MAECT_S = (676.6925, 779.4053)
 THESIS_COVER_MS = 2.8
 TARGET_S = 5.0
 RANGE, ROBOTS = 6.0, 2
+CENTRAL_MAP, CENTRAL_ROBOTS = "patrol_18x16", 3
+#: thesis Table 4.5 per policy, seconds (mean)
+THESIS_POLICY_S = {"distributed 4.9(a)": 733.2722, "distributed 4.9(b)": 676.6925,
+                   "centralised 4.13(a)": 779.4053, "centralised 4.13(b)": 744.9866,
+                   "centralised 4.13(c)": 752.8397}
 
 
 def _row(name: str, value: str, note: str = "") -> None:
@@ -96,6 +108,33 @@ def bench_maect(quick: bool, repeats: int) -> dict:
              f"{result.iterations} / {result.objective:.6f}")
         out[name] = dict(n=n, edges=q, seconds=seconds, iterations=result.iterations,
                          objective=result.objective)
+    return out
+
+
+def bench_policies(quick: bool) -> dict:
+    """Problem 4.5 per chain of the visibility policies, as in Table 4.5."""
+    cases = [("distributed", MAP, ROBOTS)]
+    if not quick:
+        cases.append(("centralised", CENTRAL_MAP, CENTRAL_ROBOTS))
+    print("Visibility policies (problem 4.5 per chain, h = 0.8, certified relative gap <= 1e-10), "
+          "against Table 4.5 (thesis, n = 188)")
+    out = {}
+    for kind, name, m in cases:
+        world = get(name)
+        graph = cell_graph(world)
+        visibility = cell_visibility(world.occupancy(1.0), RANGE)
+        subsets = distributed_subsets(visibility, m) if kind == "distributed" else \
+            centralised_plan(graph, visibility, visibility, m).subsets
+        figure = "4.9" if kind == "distributed" else "4.13"
+        for k, subset in enumerate(subsets):
+            row = f"{kind} {figure}({'abc'[k]})"
+            seconds, result = _best(lambda s=subset, g=graph: solve_subset_maect(g, s), 1)
+            thesis = THESIS_POLICY_S[row]
+            _row(f"  {row}, {name} (n = {len(graph)}, |Q| = {len(subset)}) [s]",
+                 f"{seconds:.2f}", f"thesis {thesis:.0f} s = {thesis / seconds:,.0f} x ours; "
+                 f"{result.iterations} iterations")
+            out[row] = dict(n=len(graph), subset=len(subset), seconds=seconds,
+                            iterations=result.iterations, thesis=thesis)
     return out
 
 
@@ -168,7 +207,8 @@ def bench_env(agent_steps: int, repeats: int) -> dict:
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
-                        help="skip the 1,000-vertex MAECT, fewer env steps")
+                        help="skip the 1,000-vertex MAECT and the centralised chains, fewer env "
+                             "steps")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--steps", type=int, default=None,
                         help="agent-steps of each env per timed run (default 6,000; --quick "
@@ -176,6 +216,8 @@ def main(argv: list[str] | None = None) -> dict:
     args = parser.parse_args(argv)
     steps = args.steps if args.steps is not None else (1_000 if args.quick else 6_000)
     out = dict(maect=bench_maect(args.quick, args.repeats))
+    print()
+    out["policies"] = bench_policies(args.quick)
     print()
     out["covers"] = bench_covers(args.repeats)
     print()

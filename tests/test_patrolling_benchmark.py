@@ -10,6 +10,12 @@ def test_patrolling_benchmark_runs(capsys):
     assert (maect["n"], maect["edges"]) == (188, 586)
     assert maect["objective"] > 0 and maect["iterations"] > 0 and maect["seconds"] > 0
     assert "Table 4.5" in text and "Table 4.4" in text
+    policies = out["policies"]
+    assert sorted(policies) == ["distributed 4.9(a)", "distributed 4.9(b)"]
+    for row in policies.values():
+        assert row["n"] == 188 and row["seconds"] > 0 and row["iterations"] > 0
+        assert 676 <= row["thesis"] <= 734
+    assert "distributed 4.9(a)" in text
     assert out["covers"]["cells"] == 188
     assert 0 < out["covers"]["covers_ms"] < out["covers"]["with_visibility_ms"]
     if patrolling._registered():

@@ -2,8 +2,9 @@
 walks with their hitting and commute times, MAECT strategies over all vertices and over a subset
 (`subset`, problem 4.5), the chains towards one vertex (`towards`, Alg. 4.1), the patrolling game
 (Alg. 4.2 payoffs, strong Stackelberg equilibrium by LPs or DOBSS) and its n + 2 strategies end
-to end (`strategies`), limited-range visibility covers (Alg. 4.3), detection times with the
-generalised lambda distribution, and perimeter-patrol baselines (`visibility`, `vulnerability`,
+to end (`strategies`), the visibility policies' subsets and chains (`visibility_policies`,
+`visibility_chains`, §4.3.3-4.3.4), limited-range visibility covers (Alg. 4.3), detection times
+with the generalised lambda distribution, and perimeter-patrol baselines (`visibility`, `vulnerability`,
 `perimeter`). Every planner takes a networkx graph and returns plain data (edge -> weight, a
 transition matrix with its node order)."""
 
@@ -45,6 +46,18 @@ from baselines.patrolling.towards import (
     towards_vertex_chain,
     towards_vertex_chains,
 )
+from baselines.patrolling.visibility_chains import (
+    VisibilityChain,
+    centralised_chains,
+    distributed_chains,
+    remote_target,
+)
+from baselines.patrolling.visibility_policies import (
+    CentralisedPlan,
+    centralised_plan,
+    centralised_starts,
+    distributed_subsets,
+)
 
 __all__ = ["DEFAULT_CORNER_RULE", "DEFAULT_CYCLE_SHARE", "DEFAULT_PATHS", "SOLVERS",
            "STACKELBERG_METHODS", "MaectResult", "PatrolGame", "StackelbergResult", "StrategySet",
@@ -53,4 +66,6 @@ __all__ = ["DEFAULT_CORNER_RULE", "DEFAULT_CYCLE_SHARE", "DEFAULT_PATHS", "SOLVE
            "preferred_all", "preferred_subset", "preferred_towards", "project_simplex",
            "project_subset_simplex", "solve_maect", "solve_subset_maect", "stackelberg",
            "strategy_set", "subset_cycle_edges", "towards_vertex_chain", "towards_vertex_chains",
-           "transition_matrix"]
+           "transition_matrix", "CentralisedPlan", "VisibilityChain", "centralised_chains",
+           "centralised_plan", "centralised_starts", "distributed_chains", "distributed_subsets",
+           "remote_target"]
