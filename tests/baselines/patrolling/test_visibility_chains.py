@@ -116,8 +116,6 @@ def test_table_4_7_centralised_detection_probability_rises_to_one(centralised_ti
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="fit_gld's Nelder-Mead stays near its start "
-                   "(λ3 = λ4 = -0.01) on these times: KS distance about 0.3")
 def test_table_4_7_fitted_gld_follows_the_empirical_cdf(centralised_times):
     _, ks = _curves(centralised_times)
     assert ks < 0.1
