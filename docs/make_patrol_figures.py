@@ -2,9 +2,12 @@
 (thesis Fig. 4.9) and p_d(t_a) of the distributed and centralised policies (Tables 4.6/4.7,
 Figs 4.15/4.17) (Alam 2018, thesis ch. 4).
 
+Also a frame of ``bounce_gym/Patrol-v0`` in the middle of an attack (MAECT patrollers against
+the best-responding adversary), as the env renders it.
+
 Run from the repository root: ``.venv/bin/python docs/make_patrol_figures.py`` (writes
-``docs/patrol_policies.png`` and ``docs/patrol_pd.png``; a few minutes, most of it the three
-centralised chains on the 253-vertex graph).
+``docs/patrol_policies.png``, ``docs/patrol_pd.png`` and ``docs/patrol_episode.png``; a few
+minutes, most of it the three centralised chains on the 253-vertex graph).
 """
 
 from __future__ import annotations
@@ -17,7 +20,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import pettingzoo  # noqa: E402
+from PIL import Image  # noqa: E402
 
+import bounce_gym  # noqa: E402, F401  (registers Patrol-v0)
 from baselines.patrolling import (  # noqa: E402
     cell_graph,
     centralised_chains,
@@ -25,6 +31,12 @@ from baselines.patrolling import (  # noqa: E402
     centralised_starts,
     distributed_chains,
     remote_target,
+    solve_maect,
+)
+from baselines.patrolling.policies import (  # noqa: E402
+    BestResponseAdversary,
+    JointPatrolPolicy,
+    MarkovPatrolPolicy,
 )
 from baselines.patrolling.visibility import cell_visibility, watch_region  # noqa: E402
 from baselines.patrolling.vulnerability import detection_curve, detection_times  # noqa: E402
@@ -121,9 +133,28 @@ def pd_figure(times: dict) -> Path:
     return _save(figure, "patrol_pd.png")
 
 
+def episode_figure(seed: int = 10_000, steps: int = 8) -> Path:
+    """A rendered frame of Patrol-v0 on patrol_15x15 ``steps`` steps into episode ``seed``: two
+    MAECT patrollers with their sensor regions, the best response's attack and its progress."""
+    maect = solve_maect(cell_graph(get("patrol_15x15")))
+    env = pettingzoo.make("parallel", "bounce_gym/Patrol-v0", strategy=maect.transition,
+                          render_mode="rgb_array")
+    policy = JointPatrolPolicy(MarkovPatrolPolicy([maect.transition]), BestResponseAdversary())
+    observations, infos = env.reset(seed=seed, options=policy.start_options(env, seed))
+    policy.reset(env)
+    for _ in range(steps):
+        observations, _, _, _, infos = env.step(policy.act(observations, infos))
+    buffer = io.BytesIO()
+    Image.fromarray(env.render()).resize((400, 400), Image.LANCZOS).save(buffer, format="png")
+    env.close()
+    path = HERE / "patrol_episode.png"
+    atomic_write(path, buffer.getvalue())
+    return path
+
+
 if __name__ == "__main__":
     distributed, distributed_sample = _times("distributed")
-    written = [policies_figure(*distributed)]
+    written = [episode_figure(), policies_figure(*distributed)]
     _, centralised_sample = _times("centralised")
     written.append(pd_figure({"distributed": distributed_sample,
                               "centralised": centralised_sample}))
