@@ -18,35 +18,9 @@ from baselines.patrolling.maect import solve_maect
 from baselines.patrolling.markov import hitting_times, transition_matrix
 from bounce_gym.errors import ConfigError
 
-# Table 4.2 as printed: P_s and Q_s for the strategies towards v1..v8, MAECT, Clique
-TABLE_4_2 = np.array([
-    [8.0000, 1.5938, 0.1543, 0.1318, 3.5625, 0.3672, 0.7344, 0.2148],
-    [1.0000, 0.8438, 0.2324, 0.1865, 1.0625, 0.4297, 0.6094, 0.3086],
-    [0.2148, 8.0000, 1.5938, 0.7344, 0.1543, 0.1318, 0.3672, 3.5625],
-    [0.3086, 1.0000, 0.8438, 0.6094, 0.2324, 0.1865, 0.4297, 1.0625],
-    [0.2148, 1.5938, 8.0000, 3.5625, 0.1543, 0.1318, 0.7344, 0.3672],
-    [0.3086, 0.8438, 1.0000, 1.0625, 0.2324, 0.1865, 0.6094, 0.4297],
-    [0.3672, 0.7344, 3.5625, 8.0000, 0.1543, 0.1318, 0.2148, 1.5938],
-    [0.4297, 0.6094, 1.0625, 1.0000, 0.2324, 0.1865, 0.3086, 0.8438],
-    [0.7344, 0.3672, 0.1543, 0.1318, 8.0000, 3.5625, 1.5938, 0.2148],
-    [0.6094, 0.4297, 0.2324, 0.1865, 1.0000, 1.0625, 0.8438, 0.3086],
-    [0.3672, 0.1543, 0.7344, 0.1318, 3.5625, 8.0000, 1.5938, 0.2148],
-    [0.4297, 0.2324, 0.6094, 0.1865, 1.0625, 1.0000, 0.8438, 0.3086],
-    [0.1318, 1.5938, 0.7344, 0.1543, 0.2148, 0.3672, 8.0000, 3.5625],
-    [0.1865, 0.8438, 0.6094, 0.2324, 0.3086, 0.4297, 1.0000, 1.0625],
-    [0.2148, 1.5938, 0.3672, 3.5625, 0.1318, 0.1543, 0.7344, 8.0000],
-    [0.3086, 0.8438, 0.4297, 1.0625, 0.1865, 0.2324, 0.6094, 1.0000],
-    [0.2148, 3.5625, 0.7344, 0.1543, 1.5938, 0.1318, 8.0000, 0.3672],
-    [0.3086, 1.0625, 0.6094, 0.2324, 0.8438, 0.1865, 1.0000, 0.4297],
-    [0.7344, 3.5625, 0.1318, 0.2148, 1.5938, 0.1543, 0.3672, 8.0000],
-    [0.6094, 1.0625, 0.1865, 0.3086, 0.8438, 0.2324, 0.4297, 1.0000],
-])
-P_TABLE, Q_TABLE = TABLE_4_2[0::2], TABLE_4_2[1::2]
-SMALL_EDGES = [(1, 2), (2, 3), (3, 4), (1, 5), (2, 8), (2, 4), (5, 6), (5, 7), (3, 7), (4, 8),
-               (6, 7), (7, 8), (2, 7)]
 
-
-def test_every_table_4_2_entry_follows_from_the_vertex_ranking():
+def test_every_table_4_2_entry_follows_from_the_vertex_ranking(table_4_2):
+    P_TABLE, Q_TABLE = table_4_2
     # each printed row ranks the vertices by its P entries (8 = rank 1, 3.5625 = rank 2, ...)
     P, Q = payoff_matrices(-P_TABLE)
     np.testing.assert_allclose(P, P_TABLE, atol=5e-5)
@@ -54,8 +28,9 @@ def test_every_table_4_2_entry_follows_from_the_vertex_ranking():
     assert P.shape == (10, 8)
 
 
-def test_maect_row_of_table_4_2_from_the_optimal_chain():
-    graph = nx.Graph(SMALL_EDGES)
+def test_maect_row_of_table_4_2_from_the_optimal_chain(cvx_small_graph, table_4_2):
+    P_TABLE, Q_TABLE = table_4_2
+    graph = nx.Graph(list(cvx_small_graph.edges()))
     result = solve_maect(graph)
     H = hitting_times(result.transition)
     order = [result.nodes.index(v) for v in range(1, 9)]
@@ -85,7 +60,8 @@ def test_preferred_hitting_times():
         preferred_subset(H, [])
 
 
-def test_table_4_3_equilibrium():
+def test_table_4_3_equilibrium(table_4_2):
+    P_TABLE, Q_TABLE = table_4_2
     result = stackelberg(P_TABLE, Q_TABLE)
     assert result.value == pytest.approx(8.0, abs=1e-6)
     assert result.attack == 6  # v7
