@@ -33,7 +33,7 @@ import multiprocessing
 import os
 import pickle
 import re
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -338,26 +338,58 @@ def machine_cores() -> int:
     return os.cpu_count() or 1
 
 
+#: an ``executor`` block's keys and defaults (``workers: None``: see `make_executor`)
+EXECUTOR_DEFAULTS = {"kind": "local", "workers": None, "address": None, "retries": 2}
+
+
+def executor_settings(value: object, where: str = "executor",
+                      names: Mapping[str, str] | None = None) -> dict:
+    """An ``executor`` block (``{kind, workers, address, retries}``, every key optional)
+    checked and completed with `EXECUTOR_DEFAULTS`; a mistake raises `ConfigError` naming
+    ``<where>.<key>``, or ``names[key]`` (e.g. a command-line flag)."""
+    names = names or {}
+
+    def field(key: str) -> str:
+        return names.get(key, f"{where}.{key}")
+
+    if not isinstance(value, Mapping):
+        raise ConfigError(f"{where}: expected a mapping {{kind, workers, address, retries}}, "
+                          f"got {type(value).__name__}")
+    unknown = sorted(set(value) - set(EXECUTOR_DEFAULTS))
+    if unknown:
+        raise ConfigError(f"{where}: unknown keys {unknown}; allowed are "
+                          f"{sorted(EXECUTOR_DEFAULTS)}")
+    out = {**EXECUTOR_DEFAULTS, **value}
+    if out["kind"] not in EXECUTOR_KINDS:
+        raise ConfigError(f"{field('kind')}: expected one of {EXECUTOR_KINDS}, got "
+                          f"{out['kind']!r}")
+    for key, low in (("workers", 1), ("retries", 0)):
+        number = out[key]
+        if (number is not None or key == "retries") and (
+                not isinstance(number, int) or isinstance(number, bool) or number < low):
+            raise ConfigError(f"{field(key)}: expected an integer >= {low}, got {number!r}")
+    address = out["address"]
+    if address is not None:
+        if out["kind"] != "ray":
+            raise ConfigError(f"{field('address')}: only for the ray executor "
+                              f"({field('kind')}: ray)")
+        if not isinstance(address, str) or not address.strip():
+            raise ConfigError(f"{field('address')}: expected a Ray address (host:port, "
+                              f"ray://host:port or auto), got {address!r}")
+    return out
+
+
 def make_executor(kind: str = "local", workers: int | None = None, address: str | None = None,
                   retries: int = 2) -> Executor:
     """The executor ``kind`` (``local`` or ``ray``; module docstring). ``workers``: units run
     at once (default: the machine's cores for ``local`` and a local Ray, no limit on a
     cluster); ``address``: a Ray cluster's (only for ``ray``; default: start a local
-    instance); ``retries``: attempts after a unit's first failure."""
-    if kind not in EXECUTOR_KINDS:
-        raise ConfigError(f"executor.kind: expected one of {EXECUTOR_KINDS}, got {kind!r}")
-    for field, value, low in (("workers", workers, 1), ("retries", retries, 0)):
-        if value is not None and (not isinstance(value, int) or isinstance(value, bool)
-                                  or value < low):
-            raise ConfigError(f"executor.{field}: expected an integer >= {low}, got {value!r}")
+    instance); ``retries``: attempts after a unit's first failure. Arguments are checked as
+    an ``executor`` block (`executor_settings`)."""
+    executor_settings(dict(kind=kind, workers=workers, address=address, retries=retries))
     if kind == "local":
-        if address is not None:
-            raise ConfigError("executor.address: only for the ray executor (executor: ray)")
         workers = machine_cores() if workers is None else workers
         return InProcessExecutor(retries) if workers == 1 else PoolExecutor(workers, retries)
-    if address is not None and (not isinstance(address, str) or not address.strip()):
-        raise ConfigError(f"executor.address: expected a Ray address (host:port, ray://host:port "
-                          f"or auto), got {address!r}")
     try:
         import ray  # noqa: F401
     except ImportError:

@@ -14,6 +14,7 @@ from experiments.executors import (
     Unit,
     UnitFailure,
     UnitStore,
+    executor_settings,
     make_executor,
 )
 
@@ -153,3 +154,26 @@ def test_a_missing_ray_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "ray", None)
     with pytest.raises(ConfigError, match=r"pip install bounce-gym\[distributed\]"):
         make_executor("ray")
+
+
+def test_an_executor_block_is_completed_with_the_defaults():
+    assert executor_settings({}) == {"kind": "local", "workers": None, "address": None,
+                                     "retries": 2}
+    assert executor_settings({"kind": "ray", "address": "auto", "workers": 4})["workers"] == 4
+
+
+@pytest.mark.parametrize(
+    ("block", "names", "message"),
+    [
+        ([], None, "config.executor: expected a mapping"),
+        ({"cores": 2}, None, r"config.executor: unknown keys \['cores'\]"),
+        ({"workers": "2"}, None, "config.executor.workers: expected an integer >= 1, got '2'"),
+        ({"retries": None}, None, "config.executor.retries: expected an integer >= 0"),
+        ({"workers": 0}, {"workers": "--workers"}, "^--workers: expected an integer >= 1"),
+        ({"address": "h:1"}, {"address": "--address", "kind": "--executor"},
+         r"^--address: only for the ray executor \(--executor: ray\)"),
+    ],
+)
+def test_bad_executor_blocks_name_the_field(block, names, message):
+    with pytest.raises(ConfigError, match=message):
+        executor_settings(block, "config.executor", names)
