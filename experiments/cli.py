@@ -1,7 +1,10 @@
 """The ``bounce-gym`` command: evaluate planners, baselines and trained agents; train agents.
 
     bounce-gym evaluate [config.yaml] [--no-progress]
-    bounce-gym train config.yaml [--timesteps N] [--seeds S ...] [--resume] [--no-progress]
+    bounce-gym train config.yaml [--timesteps N] [--seeds S ...] [--resume]
+                     [--executor local|ray] [--workers N] [--address ADDR] [--no-progress]
+    bounce-gym tune config.yaml [--space FILE] [--trials N] [--metric return|success]
+                    [--scheduler fifo|asha] [--workers N] [--address ADDR] ...
     bounce-gym curves models/<name> [--window EPISODES]
     bounce-gym trust models/<name>/<algo>_seed<N>.zip ...
 
@@ -75,33 +78,78 @@ MAX_TIMESTEPS = "BOUNCE_GYM_MAX_TIMESTEPS"
 
 
 def train(config_path: str, timesteps: int | None = None, resume: bool = False,
-          progress: bool = True, seeds: list[int] | None = None) -> int:
-    """Train (or resume) the agents of a training configuration, report where they are saved,
-    and draw the folder's learning curves."""
-    from baselines.rl.train import train as train_agent
-    from bounce_gym.errors import ConfigError
+          progress: bool = True, seeds: list[int] | None = None,
+          executor: dict | None = None) -> int:
+    """Train (or resume) the agents of a training configuration, one unit per seed on the
+    configured executor (`experiments.training`), report where they are saved, and draw the
+    folder's learning curves. ``executor`` holds the flags that override the configuration's
+    ``executor:`` mapping. A seed that fails for good is reported (status 1) after the others
+    are saved."""
     from experiments.config import load_config
+    from experiments.training import sweep
 
-    config = load_config(config_path)
-    if isinstance(config, dict):
-        for key, value in (("total_timesteps", timesteps), ("seeds", seeds)):
-            if value is not None:
-                config[key] = value
-        if seeds is not None:
-            config.pop("seed", None)
-        if resume:
-            config["resume"] = True
-        cap = os.environ.get(MAX_TIMESTEPS)
-        if cap is not None:
-            if not cap.isdigit() or int(cap) < 1:
-                raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {cap!r}")
-            budget = config.get("total_timesteps", int(cap))
-            config["total_timesteps"] = min(budget, int(cap)) if isinstance(budget, int) \
-                else budget
-    paths = train_agent(config, progress=progress, folder=Path(config_path).parent, log=print)
+    config = training_config(load_config(config_path), timesteps, resume, seeds)
+    paths, failures = sweep(config, executor, folder=Path(config_path).parent,
+                            progress=progress)
     for path in paths:
         print(f"saved {path}")
-    return curves(str(paths[0].parent), required=False)
+    for failure in failures:
+        print(f"error: {failure.key} failed after {failure.attempts} attempts: {failure.error}",
+              file=sys.stderr)
+    if paths:
+        curves(str(paths[0].parent), required=False)
+    return 1 if failures else 0
+
+
+def training_config(config: object, timesteps: int | None = None, resume: bool = False,
+                    seeds: list[int] | None = None) -> object:
+    """A loaded training configuration with the command's overrides and the budget cap
+    (`MAX_TIMESTEPS`) applied; a non-mapping is returned as it is, for the validation to
+    report."""
+    from bounce_gym.errors import ConfigError
+
+    if not isinstance(config, dict):
+        return config
+    for key, value in (("total_timesteps", timesteps), ("seeds", seeds)):
+        if value is not None:
+            config[key] = value
+    if seeds is not None:
+        config.pop("seed", None)
+    if resume:
+        config["resume"] = True
+    cap = os.environ.get(MAX_TIMESTEPS)
+    if cap is not None:
+        if not cap.isdigit() or int(cap) < 1:
+            raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {cap!r}")
+        budget = config.get("total_timesteps", int(cap))
+        config["total_timesteps"] = min(budget, int(cap)) if isinstance(budget, int) \
+            else budget
+    return config
+
+
+def tune(config_path: str, space: str | None = None, trials: int = 8, metric: str = "return",
+         scheduler: str = "fifo", seed: int = 0, timesteps: int | None = None,
+         resume: bool = False, workers: int | None = None, address: str | None = None,
+         progress: bool = True) -> int:
+    """Search hyperparameters of a training configuration with Ray Tune
+    (`experiments.search`), print the trials and write their table and the best entry."""
+    from experiments.config import load_config
+    from experiments.search import default_space, search_folder, trial_configs, tune_search
+
+    config = training_config(load_config(config_path), timesteps, resume)
+    if isinstance(config, dict):
+        config.pop("executor", None)  # the trials run on Ray Tune: --workers, --address
+    path = Path(space) if space is not None else default_space(Path(config_path), config)
+    prepared = trial_configs(config, path, trials, seed, folder=Path(config_path).parent)
+    done = tune_search(prepared, metric, scheduler, workers, address, progress)
+    for trial in done:
+        print(f"trial {trial.index}: {trial.status}, {metric} {trial.metric:.4g} after "
+              f"{trial.episodes} episodes ({trial.env_steps} env steps), {trial.hyperparams}")
+    folder = search_folder(config)
+    print(f"wrote {folder}/trials.csv" + (f" and {folder}/best_hyperparams.yaml"
+                                          if (folder / "best_hyperparams.yaml").is_file()
+                                          else ""))
+    return 0
 
 
 def curves(folder: str, window: int | None = None, required: bool = True) -> int:
@@ -145,7 +193,43 @@ def train_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help="override the configuration's seeds")
     parser.add_argument("--resume", action="store_true",
                         help="continue every seed from its newest checkpoint")
+    executor_arguments(parser)
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    return parser
+
+
+def executor_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--executor``, ``--workers``, ``--address``: over the configuration's ``executor:``."""
+    parser.add_argument("--executor", choices=("local", "ray"),
+                        help="where the units run (default local: a process pool)")
+    parser.add_argument("--workers", type=int, metavar="N",
+                        help="units at once (default: the machine's cores; 1: in this process)")
+    parser.add_argument("--address", metavar="ADDR", help="a running Ray cluster's address")
+
+
+def executor_flags(args: argparse.Namespace) -> dict:
+    """The executor flags given on the command line."""
+    return {key: value for key, value in (("kind", args.executor), ("workers", args.workers),
+                                          ("address", args.address)) if value is not None}
+
+
+def tune_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("config", help="YAML training configuration")
+    parser.add_argument("--space", help="search space YAML (default: "
+                                        "hyperparams/search/<algo>.yaml beside the config)")
+    parser.add_argument("--trials", type=int, default=8, help="trials (default 8)")
+    parser.add_argument("--metric", default="return", help="return (default) or success: its "
+                        "mean over the last 100 episodes is maximised")
+    parser.add_argument("--scheduler", default="fifo",
+                        help="fifo (default: every trial runs its budget) or asha")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the draws (default 0)")
+    parser.add_argument("--timesteps", type=int, help="override total_timesteps (per trial)")
+    parser.add_argument("--resume", action="store_true",
+                        help="skip finished trials, continue the others from checkpoints")
+    parser.add_argument("--workers", type=int, metavar="N",
+                        help="trials at once (default: the machine's cores)")
+    parser.add_argument("--address", metavar="ADDR", help="a running Ray cluster's address")
+    parser.add_argument("--no-progress", action="store_true", help="hide Tune's progress")
     return parser
 
 
@@ -171,8 +255,12 @@ def dispatch(args: argparse.Namespace) -> int:
             return trust(args.models)
         if args.command == "curves":
             return curves(args.folder, args.window)
+        if args.command == "tune":
+            return tune(args.config, args.space, args.trials, args.metric, args.scheduler,
+                        args.seed, args.timesteps, args.resume, args.workers, args.address,
+                        progress=not args.no_progress)
         return train(args.config, args.timesteps, args.resume, progress=not args.no_progress,
-                     seeds=args.seeds)
+                     seeds=args.seeds, executor=executor_flags(args))
     except BounceGymError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -189,6 +277,7 @@ def main(argv: list[str] | None = None) -> int:
     commands = parser.add_subparsers(dest="command", required=True)
     evaluate_parser(commands.add_parser("evaluate", help="evaluate policies side by side"))
     train_parser(commands.add_parser("train", help="train a Stable-Baselines3 agent"))
+    tune_parser(commands.add_parser("tune", help="search hyperparameters with Ray Tune"))
     curves_parser(commands.add_parser("curves", help="draw the learning curves of trained "
                                                      "agents"))
     trust_parser(commands.add_parser("trust", help="let evaluate load these model files"))
