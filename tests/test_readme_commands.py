@@ -16,13 +16,14 @@ tomllib = pytest.importorskip("tomllib", reason="reading pyproject.toml needs Py
 
 ROOT = Path(__file__).parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
-#: training commands, in ```bash blocks or inline code: python train.py …, bounce-gym train|curves …
+#: training commands, in ```bash blocks or inline code: python train.py …, bounce-gym
+#: train|curves|tune …
 #: (not the templates, such as ``bounce-gym curves models/<name>``)
 COMMANDS = [c.strip() for c in re.findall(
-    r"(?:^|`)((?:\.venv/bin/)?(?:python train\.py|bounce-gym (?:train|curves)) [^#`\n]*)",
+    r"(?:^|`)((?:\.venv/bin/)?(?:python train\.py|bounce-gym (?:train|curves|tune)) [^#`\n]*)",
     README, re.M) if "<" not in c]
 #: the extras `make install` installs besides the core dependencies (dev only adds test tools)
-EXTRAS = ("rl",)
+EXTRAS = ("rl", "distributed")
 OURS = {"bounce_gym", "baselines", "experiments", "train", "evaluate"}
 #: optional imports that libraries try and do without (imported only because they happen to be
 #: installed here)
@@ -94,6 +95,7 @@ def test_readme_training_commands_run_as_written(tmp_path):
         imported |= _imported(done.stderr)
     assert (tmp_path / "models/navigation-lab/learning_curves.png").is_file()
     assert (tmp_path / "models/navigation-lab/ppo_seed0.monitor.csv").is_file()
+    assert (tmp_path / "models/navigation-lab-tune/trials.csv").is_file()
     distributions = importlib.metadata.packages_distributions()
     declared = _declared()
     undeclared = {}

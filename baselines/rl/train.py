@@ -27,6 +27,8 @@ A training configuration (YAML, see ``configs/train_*.yaml``; checked by
                                      # bounce-gym[tensorboard])
     models: models
     torch_threads: 1                 # torch intra-op threads while training (default 1)
+    executor: {kind: local, workers: 2}  # where the seeds run at once (`bounce-gym train`,
+                                     # experiments.training; default: a process per core)
 
 **What a run writes** into ``<models>/<name>/`` for each seed: the model
 ``<run>_seed<seed>.zip`` (``<run>`` = ``<algo>[-<variant>]``), where the evaluation finds it;
