@@ -140,7 +140,10 @@ def run_trial(params: dict, configs: list[dict], metric: str) -> None:
             return True
 
         def _on_rollout_end(self) -> None:
-            if self.num_timesteps >= self.next and final_metric(monitor, metric)[1]:
+            # never at the budget: a scheduler stops a trial that reports it (max_t) in the
+            # report, and the model is saved after it
+            if self.next <= self.num_timesteps < config["total_timesteps"] and \
+                    final_metric(monitor, metric)[1]:
                 self.next = self.num_timesteps + every
                 report(self.num_timesteps)
 

@@ -77,21 +77,25 @@ def test_a_tiny_search_on_a_local_ray_writes_ordinary_runs_a_table_and_the_best_
     config.write_text(yaml.safe_dump({**CONFIG, "models": str(tmp_path / "models")}),
                       encoding="utf-8")
     assert main(["tune", str(config), "--space", str(_space(tmp_path, SPACE)), "--trials", "3",
-                 "--workers", "2", "--metric", "success", "--no-progress"]) == 0
+                 "--workers", "2", "--metric", "success", "--scheduler", "asha",
+                 "--no-progress"]) == 0
     folder = tmp_path / "models" / "nav-tune"
     rows = list(csv.DictReader((folder / "trials.csv").open(encoding="utf-8")))
     assert [r["trial"] for r in rows] == ["0", "1", "2"]
-    assert all(r["status"] == "finished" for r in rows)
+    # ASHA may stop a trial early (it keeps its checkpoints, saves no model)
+    assert {r["status"] for r in rows} <= {"finished", "stopped early"}
     assert set(rows[0]) == {"trial", "status", "success", "episodes", "env_steps", *SPACE}
     for k, row in enumerate(rows):
-        model = read_model(folder / f"ppo-trial{k}_seed0.zip")  # listed in the manifest
-        assert model.metadata["config"]["hyperparams"]["n_epochs"] == int(row["n_epochs"])
         assert (folder / f"ppo-trial{k}_seed0.monitor.csv").is_file()
+        if row["status"] == "finished":
+            model = read_model(folder / f"ppo-trial{k}_seed0.zip")  # listed in the manifest
+            assert model.metadata["config"]["hyperparams"]["n_epochs"] == int(row["n_epochs"])
     out = capsys.readouterr().out
     assert f"wrote {folder}/trials.csv and {folder}/best_hyperparams.yaml" in out
     best = yaml.safe_load((folder / "best_hyperparams.yaml").read_text(encoding="utf-8"))
     entry = best["bounce_gym/BounceNavigation-v0"]
-    winner = max(rows, key=lambda r: float(r["success"]))
+    winner = max((r for r in rows if r["status"] == "finished"),
+                 key=lambda r: float(r["success"]))
     assert entry["n_epochs"] == int(winner["n_epochs"]) and entry["n_timesteps"] == 256
     # the entry is a hyperparameter file's: a configuration trains from it as it is
     again = validate_train_config({"name": "x", "env": "bounce_gym/BounceNavigation-v0",

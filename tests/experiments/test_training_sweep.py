@@ -117,3 +117,14 @@ def test_a_failing_seed_is_reported_and_the_others_are_saved(tmp_path, capsys, m
     assert f"saved {_models(tmp_path)[0]}" in captured.out.splitlines()
     assert captured.err.splitlines() == [
         "error: ppo_seed1 failed after 3 attempts: RuntimeError: no memory left"]
+
+
+def test_the_executor_key_and_flags_are_checked_before_training(tmp_path, capsys):
+    config = _write(tmp_path, executor={"kind": "local", "workers": 0})
+    assert train.main([str(config), "--no-progress"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "error: config.executor.workers: expected an integer >= 1, got 0"]
+    assert train.main([str(_write(tmp_path)), "--workers", "0", "--no-progress"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "error: --workers: expected an integer >= 1, got 0"]
+    assert not (tmp_path / "models").exists()
