@@ -1,6 +1,7 @@
 """The ``bounce-gym`` command: evaluate planners, baselines and trained agents; train agents.
 
-    bounce-gym evaluate [config.yaml] [--no-progress]
+    bounce-gym evaluate [config.yaml] [--executor local|ray] [--workers N] [--address ADDR]
+                        [--no-progress]
     bounce-gym train config.yaml [--timesteps N] [--seeds S ...] [--resume]
                      [--executor local|ray] [--workers N] [--address ADDR] [--no-progress]
     bounce-gym tune config.yaml [--space FILE] [--trials N] [--metric return|success]
@@ -21,6 +22,16 @@ lists one obtained elsewhere (`baselines.rl.model_files`). A mistake in a config
 argument or a model file is one line ``error: ...`` on stderr and exit status 2, reported before
 any long work starts.
 
+``evaluate`` runs its units — one policy of one experiment on up to ten seeds
+(`experiments.sweep`) — on the configuration's ``executor`` or the one the flags choose
+(`experiments.executors`): by default a local process pool over the machine's cores
+(``--workers 1``: one after another in this process), or Ray (``--executor ray``, on the
+cluster at ``--address`` or a local instance). Finished units are kept in
+``<output>/<name>-units/`` until the run folder is written, so that the same command started
+again after an interruption runs only the rest and writes the same files. A unit that fails for
+good (after its retries) is one line ``error: unit ...`` on stderr each, once the other units
+are done; then no run folder is written and the exit status is 1.
+
 The environment variable ``BOUNCE_GYM_MAX_TIMESTEPS=N`` caps every training run at N env steps
 (SB3 still finishes the iteration it is in): a smoke test of a documented training command,
 which then runs exactly as written.
@@ -29,18 +40,26 @@ which then runs exactly as written.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
 
 from bounce_gym.errors import BounceGymError
 
 
-def evaluate(config_path: str | None, progress: bool = True) -> int:
-    """Run an evaluation configuration, print the tables and write the run folder."""
+def evaluate(config_path: str | None, progress: bool = True,
+             flags: Mapping[str, str] | None = None) -> int:
+    """Run an evaluation configuration on its executor (``flags``: the executor flags given,
+    `executor_from`), print the tables and write the run folder; if units fail for good, say
+    which and return 1, keeping the finished units for the next run."""
+    import shutil
+
     from bounce_gym.files import check_writable
     from experiments.config import load_config, validate_config
+    from experiments.executors import UnitStore
     from experiments.leaderboard import write_leaderboard
     from experiments.provenance import provenance
     from experiments.report import (
@@ -53,10 +72,21 @@ def evaluate(config_path: str | None, progress: bool = True) -> int:
         write_results,
     )
     from experiments.runner import run
+    from experiments.sweep import UnitsFailedError, store_folder
 
     config = validate_config(load_config(config_path))
     check_writable("config.output", Path(config["output"]))
-    rows, plots = run(config, progress=progress)
+    executor = executor_from(config.get("executor"), flags or {})
+    store = UnitStore(store_folder(config))
+    try:
+        rows, plots = run(config, progress=progress, executor=executor, store=store)
+    except UnitsFailedError as exc:
+        for line in exc.lines:
+            print(f"error: {line}", file=sys.stderr)
+        print(f"note: {exc.total - len(exc.failures)} of {exc.total} units finished and are "
+              f"kept in {exc.store}; run the same command again to run only the others",
+              file=sys.stderr)
+        return 1
     families, notes, made = families_of(plots), notes_of(plots), provenance()
     summary, per_seed = table_rows(summarise(rows, families), rows)
     print(format_table(summary, families))
@@ -67,10 +97,51 @@ def evaluate(config_path: str | None, progress: bool = True) -> int:
     written = write_plots(folder, plots, summary, per_seed)
     if config["leaderboard"]:
         written += write_leaderboard(folder, config, summary, families, notes, made)
+    shutil.rmtree(store.folder, ignore_errors=True)  # the run folder now holds the results
+    with contextlib.suppress(OSError):  # the sweeps' folder, once no other sweep is kept
+        store.folder.parent.rmdir()
     print(f"\nwrote {folder}/episodes.csv, summary.csv, results.json and {len(written)} other "
           "files" + (" (leaderboard.md, leaderboard.csv, plots)" if config["leaderboard"]
                      else " (plots)"))
     return 0
+
+
+#: the executor flags, by the key of an ``executor`` block each sets
+EXECUTOR_FLAGS = {"kind": "--executor", "workers": "--workers", "address": "--address"}
+
+
+def executor_from(block: Mapping | None, flags: Mapping[str, str]):
+    """The executor of a configuration's ``executor`` block (validated) with the flags given
+    (``{"kind": "ray", "workers": "4"}``) over it; a bad flag is a `ConfigError` naming it."""
+    from experiments.executors import make_executor
+
+    return make_executor(**executor_block(block, flags))
+
+
+def executor_block(block: Mapping | None, flags: Mapping[str, str]) -> dict:
+    """The checked and completed settings (`experiments.executors.executor_settings`) of a
+    configuration's ``executor`` block with the flags given over it."""
+    from experiments.executors import executor_settings
+
+    given = {key: int(value) if key == "workers" and value.isdigit() else value
+             for key, value in flags.items() if value is not None}
+    return executor_settings({**(block or {}), **given}, "config.executor",
+                             {key: EXECUTOR_FLAGS[key] for key in given})
+
+
+def add_executor_flags(parser: argparse.ArgumentParser) -> None:
+    """``--executor``, ``--workers`` and ``--address`` (`EXECUTOR_FLAGS`)."""
+    parser.add_argument("--executor", metavar="local|ray",
+                        help="where units run: local (a process pool; default) or ray")
+    parser.add_argument("--workers", metavar="N",
+                        help="units at once (default: the machine's cores; 1: in this process)")
+    parser.add_argument("--address", metavar="ADDR",
+                        help="a running Ray cluster's address (default: start a local one)")
+
+
+def executor_flags(args: argparse.Namespace) -> dict[str, str | None]:
+    """The executor flags of parsed arguments, by `EXECUTOR_FLAGS` key."""
+    return {key: getattr(args, flag[2:]) for key, flag in EXECUTOR_FLAGS.items()}
 
 
 #: The environment variable capping every training run (module docstring).
@@ -79,18 +150,18 @@ MAX_TIMESTEPS = "BOUNCE_GYM_MAX_TIMESTEPS"
 
 def train(config_path: str, timesteps: int | None = None, resume: bool = False,
           progress: bool = True, seeds: list[int] | None = None,
-          executor: dict | None = None) -> int:
-    """Train (or resume) the agents of a training configuration, one unit per seed on the
-    configured executor (`experiments.training`), report where they are saved, and draw the
-    folder's learning curves. ``executor`` holds the flags that override the configuration's
-    ``executor:`` mapping. A seed that fails for good is reported (status 1) after the others
-    are saved."""
+          flags: Mapping[str, str | None] | None = None) -> int:
+    """Train (or resume) the agents of a training configuration, one unit per seed on its
+    executor (``flags``: the executor flags given, over the configuration's ``executor``;
+    `experiments.training`), report where they are saved, and draw the folder's learning
+    curves. A seed that fails for good is reported (status 1) after the others are saved."""
     from experiments.config import load_config
     from experiments.training import sweep
 
     config = training_config(load_config(config_path), timesteps, resume, seeds)
-    paths, failures = sweep(config, executor, folder=Path(config_path).parent,
-                            progress=progress)
+    block = config.pop("executor", None) if isinstance(config, dict) else None
+    paths, failures = sweep(config, executor_block(block, flags or {}),
+                            folder=Path(config_path).parent, progress=progress)
     for path in paths:
         print(f"saved {path}")
     for failure in failures:
@@ -182,6 +253,7 @@ def trust(paths: list[str]) -> int:
 
 def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("config", nargs="?", help="YAML configuration (default: eval_default.yaml)")
+    add_executor_flags(parser)
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     return parser
 
@@ -193,24 +265,9 @@ def train_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help="override the configuration's seeds")
     parser.add_argument("--resume", action="store_true",
                         help="continue every seed from its newest checkpoint")
-    executor_arguments(parser)
+    add_executor_flags(parser)
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     return parser
-
-
-def executor_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--executor``, ``--workers``, ``--address``: over the configuration's ``executor:``."""
-    parser.add_argument("--executor", choices=("local", "ray"),
-                        help="where the units run (default local: a process pool)")
-    parser.add_argument("--workers", type=int, metavar="N",
-                        help="units at once (default: the machine's cores; 1: in this process)")
-    parser.add_argument("--address", metavar="ADDR", help="a running Ray cluster's address")
-
-
-def executor_flags(args: argparse.Namespace) -> dict:
-    """The executor flags given on the command line."""
-    return {key: value for key, value in (("kind", args.executor), ("workers", args.workers),
-                                          ("address", args.address)) if value is not None}
 
 
 def tune_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -250,7 +307,8 @@ def dispatch(args: argparse.Namespace) -> int:
     configuration, env argument or model file) becomes ``error: ...`` on stderr and status 2."""
     try:
         if args.command == "evaluate":
-            return evaluate(args.config, progress=not args.no_progress)
+            return evaluate(args.config, progress=not args.no_progress,
+                            flags=executor_flags(args))
         if args.command == "trust":
             return trust(args.models)
         if args.command == "curves":
@@ -260,7 +318,7 @@ def dispatch(args: argparse.Namespace) -> int:
                         args.seed, args.timesteps, args.resume, args.workers, args.address,
                         progress=not args.no_progress)
         return train(args.config, args.timesteps, args.resume, progress=not args.no_progress,
-                     seeds=args.seeds, executor=executor_flags(args))
+                     seeds=args.seeds, flags=executor_flags(args))
     except BounceGymError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -38,15 +38,11 @@ from experiments.executors import (
 )
 
 
-def executor_from(settings: object, units: int, **flags) -> Executor:
-    """The executor of a configuration's ``executor:`` mapping (None: the defaults), with the
-    command's ``flags`` (kind, workers, address) over it, for a sweep of ``units`` units: the
-    local executor's workers default to the machine's cores, but no more than there are units
-    (one unit runs in this process)."""
-    block = {} if settings is None else settings
-    executor_settings(block, "config.executor")
-    names = {key: f"--{'executor' if key == 'kind' else key}" for key in flags}
-    settings = executor_settings({**block, **flags}, "config.executor", names)
+def executor_for(settings: Mapping, units: int) -> Executor:
+    """The executor of checked ``executor`` settings (`experiments.executors.executor_settings`)
+    for a sweep of ``units`` units: the local executor's workers default to the machine's
+    cores, but no more than there are units (one unit runs in this process)."""
+    settings = dict(settings)
     if settings["kind"] == "local" and settings["workers"] is None:
         settings["workers"] = max(min(machine_cores(), units), 1)
     return make_executor(**settings)
@@ -69,14 +65,10 @@ def train_unit(config: Mapping, seed: int, live: bool, progress: bool) -> dict:
 def sweep(config: Mapping, executor: Mapping | None = None, folder: Path | None = None,
           progress: bool = True, log: Callable[[str], None] = print,
           ) -> tuple[list[Path], list[UnitFailure]]:
-    """Train every seed of ``config`` on the executor ``executor`` describes (`executor_from`:
-    the configuration's ``executor:`` mapping with the command's flags over it; module
-    docstring); ``folder`` is where a relative ``hyperparams_file`` is read from. Returns the
-    saved models in seed order and the units that failed for good (the others complete)."""
-    settings = None
-    if isinstance(config, Mapping):
-        config = dict(config)
-        settings = config.pop("executor", None)
+    """Train every seed of ``config`` (without its ``executor`` key) on the executor of the
+    checked settings ``executor`` (`executor_for`; default: the local one; module docstring);
+    ``folder`` is where a relative ``hyperparams_file`` is read from. Returns the saved models
+    in seed order and the units that failed for good (the others complete)."""
     config = prepare(config, folder)
     todo = []
     for seed in config["seeds"]:
@@ -85,7 +77,7 @@ def sweep(config: Mapping, executor: Mapping | None = None, folder: Path | None 
                 f"steps ({Run(config, seed).model})")
         else:
             todo.append(seed)
-    runner = executor_from(settings, len(todo), **(executor or {}))
+    runner = executor_for(executor or executor_settings({}), len(todo))
     live = isinstance(runner, InProcessExecutor)
     units = [Unit(Run(config, seed).stem, train_unit, (config, seed, live, progress))
              for seed in todo]
