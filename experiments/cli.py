@@ -32,6 +32,13 @@ again after an interruption runs only the rest and writes the same files. A unit
 good (after its retries) is one line ``error: unit ...`` on stderr each, once the other units
 are done; then no run folder is written and the exit status is 1.
 
+``train`` runs one unit per seed on the same executors (`experiments.training`; locally no
+more workers than seeds, so one seed trains in this process); with ``--resume`` it skips the
+seeds whose model is saved and continues the others from their checkpoints. A seed that fails
+for good is ``error: <run>_seed<N> failed after ...`` (status 1) once the others are saved.
+``tune`` searches hyperparameters with Ray Tune (`experiments.search`): trials are training runs
+in ``models/<name>-tune/``, summarised in ``trials.csv`` and ``best_hyperparams.yaml``.
+
 The environment variable ``BOUNCE_GYM_MAX_TIMESTEPS=N`` caps every training run at N env steps
 (SB3 still finishes the iteration it is in): a smoke test of a documented training command,
 which then runs exactly as written.

@@ -83,8 +83,8 @@ def sweep(config: Mapping, executor: Mapping | None = None, folder: Path | None 
              for seed in todo]
     with tempfile.TemporaryDirectory(prefix="bounce-gym-units-") as store:
         results, failures = runner.run(units, UnitStore(Path(store)),
-                                         progress=progress and not live,
-                                         desc=f"{config['name']}: seeds")
+                                       progress=progress and not live,
+                                       desc=f"{config['name']}: seeds")
     for unit in units:
         for line in results.get(unit.key, {}).get("log", []):
             log(line)

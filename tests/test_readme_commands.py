@@ -29,6 +29,9 @@ OURS = {"bounce_gym", "baselines", "experiments", "train", "evaluate"}
 #: installed here)
 OPTIONAL = {"charset_normalizer": "numpy.f2py.crackfortran: try/except ImportError",
             "tabulate": "torch._dynamo.utils.tabulate: try/except ImportError, at exit"}
+#: modules shipped inside a declared distribution (ray puts ray/thirdparty_files on sys.path),
+#: whose names are also distributions of their own
+VENDORED = {"psutil": "ray", "colorama": "ray"}
 
 
 def _argv(command: str) -> list[str]:
@@ -99,7 +102,8 @@ def test_readme_training_commands_run_as_written(tmp_path):
     distributions = importlib.metadata.packages_distributions()
     declared = _declared()
     undeclared = {}
-    for module in sorted(imported - OURS - set(OPTIONAL) - set(sys.stdlib_module_names)):
+    others = imported - OURS - set(OPTIONAL) - set(VENDORED) - set(sys.stdlib_module_names)
+    for module in sorted(others):
         owners = {canonicalize_name(d) for d in distributions.get(module, [])}
         if owners and not owners & (declared | {"bounce-gym", "setuptools"}):
             undeclared[module] = sorted(owners)

@@ -92,7 +92,8 @@ from baselines.rl.train_env import attach_monitor_file, make_train_env
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import check_writable
 
-__all__ = ["Run", "make_train_env", "finished", "prepare", "train", "train_seed", "validate_train_config"]
+__all__ = ["Run", "finished", "make_train_env", "prepare", "train", "train_seed",
+           "validate_train_config"]
 
 #: Keys a resumed run may change: the budget, checkpointing, logging, and which seeds run.
 RESUMABLE_CHANGES = ("total_timesteps", "checkpoint_every", "tensorboard", "resume", "seeds",
