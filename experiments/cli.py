@@ -330,6 +330,10 @@ def dispatch(args: argparse.Namespace) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        if args.command == "evaluate":
+            print("interrupted: the finished units are kept; run the same command again to run "
+                  "only the others", file=sys.stderr)
+            return 130
         if args.command != "train":
             raise
         print("interrupted: run the same command with --resume to continue from the newest "

@@ -190,3 +190,14 @@ def test_the_executor_key_does_not_change_the_episodes(reference, tmp_path):
     assert sweep_runs.checksums(run_folder)["episodes.csv"] == expected["episodes.csv"]
     saved = yaml.safe_load((run_folder / "results.json").read_text())["config"]["executor"]
     assert saved == {"kind": "local", "workers": 2, "address": None, "retries": 0}
+
+
+def test_ctrl_c_says_that_the_finished_units_are_kept(tmp_path, capsys, monkeypatch):
+    import experiments.runner
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(experiments.runner, "run", interrupted)
+    assert evaluate.main([str(sweep_runs.write_config(tmp_path)), "--workers", "1"]) == 130
+    assert "the finished units are kept; run the same command again" in capsys.readouterr().err
