@@ -18,7 +18,9 @@ m = 2..10, the m = 2 monitoring joint map); issue #15: `benchmarks.drifters` (th
 `benchmarks.drifter_env` (``Drifter-v0`` steps/s against CartPole-v1 in the same run) and
 `benchmarks.drifter_planners` (value iteration on 3 x 10^5 states, deployment counts); issue #16:
 `benchmarks.patrolling` (MAECT on 188 and 1,025 vertices against Table 4.5, the Alg. 4.3 covers
-against Table 4.4, ``Patrol-v0`` agent-steps/s against pistonball_v6 in the same run).
+against Table 4.4, ``Patrol-v0`` agent-steps/s against pistonball_v6 in the same run); issue #17:
+`benchmarks.executors` (the multi-robot study and the benchmark configuration with one worker,
+the local pool and Ray: wall times and the checksums of their files).
 """
 
 from __future__ import annotations
@@ -208,6 +210,12 @@ def main(argv: list[str] | None = None) -> None:
 
     print()
     patrolling.main((["--quick"] if args.quick else []) + ["--repeats", str(args.repeats)])
+
+    # evaluation sweeps (issue #17): one worker, the local pool, Ray (skipped without ray)
+    from benchmarks import executors
+
+    print()
+    executors.main(["--quick"] if args.quick else [])
 
 
 if __name__ == "__main__":

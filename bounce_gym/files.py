@@ -1,9 +1,10 @@
-"""Writing files so that readers never see one half-written, and checking early that a folder
-can be written at all."""
+"""Writing files so that readers never see one half-written, updating a shared file from several
+processes without losing an update, and checking early that a folder can be written at all."""
 
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import os
 import tempfile
 from collections.abc import Iterator
@@ -60,6 +61,23 @@ def atomic_write(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through `atomic_file`."""
     with atomic_file(path) as fh:
         fh.write(data)
+
+
+@contextlib.contextmanager
+def locked(path: Path) -> Iterator[None]:
+    """Hold an exclusive lock on ``path`` for the ``with`` block: the processes that read,
+    change and rewrite a shared file (e.g. a manifest several training runs add to at once) each
+    do it inside ``locked(path)``, so none overwrites another's update. The lock is an advisory
+    ``flock`` on the hidden file ``.<name>.lock`` beside ``path`` (POSIX; it also works on
+    NFSv4 and most cluster file systems); the kernel drops it when the process dies."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(path.parent / f".{path.name}.lock", os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # closing the descriptor releases the lock
 
 
 def check_writable(field: str, folder: Path) -> None:

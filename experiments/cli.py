@@ -1,7 +1,11 @@
 """The ``bounce-gym`` command: evaluate planners, baselines and trained agents; train agents.
 
-    bounce-gym evaluate [config.yaml] [--no-progress]
-    bounce-gym train config.yaml [--timesteps N] [--seeds S ...] [--resume] [--no-progress]
+    bounce-gym evaluate [config.yaml] [--executor local|ray] [--workers N] [--address ADDR]
+                        [--no-progress]
+    bounce-gym train config.yaml [--timesteps N] [--seeds S ...] [--resume]
+                     [--executor local|ray] [--workers N] [--address ADDR] [--no-progress]
+    bounce-gym tune config.yaml [--space FILE] [--trials N] [--metric return|success]
+                    [--scheduler fifo|asha] [--workers N] [--address ADDR] ...
     bounce-gym curves models/<name> [--window EPISODES]
     bounce-gym trust models/<name>/<algo>_seed<N>.zip ...
 
@@ -18,6 +22,23 @@ lists one obtained elsewhere (`baselines.rl.model_files`). A mistake in a config
 argument or a model file is one line ``error: ...`` on stderr and exit status 2, reported before
 any long work starts.
 
+``evaluate`` runs its units — one policy of one experiment on up to ten seeds
+(`experiments.sweep`) — on the configuration's ``executor`` or the one the flags choose
+(`experiments.executors`): by default a local process pool over the machine's cores
+(``--workers 1``: one after another in this process), or Ray (``--executor ray``, on the
+cluster at ``--address`` or a local instance). Finished units are kept in
+``<output>/<name>-units/`` until the run folder is written, so that the same command started
+again after an interruption runs only the rest and writes the same files. A unit that fails for
+good (after its retries) is one line ``error: unit ...`` on stderr each, once the other units
+are done; then no run folder is written and the exit status is 1.
+
+``train`` runs one unit per seed on the same executors (`experiments.training`; locally no
+more workers than seeds, so one seed trains in this process); with ``--resume`` it skips the
+seeds whose model is saved and continues the others from their checkpoints. A seed that fails
+for good is ``error: <run>_seed<N> failed after ...`` (status 1) once the others are saved.
+``tune`` searches hyperparameters with Ray Tune (`experiments.search`): trials are training runs
+in ``models/<name>-tune/``, summarised in ``trials.csv`` and ``best_hyperparams.yaml``.
+
 The environment variable ``BOUNCE_GYM_MAX_TIMESTEPS=N`` caps every training run at N env steps
 (SB3 still finishes the iteration it is in): a smoke test of a documented training command,
 which then runs exactly as written.
@@ -26,18 +47,26 @@ which then runs exactly as written.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
 
 from bounce_gym.errors import BounceGymError
 
 
-def evaluate(config_path: str | None, progress: bool = True) -> int:
-    """Run an evaluation configuration, print the tables and write the run folder."""
+def evaluate(config_path: str | None, progress: bool = True,
+             flags: Mapping[str, str] | None = None) -> int:
+    """Run an evaluation configuration on its executor (``flags``: the executor flags given,
+    `executor_from`), print the tables and write the run folder; if units fail for good, say
+    which and return 1, keeping the finished units for the next run."""
+    import shutil
+
     from bounce_gym.files import check_writable
     from experiments.config import load_config, validate_config
+    from experiments.executors import UnitStore
     from experiments.leaderboard import write_leaderboard
     from experiments.provenance import provenance
     from experiments.report import (
@@ -50,10 +79,21 @@ def evaluate(config_path: str | None, progress: bool = True) -> int:
         write_results,
     )
     from experiments.runner import run
+    from experiments.sweep import UnitsFailedError, store_folder
 
     config = validate_config(load_config(config_path))
     check_writable("config.output", Path(config["output"]))
-    rows, plots = run(config, progress=progress)
+    executor = executor_from(config.get("executor"), flags or {})
+    store = UnitStore(store_folder(config))
+    try:
+        rows, plots = run(config, progress=progress, executor=executor, store=store)
+    except UnitsFailedError as exc:
+        for line in exc.lines:
+            print(f"error: {line}", file=sys.stderr)
+        print(f"note: {exc.total - len(exc.failures)} of {exc.total} units finished and are "
+              f"kept in {exc.store}; run the same command again to run only the others",
+              file=sys.stderr)
+        return 1
     families, notes, made = families_of(plots), notes_of(plots), provenance()
     summary, per_seed = table_rows(summarise(rows, families), rows)
     print(format_table(summary, families))
@@ -64,10 +104,51 @@ def evaluate(config_path: str | None, progress: bool = True) -> int:
     written = write_plots(folder, plots, summary, per_seed)
     if config["leaderboard"]:
         written += write_leaderboard(folder, config, summary, families, notes, made)
+    shutil.rmtree(store.folder, ignore_errors=True)  # the run folder now holds the results
+    with contextlib.suppress(OSError):  # the sweeps' folder, once no other sweep is kept
+        store.folder.parent.rmdir()
     print(f"\nwrote {folder}/episodes.csv, summary.csv, results.json and {len(written)} other "
           "files" + (" (leaderboard.md, leaderboard.csv, plots)" if config["leaderboard"]
                      else " (plots)"))
     return 0
+
+
+#: the executor flags, by the key of an ``executor`` block each sets
+EXECUTOR_FLAGS = {"kind": "--executor", "workers": "--workers", "address": "--address"}
+
+
+def executor_from(block: Mapping | None, flags: Mapping[str, str]):
+    """The executor of a configuration's ``executor`` block (validated) with the flags given
+    (``{"kind": "ray", "workers": "4"}``) over it; a bad flag is a `ConfigError` naming it."""
+    from experiments.executors import make_executor
+
+    return make_executor(**executor_block(block, flags))
+
+
+def executor_block(block: Mapping | None, flags: Mapping[str, str]) -> dict:
+    """The checked and completed settings (`experiments.executors.executor_settings`) of a
+    configuration's ``executor`` block with the flags given over it."""
+    from experiments.executors import executor_settings
+
+    given = {key: int(value) if key == "workers" and value.isdigit() else value
+             for key, value in flags.items() if value is not None}
+    return executor_settings({**(block or {}), **given}, "config.executor",
+                             {key: EXECUTOR_FLAGS[key] for key in given})
+
+
+def add_executor_flags(parser: argparse.ArgumentParser) -> None:
+    """``--executor``, ``--workers`` and ``--address`` (`EXECUTOR_FLAGS`)."""
+    parser.add_argument("--executor", metavar="local|ray",
+                        help="where units run: local (a process pool; default) or ray")
+    parser.add_argument("--workers", metavar="N",
+                        help="units at once (default: the machine's cores; 1: in this process)")
+    parser.add_argument("--address", metavar="ADDR",
+                        help="a running Ray cluster's address (default: start a local one)")
+
+
+def executor_flags(args: argparse.Namespace) -> dict[str, str | None]:
+    """The executor flags of parsed arguments, by `EXECUTOR_FLAGS` key."""
+    return {key: getattr(args, flag[2:]) for key, flag in EXECUTOR_FLAGS.items()}
 
 
 #: The environment variable capping every training run (module docstring).
@@ -75,33 +156,78 @@ MAX_TIMESTEPS = "BOUNCE_GYM_MAX_TIMESTEPS"
 
 
 def train(config_path: str, timesteps: int | None = None, resume: bool = False,
-          progress: bool = True, seeds: list[int] | None = None) -> int:
-    """Train (or resume) the agents of a training configuration, report where they are saved,
-    and draw the folder's learning curves."""
-    from baselines.rl.train import train as train_agent
-    from bounce_gym.errors import ConfigError
+          progress: bool = True, seeds: list[int] | None = None,
+          flags: Mapping[str, str | None] | None = None) -> int:
+    """Train (or resume) the agents of a training configuration, one unit per seed on its
+    executor (``flags``: the executor flags given, over the configuration's ``executor``;
+    `experiments.training`), report where they are saved, and draw the folder's learning
+    curves. A seed that fails for good is reported (status 1) after the others are saved."""
     from experiments.config import load_config
+    from experiments.training import sweep
 
-    config = load_config(config_path)
-    if isinstance(config, dict):
-        for key, value in (("total_timesteps", timesteps), ("seeds", seeds)):
-            if value is not None:
-                config[key] = value
-        if seeds is not None:
-            config.pop("seed", None)
-        if resume:
-            config["resume"] = True
-        cap = os.environ.get(MAX_TIMESTEPS)
-        if cap is not None:
-            if not cap.isdigit() or int(cap) < 1:
-                raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {cap!r}")
-            budget = config.get("total_timesteps", int(cap))
-            config["total_timesteps"] = min(budget, int(cap)) if isinstance(budget, int) \
-                else budget
-    paths = train_agent(config, progress=progress, folder=Path(config_path).parent, log=print)
+    config = training_config(load_config(config_path), timesteps, resume, seeds)
+    block = config.pop("executor", None) if isinstance(config, dict) else None
+    paths, failures = sweep(config, executor_block(block, flags or {}),
+                            folder=Path(config_path).parent, progress=progress)
     for path in paths:
         print(f"saved {path}")
-    return curves(str(paths[0].parent), required=False)
+    for failure in failures:
+        print(f"error: {failure.key} failed after {failure.attempts} attempts: {failure.error}",
+              file=sys.stderr)
+    if paths:
+        curves(str(paths[0].parent), required=False)
+    return 1 if failures else 0
+
+
+def training_config(config: object, timesteps: int | None = None, resume: bool = False,
+                    seeds: list[int] | None = None) -> object:
+    """A loaded training configuration with the command's overrides and the budget cap
+    (`MAX_TIMESTEPS`) applied; a non-mapping is returned as it is, for the validation to
+    report."""
+    from bounce_gym.errors import ConfigError
+
+    if not isinstance(config, dict):
+        return config
+    for key, value in (("total_timesteps", timesteps), ("seeds", seeds)):
+        if value is not None:
+            config[key] = value
+    if seeds is not None:
+        config.pop("seed", None)
+    if resume:
+        config["resume"] = True
+    cap = os.environ.get(MAX_TIMESTEPS)
+    if cap is not None:
+        if not cap.isdigit() or int(cap) < 1:
+            raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {cap!r}")
+        budget = config.get("total_timesteps", int(cap))
+        config["total_timesteps"] = min(budget, int(cap)) if isinstance(budget, int) \
+            else budget
+    return config
+
+
+def tune(config_path: str, space: str | None = None, trials: int = 8, metric: str = "return",
+         scheduler: str = "fifo", seed: int = 0, timesteps: int | None = None,
+         resume: bool = False, workers: int | None = None, address: str | None = None,
+         progress: bool = True) -> int:
+    """Search hyperparameters of a training configuration with Ray Tune
+    (`experiments.search`), print the trials and write their table and the best entry."""
+    from experiments.config import load_config
+    from experiments.search import default_space, search_folder, trial_configs, tune_search
+
+    config = training_config(load_config(config_path), timesteps, resume)
+    if isinstance(config, dict):
+        config.pop("executor", None)  # the trials run on Ray Tune: --workers, --address
+    path = Path(space) if space is not None else default_space(Path(config_path), config)
+    prepared = trial_configs(config, path, trials, seed, folder=Path(config_path).parent)
+    done = tune_search(prepared, metric, scheduler, workers, address, progress)
+    for trial in done:
+        print(f"trial {trial.index}: {trial.status}, {metric} {trial.metric:.4g} after "
+              f"{trial.episodes} episodes ({trial.env_steps} env steps), {trial.hyperparams}")
+    folder = search_folder(config)
+    print(f"wrote {folder}/trials.csv" + (f" and {folder}/best_hyperparams.yaml"
+                                          if (folder / "best_hyperparams.yaml").is_file()
+                                          else ""))
+    return 0
 
 
 def curves(folder: str, window: int | None = None, required: bool = True) -> int:
@@ -134,6 +260,7 @@ def trust(paths: list[str]) -> int:
 
 def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("config", nargs="?", help="YAML configuration (default: eval_default.yaml)")
+    add_executor_flags(parser)
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     return parser
 
@@ -145,7 +272,28 @@ def train_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help="override the configuration's seeds")
     parser.add_argument("--resume", action="store_true",
                         help="continue every seed from its newest checkpoint")
+    add_executor_flags(parser)
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    return parser
+
+
+def tune_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("config", help="YAML training configuration")
+    parser.add_argument("--space", help="search space YAML (default: "
+                                        "hyperparams/search/<algo>.yaml beside the config)")
+    parser.add_argument("--trials", type=int, default=8, help="trials (default 8)")
+    parser.add_argument("--metric", default="return", help="return (default) or success: its "
+                        "mean over the last 100 episodes is maximised")
+    parser.add_argument("--scheduler", default="fifo",
+                        help="fifo (default: every trial runs its budget) or asha")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the draws (default 0)")
+    parser.add_argument("--timesteps", type=int, help="override total_timesteps (per trial)")
+    parser.add_argument("--resume", action="store_true",
+                        help="skip finished trials, continue the others from checkpoints")
+    parser.add_argument("--workers", type=int, metavar="N",
+                        help="trials at once (default: the machine's cores)")
+    parser.add_argument("--address", metavar="ADDR", help="a running Ray cluster's address")
+    parser.add_argument("--no-progress", action="store_true", help="hide Tune's progress")
     return parser
 
 
@@ -166,17 +314,26 @@ def dispatch(args: argparse.Namespace) -> int:
     configuration, env argument or model file) becomes ``error: ...`` on stderr and status 2."""
     try:
         if args.command == "evaluate":
-            return evaluate(args.config, progress=not args.no_progress)
+            return evaluate(args.config, progress=not args.no_progress,
+                            flags=executor_flags(args))
         if args.command == "trust":
             return trust(args.models)
         if args.command == "curves":
             return curves(args.folder, args.window)
+        if args.command == "tune":
+            return tune(args.config, args.space, args.trials, args.metric, args.scheduler,
+                        args.seed, args.timesteps, args.resume, args.workers, args.address,
+                        progress=not args.no_progress)
         return train(args.config, args.timesteps, args.resume, progress=not args.no_progress,
-                     seeds=args.seeds)
+                     seeds=args.seeds, flags=executor_flags(args))
     except BounceGymError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        if args.command == "evaluate":
+            print("interrupted: the finished units are kept; run the same command again to run "
+                  "only the others", file=sys.stderr)
+            return 130
         if args.command != "train":
             raise
         print("interrupted: run the same command with --resume to continue from the newest "
@@ -189,6 +346,7 @@ def main(argv: list[str] | None = None) -> int:
     commands = parser.add_subparsers(dest="command", required=True)
     evaluate_parser(commands.add_parser("evaluate", help="evaluate policies side by side"))
     train_parser(commands.add_parser("train", help="train a Stable-Baselines3 agent"))
+    tune_parser(commands.add_parser("tune", help="search hyperparameters with Ray Tune"))
     curves_parser(commands.add_parser("curves", help="draw the learning curves of trained "
                                                      "agents"))
     trust_parser(commands.add_parser("trust", help="let evaluate load these model files"))

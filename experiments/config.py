@@ -46,7 +46,10 @@ episodes stay the same); ``visibility`` makes a single-robot experiment a safe-p
 (`experiments.families.visibility`); ``planner_kwargs`` (multi-robot only) are keyword arguments
 of the planner's ``for_env`` (e.g. ``{phi: 135}``); ``difficulty`` (``easy``, ``medium`` or
 ``hard``) labels the experiment in a leaderboard. A top-level ``leaderboard: true`` makes the
-evaluation write ``leaderboard.md`` and ``leaderboard.csv`` (`experiments.leaderboard`).
+evaluation write ``leaderboard.md`` and ``leaderboard.csv`` (`experiments.leaderboard`). A
+top-level ``executor: {kind: local|ray, workers: N, address: ..., retries: 2}`` says where the
+evaluation's units run (`experiments.executors.executor_settings`; the flags ``--executor``,
+``--workers`` and ``--address`` override it); it does not change the results.
 
 A relative map file in ``env_kwargs.world`` (``*.yaml``, ``*.yml``, ``*.json``) or flow file
 in ``env_kwargs.flow`` (a path with a suffix, e.g. ``*.nc``; zoo names have none) of a
@@ -78,6 +81,7 @@ from bounce_gym.envs.registration import (
 )
 from bounce_gym.errors import ConfigError
 from bounce_gym.validate import integer
+from experiments.executors import executor_settings
 
 POLICY_KINDS = ("planner", "random", "fixed", "rl")
 #: the env of the patrol experiments (`experiments.families.patrolling`)
@@ -95,7 +99,8 @@ _MAP_SUFFIXES = (".yaml", ".yml", ".json")
 #: the PettingZoo ids (several robots or drifters)
 _PARALLEL_IDS = [*PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]
 
-_TOP_KEYS = {"name": str, "output": str, "models": str, "experiments": list, "leaderboard": bool}
+_TOP_KEYS = {"name": str, "output": str, "models": str, "experiments": list, "leaderboard": bool,
+             "executor": dict}
 _EXPERIMENT_KEYS = {"name": str, "env": str, "env_kwargs": dict, "seeds": list | dict,
                     "max_steps": int, "horizon_reason": str, "policies": list,
                     "visibility": dict, "planner_kwargs": dict, "rl_models": str | list,
@@ -153,6 +158,8 @@ def validate_config(config: object) -> dict:
     config.setdefault("output", "runs")
     config.setdefault("models", "models")
     config.setdefault("leaderboard", False)
+    if "executor" in config:
+        config["executor"] = executor_settings(config["executor"], "config.executor")
     if not config["experiments"]:
         raise ConfigError("config.experiments: expected at least one experiment")
     names = set()

@@ -1,5 +1,6 @@
-"""Running experiments: one episode loop and one experiment loop for Gymnasium envs (one robot)
-and PettingZoo parallel envs (several robots).
+"""Running experiments: one episode loop for Gymnasium envs (one robot) and PettingZoo parallel
+envs (several robots), preparing an experiment, and `run`, which runs a configuration as a sweep
+of units on an executor (`experiments.sweep`, `experiments.executors`).
 
 An experiment builds its env and its policies once; every seed then runs one episode of each
 policy (the env is reset with the seed, and each policy restarts its own random stream in
@@ -19,19 +20,19 @@ there are several folders) whose rows carry the ``group`` they are aggregated in
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
-from baselines.policy import FixedAnglePolicy, Policy, is_parallel_env
+from baselines.policy import Policy, is_parallel_env
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError, config_errors
 from experiments.config import validate_config
+from experiments.executors import Executor, UnitStore, make_executor
 from experiments.families.base import Episode, Family
-from experiments.oracle import best_fixed_in_hindsight
 from experiments.registry import family_for
 
 
@@ -183,58 +184,30 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
     return Prepared(experiment, env, family, setup, entrants, notes)
 
 
-def run_experiment(prepared: Prepared, on_seed: Callable[[], None]
-                   ) -> tuple[list[EpisodeResult], dict]:
-    """Every policy on every seed of a prepared experiment (`prepare_experiment`), then the
-    best fixed angle per seed in hindsight.
+def run(config: Mapping, progress: bool = True, executor: Executor | None = None,
+        store: UnitStore | None = None) -> tuple[list[EpisodeResult], dict]:
+    """Run every experiment of a configuration (validated here) as a sweep of units
+    (`experiments.sweep`) on ``executor`` (default: one after another in this process),
+    keeping finished units in ``store`` (default: a temporary folder). Every experiment is
+    prepared (`prepare_experiment`) before the first unit runs.
 
-    Returns the rows and the experiment's data: ``world``, ``family``, ``notes``, each policy's
-    first-seed positions (``paths``) and what the family collects for its plots. ``on_seed`` is
-    called after each seed (a progress bar).
+    Returns the result rows — per experiment, per seed, per policy, then the best fixed angle
+    per seed in hindsight — and, per experiment name, its data: ``world``, ``family``,
+    ``notes``, each policy's first-seed positions (``paths``) and what the family collects for
+    its plots. Units that fail for good raise `experiments.sweep.UnitsFailedError`.
     """
-    rows: list[EpisodeResult] = []
-    experiment, family = prepared.experiment, prepared.family
-    data: dict = {"paths": {}, "world": family.world(prepared.env), "family": family,
-                  "notes": list(prepared.notes)}
-    for k, seed in enumerate(experiment["seeds"]):
-        for one in prepared.entrants:
-            episode = family.episode(one.env, one.policy, one.setup)
-            summary, path = run_episode(one.env, one.policy, seed, experiment["max_steps"],
-                                        episode, record=k == 0 and family.record_paths)
-            rows.append(EpisodeResult(experiment["name"], one.policy.name, seed,
-                                      summary["steps"], summary["ticks"], summary["return"],
-                                      family.row_metrics(episode, summary["info"], one.policy),
-                                      one.group))
-            if k == 0:
-                data["paths"][one.policy.name] = path
-                family.collect(data, one.env, one.policy, one.setup)
-        on_seed()
-    fixed = [e.policy.name for e in prepared.entrants if isinstance(e.policy, FixedAnglePolicy)]
-    rows += best_fixed_in_hindsight(rows, fixed, family)
-    envs = {id(e.env): e.env for e in prepared.entrants}
-    envs[id(prepared.env)] = prepared.env
-    for env in envs.values():
-        env.close()
-    return rows, data
+    import tempfile
 
-
-def run(config: Mapping, progress: bool = True) -> tuple[list[EpisodeResult], dict]:
-    """Run every experiment of a configuration (validated here). Every experiment is prepared
-    (`prepare_experiment`) before the first one runs.
-
-    Returns the result rows and, per experiment name, its data (see `run_experiment`).
-    """
-    from tqdm import tqdm
+    from experiments import sweep
 
     config = validate_config(config)
-    models = Path(config["models"])
-    rows: list[EpisodeResult] = []
-    plots: dict = {}
-    total = sum(len(exp["seeds"]) for exp in config["experiments"])
-    prepared = [prepare_experiment(exp, models, f"config.experiments[{k}]")
-                for k, exp in enumerate(config["experiments"])]
-    with tqdm(total=total, desc="evaluating", disable=not progress, unit="seed") as bar:
-        for one in prepared:
-            episodes, plots[one.experiment["name"]] = run_experiment(one, bar.update)
-            rows += episodes
-    return rows, plots
+    experiments = sweep.prepare_all(config)
+    try:
+        executor = make_executor(workers=1) if executor is None else executor
+        if store is not None:
+            return sweep.evaluate(config, experiments, executor, store, progress)
+        with tempfile.TemporaryDirectory(prefix="bounce-gym-units-") as folder:
+            return sweep.evaluate(config, experiments, executor, UnitStore(Path(folder)),
+                                  progress)
+    finally:
+        sweep.release(experiments)

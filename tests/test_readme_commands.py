@@ -16,18 +16,22 @@ tomllib = pytest.importorskip("tomllib", reason="reading pyproject.toml needs Py
 
 ROOT = Path(__file__).parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
-#: training commands, in ```bash blocks or inline code: python train.py …, bounce-gym train|curves …
+#: training commands, in ```bash blocks or inline code: python train.py …, bounce-gym
+#: train|curves|tune …
 #: (not the templates, such as ``bounce-gym curves models/<name>``)
 COMMANDS = [c.strip() for c in re.findall(
-    r"(?:^|`)((?:\.venv/bin/)?(?:python train\.py|bounce-gym (?:train|curves)) [^#`\n]*)",
+    r"(?:^|`)((?:\.venv/bin/)?(?:python train\.py|bounce-gym (?:train|curves|tune)) [^#`\n]*)",
     README, re.M) if "<" not in c]
 #: the extras `make install` installs besides the core dependencies (dev only adds test tools)
-EXTRAS = ("rl",)
+EXTRAS = ("rl", "distributed")
 OURS = {"bounce_gym", "baselines", "experiments", "train", "evaluate"}
 #: optional imports that libraries try and do without (imported only because they happen to be
 #: installed here)
 OPTIONAL = {"charset_normalizer": "numpy.f2py.crackfortran: try/except ImportError",
             "tabulate": "torch._dynamo.utils.tabulate: try/except ImportError, at exit"}
+#: modules shipped inside a declared distribution (ray puts ray/thirdparty_files on sys.path),
+#: whose names are also distributions of their own
+VENDORED = {"psutil": "ray", "colorama": "ray"}
 
 
 def _argv(command: str) -> list[str]:
@@ -94,10 +98,12 @@ def test_readme_training_commands_run_as_written(tmp_path):
         imported |= _imported(done.stderr)
     assert (tmp_path / "models/navigation-lab/learning_curves.png").is_file()
     assert (tmp_path / "models/navigation-lab/ppo_seed0.monitor.csv").is_file()
+    assert (tmp_path / "models/navigation-lab-tune/trials.csv").is_file()
     distributions = importlib.metadata.packages_distributions()
     declared = _declared()
     undeclared = {}
-    for module in sorted(imported - OURS - set(OPTIONAL) - set(sys.stdlib_module_names)):
+    others = imported - OURS - set(OPTIONAL) - set(VENDORED) - set(sys.stdlib_module_names)
+    for module in sorted(others):
         owners = {canonicalize_name(d) for d in distributions.get(module, [])}
         if owners and not owners & (declared | {"bounce-gym", "setuptools"}):
             undeclared[module] = sorted(owners)

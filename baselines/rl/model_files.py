@@ -24,7 +24,10 @@ any of it. `trust` (the command ``bounce-gym trust FILE``) lists a file obtained
 
 The manifest maps a file name to the list of its accepted sha256 digests: one, except for the
 instant of a save, when the new digest is added before the file is renamed into place and the
-old one dropped after, so that a crash at any instant leaves a listed file.
+old one dropped after, so that a crash at any instant leaves a listed file. Several processes may
+save into one folder at once (the seeds of a training sweep, the trials of a search,
+`experiments.training`): each reads, changes and rewrites the manifest under an exclusive lock
+(`bounce_gym.files.locked`), so no update is lost.
 """
 
 from __future__ import annotations
@@ -39,7 +42,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import atomic_file, atomic_write
+from bounce_gym.files import atomic_file, atomic_write, locked
 
 ALGOS = ("ppo", "dqn", "recurrentppo")
 _RUN = r"(?P<algo>ppo|dqn|recurrentppo)(?:-(?P<variant>[a-z0-9]+(?:-[a-z0-9]+)*))?"
@@ -101,10 +104,13 @@ def _manifest(folder: Path) -> dict[str, list[str]]:
 
 
 def _list(path: Path, digests: list[str]) -> None:
-    entries = _manifest(path.parent)
-    entries[path.name] = digests
-    atomic_write(path.parent / MANIFEST, (json.dumps(entries, indent=2, sort_keys=True)
-                                          + "\n").encode())
+    """Set the digests of ``path`` in its folder's manifest (read and rewritten under the lock,
+    so concurrent writers of other files in the folder lose nothing)."""
+    with locked(path.parent / MANIFEST):
+        entries = _manifest(path.parent)
+        entries[path.name] = digests
+        atomic_write(path.parent / MANIFEST, (json.dumps(entries, indent=2, sort_keys=True)
+                                              + "\n").encode())
 
 
 def save_model(model, path: Path, metadata: dict | None = None, resume: object = None,

@@ -27,6 +27,8 @@ A training configuration (YAML, see ``configs/train_*.yaml``; checked by
                                      # bounce-gym[tensorboard])
     models: models
     torch_threads: 1                 # torch intra-op threads while training (default 1)
+    executor: {kind: local, workers: 2}  # where the seeds run at once (`bounce-gym train`,
+                                     # experiments.training; default: a process per core)
 
 **What a run writes** into ``<models>/<name>/`` for each seed: the model
 ``<run>_seed<seed>.zip`` (``<run>`` = ``<algo>[-<variant>]``), where the evaluation finds it;
@@ -90,7 +92,8 @@ from baselines.rl.train_env import attach_monitor_file, make_train_env
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import check_writable
 
-__all__ = ["Run", "make_train_env", "train", "validate_train_config"]
+__all__ = ["Run", "finished", "make_train_env", "prepare", "train", "train_seed",
+           "validate_train_config"]
 
 #: Keys a resumed run may change: the budget, checkpointing, logging, and which seeds run.
 RESUMABLE_CHANGES = ("total_timesteps", "checkpoint_every", "tensorboard", "resume", "seeds",
@@ -126,6 +129,15 @@ def train(config: Mapping, progress: bool = True, callbacks: Sequence = (),
     evaluation finds it; returns the model paths. ``callbacks`` are SB3 callbacks added to
     every run; ``folder`` is where a relative ``hyperparams_file`` is read from; ``log`` gets
     one line per seed saying what happens to it."""
+    config = prepare(config, folder)
+    return [train_seed(config, seed, progress, callbacks, log) for seed in config["seeds"]]
+
+
+def prepare(config: Mapping, folder: Path | None = None) -> dict:
+    """The validated configuration (`validate_train_config`), checked for everything that can
+    be checked before any training: the models folder, the checkpoints there, the
+    hyperparameters and the action space. Its seeds may then train in any order or at once
+    (`train_seed`; a sweep over processes, `experiments.training`)."""
     config = validate_train_config(config, folder)  # the quick checks first, before torch
     runs = [Run(config, seed) for seed in config["seeds"]]
     check_writable("config.models", runs[0].folder)
@@ -133,19 +145,41 @@ def train(config: Mapping, progress: bool = True, callbacks: Sequence = (),
     if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError("config.tensorboard: needs the tensorboard package "
                           "(pip install -e .[tensorboard]), or set tensorboard: false")
-    import torch
-
     check_hyperparams(_algo_class(config["algo"]), config["hyperparams"])
     _check_action_space(config)
+    return config
+
+
+def train_seed(config: Mapping, seed: int, progress: bool = True, callbacks: Sequence = (),
+               log: Callable[[str], None] | None = None) -> Path:
+    """Train (or, with ``resume``, continue from its newest checkpoint) the run of one seed of
+    a configuration `prepare` returned; returns the model path. torch uses
+    ``torch_threads`` threads meanwhile."""
+    import torch
+
     threads = torch.get_num_threads()
     # small MLPs on tiny batches: more intra-op threads only contend with the env processes
     torch.set_num_threads(config["torch_threads"])
     try:
-        paths = [_train_run(run, progress, list(callbacks), log or (lambda line: None))
-                 for run in runs]
+        return _train_run(Run(config, seed), progress, list(callbacks),
+                          log or (lambda line: None))
     finally:
         torch.set_num_threads(threads)
-    return paths
+
+
+def finished(config: Mapping, seed: int) -> bool:
+    """Whether the seed's model of a configuration `prepare` returned is saved already: listed
+    in the manifest, trained with this configuration (`RESUMABLE_CHANGES` aside) for exactly
+    its ``total_timesteps``. A sweep started again skips such seeds."""
+    run = Run(config, seed)
+    if not run.model.is_file():
+        return False
+    try:
+        saved = read_model(run.model).metadata.get("config", {})
+    except ConfigError:
+        return False
+    return saved.get("total_timesteps") == config["total_timesteps"] and \
+        _comparable(saved) == _comparable(run.config)
 
 
 def _check_checkpoints(config: Mapping, runs: list[Run]) -> None:

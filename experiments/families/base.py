@@ -158,6 +158,16 @@ class Family:
     def collect(self, data: dict, env, policy: Policy, setup: object) -> None:
         """Plot data after a first-seed episode (``data`` holds world, paths, family)."""
 
+    def drain(self, setup: object) -> object:
+        """What the episodes run so far have filed with ``setup`` for the plots (e.g. every
+        episode's coverage curve), taken out of it: a unit of an evaluation sweep
+        (`experiments.sweep`) runs on its own copy of the setup and hands this back, and
+        `absorb` files it with the experiment's setup. Default: nothing is filed."""
+        return None
+
+    def absorb(self, setup: object, drained: object) -> None:
+        """File what `drain` took from a copy of ``setup`` with ``setup``."""
+
     def plots(self, folder: Path, name: str, data: dict) -> list[Path]:
         """The family's plots of one experiment."""
         return []

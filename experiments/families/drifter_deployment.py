@@ -111,6 +111,16 @@ class DrifterDeployment(DrifterFamily):
     def episode(self, env, policy, setup):
         return DeploymentEpisode(env, policy, setup)
 
+    def drain(self, setup):
+        drained = (setup.curves, setup.predicted)
+        setup.curves, setup.predicted = {}, {}
+        return drained
+
+    def absorb(self, setup, drained):
+        for filed, more in zip((setup.curves, setup.predicted), drained, strict=True):
+            for policy, values in more.items():
+                filed.setdefault(policy, []).extend(values)
+
     def collect(self, data, env, policy, setup):
         super().collect(data, env, policy, setup)
         data["setup"] = setup

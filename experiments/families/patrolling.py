@@ -236,6 +236,14 @@ class Patrolling(Family):
         captures = setup.captured.setdefault(policy.patrollers.name, []) if told else None
         return PatrolEpisode(env, setup.t_a, captures)
 
+    def drain(self, setup):
+        drained, setup.captured = setup.captured, {}
+        return drained
+
+    def absorb(self, setup, drained):
+        for patrollers, captures in drained.items():
+            setup.captured.setdefault(patrollers, []).extend(captures)
+
     def collect(self, data, env, policy, setup):
         """The setup and each Markov strategy's best-response target for the plots; a note
         with the equilibrium mixture's weights."""

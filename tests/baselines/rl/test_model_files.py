@@ -50,7 +50,9 @@ def test_save_model_lists_the_file_and_leaves_no_temporary_file(tmp_path, ppo, e
     save_model(ppo, path)  # saving again replaces the digest
     manifest = json.loads((tmp_path / "m" / MANIFEST).read_text())
     assert list(manifest) == ["ppo_seed0.zip"] and len(manifest["ppo_seed0.zip"]) == 1
-    assert sorted(p.name for p in (tmp_path / "m").iterdir()) == [MANIFEST, "ppo_seed0.zip"]
+    # the manifest's lock file stays (bounce_gym.files.locked), no temporary one does
+    assert sorted(p.name for p in (tmp_path / "m").iterdir()) == [
+        f".{MANIFEST}.lock", MANIFEST, "ppo_seed0.zip"]
     assert _load(path, env).observation_space == env.observation_space
 
 
@@ -167,3 +169,26 @@ def test_metadata_and_resume_state_travel_in_the_trusted_zip(tmp_path, ppo, env)
         read_model(copy)
     trust(copy)
     assert read_model(copy).resume_state() == {"episodes": 3}
+
+
+def _trust_many(folder: str, prefix: str, count: int) -> None:
+    for i in range(count):
+        path = Path(folder) / f"ppo-{prefix}_seed{i}.zip"
+        path.write_bytes(f"{prefix}{i}".encode())
+        trust(path)
+
+
+def test_processes_listing_files_at_once_lose_no_entry(tmp_path):
+    """The manifest is read, changed and rewritten under a lock: two processes adding 40
+    entries each to one manifest at once leave all 80 listed."""
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    workers = [context.Process(target=_trust_many, args=(str(tmp_path), p, 40))
+               for p in ("a", "b")]
+    for worker in workers:
+        worker.start()
+    for worker in workers:
+        worker.join(timeout=120)
+        assert worker.exitcode == 0
+    assert len(json.loads((tmp_path / MANIFEST).read_text())) == 80

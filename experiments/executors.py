@@ -1,0 +1,399 @@
+"""Running a sweep of independent units of work — in this process, on a local process pool or
+on Ray — with a store that keeps every finished unit, so that a sweep started again skips them.
+
+A `Unit` is a module-level function and its (picklable) arguments under a key that is unique in
+its sweep and the same in every run of it. `Executor.run` runs the units a `UnitStore` does not
+hold yet, saves each result as soon as it arrives, and retries a unit whose worker died or that
+raised, at most ``retries`` more times; a unit that fails for good is reported as a
+`UnitFailure` while the others complete. Results come back by key: callers put them in their
+own canonical order, so nothing depends on which worker finished first.
+
+Executors (`make_executor`):
+
+* ``local`` with one worker runs the units one after another in this process (no pickling, no
+  new process; a crash of the unit is the crash of the program, whose stored units survive);
+* ``local`` with more workers runs them on a ``concurrent.futures.ProcessPoolExecutor`` whose
+  processes are started by a fork server (`POOL_START_METHOD`). A worker that dies breaks the
+  whole pool: it is rebuilt, and the units that were in flight run again one at a time (the
+  one whose worker died cannot be told apart otherwise), each attempt that then dies counting
+  against its unit;
+* ``ray`` runs each unit as a Ray task on a running cluster (``address``) or on a local instance
+  started here (``num_cpus = workers``). Ray itself retries a task whose worker process died
+  (``max_retries``); an exception is retried here. At most ``workers`` units are in flight.
+
+Every executor keeps at most ``workers`` units in flight, so a pool that breaks or a cluster
+that is lost loses no more than that.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import multiprocessing
+import os
+import pickle
+import re
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from bounce_gym.errors import ConfigError
+from bounce_gym.files import atomic_write
+
+EXECUTOR_KINDS = ("local", "ray")
+#: how the local pool starts its processes: never a fork of this one (which may hold threads:
+#: tqdm's monitor, torch's pools), but forks of a clean server process, ~1 s faster per pool
+#: than fresh interpreters ("spawn", where there is no forkserver) — docs/choices.md
+POOL_START_METHOD = ("forkserver" if "forkserver" in multiprocessing.get_all_start_methods()
+                     else "spawn")
+#: what a unit's error says when its process died instead of returning or raising
+WORKER_DIED = "worker died"
+_KEY = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.=+-]*")
+_RAY_MISSING = "executor: ray is not installed; pip install bounce-gym[distributed]"
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One independent piece of a sweep: ``fn(*args)``. ``fn`` is a module-level function (a
+    worker imports it by name) and ``key`` names the unit's stored result: unique in the sweep,
+    the same in every run of it, and a file name (letters, digits and ``_.=+-``)."""
+
+    key: str
+    fn: Callable
+    args: tuple = ()
+
+    def __post_init__(self) -> None:
+        if not _KEY.fullmatch(self.key):
+            raise ValueError(f"unit key {self.key!r}: expected letters, digits and _.=+- "
+                             "(not starting with . = + -)")
+
+
+@dataclass
+class UnitFailure:
+    """A unit that failed for good: its key, its last error (the exception's type and message,
+    or `WORKER_DIED`) and how many times it was tried."""
+
+    key: str
+    error: str
+    attempts: int
+
+
+class UnitStore:
+    """Finished units' results, one pickle file ``<key>.pkl`` per unit in ``folder``, each
+    written atomically (`bounce_gym.files.atomic_write`), so that a sweep interrupted at any
+    instant leaves only whole results."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = Path(folder)
+
+    def _path(self, key: str) -> Path:
+        return self.folder / f"{key}.pkl"
+
+    def done(self, key: str) -> bool:
+        return self._path(key).is_file()
+
+    def load(self, key: str) -> object:
+        return pickle.loads(self._path(key).read_bytes())
+
+    def save(self, key: str, result: object) -> None:
+        atomic_write(self._path(key), pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+
+
+def error_text(exc: BaseException) -> str:
+    """An exception as a failure reports it: ``Type: message``."""
+    return f"{type(exc).__name__}: {exc}"
+
+
+class Executor:
+    """Runs units (`run`); subclasses start them (`_submit`) and collect finished ones
+    (`_finished`), at most `slots` at a time."""
+
+    def __init__(self, workers: int, retries: int) -> None:
+        self.workers = workers
+        self.retries = retries
+
+    def run(self, units: Iterable[Unit], store: UnitStore, progress: bool = True,
+            desc: str = "units") -> tuple[dict[str, object], list[UnitFailure]]:
+        """Run every unit ``store`` does not hold, saving each result as it finishes; returns
+        every unit's result by key (stored ones included) and the units that failed for good,
+        in the order given. One progress bar counts all units, stored ones from the start."""
+        from tqdm import tqdm
+
+        units = list(units)
+        keys = [u.key for u in units]
+        if len(set(keys)) != len(keys):
+            twice = sorted({k for k in keys if keys.count(k) > 1})
+            raise ValueError(f"unit keys must be unique in a sweep, repeated: {twice[:5]}")
+        results = {u.key: store.load(u.key) for u in units if store.done(u.key)}
+        pending = [u for u in units if u.key not in results]
+        failed: dict[str, UnitFailure] = {}
+        with tqdm(total=len(units), initial=len(results), desc=desc, unit="unit",
+                  disable=not progress) as bar:
+            if pending:
+                for unit, ok, value, attempts in self._attempts(pending):
+                    if ok:
+                        store.save(unit.key, value)
+                        results[unit.key] = value
+                    else:
+                        failed[unit.key] = UnitFailure(unit.key, value, attempts)
+                    bar.update()
+        return results, [failed[k] for k in keys if k in failed]
+
+    def _attempts(self, units: list[Unit]) -> Iterator[tuple[Unit, bool, object, int]]:
+        """Each unit's final outcome ``(unit, ok, result or error text, attempts)``, as they
+        finish, retrying failed attempts up to `retries` more times.
+
+        An attempt lost together with others (a pool broken while several units ran) counts
+        against none of them: they become suspects and run again one at a time, before any
+        other unit, so that the one that kills its worker is charged and the others are not."""
+        queue = list(reversed(units))  # pop() takes them in the order given
+        tries: dict[str, int] = {}
+        suspects: set[str] = set()
+        in_flight: dict[object, Unit] = {}
+        with self._session():
+            while queue or in_flight:
+                while queue and len(in_flight) < (1 if suspects else self._slots()):
+                    unit = queue.pop()
+                    tries[unit.key] = tries.get(unit.key, 0) + 1
+                    in_flight[self._submit(unit)] = unit
+                for handle, ok, value, used in self._finished(list(in_flight)):
+                    unit = in_flight.pop(handle)
+                    tries[unit.key] += used - 1
+                    if used == 0:
+                        suspects.add(unit.key)
+                        queue.append(unit)
+                        continue
+                    suspects.discard(unit.key)
+                    if ok or tries[unit.key] > self.retries:
+                        yield unit, ok, value, tries[unit.key]
+                    else:
+                        queue.append(unit)
+
+    def _slots(self) -> int:
+        return self.workers
+
+    def _session(self) -> contextlib.AbstractContextManager:
+        """Around a run: start and stop the workers."""
+        return contextlib.nullcontext()
+
+    def _submit(self, unit: Unit) -> object:
+        """Start one attempt of ``unit``; returns its handle."""
+        raise NotImplementedError
+
+    def _finished(self, handles: list) -> list[tuple[object, bool, object, int]]:
+        """Wait until at least one of ``handles`` has finished; each finished one as
+        ``(handle, ok, result or error text, attempts it took)``, where 0 attempts means lost
+        with others through no known fault of its own."""
+        raise NotImplementedError
+
+
+class _Done:
+    """The handle of an attempt that has already run (in-process)."""
+
+    def __init__(self, ok: bool, value: object) -> None:
+        self.ok, self.value = ok, value
+
+
+class InProcessExecutor(Executor):
+    """The units one after another in this process."""
+
+    def __init__(self, retries: int) -> None:
+        super().__init__(1, retries)
+
+    def _submit(self, unit: Unit) -> _Done:
+        try:
+            return _Done(True, unit.fn(*unit.args))
+        except Exception as exc:  # reported as the unit's failure; the others go on
+            return _Done(False, error_text(exc))
+
+    def _finished(self, handles: list) -> list[tuple[object, bool, object, int]]:
+        return [(h, h.ok, h.value, 1) for h in handles]
+
+
+class PoolExecutor(Executor):
+    """The units on a pool of ``workers`` processes (`POOL_START_METHOD`); a pool broken by a
+    dying worker is rebuilt and the units in flight are tried again."""
+
+    def __init__(self, workers: int, retries: int) -> None:
+        super().__init__(workers, retries)
+        self._pool: cf.ProcessPoolExecutor | None = None
+
+    @contextlib.contextmanager
+    def _session(self) -> Iterator[None]:
+        try:
+            yield
+        finally:
+            if self._pool is not None:
+                self._pool.shutdown(wait=True, cancel_futures=True)
+                self._pool = None
+
+    def _submit(self, unit: Unit) -> cf.Future:
+        if self._pool is None:
+            self._pool = cf.ProcessPoolExecutor(
+                self.workers, mp_context=multiprocessing.get_context(POOL_START_METHOD),
+                initializer=_one_thread)
+        try:
+            return self._pool.submit(unit.fn, *unit.args)
+        except cf.process.BrokenProcessPool as exc:  # broke since the last wait: lost with it
+            future = cf.Future()
+            future.set_exception(exc)
+            return future
+
+    def _finished(self, handles: list) -> list[tuple[object, bool, object, int]]:
+        done, _ = cf.wait(handles, return_when=cf.FIRST_COMPLETED)
+        out, lost = [], []
+        for future in done:
+            exc = future.exception()
+            if isinstance(exc, cf.process.BrokenProcessPool):
+                lost.append(future)
+            elif exc is not None:
+                out.append((future, False, error_text(exc), 1))
+            else:
+                out.append((future, True, future.result(), 1))
+        if lost:  # every unit in flight is lost with the pool: rebuild it on the next submit
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+            lost += [f for f in handles if f not in done]
+            charged = 1 if len(lost) == 1 else 0  # alone, it is the one whose worker died
+            out += [(f, False, WORKER_DIED, charged) for f in lost]
+        return out
+
+
+def _one_thread() -> None:
+    """A pool worker's start: one torch thread per process (several processes share the
+    cores); torch is set only if it is installed."""
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    try:
+        import torch
+    except ImportError:
+        return
+    torch.set_num_threads(1)
+
+
+class RayExecutor(Executor):
+    """The units as Ray tasks on the cluster at ``address``, or on a local instance with
+    ``workers`` CPUs; a task whose worker process died is retried by Ray (``max_retries``), an
+    exception here. A Ray already initialised in this process (e.g. by a test) is used as it
+    is and left running."""
+
+    def __init__(self, workers: int | None, address: str | None, retries: int) -> None:
+        super().__init__(workers, retries)
+        self.address = address
+        self._task = None
+
+    def _slots(self) -> int:
+        return self.workers if self.workers is not None else 1 << 30
+
+    @contextlib.contextmanager
+    def _session(self) -> Iterator[None]:
+        import ray
+
+        started = not ray.is_initialized()
+        if started:
+            os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # no network call home
+            if self.address is None:
+                ray.init(num_cpus=self.workers, include_dashboard=False, log_to_driver=False)
+            else:
+                ray.init(address=self.address, log_to_driver=False)
+        self._task = ray.remote(max_retries=self.retries, retry_exceptions=False)(_call)
+        try:
+            yield
+        finally:
+            self._task = None
+            if started:
+                ray.shutdown()
+
+    def _submit(self, unit: Unit) -> object:
+        return self._task.remote(unit.fn, unit.args)
+
+    def _finished(self, handles: list) -> list[tuple[object, bool, object, int]]:
+        import ray
+        from ray.exceptions import RayError, RayTaskError, WorkerCrashedError
+
+        done, _ = ray.wait(handles, num_returns=1)
+        out = []
+        for ref in done:
+            try:
+                out.append((ref, True, ray.get(ref), 1))
+            except RayTaskError as exc:  # the unit raised: retried here
+                cause = exc.cause if exc.cause is not None else exc
+                out.append((ref, False, error_text(cause), 1))
+            except WorkerCrashedError:  # Ray has retried it max_retries times already
+                out.append((ref, False, WORKER_DIED, 1 + self.retries))
+            except RayError as exc:  # e.g. a lost node or out of memory: retried here
+                out.append((ref, False, error_text(exc), 1))
+        return out
+
+
+def _call(fn: Callable, args: tuple) -> object:
+    """A Ray task: one attempt of a unit, with one torch thread."""
+    _one_thread()
+    return fn(*args)
+
+
+def machine_cores() -> int:
+    """The cores this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+#: an ``executor`` block's keys and defaults (``workers: None``: see `make_executor`)
+EXECUTOR_DEFAULTS = {"kind": "local", "workers": None, "address": None, "retries": 2}
+
+
+def executor_settings(value: object, where: str = "executor",
+                      names: Mapping[str, str] | None = None) -> dict:
+    """An ``executor`` block (``{kind, workers, address, retries}``, every key optional)
+    checked and completed with `EXECUTOR_DEFAULTS`; a mistake raises `ConfigError` naming
+    ``<where>.<key>``, or ``names[key]`` (e.g. a command-line flag)."""
+    names = names or {}
+
+    def field(key: str) -> str:
+        return names.get(key, f"{where}.{key}")
+
+    if not isinstance(value, Mapping):
+        raise ConfigError(f"{where}: expected a mapping {{kind, workers, address, retries}}, "
+                          f"got {type(value).__name__}")
+    unknown = sorted(set(value) - set(EXECUTOR_DEFAULTS))
+    if unknown:
+        raise ConfigError(f"{where}: unknown keys {unknown}; allowed are "
+                          f"{sorted(EXECUTOR_DEFAULTS)}")
+    out = {**EXECUTOR_DEFAULTS, **value}
+    if out["kind"] not in EXECUTOR_KINDS:
+        raise ConfigError(f"{field('kind')}: expected one of {EXECUTOR_KINDS}, got "
+                          f"{out['kind']!r}")
+    for key, low in (("workers", 1), ("retries", 0)):
+        number = out[key]
+        if (number is not None or key == "retries") and (
+                not isinstance(number, int) or isinstance(number, bool) or number < low):
+            raise ConfigError(f"{field(key)}: expected an integer >= {low}, got {number!r}")
+    address = out["address"]
+    if address is not None:
+        if out["kind"] != "ray":
+            raise ConfigError(f"{field('address')}: only for the ray executor "
+                              f"({field('kind')}: ray)")
+        if not isinstance(address, str) or not address.strip():
+            raise ConfigError(f"{field('address')}: expected a Ray address (host:port, "
+                              f"ray://host:port or auto), got {address!r}")
+    return out
+
+
+def make_executor(kind: str = "local", workers: int | None = None, address: str | None = None,
+                  retries: int = 2) -> Executor:
+    """The executor ``kind`` (``local`` or ``ray``; module docstring). ``workers``: units run
+    at once (default: the machine's cores for ``local`` and a local Ray, no limit on a
+    cluster); ``address``: a Ray cluster's (only for ``ray``; default: start a local
+    instance); ``retries``: attempts after a unit's first failure. Arguments are checked as
+    an ``executor`` block (`executor_settings`)."""
+    executor_settings(dict(kind=kind, workers=workers, address=address, retries=retries))
+    if kind == "local":
+        workers = machine_cores() if workers is None else workers
+        return InProcessExecutor(retries) if workers == 1 else PoolExecutor(workers, retries)
+    try:
+        import ray  # noqa: F401
+    except ImportError:
+        raise ConfigError(_RAY_MISSING) from None
+    if workers is None and address is None:
+        workers = machine_cores()
+    return RayExecutor(workers, address, retries)

@@ -1,0 +1,179 @@
+"""The shared executor layer (`experiments.executors`): the unit store, retries, failures that
+leave the other units running, and a worker that dies, on the in-process executor and the local
+process pool (the Ray executor: test_ray_executor.py)."""
+
+import pickle
+
+import pytest
+import sweep_units
+
+from bounce_gym.errors import ConfigError
+from experiments.executors import (
+    InProcessExecutor,
+    PoolExecutor,
+    Unit,
+    UnitFailure,
+    UnitStore,
+    executor_settings,
+    make_executor,
+)
+
+LOCAL = [pytest.param(1, id="in-process"), pytest.param(2, id="pool")]
+
+
+def _squares(n: int) -> list[Unit]:
+    return [Unit(f"sq{k}", sweep_units.square, (k,)) for k in range(n)]
+
+
+def test_the_store_keeps_results_atomically_one_file_per_unit(tmp_path):
+    store = UnitStore(tmp_path / "units")
+    assert not store.done("a")
+    store.save("a", {"rows": [1, 2]})
+    assert store.done("a") and store.load("a") == {"rows": [1, 2]}
+    assert [p.name for p in (tmp_path / "units").iterdir()] == ["a.pkl"]
+    assert pickle.loads((tmp_path / "units/a.pkl").read_bytes()) == {"rows": [1, 2]}
+
+
+@pytest.mark.parametrize("key", ["", "a/b", "../x", ".hidden", "a b", "-x"])
+def test_a_unit_key_must_be_a_plain_file_name(key):
+    with pytest.raises(ValueError, match="unit key"):
+        Unit(key, sweep_units.square, (1,))
+
+
+def test_unit_keys_must_be_unique(tmp_path):
+    units = [Unit("a", sweep_units.square, (1,)), Unit("a", sweep_units.square, (2,))]
+    with pytest.raises(ValueError, match="repeated: \\['a'\\]"):
+        make_executor(workers=1).run(units, UnitStore(tmp_path), progress=False)
+
+
+@pytest.mark.parametrize("workers", LOCAL)
+def test_every_unit_runs_once_and_is_stored(tmp_path, workers):
+    store = UnitStore(tmp_path / "units")
+    results, failures = make_executor(workers=workers).run(_squares(5), store, progress=False)
+    assert results == {f"sq{k}": k * k for k in range(5)} and failures == []
+    assert all(store.load(f"sq{k}") == k * k for k in range(5))
+
+
+def test_the_pool_runs_units_in_other_processes(tmp_path):
+    import os
+
+    units = [Unit(f"p{k}", sweep_units.pid_of, (k,)) for k in range(4)]
+    results, _ = make_executor(workers=2).run(units, UnitStore(tmp_path), progress=False)
+    assert os.getpid() not in results.values()
+
+
+@pytest.mark.parametrize("workers", LOCAL)
+def test_a_restarted_sweep_skips_stored_units(tmp_path, workers):
+    store, calls = UnitStore(tmp_path / "units"), tmp_path / "calls"
+    store.save("sq1", 1)
+    store.save("sq3", 9)
+    units = [Unit(u.key, sweep_units.count_calls, (calls, u.fn, *u.args)) for u in _squares(5)]
+    results, failures = make_executor(workers=workers).run(units, store, progress=False)
+    assert results == {f"sq{k}": k * k for k in range(5)} and failures == []
+    assert len(list(calls.iterdir())) == 3
+
+
+@pytest.mark.parametrize("workers", LOCAL)
+def test_a_unit_failing_for_good_is_reported_while_the_others_complete(tmp_path, workers):
+    units = [*_squares(3), Unit("bad", sweep_units.fail, (7,))]
+    store = UnitStore(tmp_path / "units")
+    results, failures = make_executor(workers=workers, retries=2).run(units, store,
+                                                                      progress=False)
+    assert results == {"sq0": 0, "sq1": 1, "sq2": 4}
+    assert failures == [UnitFailure("bad", "ValueError: unit 7 cannot be done", 3)]
+    assert not store.done("bad")
+
+
+@pytest.mark.parametrize("workers", LOCAL)
+def test_a_unit_that_raises_once_is_retried(tmp_path, workers):
+    units = [*_squares(2), Unit("x", sweep_units.raise_once, (tmp_path / "m", sweep_units.square,
+                                                             6))]
+    results, failures = make_executor(workers=workers, retries=1).run(
+        units, UnitStore(tmp_path / "units"), progress=False)
+    assert results == {"sq0": 0, "sq1": 1, "x": 36} and failures == []
+
+
+def test_no_retries_means_one_attempt(tmp_path):
+    units = [Unit("x", sweep_units.raise_once, (tmp_path / "m", sweep_units.square, 6))]
+    _, failures = make_executor(workers=1, retries=0).run(units, UnitStore(tmp_path / "u"),
+                                                          progress=False)
+    assert failures == [UnitFailure("x", "RuntimeError: injected failure", 1)]
+
+
+def test_a_pool_worker_that_dies_is_replaced_and_its_unit_retried(tmp_path):
+    units = [*_squares(4), Unit("x", sweep_units.die_once, (tmp_path / "m", sweep_units.square,
+                                                           5)), *_squares(8)[4:]]
+    results, failures = make_executor(workers=2, retries=2).run(
+        units, UnitStore(tmp_path / "units"), progress=False)
+    assert failures == []
+    assert results == {**{f"sq{k}": k * k for k in range(8)}, "x": 25}
+
+
+def test_a_pool_worker_that_always_dies_fails_for_good(tmp_path):
+    units = [Unit("x", sweep_units.die, (5,)), *_squares(5)]
+    results, failures = make_executor(workers=2, retries=2).run(
+        units, UnitStore(tmp_path / "units"), progress=False)
+    assert failures == [UnitFailure("x", "worker died", 3)]
+    assert results == {f"sq{k}": k * k for k in range(5)}
+
+
+def test_the_progress_bar_counts_stored_units_from_the_start(tmp_path, capsys):
+    store = UnitStore(tmp_path)
+    store.save("sq0", 0)
+    make_executor(workers=1).run(_squares(2), store, desc="squares")
+    err = capsys.readouterr().err
+    assert "squares:  50%" in err and "squares: 100%" in err and "2/2" in err
+
+
+def test_make_executor_picks_the_executor_and_checks_its_arguments():
+    assert isinstance(make_executor(workers=1), InProcessExecutor)
+    pool = make_executor("local", workers=3, retries=0)
+    assert isinstance(pool, PoolExecutor) and (pool.workers, pool.retries) == (3, 0)
+    assert make_executor().workers >= 1
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"kind": "dask"}, r"executor.kind: expected one of \('local', 'ray'\), got 'dask'"),
+        ({"workers": 0}, "executor.workers: expected an integer >= 1, got 0"),
+        ({"workers": True}, "executor.workers: expected an integer >= 1, got True"),
+        ({"retries": -1}, "executor.retries: expected an integer >= 0, got -1"),
+        ({"address": "localhost:6379"}, "executor.address: only for the ray executor"),
+        ({"kind": "ray", "address": " "}, "executor.address: expected a Ray address"),
+    ],
+)
+def test_bad_executor_arguments_raise(kwargs, message):
+    with pytest.raises(ConfigError, match=message):
+        make_executor(**kwargs)
+
+
+def test_a_missing_ray_names_the_extra(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "ray", None)
+    with pytest.raises(ConfigError, match=r"pip install bounce-gym\[distributed\]"):
+        make_executor("ray")
+
+
+def test_an_executor_block_is_completed_with_the_defaults():
+    assert executor_settings({}) == {"kind": "local", "workers": None, "address": None,
+                                     "retries": 2}
+    assert executor_settings({"kind": "ray", "address": "auto", "workers": 4})["workers"] == 4
+
+
+@pytest.mark.parametrize(
+    ("block", "names", "message"),
+    [
+        ([], None, "config.executor: expected a mapping"),
+        ({"cores": 2}, None, r"config.executor: unknown keys \['cores'\]"),
+        ({"workers": "2"}, None, "config.executor.workers: expected an integer >= 1, got '2'"),
+        ({"retries": None}, None, "config.executor.retries: expected an integer >= 0"),
+        ({"workers": 0}, {"workers": "--workers"}, "^--workers: expected an integer >= 1"),
+        ({"address": "h:1"}, {"address": "--address", "kind": "--executor"},
+         r"^--address: only for the ray executor \(--executor: ray\)"),
+    ],
+)
+def test_bad_executor_blocks_name_the_field(block, names, message):
+    with pytest.raises(ConfigError, match=message):
+        executor_settings(block, "config.executor", names)
