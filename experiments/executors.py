@@ -106,7 +106,7 @@ def error_text(exc: BaseException) -> str:
 
 class Executor:
     """Runs units (`run`); subclasses start them (`_submit`) and collect finished ones
-    (`_finished`), at most `slots` at a time."""
+    (`_finished`), at most `_slots` at a time."""
 
     def __init__(self, workers: int, retries: int) -> None:
         self.workers = workers
