@@ -21,9 +21,9 @@ import math
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from bounce_gym.errors import ConfigError
+from bounce_gym.files import read_yaml
 
 DISTRIBUTIONS = ("loguniform", "uniform", "randint", "choice")
 
@@ -31,13 +31,7 @@ DISTRIBUTIONS = ("loguniform", "uniform", "randint", "choice")
 def load_search_space(path: Path) -> dict[str, tuple[str, object]]:
     """The search space of the YAML file ``path``: per hyperparameter, its distribution's name
     and its bounds (or, for ``choice``, its values)."""
-    if not path.is_file():
-        raise ConfigError(f"search: file {str(path)!r} does not exist")
-    try:
-        entries = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"search: {path} is not valid YAML ({str(exc).splitlines()[0]})") \
-            from None
+    entries = read_yaml("search", path)
     if not isinstance(entries, dict) or not entries:
         raise ConfigError(f"search: {path} must map hyperparameter names to distributions, "
                           f"e.g. learning_rate: {{loguniform: [1.0e-5, 1.0e-3]}}")

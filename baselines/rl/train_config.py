@@ -23,7 +23,6 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import gymnasium as gym
-import yaml
 
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.model_files import ALGOS, VARIANT, check_folder_name
@@ -35,6 +34,7 @@ from bounce_gym.envs.registration import (
     is_pettingzoo_id,
 )
 from bounce_gym.errors import ConfigError
+from bounce_gym.files import read_yaml
 
 MULTI_ALGOS = ("ppo",)
 VEC_ENVS = ("native", "sync", "subproc")
@@ -252,13 +252,7 @@ def _merge_file(config: dict, folder: Path | None) -> None:
         path = (folder or Path.cwd()) / path
     config["hyperparams_file"] = str(path)
     field = "config.hyperparams_file"
-    if not path.is_file():
-        raise ConfigError(f"{field}: file {str(path)!r} does not exist")
-    try:
-        entries = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{field}: {path} is not valid YAML ({str(exc).splitlines()[0]})") \
-            from None
+    entries = read_yaml(field, path)
     key = config["env"] if "role" not in config else f"{config['env']}:{config['role']}"
     if not isinstance(entries, dict) or key not in entries:
         ids = sorted(entries) if isinstance(entries, dict) else []
