@@ -18,6 +18,7 @@ import errno
 import fcntl
 import os
 import shutil
+import stat
 import tempfile
 import unicodedata
 from collections.abc import Iterator
@@ -95,16 +96,24 @@ def _no_follow(path: str, flags: int) -> int:
 
 
 def open_no_follow(path: Path, flags: int) -> int:
-    """``os.open(path, flags)`` (files it creates get mode 0o666 less the umask) without
-    following a symbolic link: a link at ``path`` raises `ConfigError` naming the file, and
-    nothing is read or written through it."""
+    """``os.open(path, flags)`` of a regular file (one it creates gets mode 0o666 less the
+    umask), without following a symbolic link: a link at ``path``, or a pipe or device planted
+    there (which could block the open or a read for ever), raises `ConfigError` naming the
+    file, and nothing is read or written through it."""
     try:
-        return _no_follow(str(path), flags)
+        fd = _no_follow(str(path), flags | os.O_NONBLOCK)
     except OSError as exc:
         if exc.errno == errno.ELOOP or os.path.islink(path):
             raise ConfigError(f"{path}: is a symbolic link; the package does not open its own "
-                              "files through a link (remove it)") from None
-        raise
+                              "files through one, remove it") from None
+        if exc.errno != errno.ENXIO:  # a pipe nobody reads
+            raise
+        fd = None
+    if fd is None or not stat.S_ISREG(os.fstat(fd).st_mode):
+        if fd is not None:
+            os.close(fd)
+        raise ConfigError(f"{path}: is not a regular file; remove it")
+    return fd
 
 
 def refuse_links(field: str, base: Path, path: Path) -> None:
@@ -117,7 +126,7 @@ def refuse_links(field: str, base: Path, path: Path) -> None:
         here = here / part
         if here.is_symlink():
             raise ConfigError(f"{field}: {here} is a symbolic link; the package does not write "
-                              "through a link inside its folders (remove it)")
+                              "through a link inside its folders, remove it")
 
 
 #: the most bytes (UTF-8) of a name that becomes a path component (`check_path_component`),

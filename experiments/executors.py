@@ -33,19 +33,17 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
-import errno
 import multiprocessing
 import os
 import pickle
 import re
-import stat
 import sys
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import atomic_write
+from bounce_gym.files import atomic_write, open_no_follow
 from bounce_gym.trust import secret_key, sign, verify
 
 EXECUTOR_KINDS = ("local", "ray")
@@ -141,18 +139,18 @@ class UnitStore:
                 continue
             except (OSError, UntrustedUnitError) as exc:
                 why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-                print(f"warning: {self._path(key)}: not a unit result signed with your key "
-                      f"({why}); running the unit again", file=sys.stderr)
+                print(f"warning: {self._path(key)}: not taken as a unit result ({why}); "
+                      "running the unit again", file=sys.stderr)
         return out
 
     def _verified(self, key: str, raw: bytes) -> bytes:
         head, newline, data = raw.partition(b"\n")
         magic, _, signature = head.partition(b" ")
         if not newline or magic != _UNIT_MAGIC.encode():
-            raise UntrustedUnitError("no signature line")
+            raise UntrustedUnitError("not signed: no signature line")
         if not verify(data, signature.decode("ascii", "replace"), self._purpose(key)):
-            raise UntrustedUnitError("the signature does not match: another key, or changed "
-                                     "or cut short since")
+            raise UntrustedUnitError("its signature does not match your key: signed with "
+                                     "another, or changed or cut short since")
         return data
 
 
@@ -161,17 +159,13 @@ class UntrustedUnitError(Exception):
 
 
 def _read_regular(path: Path) -> bytes:
-    """The bytes of the regular file ``path``: not through a symbolic link, and without
-    waiting on a pipe or a device planted at its name (`UntrustedUnitError`)."""
+    """The bytes of the regular file ``path``, never through a symbolic link nor waiting on a
+    pipe planted at its name (`bounce_gym.files.open_no_follow`; `UntrustedUnitError`)."""
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            raise UntrustedUnitError("a symbolic link") from None
-        raise
+        fd = open_no_follow(path, os.O_RDONLY)
+    except ConfigError as exc:
+        raise UntrustedUnitError(str(exc).removeprefix(f"{path}: ")) from None
     with os.fdopen(fd, "rb") as fh:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise UntrustedUnitError("not a regular file")
         return fh.read()
 
 
