@@ -106,7 +106,7 @@ class UnitStore:
 
     def __init__(self, folder: Path) -> None:
         self.folder = Path(folder)
-        secret_key()
+        secret_key()  # made or read now: a problem with it is reported before any unit runs
 
     def _path(self, key: str) -> Path:
         return self.folder / f"{key}{UNIT_SUFFIX}"
@@ -121,12 +121,12 @@ class UnitStore:
 
     def load(self, key: str) -> object:
         """The stored result of unit ``key``; `FileNotFoundError` if there is none, and
-        `UntrustedUnitError` if its file fails the check (class docstring)."""
+        `StoredUnitError` if its file fails the check (class docstring)."""
         data = self._verified(key, _read_regular(self._path(key)))
         try:
             return pickle.loads(data)  # noqa: S301  (signed with the user's key)
         except Exception as exc:  # signed, but this code cannot rebuild it (e.g. a class moved)
-            raise UntrustedUnitError(f"cannot be unpickled ({error_text(exc)})") from None
+            raise StoredUnitError(f"cannot be unpickled ({error_text(exc)})") from None
 
     def stored(self, keys: Iterable[str]) -> dict[str, object]:
         """The results of ``keys`` the store holds and vouches for; each file that fails the
@@ -137,7 +137,7 @@ class UnitStore:
                 out[key] = self.load(key)
             except FileNotFoundError:
                 continue
-            except (OSError, UntrustedUnitError) as exc:
+            except (OSError, StoredUnitError) as exc:
                 why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
                 print(f"warning: {self._path(key)}: not taken as a unit result ({why}); "
                       "running the unit again", file=sys.stderr)
@@ -147,24 +147,25 @@ class UnitStore:
         head, newline, data = raw.partition(b"\n")
         magic, _, signature = head.partition(b" ")
         if not newline or magic != _UNIT_MAGIC.encode():
-            raise UntrustedUnitError("not signed: no signature line")
+            raise StoredUnitError("not signed: no signature line")
         if not verify(data, signature.decode("ascii", "replace"), self._purpose(key)):
-            raise UntrustedUnitError("its signature does not match your key: signed with "
-                                     "another, or changed or cut short since")
+            raise StoredUnitError("its signature does not match your key: signed with "
+                                  "another, or changed or cut short since")
         return data
 
 
-class UntrustedUnitError(Exception):
-    """A stored unit's file that fails the check (`UnitStore`); the message says why."""
+class StoredUnitError(Exception):
+    """A stored unit's file that is not taken (`UnitStore`): it fails the check, or, though
+    signed, this code cannot unpickle it; the message says why."""
 
 
 def _read_regular(path: Path) -> bytes:
     """The bytes of the regular file ``path``, never through a symbolic link nor waiting on a
-    pipe planted at its name (`bounce_gym.files.open_no_follow`; `UntrustedUnitError`)."""
+    pipe planted at its name (`bounce_gym.files.open_no_follow`; `StoredUnitError`)."""
     try:
         fd = open_no_follow(path, os.O_RDONLY)
     except ConfigError as exc:
-        raise UntrustedUnitError(str(exc).removeprefix(f"{path}: ")) from None
+        raise StoredUnitError(str(exc).removeprefix(f"{path}: ")) from None
     with os.fdopen(fd, "rb") as fh:
         return fh.read()
 

@@ -86,6 +86,18 @@ def test_unit_files_the_user_did_not_sign_are_never_unpickled(tmp_path, capsys):
     assert "symbolic link" in lines[-2] and "not a regular file" in lines[-1]
 
 
+def test_a_signed_unit_file_this_code_cannot_unpickle_is_a_warning_too(tmp_path, capsys):
+    from bounce_gym.trust import sign
+
+    store = UnitStore(tmp_path / "units")
+    data = b"cno_such_module_here\nThing\n."  # a pickle of a class that is gone
+    (tmp_path / "units").mkdir()
+    (tmp_path / "units/a.unit").write_bytes(
+        b"bounce_gym-unit " + sign(data, "unit units/a").encode() + b"\n" + data)
+    assert store.stored(["a"]) == {}
+    assert "cannot be unpickled (ModuleNotFoundError" in capsys.readouterr().err
+
+
 def test_a_unit_file_signed_by_another_user_runs_again(tmp_path, monkeypatch, capsys):
     from bounce_gym.trust import HOME_VARIABLE
 
