@@ -84,6 +84,7 @@ from baselines.rl.model_files import read_model, run_name, save_model
 from baselines.rl.monitor import SUFFIX
 from baselines.rl.train_config import (
     POLICIES,
+    algo_class,
     algo_kwargs,
     check_hyperparams,
     validate_train_config,
@@ -145,7 +146,7 @@ def prepare(config: Mapping, folder: Path | None = None) -> dict:
     if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError("config.tensorboard: needs the tensorboard package "
                           "(pip install -e .[tensorboard]), or set tensorboard: false")
-    check_hyperparams(_algo_class(config["algo"]), config["hyperparams"])
+    check_hyperparams(algo_class(config["algo"]), config["hyperparams"])
     _check_action_space(config)
     return config
 
@@ -214,13 +215,6 @@ def _check_action_space(config: Mapping) -> None:
                           "(set env_kwargs.action_type: discrete, or use ppo or recurrentppo)")
 
 
-def _algo_class(algo: str):
-    from sb3_contrib import RecurrentPPO
-    from stable_baselines3 import DQN, PPO
-
-    return {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[algo]
-
-
 def _comparable(config: Mapping) -> dict:
     return json.loads(json.dumps({k: v for k, v in config.items()
                                   if k not in RESUMABLE_CHANGES}))
@@ -275,7 +269,7 @@ def _fresh(run: Run, env, log):
     config = run.config
     kwargs = algo_kwargs(config["hyperparams"])
     try:
-        model = _algo_class(config["algo"])(
+        model = algo_class(config["algo"])(
             POLICIES[config["algo"]], env, seed=run.seed, device="cpu", verbose=0,
             tensorboard_log=_log_dir(run), **kwargs)
     except (AssertionError, TypeError, ValueError) as exc:  # SB3's checks of the values
