@@ -36,16 +36,20 @@ checkpoints ``checkpoints/<run>_seed<seed>_<steps>_steps.zip`` (every ``checkpoi
 at the start of an iteration, and at the end), never overwritten; the per-episode monitor file
 ``<run>_seed<seed>.monitor.csv`` (`baselines.rl.monitor`), from which ``bounce-gym train`` and
 ``bounce-gym curves`` draw the learning curves (`baselines.rl.curves`). Model files are
-written atomically and listed with their sha256 in the folder's ``manifest.json``
-(`baselines.rl.model_files`); each carries its configuration and the wrappers the evaluation
-must rebuild (frame stack, VecNormalize statistics; `baselines.rl.wrappers`).
+written atomically and recorded with their sha256 in the folder's ``manifest.json``, against
+damage (`baselines.rl.model_files`); each carries its configuration and the wrappers the
+evaluation must rebuild (frame stack, VecNormalize statistics; `baselines.rl.wrappers`), and is
+loaded as data, nothing in it unpickled (`baselines.rl.model_load`).
 
 **Resuming** (``resume: true``, ``--resume``) continues every seed from its newest checkpoint —
 weights, optimiser, step count, random streams and the envs mid-episode (`baselines.rl.resume`)
 — up to ``total_timesteps``, with the monitor file cut back to the checkpoint: the result is the
-run that was never interrupted. A seed without a checkpoint starts afresh; a configuration that
-differs from the checkpoint's (other than budget, checkpoint interval and logging) or no
-checkpoint for any seed is a `ConfigError`. Without ``resume`` a seed with checkpoints is a
+run that was never interrupted. The state besides the weights is a pickle, signed with the
+user's key (`bounce_gym.trust`) when the checkpoint is saved; a checkpoint whose signature does
+not check (one copied from another user or machine) is resumed only once trusted with
+``bounce-gym trust FILE`` (``docs/model_files.md``). A seed without a checkpoint starts afresh;
+a configuration that differs from the checkpoint's (other than budget, checkpoint interval and
+logging) or no checkpoint for any seed is a `ConfigError`. Without ``resume`` a seed with checkpoints is a
 `ConfigError` too: nothing is overwritten. Same configuration and seed, same weights, bit for
 bit (torch on the CPU).
 
@@ -169,9 +173,10 @@ def train_seed(config: Mapping, seed: int, progress: bool = True, callbacks: Seq
 
 
 def finished(config: Mapping, seed: int) -> bool:
-    """Whether the seed's model of a configuration `prepare` returned is saved already: listed
-    in the manifest, trained with this configuration (`RESUMABLE_CHANGES` aside) for exactly
-    its ``total_timesteps``. A sweep started again skips such seeds."""
+    """Whether the seed's model of a configuration `prepare` returned is saved already: a
+    readable model file (unchanged since saved, `baselines.rl.model_files.read_model`), trained
+    with this configuration (`RESUMABLE_CHANGES` aside) for exactly its ``total_timesteps``. A
+    sweep started again skips such seeds."""
     run = Run(config, seed)
     if not run.model.is_file():
         return False
@@ -281,7 +286,9 @@ def _fresh(run: Run, env, log):
 
 def _resumed(run: Run, env, found: dict[int, Path], log):
     """The model of the newest checkpoint in ``found``, with everything restored into it and
-    into ``env``, its monitor file cut back to the checkpoint."""
+    into ``env``, its monitor file cut back to the checkpoint. The resume state is unpickled
+    only once vouched for (`baselines.rl.model_files.ModelFile.resume_state`), before the
+    weights are loaded."""
     from baselines.rl.resume import restore
 
     steps, path = max(found.items())

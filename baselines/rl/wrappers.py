@@ -5,7 +5,7 @@ Training may stack frames (``VecFrameStack``) and normalise observations (``VecN
 `baselines.rl.train_env`); the policy only ever saw the wrapped observations. `describe` records
 what the evaluation needs — the stack size and the normalisation statistics, as JSON numbers
 (float64, exact) — in the model file's metadata (`baselines.rl.model_files.METADATA_ENTRY`,
-part of the trusted file, never a pickle). `ObservationPipeline` rebuilds the same SB3 wrappers,
+JSON, never a pickle). `ObservationPipeline` rebuilds the same SB3 wrappers,
 with the statistics frozen, around the observations of one evaluation episode, so the model acts
 on exactly what it would have seen in training.
 """
