@@ -114,7 +114,7 @@ def _read(path: Path, limit: int, what: str) -> bytes:
     try:
         with open(path, "rb") as fh:
             size = os.fstat(fh.fileno()).st_size
-            data = fh.read(limit + 1) if size <= limit else b""
+            data = fh.read(size + 1) if size <= limit else b""  # read(n) allocates n bytes
     except OSError as exc:
         raise ConfigError(f"{what} {path}: cannot be read ({exc.strerror or exc})") from None
     if size > limit or len(data) > limit:
@@ -298,8 +298,8 @@ def read_model(path: Path) -> ModelFile:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
             sizes = {info.filename: info.file_size for info in archive.infolist()}
             if DATA_ENTRY not in sizes:
-                raise ConfigError(f"model {path}: not a Stable-Baselines3 model file (it has no "
-                                  f"{DATA_ENTRY!r} entry)")
+                raise ConfigError(f"model {path}: not a readable Stable-Baselines3 model file "
+                                  f"(it has no {DATA_ENTRY!r} entry)")
             sb3_data = _json_entry(archive, sizes, DATA_ENTRY, path)
             metadata = (_json_entry(archive, sizes, METADATA_ENTRY, path)
                         if METADATA_ENTRY in sizes else {})

@@ -68,7 +68,7 @@ def load_model_file(trained: ModelFile, observation_space, action_space, **load_
                                    custom_objects=custom_objects, **load_kwargs)
     except _LOAD_ERRORS as exc:
         raise ConfigError(f"model {trained.path}: its weights do not fit the {trained.algo} model "
-                          f"its configuration describes ({type(exc).__name__}: {exc})") from None
+                          f"its configuration describes ({_reason(exc)})") from None
 
 
 def _config(trained: ModelFile) -> dict:
@@ -81,15 +81,15 @@ def _config(trained: ModelFile) -> dict:
     # the saved configuration is complete: its defaults of None are left out to be filled in
     # again, and the hyperparameter file it names was merged into it already
     config = {k: v for k, v in saved.items() if v is not None and k != "hyperparams_file"}
+    if config.get("algo") != trained.algo:
+        raise ConfigError(f"model {trained.path}: its name says {trained.algo}, but its "
+                          f"configuration says algo {config.get('algo')!r}")
     try:
         config = validate_train_config(config)
-        check_hyperparams(algo_class(config["algo"]), config["hyperparams"])
+        check_hyperparams(algo_class(trained.algo), config["hyperparams"])
     except ConfigError as exc:
         raise ConfigError(f"model {trained.path}: the training configuration it carries is not "
                           f"valid ({exc})") from None
-    if config["algo"] != trained.algo:
-        raise ConfigError(f"model {trained.path}: its name says {trained.algo}, but its "
-                          f"configuration says algo {config['algo']!r}")
     return config
 
 
@@ -106,7 +106,7 @@ def _template(trained: ModelFile, observation_space, action_space):
     except (AssertionError, TypeError, ValueError, KeyError) as exc:
         raise ConfigError(f"model {trained.path}: no {trained.algo} model for observations "
                           f"{observation_space} and actions {action_space} can be built from its "
-                          f"configuration ({type(exc).__name__}: {exc})") from None
+                          f"configuration ({_reason(exc)})") from None
 
 
 def _saved(template) -> tuple[dict, dict[str, int]]:
@@ -195,4 +195,13 @@ def _variables(trained: ModelFile) -> object:
             return torch.load(io.BytesIO(entry.read()), map_location="cpu", weights_only=True)
     except _LOAD_ERRORS as exc:
         raise ConfigError(f"model {trained.path}: its {VARIABLES_ENTRY!r} cannot be read as "
-                          f"torch weights ({type(exc).__name__}: {exc})") from None
+                          f"torch weights ({_reason(exc)})") from None
+
+
+def _reason(exc: BaseException) -> str:
+    """The exception's type and the gist of its message, on one line: of torch's refusal to
+    unpickle, the reason only (not its advice to load without ``weights_only``)."""
+    text = str(exc)
+    refusal = re.search(r"WeightsUnpickler error:\s*(.+?)(?:\. Please|\n\n|$)", text, re.S)
+    gist = " ".join((refusal.group(1) if refusal else text).split())
+    return f"{type(exc).__name__}: {gist if len(gist) <= 300 else gist[:299] + '…'}"
