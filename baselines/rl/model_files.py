@@ -270,9 +270,11 @@ class ModelFile:
         if self.sizes.get(SIGNATURE_ENTRY, _MAX_SIGNATURE_BYTES + 1) > _MAX_SIGNATURE_BYTES:
             return False
         signature = archive.read(SIGNATURE_ENTRY).decode("ascii", errors="replace")
+        state_digest = hashlib.sha256()
         with archive.open(RESUME_ENTRY) as state:
-            state_digest = hashlib.file_digest(state, "sha256").hexdigest()
-        return verify(state_digest.encode(), signature, SIGNATURE_PURPOSE)
+            for chunk in iter(lambda: state.read(1 << 20), b""):
+                state_digest.update(chunk)
+        return verify(state_digest.hexdigest().encode(), signature, SIGNATURE_PURPOSE)
 
 
 def _json_entry(archive: zipfile.ZipFile, sizes: dict[str, int], name: str, path: Path) -> dict:

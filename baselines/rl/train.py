@@ -49,9 +49,9 @@ user's key (`bounce_gym.trust`) when the checkpoint is saved; a checkpoint whose
 not check (one copied from another user or machine) is resumed only once trusted with
 ``bounce-gym trust FILE`` (``docs/model_files.md``). A seed without a checkpoint starts afresh;
 a configuration that differs from the checkpoint's (other than budget, checkpoint interval and
-logging) or no checkpoint for any seed is a `ConfigError`. Without ``resume`` a seed with checkpoints is a
-`ConfigError` too: nothing is overwritten. Same configuration and seed, same weights, bit for
-bit (torch on the CPU).
+logging) or no checkpoint for any seed is a `ConfigError`. Without ``resume`` a seed with
+checkpoints is a `ConfigError` too: nothing is overwritten. Same configuration and seed, same
+weights, bit for bit (torch on the CPU).
 
 **Batched episodes.** ``vec_env: native`` (the default for ids with a Gymnasium
 ``vector_entry_point``: free, navigation, coverage) steps the ``n_envs`` episodes as one batch
