@@ -59,7 +59,7 @@ def test_parallel_refuses_a_bad_action(env_id, action):
     env.reset(seed=0)
     first = env.agents[0]
     with pytest.raises(ActionError, match=rf"^action of {first}: .*({_allowed(first)})"):
-        env.step({a: action for a in env.agents})
+        env.step(dict.fromkeys(env.agents, action))
 
 
 @pytest.mark.parametrize("make", [multi_drifter_v0.env, patrol_v0.env])
