@@ -70,7 +70,7 @@ def check_variable(source: str, label: str, sizes: dict, chunks, cap: int) -> No
     if total > cap or max(sizes.values(), default=0) > cap:
         raise FlowFileError(f"{source}: {label}: declares {total:,} values ({shape}); at most "
                             f"{cap:,} are read (max_values=..., or ${MAX_VALUES_VARIABLE})")
-    if not chunks:
+    if not chunks or len(chunks) != len(sizes):  # none, or stale after a selection
         return
     chunk = math.prod(int(c) for c in chunks)
     count = math.prod(-(-size // int(c)) for size, c in zip(sizes.values(), chunks, strict=True))
