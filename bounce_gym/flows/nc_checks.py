@@ -126,8 +126,9 @@ _STREAMING = ((1 << 32) - 1, (1 << 64) - 1)
 
 def classic_data_end(path: Path) -> int:
     """The length a classic file needs for the data its header declares: the end of the last
-    fixed-size variable or of the last variable's slice of the last record. Reads the header only, skipping names and attribute values; raises
-    `FlowFileError` for a header that ends early or counts more items than it could hold."""
+    fixed-size variable or of the last variable's slice of the last record. Reads the header
+    only, skipping names and attribute values; raises `FlowFileError` for a header that ends
+    early or counts more items than it could hold."""
     with open(path, "rb") as f:
         reader = _Header(f, path.stat().st_size, str(path))
         version = reader.read(4)[3]

@@ -53,16 +53,39 @@ def world_from_grid(free: np.ndarray, cell_size: float = 1.0, name: str | None =
 def _boundary_rings(grid: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
     """The boundary rings of the free cells (cell units) and which of them are outer rings.
 
-    Every unit edge between a free and a blocked cell (or the outside) is directed with the free
-    cell on its left, so outer rings run counter-clockwise and holes clockwise. Without diagonal
-    pinches every boundary vertex has one edge in and one out, so the edges form disjoint cycles:
-    each is labelled by its lowest, then leftmost vertex (pointer doubling), ordered from the edge
-    leaving that vertex (list ranking), and cut down to its corners. A ring is returned starting
-    one corner after that vertex — the order the former polygon union left in the world — and
-    the rings come sorted by that vertex.
+    The boundary edges (`_boundary_edges`) form disjoint cycles; each is labelled by its lowest,
+    then leftmost vertex, ordered from the edge leaving that vertex (`_cycles`) and cut down to
+    its corners. A ring starts one corner after that vertex (a lone rectangle: at it) — the
+    order the former polygon union left in the world — and the rings come sorted by it.
     """
-    n_rows, n_cols = grid.shape
-    pad = np.zeros((n_rows + 2, n_cols + 2), dtype=bool)
+    start, step = _boundary_edges(grid)
+    width = grid.shape[1] + 1
+    start_id = start[:, 1] * width + start[:, 0]
+    leaving = np.empty((grid.shape[0] + 1) * width, dtype=np.int64)
+    leaving[start_id] = np.arange(len(start_id))
+    label, rank = _cycles(start_id, leaving[start_id + step[:, 1] * width + step[:, 0]], leaving)
+    order = np.lexsort((-rank, label))
+    label, start, step = label[order], start[order], step[order]
+    new_ring = np.r_[True, label[1:] != label[:-1]]
+    ring_start = np.flatnonzero(new_ring)
+    previous = np.arange(len(label)) - 1
+    previous[ring_start] = np.r_[ring_start[1:], len(label)] - 1
+    kept = np.flatnonzero(np.any(step != step[previous], axis=1))  # the corners
+    bounds = np.searchsorted((np.cumsum(new_ring) - 1)[kept], np.arange(len(ring_start) + 1))
+    index = np.arange(len(kept))
+    if len(ring_start) > 1 or len(kept) > 4:  # the union gave back a lone box as it was built
+        index = index + 1  # each ring from its second corner on, the first one last
+        index[bounds[1:] - 1] = bounds[:-1]
+    points = start[kept[index]].astype(np.float64)
+    outer = step[ring_start, 0] == 1  # a ring leaves its lowest-leftmost vertex east iff CCW
+    return np.split(points, bounds[1:-1]), outer
+
+
+def _boundary_edges(grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every unit edge between a free and a blocked cell (or the outside): its start vertex
+    (x, y) and unit step, directed with the free cell on its left, so outer rings run
+    counter-clockwise and holes clockwise."""
+    pad = np.zeros((grid.shape[0] + 2, grid.shape[1] + 2), dtype=bool)
     pad[1:-1, 1:-1] = grid
     below, above = pad[:-1, 1:-1], pad[1:, 1:-1]  # the cells under and over y = row
     left, right = pad[1:-1, :-1], pad[1:-1, 1:]  # the cells left and right of x = col
@@ -76,45 +99,28 @@ def _boundary_rings(grid: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
         row, col = np.nonzero(edges)
         starts.append(np.column_stack((col + ox, row + oy)))
         steps.append(np.broadcast_to((dx, dy), (len(row), 2)))
-    start = np.concatenate(starts)
-    step = np.concatenate(steps)
-    width = n_cols + 1
-    start_id = start[:, 1] * width + start[:, 0]
-    end_id = start_id + step[:, 1] * width + step[:, 0]
-    leaving = np.empty((n_rows + 1) * width, dtype=np.int64)
-    leaving[start_id] = np.arange(len(start_id))
-    nxt = leaving[end_id]
-    # label each cycle by its smallest vertex id: the lowest, then leftmost vertex
-    # (a round that changes no label means every window already spans its whole cycle)
+    return np.concatenate(starts), np.concatenate(steps)
+
+
+def _cycles(start_id: np.ndarray, nxt: np.ndarray, leaving: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """For edges that form disjoint cycles (``nxt``: each edge's successor; without diagonal
+    pinches every boundary vertex has one edge in and one out): each edge's cycle label, the
+    smallest start vertex id of its cycle, and its rank, the steps from it to the cycle's last
+    edge when the cycle starts at the edge leaving that vertex (``leaving``: vertex -> edge).
+    Both by pointer doubling: O(edges x log(longest cycle))."""
     label, jump = start_id, nxt
-    while True:
+    while True:  # a round that changes no label: every window spans its whole cycle
         merged = np.minimum(label, label[jump])
         if np.array_equal(merged, label):
             break
         label, jump = merged, jump[jump]
-    first = leaving[label]  # the edge leaving each cycle's label vertex
-    # list ranking: steps from each edge to the last edge of its cycle (the one before `first`)
-    last = nxt == first
+    last = nxt == leaving[label]  # the edge before the cycle's first
     rank = (~last).astype(np.int64)
     jump = np.where(last, np.arange(len(nxt)), nxt)
     while not np.array_equal(jump, jump[jump]):
         rank, jump = rank + rank[jump], jump[jump]
-    order = np.lexsort((-rank, label))
-    label, start, step = label[order], start[order], step[order]
-    ring_start = np.flatnonzero(np.r_[True, label[1:] != label[:-1]])
-    previous = np.arange(len(label)) - 1
-    previous[ring_start] = np.r_[ring_start[1:], len(label)] - 1
-    corner = np.any(step != step[previous], axis=1)
-    ring_of = np.cumsum(np.r_[False, label[1:] != label[:-1]])
-    kept = np.flatnonzero(corner)
-    bounds = np.searchsorted(ring_of[kept], np.arange(len(ring_start) + 1))
-    index = np.arange(len(kept))
-    if len(ring_start) > 1 or len(kept) > 4:  # a lone rectangle was the union's input box
-        index = index + 1  # each ring from its second corner on, the first one last
-        index[bounds[1:] - 1] = bounds[:-1]
-    points = start[kept[index]].astype(np.float64)
-    outer = step[ring_start, 0] == 1  # a ring leaves its lowest-leftmost vertex east iff CCW
-    return np.split(points, bounds[1:-1]), outer
+    return label, rank
 
 
 def _check_pinches(grid: np.ndarray) -> None:

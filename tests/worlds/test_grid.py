@@ -112,7 +112,8 @@ def test_traced_rings_are_the_union_of_the_free_cells_vertex_for_vertex():
         for _ in range(int(rng.integers(0, 25))):
             h, w, r, c = (int(v) for v in rng.integers(0, 4, size=4) + (1, 1, 0, 0))
             candidate = free.copy()
-            candidate[r * rows // 4 : r * rows // 4 + h, c * cols // 4 + w : c * cols // 4 + 2 * w] = False
+            top, left = r * rows // 4, c * cols // 4 + w
+            candidate[top : top + h, left : left + w] = False
             a, b = candidate[:-1, :-1], candidate[1:, 1:]
             c_, d = candidate[:-1, 1:], candidate[1:, :-1]
             if candidate.any() and not np.any((a & b & ~c_ & ~d) | (c_ & d & ~a & ~b)):

@@ -144,7 +144,8 @@ class DrifterCore:
         return bool(self._legal[k, action])
 
     def illegal(self, k: int, action: int, who: str = "action") -> ActionError:
-        """The error for drifter ``k`` taking the illegal ``action`` (``illegal_action="error"``)."""
+        """The error for drifter ``k`` taking the illegal ``action`` (with
+        ``illegal_action="error"``)."""
         return ActionError(f"{who}: {ACTIONS[action]} is illegal for drifter {k} in layer "
                            f"{int(self.fleet.layers()[k])} (no water there; legal actions: "
                            f"{np.flatnonzero(self._legal[k]).tolist()})")
