@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bounce_gym.documents import read_document
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import read_yaml
 
 DISTRIBUTIONS = ("loguniform", "uniform", "randint", "choice")
 
@@ -31,7 +31,7 @@ DISTRIBUTIONS = ("loguniform", "uniform", "randint", "choice")
 def load_search_space(path: Path) -> dict[str, tuple[str, object]]:
     """The search space of the YAML file ``path``: per hyperparameter, its distribution's name
     and its bounds (or, for ``choice``, its values)."""
-    entries = read_yaml("search", path)
+    entries = read_document(path, "search")
     if not isinstance(entries, dict) or not entries:
         raise ConfigError(f"search: {path} must map hyperparameter names to distributions, "
                           f"e.g. learning_rate: {{loguniform: [1.0e-5, 1.0e-3]}}")
