@@ -41,7 +41,8 @@ def _space(tmp_path: Path, space: object) -> Path:
     ({"learning_rate": {"loguniform": [0, 1]}}, "search.learning_rate.loguniform: .* 0 < low"),
     ({"n_epochs": {"randint": [1.5, 3]}}, "search.n_epochs.randint: expected .* integers"),
     ({"n_epochs": {"randint": [3]}}, "search.n_epochs.randint: expected"),
-    ({"batch_size": {"choice": []}}, "search.batch_size.choice: expected a non-empty list"),
+    ({"batch_size": {"choice": []}},
+     "search.batch_size.choice: expected a list of 1 to 10000 values, got 0 values"),
 ])
 def test_a_bad_search_space_names_the_field(tmp_path, space, message):
     with pytest.raises(ConfigError, match=message):
