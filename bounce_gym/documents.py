@@ -110,7 +110,8 @@ class _RefusedError(Exception):
 
 
 def _too_deep(depth: int | str, limits: Limits) -> _RefusedError:
-    return _RefusedError(f"lists and mappings nest {depth} deep; at most {limits.depth} are allowed")
+    return _RefusedError(f"lists and mappings nest {depth} deep; at most {limits.depth} are "
+                         "allowed")
 
 
 def _check_text(value: str, at: str) -> None:
@@ -179,8 +180,8 @@ def _construct_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode, deep: bo
         if key_node.tag == "tag:yaml.org,2002:merge":
             continue  # merged keys may be overridden; checked in their own mapping
         key = loader.construct_object(key_node, deep=True)
-        problem = (f"found a key that is not a string: {key!r}{_QUOTE if isinstance(key, bool) else ''}"
-                   if not isinstance(key, str)
+        hint = _QUOTE if isinstance(key, bool) else ""
+        problem = (f"found a key that is not a string: {key!r}{hint}" if not isinstance(key, str)
                    else f"found duplicate key {key!r}" if key in seen else None)
         if problem:
             raise yaml.constructor.ConstructorError(None, None, problem, key_node.start_mark)

@@ -129,13 +129,18 @@ def executor_from(block: Mapping | None, flags: Mapping[str, str]):
 
 def executor_block(block: Mapping | None, flags: Mapping[str, str]) -> dict:
     """The checked and completed settings (`experiments.executors.executor_settings`) of a
-    configuration's ``executor`` block with the flags given over it."""
-    from experiments.executors import executor_settings
+    configuration's ``executor`` block with the flags given over it; a Ray cluster it names
+    must answer now (`experiments.executors.check_ray_cluster`), not when the first unit
+    starts."""
+    from experiments.executors import check_ray_cluster, executor_settings
 
     given = {key: int(value) if key == "workers" and value.isascii() and value.isdigit()
              else value for key, value in flags.items() if value is not None}
-    return executor_settings({**(block or {}), **given}, "config.executor",
-                             {key: EXECUTOR_FLAGS[key] for key in given})
+    names = {key: EXECUTOR_FLAGS[key] for key in given}
+    settings = executor_settings({**(block or {}), **given}, "config.executor", names)
+    if settings["address"] is not None:
+        check_ray_cluster(names.get("address", "config.executor.address"), settings["address"])
+    return settings
 
 
 def add_executor_flags(parser: argparse.ArgumentParser) -> None:

@@ -502,8 +502,6 @@ def make_executor(kind: str = "local", workers: int | None = None, address: str 
         return InProcessExecutor(retries) if workers == 1 else PoolExecutor(workers, retries)
     if importlib.util.find_spec("ray") is None:
         raise ConfigError(_RAY_MISSING)
-    if address is not None:
-        check_ray_cluster("executor.address", address)  # now, not when the first unit starts
     if workers is None and address is None:
         workers = machine_cores()
     return RayExecutor(workers, address, retries)

@@ -25,13 +25,13 @@ Ray runs the trials, one CPU each, at most ``workers`` at once: a local instance
 nodes must see the models folder at the same path (a shared file system). The draws are made
 here, not by Tune, so trial k has the same hyperparameters on every machine.
 
-**Settings** (`check_search`, before the configuration is read): ``--trials`` in
-[1, `MAX_TRIALS` = 10,000]; ``--metric`` ``return`` or ``success``; ``--scheduler`` ``fifo`` or
-``asha``; ``--seed`` in [0, 2**32 - 1]; ``--workers`` in [1, 1024] and ``--address`` a Ray
-address as `experiments.executors` describes them (the cluster must answer within its
-``CONNECT_TIMEOUT`` before Ray connects). The search space's bounds are checked against the
-hyperparameters' ranges (`experiments.search_space`), and then every trial is prepared, so that
-no mistake waits for a trial to start.
+**Settings**, checked before the configuration is read (`check_search`): ``--metric``
+``return`` or ``success``; ``--scheduler`` ``fifo`` or ``asha``; ``--workers`` in [1, 1024];
+``--address`` a Ray address as `experiments.executors` describes them, whose cluster answers
+within its ``CONNECT_TIMEOUT``. Then, before the search space is read (`trial_configs`):
+``--trials`` in [1, `MAX_TRIALS` = 10,000] and ``--seed`` in [0, 2**32 - 1]. The search
+space's bounds are checked against the hyperparameters' ranges (`experiments.search_space`),
+and then every trial is prepared, so that no mistake waits for a trial to start.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ from baselines.rl.train_config import POLICIES
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_write
 from bounce_gym.validate import integer
-from experiments.executors import executor_settings, init_ray
+from experiments.executors import check_ray_cluster, executor_settings, init_ray
 from experiments.search_space import load_search_space, sample
 
 #: The metrics a search maximises, and the monitor columns they average.
@@ -125,6 +125,8 @@ def check_search(metric: str, scheduler: str, workers: int | None,
                           f"{scheduler!r}")
     executor_settings({"kind": "ray", "workers": workers, "address": address}, "tune",
                       {"workers": "--workers", "address": "--address"})
+    if address is not None:
+        check_ray_cluster("--address", address)
 
 
 def default_space(config_path: Path, config: object) -> Path:

@@ -13,9 +13,10 @@
 numbers, a ``choice`` has 1 to `MAX_CHOICES` (10,000) values, and every bound and every value
 of a ``choice`` lies within its hyperparameter's range (`baselines.rl.train_config`, e.g.
 ``gamma`` in (0, 1]), so no draw can leave it. Whether each name is a hyperparameter of the
-algorithm is checked with the training configuration it goes into (`experiments.search`). `sample` draws the
-hyperparameters of trial ``k`` from its own random stream, seeded with ``(seed, k)``: a search
-is reproducible, and running more trials leaves the first ones as they were.
+algorithm is checked with the training configuration it goes into (`experiments.search`).
+`sample` draws the hyperparameters of trial ``k`` from its own random stream, seeded with
+``(seed, k)``: a search is reproducible, and running more trials leaves the first ones as they
+were.
 """
 
 from __future__ import annotations
