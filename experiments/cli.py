@@ -7,7 +7,7 @@
     bounce-gym tune config.yaml [--space FILE] [--trials N] [--metric return|success]
                     [--scheduler fifo|asha] [--workers N] [--address ADDR] ...
     bounce-gym curves models/<name> [--window EPISODES]
-    bounce-gym trust models/<name>/<algo>_seed<N>.zip ...
+    bounce-gym trust models/<name>/checkpoints/<algo>_seed<N>_<steps>_steps.zip ...
 
 ``evaluate`` prints tables (per experiment and policy, every cell with its 95% interval and
 count) and writes ``episodes.csv``, ``summary.csv``, ``results.json``, plots and, for a
@@ -15,12 +15,14 @@ configuration with ``leaderboard: true``, ``leaderboard.md`` and ``leaderboard.c
 ``<output>/<name>-<timestamp>/``; without a configuration it runs the default one
 (``eval_default.yaml``; format: `experiments.config`). ``train`` saves a model per seed as
 ``models/<name>/<algo>_seed<seed>.zip``, where ``evaluate`` finds it (format:
-`baselines.rl.train`), listed in ``models/<name>/manifest.json``, and then draws the folder's
+`baselines.rl.train`), recorded in ``models/<name>/manifest.json``, and then draws the folder's
 learning curves, as ``curves`` does at any time (``learning_curves.png`` and ``.csv``,
-`experiments.plots.learning_curves`); ``evaluate`` loads only listed model files, and ``trust``
-lists one obtained elsewhere (`baselines.rl.model_files`). A mistake in a configuration, an env
-argument or a model file is one line ``error: ...`` on stderr and exit status 2, reported before
-any long work starts.
+`experiments.plots.learning_curves`). Model files are data: ``evaluate`` loads any, unpickling
+nothing in them, and refuses one the manifest records with other content. ``trust`` adds a
+file's sha256 to the user's own trusted digests (``$BOUNCE_GYM_HOME``, `bounce_gym.trust`),
+which only ``--resume`` needs, for a checkpoint this user's runs did not sign
+(``docs/model_files.md``). A mistake in a configuration, an env argument or a model file is one
+line ``error: ...`` on stderr and exit status 2, reported before any long work starts.
 
 ``evaluate`` runs its units — one policy of one experiment on up to ten seeds
 (`experiments.sweep`) — on the configuration's ``executor`` or the one the flags choose
@@ -265,11 +267,13 @@ def curves(folder: str, window: int | None = None, required: bool = True) -> int
 
 
 def trust(paths: list[str]) -> int:
-    """List model files in their folders' manifests, so that ``evaluate`` loads them."""
+    """Add the sha256 of these model files to the user's trusted digests, so that ``--resume``
+    unpickles the resume state of checkpoints this user's runs did not sign."""
     from baselines.rl.model_files import trust as trust_file
+    from bounce_gym.trust import TRUSTED_FILE, home
 
     for path in paths:
-        print(f"trusted {path} (sha256 {trust_file(Path(path))})")
+        print(f"trusted {path} (sha256 {trust_file(Path(path))}, in {home() / TRUSTED_FILE})")
     return 0
 
 
@@ -332,7 +336,8 @@ def curves_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
 
 
 def trust_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    parser.add_argument("models", nargs="+", help="model files (<algo>_seed<N>.zip) to trust")
+    parser.add_argument("models", nargs="+", help="checkpoints (or models) whose content you "
+                        "trust, e.g. received from a colleague")
     return parser
 
 
@@ -376,7 +381,8 @@ def main(argv: list[str] | None = None) -> int:
     tune_parser(commands.add_parser("tune", help="search hyperparameters with Ray Tune"))
     curves_parser(commands.add_parser("curves", help="draw the learning curves of trained "
                                                      "agents"))
-    trust_parser(commands.add_parser("trust", help="let evaluate load these model files"))
+    trust_parser(commands.add_parser("trust", help="trust checkpoints from elsewhere for "
+                                                   "--resume (user-level, by sha256)"))
     return dispatch(parser.parse_args(argv))
 
 

@@ -1,4 +1,4 @@
-"""Model files: their names, saving them atomically, and trusting them.
+"""Model files: their names, saving them atomically, and reading them as data.
 
 `baselines.rl.train` saves, in ``<models>/<name>/``:
 
@@ -11,21 +11,27 @@
 A model zip is Stable-Baselines3's file plus entries of its own, which SB3 ignores:
 ``bounce_gym.json`` (`METADATA_ENTRY`: the training configuration and the observation wrappers
 the model was trained behind — frame stacking, VecNormalize statistics, `baselines.rl.wrappers`
-— so the evaluation rebuilds them from the same trusted file) and, in a checkpoint,
-``bounce_gym_resume.pkl`` (`RESUME_ENTRY`: what resuming needs besides the weights and the
-optimiser, `baselines.rl.resume`). One file holds a whole checkpoint, so a crash leaves either
-all of it or none.
+— so the evaluation rebuilds them) and, in a checkpoint, ``bounce_gym_resume.pkl``
+(`RESUME_ENTRY`: what resuming needs besides the weights and the optimiser,
+`baselines.rl.resume`) with its signature ``bounce_gym_resume.sig`` (`SIGNATURE_ENTRY`). One
+file holds a whole checkpoint, so a crash leaves either all of it or none. The format and the
+threat model are described in ``docs/model_files.md``.
 
-**Trust.** A Stable-Baselines3 zip is code as much as data: loading one unpickles parts of it,
-and a pickle can run anything. So every model file this package saves is listed, with its
-sha256, in ``manifest.json`` of its folder (written atomically, like the file), and
-`read_model` refuses a file that is not listed or whose content changed since — before reading
-any of it. `trust` (the command ``bounce-gym trust FILE``) lists a file obtained elsewhere.
+**Data, not code.** Loading a model never unpickles anything from its file: `read_model` reads
+only JSON (after checking every entry's size), and `ModelFile.load` hands Stable-Baselines3 a
+replacement, rebuilt by this package, for every object the file would have it unpickle
+(`baselines.rl.model_load`); the weights are read with ``torch.load(weights_only=True)``. Only a
+checkpoint's resume state stays a pickle, and `ModelFile.resume_state` unpickles it only when it
+is vouched for from outside the folder (`bounce_gym.trust`): signed with this user's key when a
+run of theirs saved it, or trusted by its file's sha256 (`trust`, ``bounce-gym trust FILE``).
 
-The manifest maps a file name to the list of its accepted sha256 digests: one, except for the
-instant of a save, when the new digest is added before the file is renamed into place and the
-old one dropped after, so that a crash at any instant leaves a listed file. Several processes may
-save into one folder at once (the seeds of a training sweep, the trials of a search,
+**The manifest** (``manifest.json`` of a folder) records the sha256 of every file this package
+saved there: `read_model` refuses a listed file whose content changed since (damaged, or
+replaced), unless the user trusts the new content; a file it does not list loads like any other.
+The manifest maps a file name to the list of its accepted digests: one, except for the instant
+of a save, when the new digest is added before the file is renamed into place and the old one
+dropped after, so that a crash at any instant leaves a correctly listed file. Several processes
+may save into one folder at once (the seeds of a training sweep, the trials of a search,
 `experiments.training`): each reads, changes and rewrites the manifest under an exclusive lock
 (`bounce_gym.files.locked`), so no update is lost.
 """
@@ -35,14 +41,17 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import os
 import pickle
 import re
 import zipfile
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_file, atomic_write, locked
+from bounce_gym.trust import add_trusted, digest, sign, trusted_digests, verify
 
 ALGOS = ("ppo", "dqn", "recurrentppo")
 _RUN = r"(?P<algo>ppo|dqn|recurrentppo)(?:-(?P<variant>[a-z0-9]+(?:-[a-z0-9]+)*))?"
@@ -53,14 +62,30 @@ CHECKPOINT_NAME = re.compile(_RUN + r"_seed(?P<seed>\d+)_(?P<steps>\d+)_steps\.z
 #: A variant name: lower-case letters and digits, in parts joined by ``-``.
 VARIANT = re.compile(r"[a-z0-9]+(?:-[a-z0-9]+)*")
 MANIFEST = "manifest.json"
+#: The zip entry of Stable-Baselines3's attributes of the algorithm (JSON).
+DATA_ENTRY = "data"
 #: The zip entry holding this package's metadata of a model (JSON).
 METADATA_ENTRY = "bounce_gym.json"
 #: The zip entry of a checkpoint holding the state resuming needs (a pickle).
 RESUME_ENTRY = "bounce_gym_resume.pkl"
+#: The zip entry holding the signature of `RESUME_ENTRY` (`bounce_gym.trust.sign`, hex).
+SIGNATURE_ENTRY = "bounce_gym_resume.sig"
+#: What the signatures of resume states are for (`bounce_gym.trust.sign`).
+SIGNATURE_PURPOSE = "resume"
+#: The most bytes of a model or checkpoint file, which is read whole.
+MAX_FILE_BYTES = 1 << 30
+#: The most bytes of a JSON entry (uncompressed) or a manifest.
+MAX_JSON_BYTES = 16 << 20
+#: The most bytes of a resume state (uncompressed); it is hashed before anything else.
+MAX_RESUME_BYTES = 4 << 30
+_MAX_SIGNATURE_BYTES = 256
 #: The module of the policy class each algorithm saves (read from the zip's JSON part).
 POLICY_MODULES = {"ppo": "stable_baselines3.common.policies",
                   "dqn": "stable_baselines3.dqn.policies",
                   "recurrentppo": "sb3_contrib.common.recurrent.policies"}
+#: What `zipfile` raises for a damaged, truncated or unsupported archive.
+ZIP_ERRORS = (zipfile.BadZipFile, zlib.error, EOFError, OSError, NotImplementedError,
+              RuntimeError)
 
 
 def run_name(algo: str, variant: str | None = None) -> str:
@@ -84,8 +109,17 @@ def model_files(folder: Path) -> list[Path]:
     return sorted(p for p in folder.iterdir() if MODEL_NAME.fullmatch(p.name) and p.is_file())
 
 
-def _digest(data: bytes) -> str:
-    return hashlib.sha256(data).hexdigest()
+def _read(path: Path, limit: int, what: str) -> bytes:
+    """The bytes of the file ``path``, if it holds at most ``limit``."""
+    try:
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            data = fh.read(size + 1) if size <= limit else b""  # read(n) allocates n bytes
+    except OSError as exc:
+        raise ConfigError(f"{what} {path}: cannot be read ({exc.strerror or exc})") from None
+    if size > limit or len(data) > limit:
+        raise ConfigError(f"{what} {path}: holds more than the {limit} bytes such a file may")
+    return data
 
 
 def _manifest(folder: Path) -> dict[str, list[str]]:
@@ -93,8 +127,8 @@ def _manifest(folder: Path) -> dict[str, list[str]]:
     if not path.is_file():
         return {}
     try:
-        entries = json.loads(path.read_text(encoding="utf-8"))
-    except (ValueError, OSError) as exc:
+        entries = json.loads(_read(path, MAX_JSON_BYTES, "model manifest"))
+    except (ValueError, RecursionError) as exc:
         raise ConfigError(f"model manifest {path}: cannot be read ({exc})") from None
     if not isinstance(entries, dict) or not all(
             isinstance(v, list) and all(isinstance(d, str) for d in v) for v in entries.values()):
@@ -116,9 +150,10 @@ def _list(path: Path, digests: list[str]) -> None:
 def save_model(model, path: Path, metadata: dict | None = None, resume: object = None,
                overwrite: bool = True) -> None:
     """Save an SB3 model to ``path`` atomically, with ``metadata`` (JSON) as its
-    `METADATA_ENTRY` and ``resume`` (pickled) as its `RESUME_ENTRY`, and list it in its folder's
-    manifest (the new digest is listed before the rename, the old one dropped after).
-    ``overwrite=False`` refuses a ``path`` that exists (checkpoints)."""
+    `METADATA_ENTRY` and ``resume`` (pickled, and signed with the user's key) as its
+    `RESUME_ENTRY`, and record its digest in its folder's manifest (the new digest is listed
+    before the rename, the old one dropped after). ``overwrite=False`` refuses a ``path`` that
+    exists (checkpoints)."""
     if not overwrite and path.exists():
         raise ConfigError(f"{path}: exists already, and a checkpoint is never overwritten")
     old = _manifest(path.parent).get(path.name, [])
@@ -129,113 +164,160 @@ def save_model(model, path: Path, metadata: dict | None = None, resume: object =
             if metadata is not None:
                 archive.writestr(METADATA_ENTRY, json.dumps(metadata, indent=1, sort_keys=True))
             if resume is not None:
-                archive.writestr(RESUME_ENTRY,
-                                 pickle.dumps(resume, protocol=pickle.HIGHEST_PROTOCOL))
+                state = pickle.dumps(resume, protocol=pickle.HIGHEST_PROTOCOL)
+                archive.writestr(RESUME_ENTRY, state)
+                archive.writestr(SIGNATURE_ENTRY, _signature(digest(state)))
         fh.seek(0)
-        digest = _digest(fh.read())
-        _list(path, sorted({*old, digest}))
-    _list(path, [digest])
+        saved = digest(fh.read())
+        _list(path, sorted({*old, saved}))
+    _list(path, [saved])
+
+
+def _signature(state_digest: str) -> str:
+    """The signature of a resume state of this sha256: its digest is signed, so that checking
+    one reads the state in a stream, however large the entry claims to be."""
+    return sign(state_digest.encode(), SIGNATURE_PURPOSE)
+
+
+def _check_name(path: Path, what: str) -> re.Match:
+    match = MODEL_NAME.fullmatch(path.name) or CHECKPOINT_NAME.fullmatch(path.name)
+    if match is None:
+        raise ConfigError(f"{what} {path}: expected a name <ppo|dqn|recurrentppo>[-<variant>]"
+                          "_seed<N>[_<steps>_steps].zip")
+    return match
 
 
 def trust(path: Path) -> str:
-    """List the file ``path`` (a model or a checkpoint) in its folder's manifest;
-    returns its sha256."""
+    """Record the sha256 of the model or checkpoint file ``path`` among the user's trusted
+    digests (`bounce_gym.trust.add_trusted`, outside any models folder); returns it.
+
+    Only resuming needs it: a checkpoint whose resume state this user's runs did not sign (one
+    from a colleague, or from a machine with another key) is resumed only once trusted, since
+    its resume state is a pickle, and unpickling it runs whatever it says. A trusted file whose
+    folder's manifest lists other digests also loads (it was replaced on purpose)."""
     if not path.is_file():
         raise ConfigError(f"trust: file {str(path)!r} does not exist")
-    if not (MODEL_NAME.fullmatch(path.name) or CHECKPOINT_NAME.fullmatch(path.name)):
-        raise ConfigError(f"trust: {str(path)!r} is not named like a model, "
-                          "<ppo|dqn|recurrentppo>[-<variant>]_seed<N>[_<steps>_steps].zip")
-    digest = _digest(path.read_bytes())
-    _list(path, [digest])
-    return digest
+    _check_name(path, "trust:")
+    sha256 = digest(_read(path, MAX_FILE_BYTES, "trust:"))
+    add_trusted(sha256)
+    return sha256
 
 
-def trusted_bytes(path: Path) -> bytes:
-    """The content of ``path``, read once; a `ConfigError` unless its sha256 is listed in its
-    folder's manifest."""
-    data = path.read_bytes()
-    digest = _digest(data)
+def checked_bytes(path: Path) -> bytes:
+    """The content of ``path``, read once (at most `MAX_FILE_BYTES`); a `ConfigError` if its
+    folder's manifest lists it with other digests (it changed since it was saved) and the user
+    does not trust this content."""
+    data = _read(path, MAX_FILE_BYTES, "model")
     listed = _manifest(path.parent).get(path.name)
-    if listed is not None and digest in listed:
+    sha256 = digest(data)
+    if listed is None or sha256 in listed or sha256 in trusted_digests():
         return data
-    why = ("is not listed in" if listed is None else
-           "has changed since it was listed in")
-    raise ConfigError(f"model {path}: {why} {path.parent / MANIFEST} (a model file runs code "
-                      f"when loaded); if you trust it, run: bounce-gym trust {path}")
+    raise ConfigError(f"model {path}: has changed since it was saved (its sha256 is not the one "
+                      f"{path.parent / MANIFEST} lists): the file is damaged or was replaced; if "
+                      f"this content is what you want, run: bounce-gym trust {path}")
 
 
 @dataclass(frozen=True)
 class ModelFile:
-    """A trusted model file, read once: its algorithm, bytes and `METADATA_ENTRY` (``{}`` for a
-    zip saved without it)."""
+    """A model file, read once: its algorithm, bytes, the uncompressed size of each zip entry,
+    SB3's `DATA_ENTRY` and this package's `METADATA_ENTRY` (``{}`` for a zip saved without it),
+    both parsed as JSON."""
 
     path: Path
     algo: str
     data: bytes
+    sizes: dict[str, int]
+    sb3_data: dict
     metadata: dict
 
     def load(self, observation_space, action_space, **load_kwargs):
-        """The SB3 model, checked to be trained for an env with these spaces."""
-        from sb3_contrib import RecurrentPPO
-        from stable_baselines3 import DQN, PPO
+        """The SB3 model, for an env with these spaces; nothing in the file is unpickled
+        (`baselines.rl.model_load.load_model_file`)."""
+        from baselines.rl.model_load import load_model_file  # it builds on train_config
 
-        algo_class = {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[self.algo]
-        try:
-            model = algo_class.load(io.BytesIO(self.data), device="cpu", **load_kwargs)
-        except (zipfile.BadZipFile, AssertionError, KeyError, RuntimeError, ValueError,
-                EOFError) as exc:
-            raise ConfigError(f"model {self.path}: cannot be loaded as {self.algo} "
-                              f"({type(exc).__name__}: {exc})") from None
-        if model.observation_space != observation_space or model.action_space != action_space:
-            raise ConfigError(
-                f"model {self.path}: trained for observations {model.observation_space} and "
-                f"actions {model.action_space}, but this env has {observation_space} and "
-                f"{action_space} (train with the same env_kwargs)")
-        return model
+        return load_model_file(self, observation_space, action_space, **load_kwargs)
 
     def resume_state(self) -> object:
-        """The checkpoint's `RESUME_ENTRY`, unpickled (the file is trusted); a `ConfigError` if
-        it has none."""
+        """The checkpoint's `RESUME_ENTRY`, unpickled once vouched for: signed by this user's
+        runs, or the whole file trusted by its digest (`trust`); otherwise a `ConfigError`."""
         try:
             with zipfile.ZipFile(io.BytesIO(self.data)) as archive:
-                data = archive.read(RESUME_ENTRY)
-        except KeyError:
-            raise ConfigError(f"checkpoint {self.path}: holds no resume state "
-                              f"({RESUME_ENTRY})") from None
+                if RESUME_ENTRY not in self.sizes:
+                    raise ConfigError(f"checkpoint {self.path}: holds no resume state "
+                                      f"({RESUME_ENTRY})")
+                if self.sizes[RESUME_ENTRY] > MAX_RESUME_BYTES:
+                    raise ConfigError(f"checkpoint {self.path}: its resume state holds more "
+                                      f"than the {MAX_RESUME_BYTES} bytes it may")
+                if not (self._signed(archive) or digest(self.data) in trusted_digests()):
+                    raise ConfigError(
+                        f"checkpoint {self.path}: its resume state was not written by this "
+                        "user's runs (no valid signature under the key of the bounce_gym folder, "
+                        "$BOUNCE_GYM_HOME), and unpickling it could run anything; if you trust "
+                        f"the file, run: bounce-gym trust {self.path}")
+                state = archive.read(RESUME_ENTRY)
+        except ZIP_ERRORS as exc:
+            raise ConfigError(f"checkpoint {self.path}: its resume state cannot be read "
+                              f"({type(exc).__name__}: {exc})") from None
         try:
-            return pickle.loads(data)  # noqa: S301  (trusted: listed with this sha256)
+            return pickle.loads(state)  # noqa: S301  (signed by this user's runs, or trusted)
         except (pickle.UnpicklingError, EOFError, AttributeError, ImportError) as exc:
             raise ConfigError(f"checkpoint {self.path}: its resume state cannot be read "
                               f"({type(exc).__name__}: {exc})") from None
 
+    def _signed(self, archive: zipfile.ZipFile) -> bool:
+        """Whether `SIGNATURE_ENTRY` is this user's signature of the resume state (hashed in a
+        stream: nothing else of it is read before it is vouched for)."""
+        if self.sizes.get(SIGNATURE_ENTRY, _MAX_SIGNATURE_BYTES + 1) > _MAX_SIGNATURE_BYTES:
+            return False
+        signature = archive.read(SIGNATURE_ENTRY).decode("ascii", errors="replace")
+        state_digest = hashlib.sha256()
+        with archive.open(RESUME_ENTRY) as state:
+            for chunk in iter(lambda: state.read(1 << 20), b""):
+                state_digest.update(chunk)
+        return verify(state_digest.hexdigest().encode(), signature, SIGNATURE_PURPOSE)
+
+
+def _json_entry(archive: zipfile.ZipFile, sizes: dict[str, int], name: str, path: Path) -> dict:
+    if sizes[name] > MAX_JSON_BYTES:
+        raise ConfigError(f"model {path}: its entry {name!r} holds {sizes[name]} bytes, more than "
+                          f"the {MAX_JSON_BYTES} a model file's JSON may")
+    try:
+        value = json.loads(archive.read(name))
+    except (ValueError, RecursionError) as exc:
+        raise ConfigError(f"model {path}: its entry {name!r} is not JSON ({exc})") from None
+    if not isinstance(value, dict):
+        raise ConfigError(f"model {path}: its entry {name!r} is not a JSON object")
+    return value
+
 
 def read_model(path: Path) -> ModelFile:
-    """The trusted model file at ``path`` (named like `MODEL_NAME` or `CHECKPOINT_NAME`); a
-    `ConfigError` naming the file says what is wrong with it. Nothing in it is unpickled here."""
-    match = MODEL_NAME.fullmatch(path.name) or CHECKPOINT_NAME.fullmatch(path.name)
-    if match is None:
-        raise ConfigError(f"model {path}: expected a name <ppo|dqn|recurrentppo>[-<variant>]"
-                          "_seed<N>.zip")
-    algo = match.group("algo")
-    data = trusted_bytes(path)  # loaded from these bytes: the file may not change in between
+    """The model file at ``path`` (named like `MODEL_NAME` or `CHECKPOINT_NAME`), its JSON
+    parts parsed; a `ConfigError` naming the file says what is wrong with it. Nothing in it is
+    unpickled here."""
+    algo = _check_name(path, "model").group("algo")
+    data = checked_bytes(path)  # loaded from these bytes: the file may not change in between
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
-            module = json.loads(archive.read("data"))["policy_class"]["__module__"]
-            names = archive.namelist()
-            metadata = (json.loads(archive.read(METADATA_ENTRY)) if METADATA_ENTRY in names
-                        else {})
-    except (zipfile.BadZipFile, KeyError, TypeError, ValueError, OSError) as exc:
+            sizes = {info.filename: info.file_size for info in archive.infolist()}
+            if DATA_ENTRY not in sizes:
+                raise ConfigError(f"model {path}: not a readable Stable-Baselines3 model file "
+                                  f"(it has no {DATA_ENTRY!r} entry)")
+            sb3_data = _json_entry(archive, sizes, DATA_ENTRY, path)
+            metadata = (_json_entry(archive, sizes, METADATA_ENTRY, path)
+                        if METADATA_ENTRY in sizes else {})
+    except ZIP_ERRORS as exc:
         raise ConfigError(f"model {path}: not a readable Stable-Baselines3 model file "
                           f"({type(exc).__name__}: {exc})") from None
-    if not isinstance(metadata, dict):
-        raise ConfigError(f"model {path}: its {METADATA_ENTRY} is not a JSON object")
+    policy = sb3_data.get("policy_class")
+    module = policy.get("__module__") if isinstance(policy, dict) else None
     if module != POLICY_MODULES[algo]:
-        saved = [a for a, m in POLICY_MODULES.items() if m == module] or [module]
+        saved = [a for a, m in POLICY_MODULES.items() if m == module] or [repr(module)]
         raise ConfigError(f"model {path}: its name says {algo}, but it holds a {saved[0]} "
                           f"policy; name it after the algorithm that trained it")
-    return ModelFile(path, algo, data, metadata)
+    return ModelFile(path, algo, data, sizes, sb3_data, metadata)
 
 
 def load_model(path: Path, observation_space, action_space, **load_kwargs):
-    """The trusted SB3 model at ``path`` for an env with these spaces (`read_model`)."""
+    """The SB3 model at ``path`` for an env with these spaces (`read_model`,
+    `ModelFile.load`)."""
     return read_model(path).load(observation_space, action_space, **load_kwargs)

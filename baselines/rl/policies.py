@@ -1,7 +1,7 @@
 """Trained Stable-Baselines3 models as policies (`baselines.policy.Policy`).
 
-A model file (as `baselines.rl.train` saves them, ``<algo>[-<variant>]_seed<seed>.zip``; only
-trusted files, `baselines.rl.model_files`) becomes the policy that fits the env
+A model file (as `baselines.rl.train` saves them, ``<algo>[-<variant>]_seed<seed>.zip``; read as
+data, nothing in it unpickled, `baselines.rl.model_files`) becomes the policy that fits the env
 (`experiments.runner.model_policies` picks the kind):
 
 * Gymnasium env — `SB3Policy`: the model's deterministic action (PPO, DQN or RecurrentPPO, with
@@ -102,8 +102,8 @@ class SharedSB3Policy(MultiPolicy):
 
 
 def _role(path: Path):
-    """The trusted model file at ``path`` and the patrol-game role it was trained as (None for
-    a model of another env)."""
+    """The model file at ``path`` and the patrol-game role it was trained as (None for a model
+    of another env)."""
     from baselines.rl.patrol import PATROL_ID
 
     trained = read_model(path)

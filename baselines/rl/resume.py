@@ -16,6 +16,11 @@ count and the counters SB3 saves — and the state SB3 does not save (`capture`)
 `restore` puts all of it back into a model loaded from the checkpoint and a freshly built env,
 so a resumed run continues the same episodes where they stopped (no env is re-seeded; none
 replays its task sequence) and takes the same steps as a run that was never interrupted.
+
+All of it is one pickle (the envs caught mid-episode are arbitrary object graphs), stored in the
+checkpoint with a signature under the user's key and unpickled only when that signature checks
+or the user trusts the checkpoint's digest (`baselines.rl.model_files.ModelFile.resume_state`):
+`restore` and `restore_env` are given only state that was vouched for so.
 """
 
 from __future__ import annotations
@@ -55,7 +60,8 @@ def capture(model) -> dict:
 
 def restore(model, state: dict) -> None:
     """Put a `capture` back into ``model`` (loaded from the checkpoint with the freshly built
-    training env, whose layers must be those captured)."""
+    training env, whose layers must be those captured); ``state`` is a resume state vouched
+    for by `baselines.rl.model_files.ModelFile.resume_state`, never one read otherwise."""
     import torch
 
     restore_env(model.get_env(), state["env"])
@@ -108,12 +114,13 @@ def capture_env(venv) -> dict:
 
 
 def restore_env(venv, captured: dict) -> None:
-    """Put a `capture_env` back into a VecEnv built with the same layers."""
+    """Put a `capture_env` back into a VecEnv built with the same layers. ``captured`` comes
+    from a vouched-for resume state (`restore`), so its inner pickle is vouched for too."""
     *wrappers, base = _layers(venv)
     kinds = [type(layer).__name__ for layer in (*wrappers, base)]
     if kinds != captured["kinds"]:
         raise ValueError(f"the env's layers {kinds} are not the captured {captured['kinds']}")
-    state = pickle.loads(captured["state"])  # noqa: S301  (from a trusted checkpoint)
+    state = pickle.loads(captured["state"])  # noqa: S301  (part of a vouched-for resume state)
     for layer, (_, saved) in zip(wrappers, state["wrappers"], strict=True):
         vars(layer).update(saved)
     if _copies(base):

@@ -36,18 +36,22 @@ checkpoints ``checkpoints/<run>_seed<seed>_<steps>_steps.zip`` (every ``checkpoi
 at the start of an iteration, and at the end), never overwritten; the per-episode monitor file
 ``<run>_seed<seed>.monitor.csv`` (`baselines.rl.monitor`), from which ``bounce-gym train`` and
 ``bounce-gym curves`` draw the learning curves (`baselines.rl.curves`). Model files are
-written atomically and listed with their sha256 in the folder's ``manifest.json``
-(`baselines.rl.model_files`); each carries its configuration and the wrappers the evaluation
-must rebuild (frame stack, VecNormalize statistics; `baselines.rl.wrappers`).
+written atomically and recorded with their sha256 in the folder's ``manifest.json``, against
+damage (`baselines.rl.model_files`); each carries its configuration and the wrappers the
+evaluation must rebuild (frame stack, VecNormalize statistics; `baselines.rl.wrappers`), and is
+loaded as data, nothing in it unpickled (`baselines.rl.model_load`).
 
 **Resuming** (``resume: true``, ``--resume``) continues every seed from its newest checkpoint —
 weights, optimiser, step count, random streams and the envs mid-episode (`baselines.rl.resume`)
 — up to ``total_timesteps``, with the monitor file cut back to the checkpoint: the result is the
-run that was never interrupted. A seed without a checkpoint starts afresh; a configuration that
-differs from the checkpoint's (other than budget, checkpoint interval and logging) or no
-checkpoint for any seed is a `ConfigError`. Without ``resume`` a seed with checkpoints is a
-`ConfigError` too: nothing is overwritten. Same configuration and seed, same weights, bit for
-bit (torch on the CPU).
+run that was never interrupted. The state besides the weights is a pickle, signed with the
+user's key (`bounce_gym.trust`) when the checkpoint is saved; a checkpoint whose signature does
+not check (one copied from another user or machine) is resumed only once trusted with
+``bounce-gym trust FILE`` (``docs/model_files.md``). A seed without a checkpoint starts afresh;
+a configuration that differs from the checkpoint's (other than budget, checkpoint interval and
+logging) or no checkpoint for any seed is a `ConfigError`. Without ``resume`` a seed with
+checkpoints is a `ConfigError` too: nothing is overwritten. Same configuration and seed, same
+weights, bit for bit (torch on the CPU).
 
 **Batched episodes.** ``vec_env: native`` (the default for ids with a Gymnasium
 ``vector_entry_point``: free, navigation, coverage) steps the ``n_envs`` episodes as one batch
@@ -84,6 +88,7 @@ from baselines.rl.model_files import read_model, run_name, save_model
 from baselines.rl.monitor import SUFFIX
 from baselines.rl.train_config import (
     POLICIES,
+    algo_class,
     algo_kwargs,
     check_hyperparams,
     validate_train_config,
@@ -145,7 +150,7 @@ def prepare(config: Mapping, folder: Path | None = None) -> dict:
     if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError("config.tensorboard: needs the tensorboard package "
                           "(pip install -e .[tensorboard]), or set tensorboard: false")
-    check_hyperparams(_algo_class(config["algo"]), config["hyperparams"])
+    check_hyperparams(algo_class(config["algo"]), config["hyperparams"])
     _check_action_space(config)
     return config
 
@@ -168,9 +173,10 @@ def train_seed(config: Mapping, seed: int, progress: bool = True, callbacks: Seq
 
 
 def finished(config: Mapping, seed: int) -> bool:
-    """Whether the seed's model of a configuration `prepare` returned is saved already: listed
-    in the manifest, trained with this configuration (`RESUMABLE_CHANGES` aside) for exactly
-    its ``total_timesteps``. A sweep started again skips such seeds."""
+    """Whether the seed's model of a configuration `prepare` returned is saved already: a
+    readable model file (unchanged since saved, `baselines.rl.model_files.read_model`), trained
+    with this configuration (`RESUMABLE_CHANGES` aside) for exactly its ``total_timesteps``. A
+    sweep started again skips such seeds."""
     run = Run(config, seed)
     if not run.model.is_file():
         return False
@@ -212,13 +218,6 @@ def _check_action_space(config: Mapping) -> None:
     if not isinstance(space, gym.spaces.Discrete):
         raise ConfigError(f"config.algo: dqn needs discrete actions, but the env's are {space} "
                           "(set env_kwargs.action_type: discrete, or use ppo or recurrentppo)")
-
-
-def _algo_class(algo: str):
-    from sb3_contrib import RecurrentPPO
-    from stable_baselines3 import DQN, PPO
-
-    return {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[algo]
 
 
 def _comparable(config: Mapping) -> dict:
@@ -275,7 +274,7 @@ def _fresh(run: Run, env, log):
     config = run.config
     kwargs = algo_kwargs(config["hyperparams"])
     try:
-        model = _algo_class(config["algo"])(
+        model = algo_class(config["algo"])(
             POLICIES[config["algo"]], env, seed=run.seed, device="cpu", verbose=0,
             tensorboard_log=_log_dir(run), **kwargs)
     except (AssertionError, TypeError, ValueError) as exc:  # SB3's checks of the values
@@ -287,7 +286,9 @@ def _fresh(run: Run, env, log):
 
 def _resumed(run: Run, env, found: dict[int, Path], log):
     """The model of the newest checkpoint in ``found``, with everything restored into it and
-    into ``env``, its monitor file cut back to the checkpoint."""
+    into ``env``, its monitor file cut back to the checkpoint. The resume state is unpickled
+    only once vouched for (`baselines.rl.model_files.ModelFile.resume_state`), before the
+    weights are loaded."""
     from baselines.rl.resume import restore
 
     steps, path = max(found.items())

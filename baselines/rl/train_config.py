@@ -394,6 +394,14 @@ def _merge_file(config: dict, folder: Path | None) -> None:
     config["hyperparams"] = {**entry, **config.get("hyperparams", {})}
 
 
+def algo_class(algo: str):
+    """The Stable-Baselines3 (or sb3-contrib) class of an algorithm of `ALGOS`."""
+    from sb3_contrib import RecurrentPPO
+    from stable_baselines3 import DQN, PPO
+
+    return {"ppo": PPO, "dqn": DQN, "recurrentppo": RecurrentPPO}[algo]
+
+
 def check_hyperparams(algo_class, hyperparams: Mapping) -> None:
     """Each hyperparameter must be an argument of the algorithm, and a number where its default
     is one (a ``lin_`` schedule where `SCHEDULED` allows it); SB3 itself checks the values of

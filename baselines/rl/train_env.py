@@ -43,7 +43,8 @@ class SnapshotEnv(gym.Wrapper):
         return pickle.dumps(self.env, protocol=pickle.HIGHEST_PROTOCOL)
 
     def restore(self, data: bytes) -> None:
-        """Put back a `snapshot` (taken by this package and read from a trusted checkpoint)."""
+        """Put back a `snapshot` (taken by this package; read from a checkpoint's resume state
+        only once that was vouched for, `baselines.rl.model_files.ModelFile.resume_state`)."""
         self.env = pickle.loads(data)  # noqa: S301
 
 

@@ -5,7 +5,7 @@ Training may stack frames (``VecFrameStack``) and normalise observations (``VecN
 `baselines.rl.train_env`); the policy only ever saw the wrapped observations. `describe` records
 what the evaluation needs — the stack size and the normalisation statistics, as JSON numbers
 (float64, exact) — in the model file's metadata (`baselines.rl.model_files.METADATA_ENTRY`,
-part of the trusted file, never a pickle). `ObservationPipeline` rebuilds the same SB3 wrappers,
+JSON, never a pickle). `ObservationPipeline` rebuilds the same SB3 wrappers,
 with the statistics frozen, around the observations of one evaluation episode, so the model acts
 on exactly what it would have seen in training.
 """
@@ -47,8 +47,9 @@ def _stats(rms) -> dict:
             "var": np.asarray(rms.var, dtype=np.float64).tolist(), "count": float(rms.count)}
 
 
-class _Feed(VecEnv):
-    """A one-env VecEnv that hands the wrappers above it the observation it was last given."""
+class Feed(VecEnv):
+    """A one-env VecEnv that hands the wrappers above it the observation it was last given; with
+    none, an env that only has these spaces (`baselines.rl.model_load` builds models on it)."""
 
     def __init__(self, observation_space, action_space) -> None:
         super().__init__(1, observation_space, action_space)
@@ -86,7 +87,7 @@ class ObservationPipeline:
     errors."""
 
     def __init__(self, wrappers: Mapping, observation_space, action_space, path: Path) -> None:
-        self.feed = _Feed(observation_space, action_space)
+        self.feed = Feed(observation_space, action_space)
         n_stack, normalize = _checked(wrappers, observation_space.shape, path)
         venv = self.feed
         if normalize is not None and normalize["norm_obs"]:

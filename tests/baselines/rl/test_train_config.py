@@ -9,9 +9,9 @@ import yaml
 pytest.importorskip("stable_baselines3")
 
 from baselines.rl.model_files import ALGOS  # noqa: E402
-from baselines.rl.train import _algo_class  # noqa: E402
 from baselines.rl.train_config import (  # noqa: E402
     POLICIES,
+    algo_class,
     algo_kwargs,
     check_hyperparams,
     validate_train_config,
@@ -29,13 +29,13 @@ def test_shipped_training_configs_build_their_model(path):
     config = validate_train_config(yaml.safe_load(path.read_text()), path.parent)
     assert config["total_timesteps"] >= 10_000 and len(config["seeds"]) >= 1
     assert max(config["seeds"]) + config["n_envs"] <= EVALUATION_SEEDS_START
-    algo_class = _algo_class(config["algo"])
-    check_hyperparams(algo_class, config["hyperparams"])
+    cls = algo_class(config["algo"])
+    check_hyperparams(cls, config["hyperparams"])
     env = make_train_env({**config, "n_envs": min(config["n_envs"], 2),
                           "vec_env": "sync" if config["vec_env"] == "subproc" else
                           config["vec_env"]})
-    model = algo_class(POLICIES[config["algo"]], env, device="cpu",
-                       **algo_kwargs(config["hyperparams"]))
+    model = cls(POLICIES[config["algo"]], env, device="cpu",
+                **algo_kwargs(config["hyperparams"]))
     assert model.policy is not None
     env.close()
 
@@ -51,7 +51,7 @@ def test_every_hyperparameter_entry_states_a_budget_and_real_hyperparameters(pat
                                         "hyperparams_file": str(path),
                                         **({"role": role} if role else {})})
         assert config["total_timesteps"] == entry["n_timesteps"]
-        check_hyperparams(_algo_class(algo), config["hyperparams"])
+        check_hyperparams(algo_class(algo), config["hyperparams"])
 
 
 def test_the_configuration_wins_over_its_hyperparameter_file(tmp_path):

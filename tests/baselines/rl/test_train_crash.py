@@ -1,6 +1,7 @@
 """A training run killed (SIGKILL) at any instant leaves only complete, listed model files,
 and the evaluation loads what is there."""
 
+import json
 import os
 import signal
 import subprocess
@@ -14,7 +15,7 @@ import pytest
 import yaml
 
 import bounce_gym  # noqa: F401
-from baselines.rl.model_files import MODEL_NAME, load_model, trusted_bytes
+from baselines.rl.model_files import MANIFEST, MODEL_NAME, load_model, read_model
 from experiments.runner import run
 
 ROOT = Path(__file__).parents[3]
@@ -61,7 +62,8 @@ def test_sigkill_at_any_instant_leaves_only_complete_listed_models(tmp_path):
             assert path.stat().st_size > 0, path
             with zipfile.ZipFile(path) as archive:
                 assert archive.testzip() is None, path
-            trusted_bytes(path)  # listed in its folder's manifest with this content
+            # listed in its folder's manifest with this content, and readable
+            assert read_model(path).path.name in json.loads((path.parent / MANIFEST).read_text())
             if MODEL_NAME.fullmatch(path.name):
                 load_model(path, env.observation_space, env.action_space)
         assert not [p for p in (folder / "models").rglob("*") if p.name.endswith(".zip")
