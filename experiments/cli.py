@@ -21,8 +21,10 @@ learning curves, as ``curves`` does at any time (``learning_curves.png`` and ``.
 nothing in them, and refuses one the manifest records with other content. ``trust`` adds a
 file's sha256 to the user's own trusted digests (``$BOUNCE_GYM_HOME``, `bounce_gym.trust`),
 which only ``--resume`` needs, for a checkpoint this user's runs did not sign
-(``docs/model_files.md``). A mistake in a configuration, an env argument or a model file is one
-line ``error: ...`` on stderr and exit status 2, reported before any long work starts.
+(``docs/model_files.md``). A mistake in a configuration, an env argument, a flag or a model
+file is one line ``error: ...`` on stderr and exit status 2, reported before any long work
+starts; a configuration's (`bounce_gym.documents` reads every file, each command's module
+checks the numbers) before anything heavy (torch, SB3, Ray) is imported.
 
 ``evaluate`` runs its units — one policy of one experiment on up to ten seeds
 (`experiments.sweep`) — on the configuration's ``executor`` or the one the flags choose
