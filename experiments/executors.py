@@ -442,7 +442,7 @@ def check_ray_cluster(field: str, address: str) -> None:
         with socket.create_connection(endpoint, timeout=CONNECT_TIMEOUT) as connection:
             if os.environ.get("RAY_USE_TLS", "0").lower() in ("0", "false", ""):
                 connection.sendall(_HTTP2_PREFACE)
-                answer = connection.recv(9)
+                answer = connection.recv(9, socket.MSG_WAITALL)  # a frame header
                 if len(answer) < 9 or answer[3] != _SETTINGS_FRAME:
                     raise ConfigError(f"{field}: {address!r} is not a Ray cluster: it does not "
                                       "answer as Ray's gRPC servers do")
@@ -456,12 +456,12 @@ def check_ray_cluster(field: str, address: str) -> None:
 
 def _auto_address() -> tuple[str | None, str]:
     """The address ``auto`` stands for, and where it was found (or looked for)."""
-    if os.environ.get("RAY_ADDRESS"):
+    if os.environ.get("RAY_ADDRESS", "auto") != "auto":
         return os.environ["RAY_ADDRESS"], "RAY_ADDRESS"
     temp = os.environ.get("RAY_TMPDIR") or os.environ.get("TMPDIR") or "/tmp"
     path = Path(temp) / "ray" / "ray_current_cluster"
     if not path.is_file():
-        return None, f"RAY_ADDRESS is unset and {path} does not exist"
+        return None, f"RAY_ADDRESS names none and {path} does not exist"
     return path.read_text(encoding="utf-8", errors="replace").strip(), str(path)
 
 

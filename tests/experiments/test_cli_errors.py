@@ -281,7 +281,7 @@ def _closed_port() -> int:
     ("host:0", "--address: expected a Ray address"),
     ("host:65536", "--address: expected a Ray address"),
     ("local", "--address: expected a Ray address"),
-    ("auto", "--address: auto: no running Ray cluster found (RAY_ADDRESS is unset and "),
+    ("auto", "--address: auto: no running Ray cluster found (RAY_ADDRESS names none and "),
     ("127.0.0.1:PORT", "--address: cannot reach a Ray cluster at '127.0.0.1:PORT': Connection "
                        "refused"),
 ])
