@@ -251,6 +251,7 @@ def test_evaluation_seeds_are_checked_in_linear_time(tmp_path, capsys, seeds, me
     assert _one_error(capsys, argv).startswith(f"error: config.experiments[0].{message}")
 
 
+@pytest.mark.timeout(60)  # a hang guard only: Ray used to retry the address for minutes
 def test_max_steps_and_the_executor_block_have_ranges(tmp_path, capsys):
     argv = _evaluate_text(tmp_path, _experiment_yaml(tmp_path, max_steps=10**9))
     assert _one_error(capsys, argv) == ("error: config.experiments[0].max_steps: expected an "
