@@ -30,7 +30,8 @@ port is in 1..65535. Before Ray connects, `check_ray_cluster` gives the cluster
 `CONNECT_TIMEOUT` (5) seconds to accept a TCP connection and answer as the gRPC (HTTP/2)
 servers of Ray do (not checked on a cluster with ``RAY_USE_TLS`` set): an address where nothing
 listens, or something else does, is a `ConfigError` in one line instead of Ray's minutes of
-retries; so is any failure of ``ray.init`` itself (`init_ray`).
+retries (docs/choices.md, "A Ray address must answer before Ray connects"); so is any failure of
+``ray.init`` itself (`init_ray`).
 
 Every executor keeps at most ``workers`` units in flight, so a pool that breaks or a cluster
 that is lost loses no more than that.
