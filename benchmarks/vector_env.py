@@ -23,10 +23,10 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-import yaml
 
 import bounce_gym  # noqa: F401
 from bounce_gym import worlds
+from bounce_gym.documents import read_document
 
 ID = "bounce_gym/Bounce-v0"
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "train_navigation.yaml"
@@ -65,7 +65,7 @@ def ppo_rate(vec_env: str, steps: int, config_path: Path = CONFIG) -> float:
             return True
 
     timer = Timer()
-    config = yaml.safe_load(config_path.read_text())
+    config = read_document(config_path, "config")
     config.pop("seed", None)
     with tempfile.TemporaryDirectory() as models:
         train({**config, "vec_env": vec_env, "total_timesteps": steps, "seeds": [0],

@@ -25,8 +25,6 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import BinaryIO
 
-import yaml
-
 from bounce_gym.errors import ConfigError
 
 
@@ -257,15 +255,3 @@ def check_writable(field: str, folder: Path) -> None:
         what = "folder" if existing == folder else f"folder {str(existing)!r}"
         raise ConfigError(f"{field}: cannot write into {str(folder)!r}: the {what} is not "
                           "writable")
-
-
-def read_yaml(field: str, path: Path) -> object:
-    """The YAML document of the file ``path``; a missing file or invalid YAML raises
-    `ConfigError` naming ``field`` (and the parser's first line)."""
-    if not path.is_file():
-        raise ConfigError(f"{field}: file {str(path)!r} does not exist")
-    try:
-        return yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{field}: {path} is not valid YAML ({str(exc).splitlines()[0]})") \
-            from None

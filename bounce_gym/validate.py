@@ -22,15 +22,19 @@ def _is_number(value: object) -> bool:
 
 
 def number(field: str, value: object, *, minimum: float | None = None,
-           strict: bool = False) -> float:
+           strict: bool = False, maximum: float | None = None) -> float:
     """``value`` as a finite float, if it is a real number (int or float, Python or numpy, not
-    bool) at least ``minimum`` (greater than it if ``strict``)."""
+    bool) at least ``minimum`` (greater than it if ``strict``) and at most ``maximum``."""
     if not _is_number(value):
         raise ConfigError(f"{field}: expected a number, got {value!r}")
     value = float(value)
     if not math.isfinite(value):
         raise ConfigError(f"{field}: expected a finite number, got {value!r}")
-    if minimum is not None and (value <= minimum if strict else value < minimum):
+    below = minimum is not None and (value <= minimum if strict else value < minimum)
+    if maximum is not None and (below or value > maximum):
+        low = "(-inf" if minimum is None else f"{'(' if strict else '['}{minimum:g}"
+        raise ConfigError(f"{field}: expected a number in {low}, {maximum:g}], got {value:g}")
+    if below:
         raise ConfigError(f"{field}: expected a number {'>' if strict else '>='} {minimum}, "
                           f"got {value!r}")
     return value

@@ -23,10 +23,12 @@ learning curves, as ``curves`` does at any time (``learning_curves.png`` and ``.
 nothing in them, and refuses one the manifest records with other content. ``trust`` adds a
 file's sha256 to the user's own trusted digests (``$BOUNCE_GYM_HOME``, `bounce_gym.trust`),
 which only ``--resume`` needs, for a checkpoint this user's runs did not sign
-(``docs/model_files.md``). A mistake in a configuration, an env argument or a model file is one
-line ``error: ...`` on stderr and exit status 2, reported before any long work starts — among
-them a name that becomes part of a path but is not one plain path component, or a symbolic link
-planted where a command writes its own files (`bounce_gym.files`).
+(``docs/model_files.md``). A mistake in a configuration, an env argument, a flag or a model
+file is one line ``error: ...`` on stderr and exit status 2, reported before any long work
+starts — among them a name that becomes part of a path but is not one plain path component, or
+a symbolic link planted where a command writes its own files (`bounce_gym.files`); a
+configuration's (`bounce_gym.documents` reads every file, each command's module checks the
+numbers) before anything heavy (torch, SB3, Ray) is imported.
 
 ``evaluate`` runs its units — one policy of one experiment on up to ten seeds
 (`experiments.sweep`) — on the configuration's ``executor`` or the one the flags choose
@@ -60,6 +62,7 @@ import os
 import sys
 from collections.abc import Mapping
 from pathlib import Path
+from typing import NoReturn
 
 from bounce_gym.errors import BounceGymError
 
@@ -69,11 +72,13 @@ def evaluate(config_path: str | None, progress: bool = True,
     """Run an evaluation configuration on its executor (``flags``: the executor flags given,
     `executor_from`), print the tables and write the run folder; if units fail for good, say
     which and return 1, keeping the finished units for the next run."""
+    from experiments.config import load_config, validate_config
+
+    config = validate_config(load_config(config_path))  # before the heavy imports below
     import shutil
 
     from bounce_gym.errors import ConfigError
     from bounce_gym.files import check_writable, refuse_links
-    from experiments.config import load_config, validate_config
     from experiments.executors import UnitStore
     from experiments.leaderboard import write_leaderboard
     from experiments.provenance import provenance
@@ -90,7 +95,6 @@ def evaluate(config_path: str | None, progress: bool = True,
     from experiments.runner import run
     from experiments.sweep import UnitsFailedError, store_folder
 
-    config = validate_config(load_config(config_path))
     output = Path(config["output"])
     check_writable("config.output", output)
     executor = executor_from(config.get("executor"), flags or {})
@@ -144,13 +148,18 @@ def executor_from(block: Mapping | None, flags: Mapping[str, str]):
 
 def executor_block(block: Mapping | None, flags: Mapping[str, str]) -> dict:
     """The checked and completed settings (`experiments.executors.executor_settings`) of a
-    configuration's ``executor`` block with the flags given over it."""
-    from experiments.executors import executor_settings
+    configuration's ``executor`` block with the flags given over it; a Ray cluster it names
+    must answer now (`experiments.executors.check_ray_cluster`), not when the first unit
+    starts."""
+    from experiments.executors import check_ray_cluster, executor_settings
 
-    given = {key: int(value) if key == "workers" and value.isdigit() else value
-             for key, value in flags.items() if value is not None}
-    return executor_settings({**(block or {}), **given}, "config.executor",
-                             {key: EXECUTOR_FLAGS[key] for key in given})
+    given = {key: int(value) if key == "workers" and value.isascii() and value.isdigit()
+             else value for key, value in flags.items() if value is not None}
+    names = {key: EXECUTOR_FLAGS[key] for key in given}
+    settings = executor_settings({**(block or {}), **given}, "config.executor", names)
+    if settings["address"] is not None:
+        check_ray_cluster(names.get("address", "config.executor.address"), settings["address"])
+    return settings
 
 
 def add_executor_flags(parser: argparse.ArgumentParser) -> None:
@@ -214,7 +223,7 @@ def training_config(config: object, timesteps: int | None = None, resume: bool =
         config["resume"] = True
     cap = os.environ.get(MAX_TIMESTEPS)
     if cap is not None:
-        if not cap.isdigit() or int(cap) < 1:
+        if not (cap.isascii() and cap.isdigit()) or int(cap) < 1:
             raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {cap!r}")
         budget = config.get("total_timesteps", int(cap))
         config["total_timesteps"] = min(budget, int(cap)) if isinstance(budget, int) \
@@ -227,10 +236,18 @@ def tune(config_path: str, space: str | None = None, trials: int = 8, metric: st
          resume: bool = False, workers: int | None = None, address: str | None = None,
          progress: bool = True) -> int:
     """Search hyperparameters of a training configuration with Ray Tune
-    (`experiments.search`), print the trials and write their table and the best entry."""
+    (`experiments.search`), print the trials and write their table and the best entry. The
+    flags are checked first, then the configuration and the search space, then every trial."""
     from experiments.config import load_config
-    from experiments.search import default_space, search_folder, trial_configs, tune_search
+    from experiments.search import (
+        check_search,
+        default_space,
+        search_folder,
+        trial_configs,
+        tune_search,
+    )
 
+    check_search(metric, scheduler, workers, address)
     config = training_config(load_config(config_path), timesteps, resume)
     if isinstance(config, dict):
         config.pop("executor", None)  # the trials run on Ray Tune: --workers, --address
@@ -277,6 +294,15 @@ def trust(paths: list[str]) -> int:
     return 0
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse's parser, whose usage mistakes (an unknown flag, a value of the wrong type or
+    not among the choices) are one line ``error: ...`` and exit status 2, as every mistake of
+    the command is; ``--help`` shows the usage. Its subcommands' parsers are of this class."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"error: {message} (see {self.prog} --help)\n")
+
+
 def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("config", nargs="?", help="YAML configuration (default: eval_default.yaml)")
     add_executor_flags(parser)
@@ -300,12 +326,15 @@ def tune_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("config", help="YAML training configuration")
     parser.add_argument("--space", help="search space YAML (default: "
                                         "hyperparams/search/<algo>.yaml beside the config)")
-    parser.add_argument("--trials", type=int, default=8, help="trials (default 8)")
-    parser.add_argument("--metric", default="return", help="return (default) or success: its "
-                        "mean over the last 100 episodes is maximised")
+    parser.add_argument("--trials", type=int, default=8, help="trials (default 8; at most "
+                                                               "10,000)")
+    parser.add_argument("--metric", default="return",
+                        help="return (default) or success: its mean over the last 100 episodes "
+                             "is maximised")
     parser.add_argument("--scheduler", default="fifo",
                         help="fifo (default: every trial runs its budget) or asha")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the draws (default 0)")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the draws (default 0; at most 2**32 - 1)")
     parser.add_argument("--timesteps", type=int, help="override total_timesteps (per trial)")
     parser.add_argument("--resume", action="store_true",
                         help="skip finished trials, continue the others from checkpoints")
@@ -362,7 +391,7 @@ def dispatch(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="bounce-gym", description=__doc__.splitlines()[0])
+    parser = Parser(prog="bounce-gym", description=__doc__.splitlines()[0])
     commands = parser.add_subparsers(dest="command", required=True)
     evaluate_parser(commands.add_parser("evaluate", help="evaluate policies side by side"))
     train_parser(commands.add_parser("train", help="train a Stable-Baselines3 agent"))

@@ -28,16 +28,18 @@ perimeter patrols after Agmon et al.) and ``rl`` (default: all four); ``adversar
 experiment takes ``adversaries``.
 
 **Seeds.** Evaluation seeds are disjoint from training seeds (`baselines.seeds`): every seed
-must be at least ``EVALUATION_SEEDS_START`` (10,000). ``seeds`` is a list of distinct integers
-or ``{start: 10000, count: 200}`` (the seeds start, start + 1, …); the validated configuration
+must be at least ``EVALUATION_SEEDS_START`` (10,000) and at most ``MAX_SEED`` (2**32 - 1).
+``seeds`` is a list of distinct integers or ``{start: 10000, count: 200}`` (the seeds start,
+start + 1, …), at most ``MAX_SEEDS`` (100,000) seeds either way; the validated configuration
 holds the list. Default: one seed, 10,000.
 
 **Horizon.** An episode lasts at most the horizon its env registers — Gymnasium's
 ``max_episode_steps``, PettingZoo's ``max_cycles`` — which is also what training uses.
 ``max_steps`` may be left out (the validated configuration holds the registered horizon) or
-restate it; a different ``max_steps`` needs ``horizon_reason: <why>`` in the same experiment,
-and then sets the env's own limit (``gym.make(max_episode_steps=...)``, ``max_cycles``), so that
-the env and the episode loop stop together. ``env_kwargs`` may set neither limit.
+restate it; a different ``max_steps`` (at most ``MAX_STEPS``, 10**6) needs
+``horizon_reason: <why>`` in the same experiment, and then sets the env's own limit
+(``gym.make(max_episode_steps=...)``, ``max_cycles``), so that the env and the episode loop stop
+together. ``env_kwargs`` may set neither limit.
 
 ``name`` (default ``run``) names the run folder and every experiment's ``name`` its plot files:
 each is one plain path component (`bounce_gym.files.check_path_component`: no ``/``, ``\\``,
@@ -66,17 +68,17 @@ folder of a source checkout, ``experiments/configs/`` once installed).
 from __future__ import annotations
 
 import copy
+from collections import Counter
 from collections.abc import Mapping
 from pathlib import Path
 
 import gymnasium as gym
 import pettingzoo
-import yaml
 
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.model_files import check_folder_name
 from baselines.seeds import EVALUATION_SEEDS_START
-from bounce_gym.envs.drifters.options import ARGUMENTS as DRIFTER_ARGUMENTS
+from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
     PETTINGZOO_ENVS,
@@ -98,6 +100,11 @@ PATROL_POLICY_KINDS = ("planner", "random", "perimeter", "rl")
 ADVERSARY_KINDS = ("best_response", "best_response_positions", "rl")
 DIFFICULTIES = ("easy", "medium", "hard")
 DEFAULT_CONFIG_NAME = "eval_default.yaml"
+#: Most evaluation seeds of one experiment (episodes per policy), and the largest seed.
+MAX_SEEDS = 100_000
+MAX_SEED = 2**32 - 1
+#: Longest episode an experiment's ``max_steps`` may ask for.
+MAX_STEPS = 10**6
 #: env options a model folder of ``rl_models`` may set differently (observation only)
 OBSERVATION_OPTIONS = frozenset({"privileged", "history"})
 _MAP_SUFFIXES = (".yaml", ".yml", ".json")
@@ -121,19 +128,12 @@ def configs_folder() -> Path:
 
 
 def load_config(path: str | Path | None = None) -> dict:
-    """The YAML configuration at ``path`` (the default configuration if ``None``), unvalidated;
-    relative map files in ``env_kwargs.world`` resolved against the file's folder."""
+    """The YAML configuration at ``path`` (the default configuration if ``None``), read within
+    the limits of `bounce_gym.documents` (4 MiB, nesting 32 deep, 10**6 nodes with aliases
+    expanded) but otherwise unvalidated; relative map files in ``env_kwargs.world`` resolved
+    against the file's folder."""
     file = configs_folder() / DEFAULT_CONFIG_NAME if path is None else Path(path)
-    if not file.is_file():
-        raise ConfigError(f"config: file {str(path if path is not None else file)!r} does not "
-                          "exist")
-    try:
-        config = yaml.safe_load(file.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:  # one line: what is wrong and where
-        mark = getattr(exc, "problem_mark", None)
-        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ConfigError(f"config: {file} is not valid YAML: {problem}{at}") from None
+    config = read_document(file, "config")
     _resolve_map_files(config, file.parent)
     return config
 
@@ -221,7 +221,9 @@ def world_name(experiment: Mapping) -> str:
     or the one its env id registers; for a drifter env the flow (``env_kwargs.flow``: a zoo
     name, a NetCDF file by its file name or a field by its name; else the env's default)."""
     if is_drifter_id(experiment["env"]):
-        world = experiment["env_kwargs"].get("flow", DRIFTER_ARGUMENTS["flow"])
+        from bounce_gym.envs.drifters.options import ARGUMENTS  # the flow zoo: only if needed
+
+        world = experiment["env_kwargs"].get("flow", ARGUMENTS["flow"])
         return Path(world).name if isinstance(world, str) else getattr(world, "name", "?")
     world = experiment["env_kwargs"].get("world")
     if world is None:
@@ -232,24 +234,40 @@ def world_name(experiment: Mapping) -> str:
 
 
 def _seeds(where: str, seeds: object) -> list[int]:
-    """The evaluation seeds of ``seeds`` (a list, or ``{start, count}``), all held out."""
+    """The evaluation seeds of ``seeds`` (a list, or ``{start, count}``), all held out, at most
+    `MAX_SEEDS` of them, each at most `MAX_SEED`; checked in time linear in their number."""
     if isinstance(seeds, Mapping):
         _check_keys(where, seeds, {"start": int, "count": int}, required=("start", "count"))
-        start = integer(f"{where}.start", seeds["start"], minimum=EVALUATION_SEEDS_START)
-        seeds = list(range(start, start + integer(f"{where}.count", seeds["count"], minimum=1)))
+        start = integer(f"{where}.start", seeds["start"], minimum=EVALUATION_SEEDS_START,
+                        maximum=MAX_SEED)
+        count = integer(f"{where}.count", seeds["count"], minimum=1,
+                        maximum=min(MAX_SEEDS, MAX_SEED - start + 1))
+        return list(range(start, start + count))
     if not seeds or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
         raise ConfigError(f"{where}: expected a non-empty list of integers or {{start, count}}, "
-                          f"got {seeds!r}")
+                          f"got {_shorten(seeds)}")
+    if len(seeds) > MAX_SEEDS:
+        raise ConfigError(f"{where}: at most {MAX_SEEDS} seeds, got {len(seeds)}")
     low = [s for s in seeds if s < EVALUATION_SEEDS_START]
     if low:
         raise ConfigError(f"{where}: evaluation seeds must be >= {EVALUATION_SEEDS_START} "
                           f"(training uses the seeds below it, baselines.seeds), got {low[:5]}"
                           f"{' ...' if len(low) > 5 else ''}")
-    if len(set(seeds)) != len(seeds):
-        twice = sorted({s for s in seeds if seeds.count(s) > 1})
+    high = [s for s in seeds if s > MAX_SEED]
+    if high:
+        raise ConfigError(f"{where}: evaluation seeds must be <= {MAX_SEED}, got {high[:5]}"
+                          f"{' ...' if len(high) > 5 else ''}")
+    twice = sorted(s for s, n in Counter(seeds).items() if n > 1)
+    if twice:
         raise ConfigError(f"{where}: every seed once (an episode counts once), repeated: "
-                          f"{twice[:5]}")
+                          f"{twice[:5]}{' ...' if len(twice) > 5 else ''}")
     return list(seeds)
+
+
+def _shorten(value: object) -> str:
+    """``repr(value)``, cut to 80 characters (a list of a million seeds is not repeated)."""
+    text = repr(value)
+    return text if len(text) <= 80 else f"{text[:77]}..."
 
 
 def _check_horizon(where: str, exp: dict) -> None:
@@ -266,7 +284,7 @@ def _check_horizon(where: str, exp: dict) -> None:
                               f"the registered horizon {horizon}")
         exp["max_steps"] = horizon
         return
-    steps = integer(f"{where}.max_steps", exp["max_steps"], minimum=1)
+    steps = integer(f"{where}.max_steps", exp["max_steps"], minimum=1, maximum=MAX_STEPS)
     if steps == horizon and reason is not None:
         raise ConfigError(f"{where}.horizon_reason: only with a max_steps that differs from "
                           f"the registered horizon {horizon}")

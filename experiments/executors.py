@@ -21,6 +21,18 @@ Executors (`make_executor`):
   started here (``num_cpus = workers``). Ray itself retries a task whose worker process died
   (``max_retries``); an exception is retried here. At most ``workers`` units are in flight.
 
+**Numbers and addresses** (`executor_settings`): ``workers`` is an integer in
+[1, `MAX_WORKERS` = 1024], ``retries`` in [0, `MAX_RETRIES` = 100]. A Ray ``address`` is
+``auto`` (the cluster that ``RAY_ADDRESS`` names, else the one ``ray start`` recorded in
+``<RAY_TMPDIR, TMPDIR or /tmp>/ray/ray_current_cluster``), ``host:port`` or ``ray://host:port``
+(Ray Client), where the host is a host name, an IPv4 address or an IPv6 one in brackets and the
+port is in 1..65535. Before Ray connects, `check_ray_cluster` gives the cluster
+`CONNECT_TIMEOUT` (5) seconds to accept a TCP connection and answer as the gRPC (HTTP/2)
+servers of Ray do (not checked on a cluster with ``RAY_USE_TLS`` set): an address where nothing
+listens, or something else does, is a `ConfigError` in one line instead of Ray's minutes of
+retries (docs/choices.md, "A Ray address must answer before Ray connects"); so is any failure of
+``ray.init`` itself (`init_ray`).
+
 Every executor keeps at most ``workers`` units in flight, so a pool that breaks or a cluster
 that is lost loses no more than that.
 
@@ -33,10 +45,13 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
+import importlib.util
+import ipaddress
 import multiprocessing
 import os
 import pickle
 import re
+import socket
 import sys
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
@@ -45,6 +60,7 @@ from pathlib import Path
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_write, open_no_follow
 from bounce_gym.trust import secret_key, sign, verify
+from bounce_gym.validate import integer
 
 EXECUTOR_KINDS = ("local", "ray")
 #: how the local pool starts its processes: never a fork of this one (which may hold threads:
@@ -360,13 +376,7 @@ class RayExecutor(Executor):
     def _session(self) -> Iterator[None]:
         import ray
 
-        started = not ray.is_initialized()
-        if started:
-            os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # no network call home
-            if self.address is None:
-                ray.init(num_cpus=self.workers, include_dashboard=False, log_to_driver=False)
-            else:
-                ray.init(address=self.address, log_to_driver=False)
+        started = init_ray("executor.address", self.address, self.workers)
         self._task = ray.remote(max_retries=self.retries, retry_exceptions=False)(_call)
         try:
             yield
@@ -412,6 +422,17 @@ def machine_cores() -> int:
 
 #: an ``executor`` block's keys and defaults (``workers: None``: see `make_executor`)
 EXECUTOR_DEFAULTS = {"kind": "local", "workers": None, "address": None, "retries": 2}
+#: the most units at once, and retries of a unit (module docstring)
+MAX_WORKERS = 1024
+MAX_RETRIES = 100
+#: seconds a Ray cluster has to answer `check_ray_cluster`
+CONNECT_TIMEOUT = 5.0
+#: what a Ray address may be, in words
+RAY_ADDRESSES = "auto, host:port or ray://host:port"
+_HOST_NAME = re.compile(r"(?!-)[A-Za-z0-9-]{1,63}(?<!-)(\.(?!-)[A-Za-z0-9-]{1,63}(?<!-))*\.?")
+#: the first bytes of an HTTP/2 connection (RFC 9113, 3.4), then an empty SETTINGS frame
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+_SETTINGS_FRAME = 4
 
 
 def executor_settings(value: object, where: str = "executor",
@@ -435,20 +456,110 @@ def executor_settings(value: object, where: str = "executor",
     if out["kind"] not in EXECUTOR_KINDS:
         raise ConfigError(f"{field('kind')}: expected one of {EXECUTOR_KINDS}, got "
                           f"{out['kind']!r}")
-    for key, low in (("workers", 1), ("retries", 0)):
-        number = out[key]
-        if (number is not None or key == "retries") and (
-                not isinstance(number, int) or isinstance(number, bool) or number < low):
-            raise ConfigError(f"{field(key)}: expected an integer >= {low}, got {number!r}")
-    address = out["address"]
-    if address is not None:
+    if out["workers"] is not None:
+        integer(field("workers"), out["workers"], 1, MAX_WORKERS)
+    integer(field("retries"), out["retries"], 0, MAX_RETRIES)
+    if out["address"] is not None:
         if out["kind"] != "ray":
             raise ConfigError(f"{field('address')}: only for the ray executor "
                               f"({field('kind')}: ray)")
-        if not isinstance(address, str) or not address.strip():
-            raise ConfigError(f"{field('address')}: expected a Ray address (host:port, "
-                              f"ray://host:port or auto), got {address!r}")
+        ray_endpoint(field("address"), out["address"])
     return out
+
+
+def ray_endpoint(field: str, address: object) -> tuple[str, int] | None:
+    """The host and port of a Ray address (module docstring), None for ``auto``; a
+    `ConfigError` naming ``field`` if it is none."""
+    if address == "auto":
+        return None
+    rest = address.removeprefix("ray://") if isinstance(address, str) else ""
+    host, _, port = rest.rpartition(":")
+    if not (port.isascii() and port.isdigit() and 1 <= int(port) <= 65535 and _is_host(host)):
+        raise ConfigError(f"{field}: expected a Ray address ({RAY_ADDRESSES}; a host name or "
+                          f"IP address, a port in 1..65535), got {address!r}")
+    return host.strip("[]"), int(port)
+
+
+def _is_host(host: str) -> bool:
+    """Whether ``host`` is an IPv4 address, an IPv6 address in brackets, or a host name (whose
+    last label is not all digits, so 256.1.1.1 is no name)."""
+    if host.startswith("[") and host.endswith("]"):
+        try:
+            ipaddress.IPv6Address(host[1:-1])
+        except ValueError:
+            return False
+        return True
+    if host.replace(".", "").isdigit():
+        try:
+            ipaddress.IPv4Address(host)
+        except ValueError:
+            return False
+        return True
+    return len(host) <= 253 and bool(_HOST_NAME.fullmatch(host)) \
+        and not host.rstrip(".").rsplit(".", 1)[-1].isdigit()
+
+
+def check_ray_cluster(field: str, address: str) -> None:
+    """Raise `ConfigError` naming ``field`` unless a Ray cluster answers at ``address``
+    within `CONNECT_TIMEOUT` seconds (module docstring); ``auto`` is the cluster that
+    ``RAY_ADDRESS`` or ``ray start`` named."""
+    endpoint = ray_endpoint(field, address)
+    if endpoint is None:
+        found, source = _auto_address()
+        if found is None:
+            raise ConfigError(f"{field}: auto: no running Ray cluster found ({source}); start "
+                              "one with `ray start --head`, or give its host:port")
+        endpoint = ray_endpoint(f"{field} (auto, from {source})", found)
+        address = found
+    try:
+        with socket.create_connection(endpoint, timeout=CONNECT_TIMEOUT) as connection:
+            if os.environ.get("RAY_USE_TLS", "0").lower() in ("0", "false", ""):
+                connection.sendall(_HTTP2_PREFACE)
+                answer = connection.recv(9, socket.MSG_WAITALL)  # a frame header
+                if len(answer) < 9 or answer[3] != _SETTINGS_FRAME:
+                    raise ConfigError(f"{field}: {address!r} is not a Ray cluster: it does not "
+                                      "answer as Ray's gRPC servers do")
+    except TimeoutError:
+        raise ConfigError(f"{field}: no Ray cluster answers at {address!r} within "
+                          f"{CONNECT_TIMEOUT:g} s") from None
+    except OSError as exc:
+        raise ConfigError(f"{field}: cannot reach a Ray cluster at {address!r}: "
+                          f"{exc.strerror or exc}") from None
+
+
+def _auto_address() -> tuple[str | None, str]:
+    """The address ``auto`` stands for, and where it was found (or looked for)."""
+    if os.environ.get("RAY_ADDRESS", "auto") != "auto":
+        return os.environ["RAY_ADDRESS"], "RAY_ADDRESS"
+    temp = os.environ.get("RAY_TMPDIR") or os.environ.get("TMPDIR") or "/tmp"
+    path = Path(temp) / "ray" / "ray_current_cluster"
+    if not path.is_file():
+        return None, f"RAY_ADDRESS names none and {path} does not exist"
+    return path.read_text(encoding="utf-8", errors="replace").strip(), str(path)
+
+
+def init_ray(field: str, address: str | None, workers: int | None, **options) -> bool:
+    """Connect to the Ray cluster at ``address`` (after `check_ray_cluster`), or start a local
+    instance with ``workers`` CPUs (``options``: more `ray.init` arguments for it), unless Ray
+    is initialised in this process already; returns whether it was initialised here (and is
+    to be shut down). A failure is a `ConfigError` naming ``field``, in one line."""
+    import ray
+
+    if ray.is_initialized():
+        return False
+    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")  # no network call home
+    if address is not None:
+        check_ray_cluster(field, address)
+    try:
+        if address is None:
+            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False, **options)
+        else:
+            ray.init(address=address, log_to_driver=False)
+    except (ConnectionError, RuntimeError, TimeoutError, ValueError) as exc:
+        line = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        where = f"the Ray cluster at {address!r}" if address else "a local Ray instance"
+        raise ConfigError(f"{field}: cannot start or reach {where}: {line}") from None
+    return True
 
 
 def make_executor(kind: str = "local", workers: int | None = None, address: str | None = None,
@@ -462,10 +573,8 @@ def make_executor(kind: str = "local", workers: int | None = None, address: str 
     if kind == "local":
         workers = machine_cores() if workers is None else workers
         return InProcessExecutor(retries) if workers == 1 else PoolExecutor(workers, retries)
-    try:
-        import ray  # noqa: F401
-    except ImportError:
-        raise ConfigError(_RAY_MISSING) from None
+    if importlib.util.find_spec("ray") is None:
+        raise ConfigError(_RAY_MISSING)
     if workers is None and address is None:
         workers = machine_cores()
     return RayExecutor(workers, address, retries)

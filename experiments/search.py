@@ -24,6 +24,14 @@ Ray runs the trials, one CPU each, at most ``workers`` at once: a local instance
 (``num_cpus = workers``, default the machine's cores), or the cluster at ``address``, whose
 nodes must see the models folder at the same path (a shared file system). The draws are made
 here, not by Tune, so trial k has the same hyperparameters on every machine.
+
+**Settings**, checked before the configuration is read (`check_search`): ``--metric``
+``return`` or ``success``; ``--scheduler`` ``fifo`` or ``asha``; ``--workers`` in [1, 1024];
+``--address`` a Ray address as `experiments.executors` describes them, whose cluster answers
+within its ``CONNECT_TIMEOUT``. Then, before the search space is read (`trial_configs`):
+``--trials`` in [1, `MAX_TRIALS` = 10,000] and ``--seed`` in [0, 2**32 - 1]. The search
+space's bounds are checked against the hyperparameters' ranges (`experiments.search_space`),
+and then every trial is prepared, so that no mistake waits for a trial to start.
 """
 
 from __future__ import annotations
@@ -45,11 +53,16 @@ from baselines.rl.train import Run, finished, prepare, train_seed
 from baselines.rl.train_config import POLICIES
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_write
+from bounce_gym.validate import integer
+from experiments.executors import check_ray_cluster, executor_settings, init_ray
 from experiments.search_space import load_search_space, sample
 
 #: The metrics a search maximises, and the monitor columns they average.
 METRICS = {"return": "r", "success": "is_success"}
 SCHEDULERS = ("fifo", "asha")
+#: Most trials of one search, and the largest seed of its draws.
+MAX_TRIALS = 10_000
+MAX_DRAW_SEED = 2**32 - 1
 #: Reports to Tune per trial (at most; at rollout ends).
 REPORTS = 10
 
@@ -75,11 +88,12 @@ def trial_configs(config: dict, space_path: Path, trials: int, seed: int,
                   folder: Path | None = None) -> list[tuple[dict, dict]]:
     """Each trial's drawn hyperparameters and its prepared training configuration
     (`baselines.rl.train.prepare`: every trial is checked before any starts); a mistake names
-    the trial and what was drawn for it."""
+    the trial and what was drawn for it. ``trials`` is at most `MAX_TRIALS`, ``seed`` (of the
+    draws) at most `MAX_DRAW_SEED`."""
+    integer("--trials", trials, 1, MAX_TRIALS)
+    integer("--seed", seed, 0, MAX_DRAW_SEED)
     if not isinstance(config, dict):
         prepare(config, folder)  # reports what is wrong with it
-    if trials < 1:
-        raise ConfigError(f"trials: expected an integer >= 1, got {trials}")
     space = load_search_space(space_path)
     base = {**config, "name": f"{config['name']}-tune",
             "models": str(Path(config.get("models", "models")).resolve())}
@@ -97,6 +111,22 @@ def trial_configs(config: dict, space_path: Path, trials: int, seed: int,
         except ConfigError as exc:
             raise ConfigError(f"search: trial {k} ({drawn}): {exc}") from None
     return out
+
+
+def check_search(metric: str, scheduler: str, workers: int | None,
+                 address: str | None) -> None:
+    """How ``bounce-gym tune`` runs its trials, checked before anything is read or prepared
+    (module docstring, "Settings"; `trial_configs` checks ``--trials`` and ``--seed``); a
+    mistake is a `ConfigError` naming the flag."""
+    if metric not in METRICS:
+        raise ConfigError(f"--metric: expected one of {list(METRICS)}, got {metric!r}")
+    if scheduler not in SCHEDULERS:
+        raise ConfigError(f"--scheduler: expected one of {list(SCHEDULERS)}, got "
+                          f"{scheduler!r}")
+    executor_settings({"kind": "ray", "workers": workers, "address": address}, "tune",
+                      {"workers": "--workers", "address": "--address"})
+    if address is not None:
+        check_ray_cluster("--address", address)
 
 
 def default_space(config_path: Path, config: object) -> Path:
@@ -158,12 +188,7 @@ def tune_search(prepared: list[tuple[dict, dict]], metric: str = "return",
     """Run the trials (`trial_configs`) on Ray Tune and write ``trials.csv`` and
     ``best_hyperparams.yaml``; returns the trials in order."""
     configs = [config for _, config in prepared]
-    if metric not in METRICS:
-        raise ConfigError(f"metric: expected one of {list(METRICS)}, got {metric!r}")
-    if scheduler not in SCHEDULERS:
-        raise ConfigError(f"scheduler: expected one of {SCHEDULERS}, got {scheduler!r}")
-    if workers is not None and workers < 1:
-        raise ConfigError(f"executor.workers: expected an integer >= 1, got {workers}")
+    check_search(metric, scheduler, workers, address)
     try:
         import ray
         from ray import tune
@@ -173,16 +198,11 @@ def tune_search(prepared: list[tuple[dict, dict]], metric: str = "return",
     from ray.tune.schedulers import ASHAScheduler
 
     folder = Path(configs[0]["models"]) / configs[0]["name"]
-    started = not ray.is_initialized()
-    if started:
-        os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-        if address is None:  # its workers import this very package, wherever it is
-            root = str(Path(__file__).resolve().parents[1])
-            paths = os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))
-            ray.init(num_cpus=workers or os.cpu_count(), include_dashboard=False,
-                     log_to_driver=False, runtime_env={"env_vars": {"PYTHONPATH": paths}})
-        else:
-            ray.init(address=address, log_to_driver=False)
+    # a local instance's workers import this very package, wherever it is
+    root = str(Path(__file__).resolve().parents[1])
+    paths = os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))
+    started = init_ray("--address", address, workers or os.cpu_count(),
+                       runtime_env={"env_vars": {"PYTHONPATH": paths}})
     try:
         total = configs[0]["total_timesteps"]
         asha = ASHAScheduler(time_attr="env_steps", max_t=total, grace_period=max(total // 4, 1),

@@ -1,7 +1,7 @@
 """Reinforcement-learning baselines: Stable-Baselines3 agents trained on the bounce_gym envs.
 
-A training configuration (YAML, see ``configs/train_*.yaml``; checked by
-`baselines.rl.train_config`)::
+A training configuration (YAML, see ``configs/train_*.yaml``; read by `bounce_gym.documents`,
+checked by `baselines.rl.train_config`, whose docstring gives every number's range)::
 
     name: navigation-lab             # the evaluation experiment the models are for
     env: bounce_gym/BounceNavigation-v0
@@ -14,19 +14,22 @@ A training configuration (YAML, see ``configs/train_*.yaml``; checked by
                                      # of one algorithm side by side in models/<name>/)
     hyperparams_file: hyperparams/ppo.yaml  # optional, rl-zoo style, keyed by env id; relative
                                      # to this file's folder
-    total_timesteps: 200000          # per seed (default: the file's n_timesteps)
-    seeds: [0, 1, 2, 3, 4]           # or seed: 0; env i of seed s is seeded with s + i
-    n_envs: 8                        # parallel episodes (default 4; DQN and multi-robot 1)
-    n_stack: 1                       # frame stacking (VecFrameStack) when > 1
+    total_timesteps: 200000          # per seed (default: the file's n_timesteps), 1..10**10
+    seeds: [0, 1, 2, 3, 4]           # or seed: 0; env i of seed s is seeded with s + i < 10000
+    n_envs: 8                        # parallel episodes (default 4; DQN and multi-robot 1),
+                                     # 1..1024
+    n_stack: 1                       # frame stacking (VecFrameStack) when > 1, 1..100
     normalize: false                 # VecNormalize: true, or {norm_obs, norm_reward, clip_obs,
                                      # clip_reward}
     vec_env: native                  # native | sync | subproc (see below)
-    hyperparams: {learning_rate: 0.0003}   # over the file's; lin_<x>: linear decay from x
+    hyperparams: {learning_rate: 0.0003}   # over the file's; lin_<x>: linear decay from x;
+                                     # ranges: train_config.HYPERPARAM_RANGES (gamma in (0, 1])
     checkpoint_every: 50000          # env steps between checkpoints (0: only the final one)
     tensorboard: false               # logs in models/<name>/tensorboard (pip install
                                      # bounce-gym[tensorboard])
     models: models
-    torch_threads: 1                 # torch intra-op threads while training (default 1)
+    torch_threads: 1                 # torch intra-op threads while training (default 1), at
+                                     # most 4 x the machine's cores
     executor: {kind: local, workers: 2}  # where the seeds run at once (`bounce-gym train`,
                                      # experiments.training; default: a process per core)
 

@@ -13,11 +13,33 @@ Python strings to evaluate; ``activation_fn`` is a name (`ACTIVATIONS`), and ``l
 schedulable value (`SCHEDULED`) is rl-zoo's linear decay from x to 0 over training. What the
 configuration sets itself wins over the file (``total_timesteps`` over ``n_timesteps``,
 ``n_stack`` over ``frame_stack``, each ``hyperparams`` key over the file's).
+
+**Ranges.** Every number is checked before training starts; NaN and infinities are refused
+everywhere, nested ``hyperparams`` included. ``total_timesteps`` is an integer in
+[1, `MAX_TIMESTEPS` = 10**10] and ``checkpoint_every`` in [0, 10**10]; ``n_envs`` in
+[1, `MAX_ENVS` = 1024]; ``n_stack`` in [1, `MAX_STACK` = 100]; ``torch_threads`` in [1, 4 x the
+machine's cores]; ``seed``/``seeds`` (at most 10,000 distinct) as `baselines.seeds` allows;
+``normalize``'s ``clip_obs`` and ``clip_reward`` finite and > 0. Hyperparameters
+(`HYPERPARAM_RANGES`; a ``lin_<x>`` schedule is checked on x): ``learning_rate``,
+``clip_range``, ``clip_range_vf`` (or null), ``target_kl`` (or null) and ``max_grad_norm``
+> 0; ``gamma`` and ``tau`` in (0, 1]; ``gae_lambda``, ``exploration_fraction``,
+``exploration_initial_eps`` and ``exploration_final_eps`` in [0, 1]; ``ent_coef`` and
+``vf_coef`` >= 0; integers ``n_steps`` and ``batch_size`` in [1, 10**6] (and ``n_steps`` x
+``n_envs``, the rollout, at most `MAX_ROLLOUT` = 10**7), ``n_epochs`` in [1, 1000],
+``buffer_size`` in [1, 10**7], ``learning_starts`` in [0, 10**10], ``train_freq`` in
+[1, 10**6], ``gradient_steps`` in [-1, 10**4] (-1: as many as env steps),
+``target_update_interval`` in [1, 10**10], ``sde_sample_freq`` in [-1, 10**6],
+``stats_window_size`` in [1, 10**6]; ``policy_kwargs.net_arch`` at most `MAX_LAYERS` = 16
+layers of 1 to `MAX_WIDTH` = 4096 units (a list, or ``{pi: [...], vf: [...]}``), and
+``lstm_hidden_size`` in [1, 4096], ``n_lstm_layers`` in [1, 16]. A hyperparameter without a
+range here is checked for its type (`check_hyperparams`) and then by SB3.
 """
 
 from __future__ import annotations
 
 import copy
+import math
+import os
 import re
 from collections.abc import Mapping
 from pathlib import Path
@@ -28,13 +50,14 @@ import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.model_files import ALGOS, VARIANT, check_folder_name
 from baselines.rl.patrol import PATROL_ID, ROLES
 from baselines.seeds import EVALUATION_SEEDS_START
+from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
     PETTINGZOO_ENVS,
     is_pettingzoo_id,
 )
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import read_yaml
+from bounce_gym.validate import integer, number
 
 MULTI_ALGOS = ("ppo",)
 VEC_ENVS = ("native", "sync", "subproc")
@@ -56,6 +79,45 @@ _KEYS = {"name": str, "env": str, "env_kwargs": dict, "algo": str, "variant": st
 _FILE_KEYS = {"n_timesteps": "total_timesteps", "n_envs": "n_envs", "frame_stack": "n_stack",
               "normalize": "normalize"}
 _LINEAR = re.compile(r"lin_(\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)")
+
+#: Caps on a configuration's numbers (module docstring, "Ranges").
+MAX_TIMESTEPS = 10**10
+MAX_ENVS = 1024
+MAX_STACK = 100
+#: Most transitions of one PPO rollout (``n_steps`` x ``n_envs``).
+MAX_ROLLOUT = 10**7
+#: Most layers, and units per layer, of ``policy_kwargs.net_arch``.
+MAX_LAYERS = 16
+MAX_WIDTH = 4096
+#: The range of each hyperparameter checked here: ``(integer, least, most, least excluded,
+#: null allowed)``; ``most`` None is no upper bound.
+HYPERPARAM_RANGES = {
+    "learning_rate": (False, 0, None, True, False),
+    "clip_range": (False, 0, None, True, False),
+    "clip_range_vf": (False, 0, None, True, True),
+    "target_kl": (False, 0, None, True, True),
+    "max_grad_norm": (False, 0, None, True, False),
+    "gamma": (False, 0, 1, True, False),
+    "tau": (False, 0, 1, True, False),
+    "gae_lambda": (False, 0, 1, False, False),
+    "exploration_fraction": (False, 0, 1, False, False),
+    "exploration_initial_eps": (False, 0, 1, False, False),
+    "exploration_final_eps": (False, 0, 1, False, False),
+    "ent_coef": (False, 0, None, False, False),
+    "vf_coef": (False, 0, None, False, False),
+    "n_steps": (True, 1, 10**6, False, False),
+    "batch_size": (True, 1, 10**6, False, False),
+    "n_epochs": (True, 1, 1000, False, False),
+    "buffer_size": (True, 1, 10**7, False, False),
+    "learning_starts": (True, 0, MAX_TIMESTEPS, False, False),
+    "train_freq": (True, 1, 10**6, False, False),
+    "gradient_steps": (True, -1, 10**4, False, False),
+    "target_update_interval": (True, 1, MAX_TIMESTEPS, False, False),
+    "sde_sample_freq": (True, -1, 10**6, False, False),
+    "stats_window_size": (True, 1, 10**6, False, False),
+}
+#: The same for the sizes in ``policy_kwargs`` (`MAX_WIDTH` units, `MAX_LAYERS` layers).
+_POLICY_SIZES = {"lstm_hidden_size": MAX_WIDTH, "n_lstm_layers": MAX_LAYERS}
 
 
 def _kind_name(kind) -> str:
@@ -104,9 +166,7 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     native = multi or "role" not in config and \
         gym.spec(config["env"]).vector_entry_point is not None
     _check_vec_env(config, multi, native)
-    if config["total_timesteps"] < 1:
-        raise ConfigError(f"config.total_timesteps: expected an integer >= 1, got "
-                          f"{config['total_timesteps']}")
+    integer("config.total_timesteps", config["total_timesteps"], 1, MAX_TIMESTEPS)
     check_folder_name("config.name", config["name"])
     if "variant" in config and not VARIANT.fullmatch(config["variant"]):
         raise ConfigError(f"config.variant: expected lower-case letters and digits in parts "
@@ -117,10 +177,10 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
                 "tensorboard": False, "models": "models", "resume": False, "torch_threads": 1}
     for key, value in defaults.items():
         config.setdefault(key, value)
-    for key, least in (("n_envs", 1), ("n_stack", 1), ("checkpoint_every", 0),
-                       ("torch_threads", 1)):
-        if config[key] < least:
-            raise ConfigError(f"config.{key}: expected an integer >= {least}, got {config[key]}")
+    for key, least, most in (("n_envs", 1, MAX_ENVS), ("n_stack", 1, MAX_STACK),
+                             ("checkpoint_every", 0, MAX_TIMESTEPS),
+                             ("torch_threads", 1, 4 * (os.cpu_count() or 1))):
+        integer(f"config.{key}", config[key], least, most)
     config["seeds"] = _seeds(config)
     config.pop("seed", None)
     config["normalize"] = _normalize(config["normalize"])
@@ -128,6 +188,13 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
         _check_multi(config)
     _check_seed_range(config)
     _check_schedules(config["hyperparams"])
+    _check_finite("config.hyperparams", config["hyperparams"])
+    for key, value in config["hyperparams"].items():
+        check_range(f"config.hyperparams.{key}", key, value)
+    rollout = config["hyperparams"].get("n_steps", 0) * config["n_envs"]
+    if rollout > MAX_ROLLOUT:
+        raise ConfigError(f"config.hyperparams.n_steps: n_steps x n_envs is a rollout of "
+                          f"{rollout} transitions; at most {MAX_ROLLOUT} are allowed")
     _check_policy_kwargs(config["hyperparams"])
     return config
 
@@ -210,13 +277,13 @@ def _normalize(value: bool | dict) -> dict | None:
                               f"{sorted(NORMALIZE_DEFAULTS)}")
         for key, default in NORMALIZE_DEFAULTS.items():
             item = value.get(key, default)
-            if isinstance(default, bool) and not isinstance(item, bool) or \
-                    isinstance(default, float) and (isinstance(item, bool) or
-                                                    not isinstance(item, int | float) or
-                                                    item <= 0):
-                kind = "true or false" if isinstance(default, bool) else "a number > 0"
-                raise ConfigError(f"config.normalize.{key}: expected {kind}, got {item!r}")
-            settings[key] = item if isinstance(default, bool) else float(item)
+            if isinstance(default, float):
+                settings[key] = number(f"config.normalize.{key}", item, minimum=0, strict=True)
+            elif not isinstance(item, bool):
+                raise ConfigError(f"config.normalize.{key}: expected true or false, got "
+                                  f"{item!r}")
+            else:
+                settings[key] = item
     if not settings["norm_obs"] and not settings["norm_reward"]:
         return None
     return settings
@@ -242,6 +309,59 @@ def _check_policy_kwargs(hyperparams: dict) -> None:
     if name not in ACTIVATIONS:
         raise ConfigError(f"config.hyperparams.policy_kwargs.activation_fn: expected one of "
                           f"{sorted(ACTIVATIONS)}, got {name!r}")
+    field = "config.hyperparams.policy_kwargs"
+    for key, most in _POLICY_SIZES.items():
+        if key in policy_kwargs:
+            integer(f"{field}.{key}", policy_kwargs[key], 1, most)
+    if "net_arch" in policy_kwargs:
+        arch = policy_kwargs["net_arch"]
+        if isinstance(arch, dict):
+            unknown = sorted(set(arch) - {"pi", "vf", "qf"})
+            if unknown:
+                raise ConfigError(f"{field}.net_arch: unknown keys {unknown}; allowed are "
+                                  "['pi', 'qf', 'vf']")
+            for key, layers in arch.items():
+                _check_layers(f"{field}.net_arch.{key}", layers)
+        else:
+            _check_layers(f"{field}.net_arch", arch)
+
+
+def _check_layers(field: str, layers: object) -> None:
+    if not isinstance(layers, list) or len(layers) > MAX_LAYERS:
+        raise ConfigError(f"{field}: expected a list of at most {MAX_LAYERS} layer sizes, got "
+                          f"{layers!r}")
+    for k, width in enumerate(layers):
+        integer(f"{field}[{k}]", width, 1, MAX_WIDTH)
+
+
+def check_range(field: str, key: str, value: object) -> None:
+    """Raise `ConfigError` naming ``field`` unless ``value`` is within the documented range of
+    hyperparameter ``key`` (`HYPERPARAM_RANGES`; a ``lin_<x>`` schedule is checked on x, a
+    hyperparameter without a range passes)."""
+    if key not in HYPERPARAM_RANGES:
+        return
+    whole, least, most, excluded, nullable = HYPERPARAM_RANGES[key]
+    if value is None and nullable:
+        return
+    if isinstance(value, str) and key in SCHEDULED and _LINEAR.fullmatch(value):
+        value = float(_LINEAR.fullmatch(value).group(1))
+        field = f"{field} (the start of its lin_ schedule)"
+    if whole:
+        integer(field, value, least, most)
+    else:
+        number(field, value, minimum=least, strict=excluded, maximum=most)
+
+
+def _check_finite(field: str, value: object) -> None:
+    """No NaN or infinity anywhere in ``value`` (nested mappings and lists included)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ConfigError(f"{field}: expected a finite number, got {value!r}")
+    if isinstance(value, dict):
+        for key, item in value.items():
+            _check_finite(f"{field}.{key}", item)
+    elif isinstance(value, list):
+        for k, item in enumerate(value):
+            _check_finite(f"{field}[{k}]", item)
 
 
 def _merge_file(config: dict, folder: Path | None) -> None:
@@ -252,7 +372,7 @@ def _merge_file(config: dict, folder: Path | None) -> None:
         path = (folder or Path.cwd()) / path
     config["hyperparams_file"] = str(path)
     field = "config.hyperparams_file"
-    entries = read_yaml(field, path)
+    entries = read_document(path, field)
     key = config["env"] if "role" not in config else f"{config['env']}:{config['role']}"
     if not isinstance(entries, dict) or key not in entries:
         ids = sorted(entries) if isinstance(entries, dict) else []

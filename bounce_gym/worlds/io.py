@@ -36,10 +36,11 @@ Exactly one of ``outer`` and ``grid`` must be present; ``holes`` belongs to the 
 ``cell_size`` to the grid form.
 
 Limits: a map file holds at most `MAX_FILE_BYTES` (128 MiB, room for a 10 000 x 10 000 grid),
-a ring at most `MAX_VERTICES` (10**6) vertices, and brackets (``[``, ``{``) nest at most
-`MAX_DEPTH` (32) deep, in YAML also by indentation; a map needs 4 (mapping, holes, ring, vertex).
-Larger or deeper files raise `bounce_gym.errors.MapFormatError` before they are parsed into
-objects.
+a ring at most `MAX_VERTICES` (10**6) vertices, lists and mappings nest at most `MAX_DEPTH`
+(32) deep (a map needs 4: mapping, holes, ring, vertex), and a YAML map, its aliases expanded,
+has at most `MAX_NODES` nodes. Larger or deeper files raise `bounce_gym.errors.MapFormatError`
+before they are parsed into objects (`bounce_gym.documents`, the package's one reader of YAML
+and JSON, which also refuses control characters in strings and keys that are not strings).
 
 File formats are chosen by suffix: ``.json``, ``.yaml`` or ``.yml`` (case-insensitive). Files
 are UTF-8. Duplicate keys are rejected. Every schema violation raises
@@ -63,6 +64,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from bounce_gym.documents import Limits, read_document
 from bounce_gym.errors import InvalidWorldError, MapFormatError
 from bounce_gym.files import atomic_write
 from bounce_gym.worlds.grid import parse_ascii, to_ascii, world_from_grid
@@ -77,8 +79,12 @@ SUFFIXES = {".json": "json", ".yaml": "yaml", ".yml": "yaml"}
 MAX_FILE_BYTES = 128 * 2**20
 #: Most vertices of one ring.
 MAX_VERTICES = 10**6
-#: Deepest nesting of lists and mappings in a map file (a map needs 4).
+#: Deepest nesting of lists and mappings in a map file (a map needs 4: mapping, holes, ring,
+#: vertex).
 MAX_DEPTH = 32
+#: Most YAML nodes of a map file, every alias counted as a copy of its anchor's node: room for
+#: ten rings of `MAX_VERTICES` vertices.
+MAX_NODES = 2**25
 
 _POLYGON_KEYS = ("name", "description", "outer", "holes")
 _GRID_KEYS = ("name", "description", "grid", "cell_size")
@@ -243,9 +249,8 @@ def load(path: str | os.PathLike) -> World:
     """Read a map file (``.json``, ``.yaml`` or ``.yml``) and build its `World`.
 
     Raises:
-        MapFormatError: unknown suffix, text that is not valid UTF-8/JSON/YAML, or a map that does
-            not follow the schema.
-        OSError: the file cannot be opened (e.g. `FileNotFoundError`).
+        MapFormatError: unknown suffix, a missing or unreadable file, text that is not valid
+            UTF-8/JSON/YAML, or a map that does not follow the schema.
     """
     path = Path(path)
     return from_dict(load_dict(path), source=str(path))
@@ -255,34 +260,13 @@ def load_dict(path: str | os.PathLike) -> dict:
     """Read a map file into its dictionary, checking the file format (not yet the schema).
 
     Use `from_dict` (or `load`) to validate and build the world; this gives access to the
-    optional ``description``.
+    optional ``description``. The file is read by `bounce_gym.documents.read_document` within
+    `MAX_FILE_BYTES`, `MAX_DEPTH` and `MAX_NODES`.
     """
     path = Path(path)
     fmt = _format(path)
-    size = path.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise MapFormatError(
-            f"{path}: file has {size} bytes; map files may have at most {MAX_FILE_BYTES}"
-        )
-    raw = path.read_bytes()
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise MapFormatError(f"{path}: not UTF-8 text ({exc})") from exc
-    if fmt == "json":
-        _check_json_depth(raw, path)
-        try:
-            data = json.loads(text, object_pairs_hook=_unique_pairs, parse_constant=_no_constant)
-        except MapFormatError as exc:
-            raise MapFormatError(f"{path}: {exc}") from exc
-        except ValueError as exc:
-            raise MapFormatError(f"{path}: not valid JSON: {exc}") from exc
-    else:
-        try:
-            _check_yaml_depth(text, path)
-            data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
-        except yaml.YAMLError as exc:
-            raise MapFormatError(f"{path}: not valid YAML: {exc}") from exc
+    data = read_document(path, fmt=fmt, error=MapFormatError,
+                         limits=Limits(bytes=MAX_FILE_BYTES, depth=MAX_DEPTH, nodes=MAX_NODES))
     if not isinstance(data, dict):
         raise MapFormatError(
             f"{path}: expected a mapping with keys {list(_ALL_KEYS)} at the top level, "
@@ -342,46 +326,6 @@ def _format(path: Path) -> str:
     return fmt
 
 
-def _too_deep(path: Path, depth: int | str) -> MapFormatError:
-    return MapFormatError(
-        f"{path}: lists and mappings nest {depth} deep; a map allows at most {MAX_DEPTH} "
-        "(it needs 4: mapping, holes, ring, vertex)"
-    )
-
-
-def _check_json_depth(raw: bytes, path: Path) -> None:
-    """Reject bracket nesting deeper than `MAX_DEPTH` before the recursive JSON parser meets it.
-
-    Counts every ``[``/``{`` against every ``]``/``}``, including those inside strings: a name
-    or description would need more than `MAX_DEPTH` unmatched brackets to trip it.
-    """
-    codes = np.frombuffer(raw, dtype=np.uint8)
-    step = np.isin(codes, (ord("["), ord("{"))).astype(np.int64)
-    step -= np.isin(codes, (ord("]"), ord("}")))
-    depth = int(np.cumsum(step).max(initial=0))
-    if depth > MAX_DEPTH:
-        raise _too_deep(path, depth)
-
-
-def _check_yaml_depth(text: str, path: Path) -> None:
-    """Reject YAML nesting (flow brackets or block indentation) deeper than `MAX_DEPTH`, from the
-    parser's event stream, before any object is built."""
-    depth = 0
-    try:
-        for event in yaml.parse(text, Loader=_UniqueKeyLoader):
-            if isinstance(event, yaml.CollectionStartEvent):
-                depth += 1
-                if depth > MAX_DEPTH:
-                    raise _too_deep(path, f"more than {MAX_DEPTH}")
-            elif isinstance(event, yaml.CollectionEndEvent):
-                depth -= 1
-    except yaml.YAMLError as error:
-        # libyaml >= 0.2.6 scans flow brackets ahead of the events and stops at its own limit
-        if "nesting depth" in str(error):
-            raise _too_deep(path, f"more than {MAX_DEPTH}") from error
-        raise
-
-
 def _ring(value: object, field: str, source: str) -> list[list[float]]:
     allowed = "a list of at least 3 vertices, each a pair of numbers [x, y]"
     if isinstance(value, np.ndarray):
@@ -405,40 +349,3 @@ def _ring(value: object, field: str, source: str) -> list[list[float]]:
             )
         ring.append([float(vertex[0]), float(vertex[1])])
     return ring
-
-
-def _unique_pairs(pairs: list[tuple[str, object]]) -> dict:
-    out: dict = {}
-    for key, value in pairs:
-        if key in out:
-            raise MapFormatError(f"duplicate key {key!r}")
-        out[key] = value
-    return out
-
-
-def _no_constant(name: str) -> float:
-    raise MapFormatError(f"non-standard JSON number {name}; coordinates must be finite numbers")
-
-
-class _UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
-    """YAML safe loader (libyaml's C parser when PyYAML has it) that rejects duplicate mapping
-    keys instead of keeping the last one."""
-
-
-def _construct_unique_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode, deep: bool = False):
-    loader.flatten_mapping(node)
-    seen: list = []
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=True)
-        if key in seen:
-            raise yaml.constructor.ConstructorError(
-                "while constructing a mapping", node.start_mark,
-                f"found duplicate key {key!r}", key_node.start_mark,
-            )
-        seen.append(key)
-    return loader.construct_mapping(node, deep=deep)
-
-
-_UniqueKeyLoader.add_constructor(
-    yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_unique_mapping
-)

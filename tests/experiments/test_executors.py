@@ -16,8 +16,11 @@ from experiments.executors import (
     Unit,
     UnitFailure,
     UnitStore,
+    check_ray_cluster,
     executor_settings,
+    init_ray,
     make_executor,
+    ray_endpoint,
 )
 
 LOCAL = [pytest.param(1, id="in-process"), pytest.param(2, id="pool")]
@@ -224,9 +227,11 @@ def test_make_executor_picks_the_executor_and_checks_its_arguments():
     ("kwargs", "message"),
     [
         ({"kind": "dask"}, r"executor.kind: expected one of \('local', 'ray'\), got 'dask'"),
-        ({"workers": 0}, "executor.workers: expected an integer >= 1, got 0"),
-        ({"workers": True}, "executor.workers: expected an integer >= 1, got True"),
-        ({"retries": -1}, "executor.retries: expected an integer >= 0, got -1"),
+        ({"workers": 0}, r"executor.workers: expected an integer in \[1, 1024\], got 0"),
+        ({"workers": True}, r"executor.workers: expected an integer in \[1, 1024\], got True"),
+        ({"workers": 10**6}, r"executor.workers: expected an integer in \[1, 1024\]"),
+        ({"retries": -1}, r"executor.retries: expected an integer in \[0, 100\], got -1"),
+        ({"retries": 10**9}, r"executor.retries: expected an integer in \[0, 100\]"),
         ({"address": "localhost:6379"}, "executor.address: only for the ray executor"),
         ({"kind": "ray", "address": " "}, "executor.address: expected a Ray address"),
     ],
@@ -255,9 +260,9 @@ def test_an_executor_block_is_completed_with_the_defaults():
     [
         ([], None, "config.executor: expected a mapping"),
         ({"cores": 2}, None, r"config.executor: unknown keys \['cores'\]"),
-        ({"workers": "2"}, None, "config.executor.workers: expected an integer >= 1, got '2'"),
-        ({"retries": None}, None, "config.executor.retries: expected an integer >= 0"),
-        ({"workers": 0}, {"workers": "--workers"}, "^--workers: expected an integer >= 1"),
+        ({"workers": "2"}, None, "config.executor.workers: expected an integer in .*, got '2'"),
+        ({"retries": None}, None, r"config.executor.retries: expected an integer in \[0, 100\]"),
+        ({"workers": 0}, {"workers": "--workers"}, r"^--workers: expected an integer in \[1,"),
         ({"address": "h:1"}, {"address": "--address", "kind": "--executor"},
          r"^--address: only for the ray executor \(--executor: ray\)"),
     ],
@@ -265,3 +270,93 @@ def test_an_executor_block_is_completed_with_the_defaults():
 def test_bad_executor_blocks_name_the_field(block, names, message):
     with pytest.raises(ConfigError, match=message):
         executor_settings(block, "config.executor", names)
+
+
+@pytest.mark.parametrize(("address", "endpoint"), [
+    ("auto", None), ("head:6379", ("head", 6379)),
+    ("ray://10.0.0.1:10001", ("10.0.0.1", 10001)), ("[::1]:6379", ("::1", 6379)),
+    ("node-1.example.org:1", ("node-1.example.org", 1)), ("h:65535", ("h", 65535)),
+])
+def test_ray_addresses(address, endpoint):
+    assert ray_endpoint("--address", address) == endpoint
+
+
+@pytest.mark.parametrize("address", [
+    "256.1.1.1:1", "ray://256.1.1.1:1", "1.2.3:6379", "h:0", "h:65536", "h:-1", "h:６３７９",
+    "h",
+    ":6379", "-h:1", "h_1:1", "[::g]:1", "::1:6379", "local", "ray://", "http://h:1", "h:1/x",
+    "a" * 64 + ":1", 6379, None,
+])
+def test_what_is_no_ray_address(address):
+    with pytest.raises(ConfigError, match=r"^--address: expected a Ray address \(auto, "
+                                          r"host:port or ray://host:port"):
+        ray_endpoint("--address", address)
+
+
+def _server(answer: bytes | None):
+    """A TCP server on a free local port that sends ``answer`` to each connection (None:
+    nothing, ever); returns its port."""
+    import socket
+    import threading
+
+    server = socket.create_server(("127.0.0.1", 0))
+    held = []
+
+    def serve() -> None:
+        while True:
+            connection, _ = server.accept()
+            held.append(connection)
+            if answer is not None:
+                connection.sendall(answer)
+
+    threading.Thread(target=serve, daemon=True).start()
+    return server.getsockname()[1]
+
+
+@pytest.mark.timeout(30)  # a hang guard only
+def test_only_an_answering_ray_cluster_passes_the_check(monkeypatch, tmp_path):
+    import experiments.executors
+
+    monkeypatch.setattr(experiments.executors, "CONNECT_TIMEOUT", 0.5)
+    settings = bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])  # an HTTP/2 server's first frame
+    check_ray_cluster("--address", f"127.0.0.1:{_server(settings)}")
+    port = _server(b"HTTP/1.1 400 Bad Request\r\n\r\n")
+    with pytest.raises(ConfigError, match=rf"^--address: '127.0.0.1:{port}' is not a Ray "
+                                          "cluster: it does not answer as Ray's gRPC servers do$"):
+        check_ray_cluster("--address", f"127.0.0.1:{port}")
+    port = _server(None)
+    with pytest.raises(ConfigError, match=rf"^--address: no Ray cluster answers at "
+                                          rf"'ray://127.0.0.1:{port}' within 0.5 s$"):
+        check_ray_cluster("--address", f"ray://127.0.0.1:{port}")
+    monkeypatch.setenv("RAY_ADDRESS", "auto")  # as good as unset
+    monkeypatch.setenv("RAY_TMPDIR", str(tmp_path))
+    with pytest.raises(ConfigError, match=rf"^x: auto: no running Ray cluster found \(RAY_ADDRESS "
+                                          rf"names none and {tmp_path}/ray/ray_current_cluster "
+                                          r"does not exist\)"):
+        check_ray_cluster("x", "auto")
+    (tmp_path / "ray").mkdir()
+    (tmp_path / "ray" / "ray_current_cluster").write_text(f"127.0.0.1:{_server(settings)}\n")
+    check_ray_cluster("x", "auto")
+    monkeypatch.setenv("RAY_ADDRESS", "256.0.0.1:1")
+    with pytest.raises(ConfigError, match=r"^x \(auto, from RAY_ADDRESS\): expected a Ray addr"):
+        check_ray_cluster("x", "auto")
+
+
+@pytest.mark.timeout(60)  # a hang guard only: ray.init used to retry for minutes
+def test_ray_is_not_asked_to_connect_where_no_cluster_answers(monkeypatch):
+    ray = pytest.importorskip("ray")
+    calls = []
+    monkeypatch.setattr(ray, "init", lambda *args, **kwargs: calls.append(kwargs))
+    monkeypatch.setattr(ray, "is_initialized", lambda: False)
+    port = _server(b"SSH-2.0-OpenSSH\r\n")
+    with pytest.raises(ConfigError, match=f"^executor.address: '127.0.0.1:{port}' is not a Ray"):
+        init_ray("executor.address", f"127.0.0.1:{port}", None)
+    assert calls == []
+
+    def refuse(**kwargs):
+        raise ConnectionError("Could not find any running Ray instance.\nPlease ...")
+
+    monkeypatch.setattr(ray, "init", refuse)
+    with pytest.raises(ConfigError, match=r"^executor.address: cannot start or reach a local Ray "
+                                          r"instance: Could not find any running Ray instance.$"):
+        init_ray("executor.address", None, 2)

@@ -41,7 +41,8 @@ def _space(tmp_path: Path, space: object) -> Path:
     ({"learning_rate": {"loguniform": [0, 1]}}, "search.learning_rate.loguniform: .* 0 < low"),
     ({"n_epochs": {"randint": [1.5, 3]}}, "search.n_epochs.randint: expected .* integers"),
     ({"n_epochs": {"randint": [3]}}, "search.n_epochs.randint: expected"),
-    ({"batch_size": {"choice": []}}, "search.batch_size.choice: expected a non-empty list"),
+    ({"batch_size": {"choice": []}},
+     "search.batch_size.choice: expected a list of 1 to 10000 values, got 0 values"),
 ])
 def test_a_bad_search_space_names_the_field(tmp_path, space, message):
     with pytest.raises(ConfigError, match=message):
@@ -103,3 +104,28 @@ def test_a_tiny_search_on_a_local_ray_writes_ordinary_runs_a_table_and_the_best_
                                    "hyperparams_file": str(folder / "best_hyperparams.yaml")})
     assert again["hyperparams"]["learning_rate"] == pytest.approx(float(
         winner["learning_rate"]), rel=1e-5)
+
+
+def test_draws_reach_the_ends_of_int64_without_overflow(tmp_path):
+    space = load_search_space(_space(tmp_path, {"seed_like": {"randint": [2**63 - 2,
+                                                                          2**63 - 1]}}))
+    assert {sample(space, 0, k)["seed_like"] for k in range(40)} == {2**63 - 2, 2**63 - 1}
+
+
+@pytest.mark.parametrize("space, message", [
+    ({"n_steps": {"randint": [1, 2**63]}}, r"search.n_steps.randint: expected \[low, high\], "
+                                           "integers in"),
+    ({"n_steps": {"randint": [10, 2**40]}}, r"search.n_steps.randint\[1\]: expected an integer "
+                                            r"in \[1, 1000000\]"),
+    ({"gae_lambda": {"uniform": [-0.5, 0.5]}}, r"search.gae_lambda.uniform\[0\]: expected a "
+                                               r"number in \[0, 1\], got -0.5"),
+    ({"ent_coef": {"choice": [0.0, -1]}}, r"search.ent_coef.choice\[1\]: expected a number >= 0"),
+    ({"policy_kwargs": {"choice": [{"net_arch": [64]}, 3]}}, None),  # checked per trial
+])
+def test_the_bounds_of_a_search_space_lie_within_the_hyperparameters_ranges(tmp_path, space,
+                                                                             message):
+    if message is None:
+        assert load_search_space(_space(tmp_path, space))
+        return
+    with pytest.raises(ConfigError, match=message):
+        load_search_space(_space(tmp_path, space))

@@ -257,8 +257,8 @@ def test_suffix_is_case_insensitive(tmp_path, polygon_world):
     assert load(save(polygon_world, tmp_path / "MAP.YAML")) == polygon_world
 
 
-def test_missing_file_is_an_os_error(tmp_path):
-    with pytest.raises(FileNotFoundError):
+def test_missing_file_is_a_map_format_error(tmp_path):
+    with pytest.raises(MapFormatError, match=r"^file '.*nope.yaml' does not exist$"):
         load(tmp_path / "nope.yaml")
 
 
@@ -326,7 +326,7 @@ def test_deep_nesting_is_a_map_format_error(tmp_path, suffix, text):
     # used to end in RecursionError
     path = tmp_path / f"deep{suffix}"
     path.write_text(text)
-    with pytest.raises(MapFormatError, match="nest .* deep; a map allows at most 32"):
+    with pytest.raises(MapFormatError, match="nest .* deep; at most 32 are allowed"):
         load(path)
 
 
@@ -341,7 +341,7 @@ def test_too_large_a_file_is_a_map_format_error(tmp_path, monkeypatch):
     monkeypatch.setattr(map_io, "MAX_FILE_BYTES", 100)
     path = tmp_path / "big.json"
     path.write_text(json.dumps({"name": "x", "outer": [[0, 0], [1, 0], [0, 1]] * 10}))
-    with pytest.raises(MapFormatError, match=r"bytes; map files may have at most 100"):
+    with pytest.raises(MapFormatError, match=r"bytes; at most 100 are allowed"):
         load(path)
 
 
@@ -350,3 +350,33 @@ def test_too_many_vertices_is_a_map_format_error(monkeypatch):
     ring = [[np.cos(a), np.sin(a)] for a in np.linspace(0, 6, 6)]
     with pytest.raises(MapFormatError, match=r"'outer' must be .* at most 5, got 6 vertices"):
         from_dict({"name": "x", "outer": ring})
+
+
+@pytest.mark.timeout(30)  # a hang guard only: the aliases are never expanded
+def test_an_alias_bomb_is_a_map_format_error(tmp_path):
+    lines = ["name: bomb", "outer: [[0, 0], [1, 0], [0, 1]]", "description:",
+             "- &a [x, x, x, x, x, x, x, x, x, x]"]
+    lines += [f"- &{chr(98 + i)} [{', '.join(['*' + chr(97 + i)] * 10)}]" for i in range(9)]
+    path = tmp_path / "bomb.yaml"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(MapFormatError, match=rf"^{path}: more than {2**25} nodes with its "
+                                             "aliases expanded"):
+        load(path)
+
+
+@pytest.mark.parametrize(("name", "text", "expected"), [
+    ("nul.json", '{"name": "a\\u0000", "outer": [[0, 0], [1, 0], [0, 1]]}',
+     "control character U+0000"),
+    ("esc.yaml", 'name: "\\e[31mred"\nouter: [[0, 0], [1, 0], [0, 1]]\n',
+     "control character U+001B"),
+    ("key.yaml", "name: m\n1: 2\nouter: [[0, 0], [1, 0], [0, 1]]\n",
+     "found a key that is not a string: 1"),
+    ("recursive.yaml", "name: m\nouter: &o [[0, 0], [1, 0], *o]\n",
+     "the alias *o at line 2, column 28 names no anchor before it, or a node that contains it"),
+])
+def test_hostile_text_in_a_map_is_a_map_format_error(tmp_path, name, text, expected):
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(MapFormatError) as info:
+        load(path)
+    assert str(info.value).startswith(f"{path}: ") and expected in str(info.value)

@@ -80,3 +80,53 @@ def test_linear_schedules_and_activation_names():
     assert kwargs["learning_rate"](0.25) == pytest.approx(2.5e-4)
     assert kwargs["clip_range"] == 0.2
     assert kwargs["policy_kwargs"] == {"activation_fn": nn.ReLU, "net_arch": [8]}
+
+
+def test_every_ranged_hyperparameter_takes_its_bounds_and_refuses_beyond_them():
+    from baselines.rl.train_config import HYPERPARAM_RANGES, check_range
+    from bounce_gym.errors import ConfigError
+
+    for key, (whole, least, most, excluded, nullable) in HYPERPARAM_RANGES.items():
+        inside = [least + (1 if whole else 0.5) if excluded else least]
+        if most is not None:
+            inside.append(most)
+        for value in inside:
+            check_range(f"h.{key}", key, value)
+        outside = [least if excluded else least - 1, float("nan"), float("inf"), "x", True]
+        if most is not None:
+            outside.append(most + 1)
+        if whole:
+            outside.append(float(inside[0]))  # an integer is not a float
+        if not nullable:
+            outside.append(None)
+        for value in outside:
+            with pytest.raises(ConfigError, match=rf"^h\.{key}: expected a"):
+                check_range(f"h.{key}", key, value)
+    check_range("h.colour", "colour", float("nan"))  # no range of its own: SB3 decides
+
+
+def test_a_schedule_is_checked_on_its_start():
+    from baselines.rl.train_config import check_range
+    from bounce_gym.errors import ConfigError
+
+    check_range("h.learning_rate", "learning_rate", "lin_3e-4")
+    with pytest.raises(ConfigError, match=r"h.clip_range \(the start of its lin_ schedule\): "
+                                          r"expected a number > 0, got 0.0"):
+        check_range("h.clip_range", "clip_range", "lin_0")
+
+
+def test_numbers_anywhere_in_the_hyperparameters_are_finite():
+    from bounce_gym.errors import ConfigError
+
+    base = {"name": "x", "env": "bounce_gym/BounceNavigation-v0", "algo": "ppo",
+            "total_timesteps": 64}
+    for hyperparams, field in (({"target_kl": float("nan")}, "target_kl"),
+                               ({"policy_kwargs": {"net_arch": {"vf": [float("inf")]}}},
+                                r"policy_kwargs.net_arch.vf\[0\]"),
+                               ({"normalize_advantage": True, "x": [1, [float("-inf")]]},
+                                r"x\[1\]\[0\]")):
+        with pytest.raises(ConfigError, match=rf"^config.hyperparams.{field}: expected a finite "
+                                              "number"):
+            validate_train_config({**base, "hyperparams": hyperparams})
+    assert validate_train_config({**base, "hyperparams": {"target_kl": None, "clip_range_vf":
+                                                          None}})["hyperparams"]["target_kl"] is None

@@ -1,0 +1,255 @@
+"""The one reader of the YAML and JSON documents the package is given: evaluation and training
+configurations, hyperparameter files, search spaces, map files, and the JSON it reads back
+(manifests, model metadata).
+
+`read_document` reads a file, `parse_document` bytes already in memory. Before any Python
+object that could be large is built, a document must pass these checks (`Limits` holds the
+numbers; the defaults suit configurations):
+
+* size: at most ``bytes`` bytes (default 4 MiB), read no further than that;
+* text: UTF-8 (a leading byte-order mark is dropped); no string, key or value, escapes decoded,
+  holds a control character other than tab, line feed and carriage return (so no NUL, DEL or
+  C1 control), nor a lone UTF-16 surrogate;
+* nesting: lists and mappings nest at most ``depth`` deep (default 32). YAML is measured on the
+  parser's event stream (flow brackets and block indentation alike), JSON by counting every
+  opening bracket against the closing ones, those inside strings included, so neither reaches
+  a recursive parser too deep;
+* aliases (YAML): the document has at most ``nodes`` nodes (default 10**6) with every alias
+  counted as a full copy of the node it names, each anchored node's size worked out once, as
+  the events stream by; so a "billion laughs" of nested aliases is refused without being
+  expanded, and so is an alias to a node that contains it;
+* data: mapping keys are strings and none repeats within its mapping (a merged ``<<`` mapping
+  may be overridden, as YAML intends); JSON has no ``NaN`` or ``Infinity``. A JSON document is
+  no bigger than its bytes, so its node count needs no check of its own.
+
+YAML is parsed by libyaml (PyYAML's C parser) where PyYAML has it, and built by PyYAML's safe
+constructors only: no tag runs code or makes a Python object other than plain data. Every
+refusal is one line raised as the caller's error class (`bounce_gym.errors.ConfigError` by
+default; `bounce_gym.errors.MapFormatError` for maps) that names the file (or what the caller
+calls the bytes) and, where the parser knows it, the line and column.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from bounce_gym.errors import BounceGymError, ConfigError
+
+__all__ = ["FORMATS", "Limits", "parse_document", "read_document"]
+
+#: The formats `parse_document` reads.
+FORMATS = ("yaml", "json")
+#: Characters no string of a document may hold: C0 controls but tab, line feed and carriage
+#: return; DEL and the C1 controls; lone surrogates (which JSON escapes can make).
+_FORBIDDEN = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f\ud800-\udfff]")
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What a document may hold (module docstring): ``bytes`` of file, lists and mappings
+    nested ``depth`` deep, ``nodes`` YAML nodes with aliases expanded."""
+
+    bytes: int = 4 * 2**20
+    depth: int = 32
+    nodes: int = 10**6
+
+
+def read_document(path: str | Path, field: str | None = None, *, fmt: str = "yaml",
+                  limits: Limits = Limits(), error: type[BounceGymError] = ConfigError
+                  ) -> object:
+    """The document in the file ``path`` (``fmt``: ``yaml`` or ``json``), checked as the
+    module docstring says. Errors start with ``<field>: <path>:`` (``<path>:`` without a
+    field); a missing file is ``<field>: file '<path>' does not exist``."""
+    path = Path(path)
+    lead = f"{field}: " if field else ""
+    if not path.is_file():
+        what = "is not a file" if path.exists() else "does not exist"
+        raise error(f"{lead}file {str(path)!r} {what}")
+    try:
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size > limits.bytes:
+                raise error(f"{lead}{path}: {size} bytes; at most {limits.bytes} are allowed")
+            data = fh.read(limits.bytes + 1)  # it may have grown since
+    except OSError as exc:
+        raise error(f"{lead}cannot read {str(path)!r}: {exc.strerror or exc}") from None
+    return parse_document(f"{lead}{path}", data, fmt=fmt, limits=limits, error=error)
+
+
+def parse_document(where: str, data: bytes, *, fmt: str = "yaml", limits: Limits = Limits(),
+                   error: type[BounceGymError] = ConfigError) -> object:
+    """The document in ``data`` (``fmt``: ``yaml`` or ``json``), checked as the module
+    docstring says; a refusal is ``error("<where>: <what is wrong>")``."""
+    if fmt not in FORMATS:
+        raise ValueError(f"fmt: expected one of {FORMATS}, got {fmt!r}")
+    if len(data) > limits.bytes:
+        raise error(f"{where}: more than {limits.bytes} bytes; at most {limits.bytes} are "
+                    "allowed")
+    try:
+        text = data.decode("utf-8").removeprefix("\ufeff")
+    except UnicodeDecodeError as exc:
+        raise error(f"{where}: not UTF-8 text: byte {data[exc.start]:#04x} at offset "
+                    f"{exc.start}") from None
+    try:
+        if fmt == "json":
+            return _json(text, data, limits)
+        return _yaml(text, limits)
+    except _RefusedError as exc:
+        raise error(f"{where}: {exc}") from None
+
+
+class _RefusedError(Exception):
+    """A document failed a check; the message says which and where, without the file."""
+
+
+def _too_deep(depth: int | str, limits: Limits) -> _RefusedError:
+    return _RefusedError(f"lists and mappings nest {depth} deep; at most {limits.depth} are "
+                         "allowed")
+
+
+def _check_text(value: str, at: str) -> None:
+    found = _FORBIDDEN.search(value)
+    if found:
+        raise _RefusedError(f"control character U+{ord(found.group()):04X} in the string "
+                       f"{value[:40]!r}{at}; strings may not hold control characters")
+
+
+# -- JSON -------------------------------------------------------------------------------------
+def _json(text: str, data: bytes, limits: Limits) -> object:
+    codes = np.frombuffer(data, dtype=np.uint8)
+    step = np.isin(codes, (ord("["), ord("{"))).astype(np.int64)
+    step -= np.isin(codes, (ord("]"), ord("}")))
+    depth = int(np.cumsum(step).max(initial=0))
+    if depth > limits.depth:
+        raise _too_deep(depth, limits)
+    try:
+        value = json.loads(text, object_pairs_hook=_unique_pairs, parse_constant=_no_constant)
+    except json.JSONDecodeError as exc:
+        raise _RefusedError(f"not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}") \
+            from None
+    _check_strings(value)
+    return value
+
+
+def _unique_pairs(pairs: list[tuple[str, object]]) -> dict:
+    out: dict = {}
+    for key, value in pairs:
+        if key in out:
+            raise _RefusedError(f"duplicate key {key!r}")
+        out[key] = value
+    return out
+
+
+def _no_constant(name: str) -> float:
+    raise _RefusedError(f"{name} is not a JSON number; numbers must be finite")
+
+
+def _check_strings(value: object) -> None:
+    """Every string of a parsed JSON document (at most `Limits.depth` deep) is clean text."""
+    if isinstance(value, str):
+        _check_text(value, "")
+    elif isinstance(value, list):
+        for item in value:
+            _check_strings(item)
+    elif isinstance(value, dict):
+        for key, item in value.items():
+            _check_text(key, "")
+            _check_strings(item)
+
+
+# -- YAML -------------------------------------------------------------------------------------
+#: what a boolean key is told (YAML 1.1 reads yes, no, on and off as booleans)
+_QUOTE = " (YAML reads yes, no, on and off as booleans: quote the key)"
+
+
+class _Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+    """PyYAML's safe loader (libyaml's parser where PyYAML has it) whose mappings have string
+    keys, each once."""
+
+
+def _construct_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode, deep: bool = False):
+    seen: set[str] = set()
+    for key_node, _ in node.value:
+        if key_node.tag == "tag:yaml.org,2002:merge":
+            continue  # merged keys may be overridden; checked in their own mapping
+        key = loader.construct_object(key_node, deep=True)
+        hint = _QUOTE if isinstance(key, bool) else ""
+        problem = (f"found a key that is not a string: {key!r}{hint}" if not isinstance(key, str)
+                   else f"found duplicate key {key!r}" if key in seen else None)
+        if problem:
+            raise yaml.constructor.ConstructorError(None, None, problem, key_node.start_mark)
+        seen.add(key)
+    loader.flatten_mapping(node)
+    return loader.construct_mapping(node, deep=deep)
+
+
+_Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+
+
+def _at(mark: yaml.Mark | None) -> str:
+    return f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+
+
+def _yaml(text: str, limits: Limits) -> object:
+    try:
+        _check_events(text, limits)
+        return yaml.load(text, Loader=_Loader)  # noqa: S506 (safe constructors only)
+    except yaml.YAMLError as exc:
+        if "nesting depth" in str(exc):  # libyaml's own limit, met while scanning ahead
+            raise _too_deep(f"more than {limits.depth}", limits) from None
+        raise _RefusedError(f"not valid YAML: {_yaml_problem(exc)}") from None
+
+
+def _yaml_problem(exc: yaml.YAMLError) -> str:
+    """A PyYAML error in one line: what was wrong, where."""
+    if isinstance(exc, yaml.reader.ReaderError):
+        code = exc.character if isinstance(exc.character, int) else ord(exc.character)
+        return f"{exc.reason}: U+{code:04X} at character {exc.position}"
+    problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    context = getattr(exc, "context", None)
+    return f"{context + ', ' if context else ''}{problem}{_at(getattr(exc, 'problem_mark', None))}"
+
+
+def _check_events(text: str, limits: Limits) -> None:
+    """Depth, expanded size and clean strings, from the parser's events: nothing is built."""
+    open_sizes: list[list] = []  # [anchor, expanded size so far] of each open collection
+    sizes: dict[str, int] = {}  # expanded size of each finished anchored node
+    total = 0
+    for event in yaml.parse(text, Loader=_Loader):
+        if isinstance(event, yaml.CollectionStartEvent):
+            if len(open_sizes) == limits.depth:
+                raise _too_deep(f"more than {limits.depth}", limits)
+            open_sizes.append([event.anchor, 1])
+            size = 1
+        elif isinstance(event, yaml.CollectionEndEvent):
+            anchor, whole = open_sizes.pop()
+            if anchor is not None:
+                sizes[anchor] = whole
+            if open_sizes:
+                open_sizes[-1][1] += whole
+            continue
+        elif isinstance(event, yaml.ScalarEvent):
+            _check_text(event.value, _at(event.start_mark))
+            size = 1
+            if event.anchor is not None:
+                sizes[event.anchor] = 1
+        elif isinstance(event, yaml.AliasEvent):
+            if event.anchor not in sizes:
+                raise _RefusedError(f"the alias *{event.anchor}{_at(event.start_mark)} names no "
+                               "anchor before it, or a node that contains it")
+            size = sizes[event.anchor]
+        else:
+            continue
+        total += size
+        if total > limits.nodes:
+            raise _RefusedError(f"more than {limits.nodes} nodes with its aliases expanded"
+                           f"{_at(event.start_mark)}; at most {limits.nodes} are allowed")
+        if open_sizes and not isinstance(event, yaml.CollectionStartEvent):
+            open_sizes[-1][1] += size
