@@ -154,7 +154,7 @@ def executor_block(block: Mapping | None, flags: Mapping[str, str]) -> dict:
     from experiments.executors import check_ray_cluster, executor_settings
 
     given = {key: int(value) if key == "workers" and value.isascii() and value.isdigit()
-             else value for key, value in flags.items() if value is not None}
+             and len(value) <= 9 else value for key, value in flags.items() if value is not None}
     names = {key: EXECUTOR_FLAGS[key] for key in given}
     settings = executor_settings({**(block or {}), **given}, "config.executor", names)
     if settings["address"] is not None:
@@ -297,7 +297,12 @@ def trust(paths: list[str]) -> int:
 class Parser(argparse.ArgumentParser):
     """argparse's parser, whose usage mistakes (an unknown flag, a value of the wrong type or
     not among the choices) are one line ``error: ...`` and exit status 2, as every mistake of
-    the command is; ``--help`` shows the usage. Its subcommands' parsers are of this class."""
+    the command is; ``--help`` shows the usage. A flag is given in full: argparse's
+    abbreviations (``--worker`` for ``--workers``) are refused as unknown flags, so that a
+    typo never becomes another flag. Its subcommands' parsers are of this class."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **{**kwargs, "allow_abbrev": False})
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"error: {message} (see {self.prog} --help)\n")

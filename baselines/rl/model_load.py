@@ -60,7 +60,7 @@ def load_model_file(trained: ModelFile, observation_space, action_space, **load_
     file that does not fit them or is not a model this package saved."""
     template = _template(trained, observation_space, action_space)
     saved, weights = _saved(template)
-    _check_spaces(trained, saved, observation_space, action_space)
+    _check_spaces(trained, saved)
     _check_weights(trained, weights)
     custom_objects = _custom_objects(trained, template, saved)
     try:
@@ -150,12 +150,18 @@ def _describe(space: object) -> str:
     if not isinstance(space, dict):
         return "(no space)"
     kind = re.fullmatch(r"<class '(?:\w+\.)*(\w+)'>", str(space.get(":type:")))
-    fields = ", ".join(f"{name.strip('_')}={space[name]}" for name in _SPACE_FIELDS
+    fields = ", ".join(f"{name.strip('_')}={_shown(space[name])}" for name in _SPACE_FIELDS
                        if name in space)
     return f"{kind.group(1) if kind else '?'}({fields})"
 
 
-def _check_spaces(trained: ModelFile, saved: dict, observation_space, action_space) -> None:
+def _shown(value: object) -> str:
+    """A value of a file's JSON in one short line (a file may put anything there)."""
+    text = " ".join(str(value).split())
+    return text if len(text) <= 40 else f"{text[:37]}..."
+
+
+def _check_spaces(trained: ModelFile, saved: dict) -> None:
     """The file's spaces are of the kind, shape and type of the template's (their JSON
     descriptions; the spaces themselves are the template's)."""
     keys = ("observation_space", "action_space")
@@ -163,8 +169,8 @@ def _check_spaces(trained: ModelFile, saved: dict, observation_space, action_spa
     if [_describe(space) for space in theirs] != [_describe(saved[key]) for key in keys]:
         raise ConfigError(
             f"model {trained.path}: trained for observations {_describe(theirs[0])} and actions "
-            f"{_describe(theirs[1])}, but this env has {observation_space} and {action_space} "
-            "(train with the same env_kwargs)")
+            f"{_describe(theirs[1])}, but this env has {_describe(saved[keys[0]])} and "
+            f"{_describe(saved[keys[1]])} (train with the same env_kwargs)")
 
 
 def _check_weights(trained: ModelFile, weights: dict[str, int]) -> None:

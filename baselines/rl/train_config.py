@@ -53,6 +53,7 @@ from baselines.seeds import EVALUATION_SEEDS_START
 from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
+    GYMNASIUM_IDS,
     PETTINGZOO_ENVS,
     is_pettingzoo_id,
 )
@@ -151,9 +152,9 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
         raise ConfigError(f"config.algo: expected one of {ALGOS}, got {config['algo']!r}")
     _check_role(config)
     multi = is_multi(config)
-    if not is_pettingzoo_id(config["env"]) and config["env"] not in gym.registry:
-        raise ConfigError(f"config.env: unknown environment id {config['env']!r}; multi-robot "
-                          f"ids are {[*PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]}")
+    if not is_pettingzoo_id(config["env"]) and config["env"] not in GYMNASIUM_IDS:
+        raise ConfigError(f"config.env: unknown environment id {config['env']!r}; registered: "
+                          f"{[*GYMNASIUM_IDS, *PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]}")
     if "hyperparams_file" in config:
         _merge_file(config, folder)
         _check_types(config)
