@@ -87,7 +87,7 @@ from bounce_gym.envs.registration import (
     is_pettingzoo_id,
 )
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import check_path_component
+from bounce_gym.files import check_path_component, check_path_text
 from bounce_gym.validate import integer
 from experiments.executors import executor_settings
 
@@ -165,6 +165,8 @@ def validate_config(config: object) -> dict:
     config.setdefault("models", "models")
     config.setdefault("leaderboard", False)
     check_path_component("config.name", config["name"], "a name for the run folder")
+    for key in ("output", "models"):
+        check_path_text(f"config.{key}", config[key])
     if "executor" in config:
         config["executor"] = executor_settings(config["executor"], "config.executor")
     if not config["experiments"]:

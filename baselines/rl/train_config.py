@@ -58,6 +58,7 @@ from bounce_gym.envs.registration import (
     is_pettingzoo_id,
 )
 from bounce_gym.errors import ConfigError
+from bounce_gym.files import check_path_text
 from bounce_gym.validate import integer, number
 
 MULTI_ALGOS = ("ppo",)
@@ -178,6 +179,7 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
                 "tensorboard": False, "models": "models", "resume": False, "torch_threads": 1}
     for key, value in defaults.items():
         config.setdefault(key, value)
+    check_path_text("config.models", config["models"])
     for key, least, most in (("n_envs", 1, MAX_ENVS), ("n_stack", 1, MAX_STACK),
                              ("checkpoint_every", 0, MAX_TIMESTEPS),
                              ("torch_threads", 1, 4 * (os.cpu_count() or 1))):

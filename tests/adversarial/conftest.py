@@ -30,8 +30,9 @@ def tally(pytestconfig) -> Counter:
 
 @pytest.fixture(scope="session")
 def hostile_records(pytestconfig) -> list:
-    """What each case of the hostile-input suite took: ``(class, mode, CPU seconds, memory
-    bytes)``, mode ``in-process`` or ``subprocess``; `pytest_terminal_summary` sums them up."""
+    """What each case of the hostile-input suite took: ``(class:name, mode, CPU seconds,
+    memory bytes)``, mode ``in-process`` or ``subprocess``; `pytest_terminal_summary` sums
+    them up."""
     return pytestconfig.stash.setdefault(_RECORDS, [])
 
 
@@ -59,12 +60,13 @@ def _hostile_summary(reporter, records: list) -> None:
         mine = [r for r in records if r[1] == mode]
         if not mine:
             continue
-        per_class = Counter(r[0] for r in mine)
-        cpu = [r[2] for r in mine]
-        memory = max(r[3] for r in mine)
+        per_class = Counter(r[0].split(":", 1)[0] for r in mine)
+        slowest = max(mine, key=lambda r: r[2])
+        largest = max(mine, key=lambda r: r[3])
         reporter.write_line(f"{mode}: {len(mine)} cases: " + ", ".join(
             f"{cls} {n}" for cls, n in per_class.items()))
-        reporter.write_line(f"  CPU per case: median {statistics.median(cpu):.3f} s, max "
-                            f"{max(cpu):.3f} s; peak memory: max {memory / 2**20:.0f} MiB "
-                            + ("(growth of the peak resident memory)" if mode == "in-process"
-                               else "(ru_maxrss of the child, start-up included)"))
+        reporter.write_line(
+            f"  CPU per case: median {statistics.median(r[2] for r in mine):.3f} s, max "
+            f"{slowest[2]:.3f} s ({slowest[0]}); peak memory: max {largest[3] / 2**20:.0f} MiB "
+            f"({largest[0]}; " + ("growth of the peak resident memory)" if mode == "in-process"
+                                  else "ru_maxrss of the child, start-up included)"))

@@ -106,7 +106,6 @@ def measure(call) -> Measured:
     holds already (pytest's, the warmed imports') are frozen meanwhile (``gc.freeze``): the
     garbage collector's passes over them are start-up, which a command's own process has far
     less of, not the case's cost."""
-    gc.collect()
     gc.freeze()
     before = _reset_peak()
     start = time.process_time()
@@ -219,7 +218,7 @@ def _prepare(case, box: Sandbox, request, monkeypatch):
 
 def _record(request, case, mode: str, cpu: float, memory: int) -> None:
     request.getfixturevalue("tally")["bad inputs"] += 1
-    request.getfixturevalue("hostile_records").append((case.cls, mode, cpu, memory))
+    request.getfixturevalue("hostile_records").append((case.id, mode, cpu, memory))
 
 
 def _no_trace(box: Sandbox, root: Path, before: dict, allowed: str) -> None:
