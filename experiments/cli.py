@@ -223,8 +223,10 @@ def training_config(config: object, timesteps: int | None = None, resume: bool =
         config["resume"] = True
     cap = os.environ.get(MAX_TIMESTEPS)
     if cap is not None:
-        if not (cap.isascii() and cap.isdigit()) or int(cap) < 1:
-            raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {cap!r}")
+        if not (cap.isascii() and cap.isdigit() and len(cap) <= 18) or int(cap) < 1:
+            shown = cap if len(cap) <= 20 else f"{cap[:17]}..."
+            raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1 (of at most 18 "
+                              f"digits), got {shown!r}")
         budget = config.get("total_timesteps", int(cap))
         config["total_timesteps"] = min(budget, int(cap)) if isinstance(budget, int) \
             else budget

@@ -23,13 +23,15 @@ from hostile_files import flow_file
 
 @dataclass(frozen=True)
 class ApiCase:
-    """A call that must raise ``error`` with a message containing ``expect``."""
+    """A call that must raise ``error`` with a message containing ``expect``, with ``env`` set
+    as `hostile_cases.Case` sets it."""
 
     cls: str
     name: str
     build: Callable[[Sandbox], Callable[[], object]]
     error: type[BounceGymError] = BounceGymError
     expect: str = ""
+    env: tuple[tuple[str, str | None], ...] = ()
 
     @property
     def id(self) -> str:
@@ -253,6 +255,11 @@ def _loaders() -> list[ApiCase]:
             p, mapping={"w": "u"})), FlowFileError),
         ApiCase(c, "flow: a billion cells", _with_flow(_load_flow, declared=(10_000, 100_000)),
                 FlowFileError),
+        ApiCase(c, "flow: a cap of 5000 digits", _with_flow(_load_flow), ConfigError,
+                "BOUNCE_GYM_MAX_FLOW_VALUES: expected a positive integer",
+                env=(("BOUNCE_GYM_MAX_FLOW_VALUES", "9" * 5000),)),
+        ApiCase(c, "flow: a cap of zero", _with_flow(_load_flow), ConfigError,
+                "BOUNCE_GYM_MAX_FLOW_VALUES", env=(("BOUNCE_GYM_MAX_FLOW_VALUES", "0"),)),
         ApiCase(c, "evaluation: models with a NUL", _value(_validate(evaluation(
             models="a\0b"))), ConfigError, "config.models"),
         ApiCase(c, "evaluation: output with a NUL", _value(_validate(evaluation(

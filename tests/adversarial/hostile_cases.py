@@ -445,7 +445,26 @@ def _config_content() -> list[Case]:
             policies=["rl"], rl_models=[{"folder": ".m"}])),
          f"{x}.rl_models[0].folder: expected the name of a folder in models/"),
     ]
-    return [eval_case(c, name, content, expect) for name, content, expect in cases]
+    out = [eval_case(c, name, content, expect) for name, content, expect in cases]
+    out.append(eval_case(c, "units folder a planted link", _units_link, "config.output: "
+                         "out/runs/run-units is a symbolic link"))
+    return out
+
+
+def _units_link(box: Sandbox) -> dict:
+    """A valid evaluation whose units folder is a link planted to a folder elsewhere."""
+    box.write("elsewhere/keep", "untouched")
+    (box.here / "out/runs").mkdir(parents=True)
+    (box.here / "out/runs/run-units").symlink_to(box.here / "elsewhere")
+    return evaluation()
+
+
+def _monitor_link(box: Sandbox) -> dict:
+    """A training run whose monitor file is a link planted to a file elsewhere."""
+    box.write("elsewhere", "untouched")
+    (box.here / "out/models/nav").mkdir(parents=True)
+    (box.here / "out/models/nav/ppo_seed0.monitor.csv").symlink_to(box.here / "elsewhere")
+    return training()
 
 
 # -- training configurations ------------------------------------------------------------------
@@ -664,6 +683,7 @@ def _training() -> list[Case]:
                    files={"hp.yaml": {NAVIGATION: {**entry[NAVIGATION], "n_envs": 10**6}}}),
         train_case("--resume with nothing", training(), "config.resume: nothing to resume",
                    "--resume"),
+        train_case("monitor file a planted link", _monitor_link, "is a symbolic link"),
     ]
     return cases
 
@@ -765,6 +785,7 @@ def _flag_case(name: str, argv: list[str], expect: str, **options) -> Case:
     def build(box: Sandbox) -> list[str]:
         box.yaml("c.yaml", evaluation(executor=None))
         box.yaml("t.yaml", training())
+        box.write("short-key/secret.key", b"short")
         return [arg.format(c="c.yaml", t="t.yaml", here=box.here) for arg in argv]
     return Case("flags", name, build, expect, **options)
 
@@ -866,7 +887,24 @@ def _flags() -> list[Case]:
         ("trust another name", ["trust", "{c}"], "trust: c.yaml: expected a name"),
         ("trust a device", ["trust", "/dev/zero"], "trust: file '/dev/zero' does not exist"),
     ]
+    environment = [
+        ("BOUNCE_GYM_MAX_TIMESTEPS x", ["train", "{t}"], "BOUNCE_GYM_MAX_TIMESTEPS: expected an "
+         "integer >= 1", (("BOUNCE_GYM_MAX_TIMESTEPS", "x"),)),
+        ("BOUNCE_GYM_MAX_TIMESTEPS 0", ["train", "{t}"], "BOUNCE_GYM_MAX_TIMESTEPS: expected an "
+         "integer >= 1 (of at most 18 digits), got '0'", (("BOUNCE_GYM_MAX_TIMESTEPS", "0"),)),
+        ("BOUNCE_GYM_MAX_TIMESTEPS of 5000 digits", ["train", "{t}"], "BOUNCE_GYM_MAX_TIMESTEPS:"
+         " expected an integer >= 1", (("BOUNCE_GYM_MAX_TIMESTEPS", "9" * 5000),)),
+        ("BOUNCE_GYM_HOME a file", ["evaluate", "{c}"], "BOUNCE_GYM_HOME: cannot read or create "
+         "the key", (("BOUNCE_GYM_HOME", "{here}/c.yaml"),)),
+        ("BOUNCE_GYM_HOME with a short key", ["evaluate", "{c}"], "BOUNCE_GYM_HOME: the key",
+         (("BOUNCE_GYM_HOME", "{here}/short-key"),)),
+        ("RAY_ADDRESS garbage for auto", ["evaluate", "{c}", "--executor", "ray", "--address",
+                                          "auto"], "--address (auto, from RAY_ADDRESS): expected "
+                                                   "a Ray address", (("RAY_ADDRESS", "::x"),)),
+    ]
     out = []
+    for name, argv, expect, env in environment:
+        out.append(_flag_case(name, argv, expect, env=env))
     for name, argv, expect in cases:
         env = no_ray if "auto" in argv else ()
         if name == "config a pipe":

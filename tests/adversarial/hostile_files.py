@@ -23,6 +23,8 @@ import numpy as np
 from hostile_cases import NAV, Case, Sandbox, evaluation, experiment, training
 
 BOUNCE = "bounce_gym/Bounce-v0"
+#: the classes whose cases start from a trained model (`Sandbox.trained`)
+MODEL_CLASSES = ("models", "loads")
 
 
 class Payload:
@@ -312,10 +314,10 @@ def _metadata(**config):
 
 
 def _model_case(name: str, content, expect: str, *, manifest=None, exp: dict | None = None,
-                file_name: str = "ppo_seed0.zip") -> Case:
+                file_name: str = "ppo_seed0.zip", status: int = 2) -> Case:
     """An evaluation of the rl models in ``models/m`` holding ``content`` (bytes, or made from
     the sandbox) as ``file_name``, with ``manifest`` (text, True: listing the file's sha256, or
-    None: none)."""
+    None: none); with ``status`` 0, a file that loads as data (class ``loads``)."""
     def build(box: Sandbox) -> list[str]:
         folder = box.here / "models" / "m"
         folder.mkdir(parents=True, exist_ok=True)
@@ -331,7 +333,7 @@ def _model_case(name: str, content, expect: str, *, manifest=None, exp: dict | N
         config = evaluation(exp or experiment(policies=["rl"], rl_models="m"))
         box.yaml("c.yaml", config)
         return ["evaluate", "c.yaml", "--no-progress"]
-    return Case("models", name, build, expect)
+    return Case("models" if status else "loads", name, build, expect, status=status)
 
 
 def _sparse_model(box: Sandbox) -> None:
@@ -392,6 +394,10 @@ def _models() -> list[Case]:
                                           rl_models="m")))
     out.append(_model_case("spaces described in many lines", _with(data=_spaces_in_lines),
                            "trained for observations Box(dtype=float32 x y, shape=[17])"))
+    out.append(_model_case("listed, with every pickled value a payload", lambda box: zipped(
+        _planted(box)), "", manifest=True, status=0))
+    out.append(_model_case("entries named to escape", _with(**{
+        "../../ESCAPED": b"x", "../../../ESCAPED": b"x"}), "", status=0))
     out.append(_resume_case("unsigned", b"0" * 64))
     out.append(_resume_case("signed in a foreign script", "\u0663".encode() * 64))
     return out
