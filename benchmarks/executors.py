@@ -29,6 +29,8 @@ from pathlib import Path
 
 import yaml
 
+from experiments.run_folders import finished_runs
+
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ("configs/eval_multirobot.yaml", "configs/benchmark.yaml")
 #: executor: its flags
@@ -63,7 +65,7 @@ def run_one(config: Path, flags: list[str], folder: Path) -> dict:
     if done.returncode != 0:
         raise RuntimeError(f"evaluate.py {config} {' '.join(flags)} failed: "
                            f"{done.stderr.strip().splitlines()[-1:]}")
-    (run,) = [p for p in (folder / "runs").iterdir() if not p.name.endswith("-units")]
+    (run,) = finished_runs(folder / "runs")
     out = {"seconds": seconds, **{f: hashlib.sha256((run / f).read_bytes()).hexdigest()
                                   for f in FILES}}
     shutil.rmtree(run)  # the next executor writes the same run folder afresh

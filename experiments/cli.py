@@ -12,8 +12,10 @@
 ``evaluate`` prints tables (per experiment and policy, every cell with its 95% interval and
 count) and writes ``episodes.csv``, ``summary.csv``, ``results.json``, plots and, for a
 configuration with ``leaderboard: true``, ``leaderboard.md`` and ``leaderboard.csv`` into
-``<output>/<name>-<timestamp>/``; without a configuration it runs the default one
-(``eval_default.yaml``; format: `experiments.config`). ``train`` saves a model per seed as
+``<output>/<name>-<timestamp>/``, which appears only once all of them are written (they are
+written into a hidden ``.<name>-<timestamp>.tmp-<random>`` beside it, `experiments.run_folders`);
+without a configuration it runs the default one (``eval_default.yaml``; format:
+`experiments.config`). ``train`` saves a model per seed as
 ``models/<name>/<algo>_seed<seed>.zip``, where ``evaluate`` finds it (format:
 `baselines.rl.train`), recorded in ``models/<name>/manifest.json``, and then draws the folder's
 learning curves, as ``curves`` does at any time (``learning_curves.png`` and ``.csv``,
@@ -23,8 +25,10 @@ file's sha256 to the user's own trusted digests (``$BOUNCE_GYM_HOME``, `bounce_g
 which only ``--resume`` needs, for a checkpoint this user's runs did not sign
 (``docs/model_files.md``). A mistake in a configuration, an env argument, a flag or a model
 file is one line ``error: ...`` on stderr and exit status 2, reported before any long work
-starts; a configuration's (`bounce_gym.documents` reads every file, each command's module
-checks the numbers) before anything heavy (torch, SB3, Ray) is imported.
+starts — among them a name that becomes part of a path but is not one plain path component, or
+a symbolic link planted where a command writes its own files (`bounce_gym.files`); a
+configuration's (`bounce_gym.documents` reads every file, each command's module checks the
+numbers) before anything heavy (torch, SB3, Ray) is imported.
 
 ``evaluate`` runs its units — one policy of one experiment on up to ten seeds
 (`experiments.sweep`) — on the configuration's ``executor`` or the one the flags choose
@@ -32,9 +36,11 @@ checks the numbers) before anything heavy (torch, SB3, Ray) is imported.
 (``--workers 1``: one after another in this process), or Ray (``--executor ray``, on the
 cluster at ``--address`` or a local instance). Finished units are kept in
 ``<output>/<name>-units/`` until the run folder is written, so that the same command started
-again after an interruption runs only the rest and writes the same files. A unit that fails for
-good (after its retries) is one line ``error: unit ...`` on stderr each, once the other units
-are done; then no run folder is written and the exit status is 1.
+again after an interruption runs only the rest and writes the same files; they are signed with
+the user's key (`bounce_gym.trust`), and a unit file that is not is one ``warning:`` line and
+its unit runs again. A unit that fails for good (after its retries) is one line
+``error: unit ...`` on stderr each, once the other units are done; then no run folder is
+written and the exit status is 1.
 
 ``train`` runs one unit per seed on the same executors (`experiments.training`; locally no
 more workers than seeds, so one seed trains in this process); with ``--resume`` it skips the
@@ -54,7 +60,6 @@ import argparse
 import contextlib
 import os
 import sys
-import time
 from collections.abc import Mapping
 from pathlib import Path
 from typing import NoReturn
@@ -72,7 +77,8 @@ def evaluate(config_path: str | None, progress: bool = True,
     config = validate_config(load_config(config_path))  # before the heavy imports below
     import shutil
 
-    from bounce_gym.files import check_writable
+    from bounce_gym.errors import ConfigError
+    from bounce_gym.files import check_writable, refuse_links
     from experiments.executors import UnitStore
     from experiments.leaderboard import write_leaderboard
     from experiments.provenance import provenance
@@ -85,12 +91,15 @@ def evaluate(config_path: str | None, progress: bool = True,
         write_plots,
         write_results,
     )
+    from experiments.run_folders import new_run_folder
     from experiments.runner import run
     from experiments.sweep import UnitsFailedError, store_folder
 
-    check_writable("config.output", Path(config["output"]))
+    output = Path(config["output"])
+    check_writable("config.output", output)
     executor = executor_from(config.get("executor"), flags or {})
     store = UnitStore(store_folder(config))
+    refuse_links("config.output", output, store.folder)
     try:
         rows, plots = run(config, progress=progress, executor=executor, store=store)
     except UnitsFailedError as exc:
@@ -105,17 +114,23 @@ def evaluate(config_path: str | None, progress: bool = True,
     print(format_table(summary, families))
     for note in notes:
         print(f"note: {note}")
-    folder = Path(config["output"]) / f"{config['name']}-{time.strftime('%Y%m%d-%H%M%S')}"
-    write_results(folder, [r.row() for r in rows], summary, config, per_seed, notes, made)
-    written = write_plots(folder, plots, summary, per_seed)
-    if config["leaderboard"]:
-        written += write_leaderboard(folder, config, summary, families, notes, made)
-    shutil.rmtree(store.folder, ignore_errors=True)  # the run folder now holds the results
-    with contextlib.suppress(OSError):  # the sweeps' folder, once no other sweep is kept
-        store.folder.parent.rmdir()
-    print(f"\nwrote {folder}/episodes.csv, summary.csv, results.json and {len(written)} other "
-          "files" + (" (leaderboard.md, leaderboard.csv, plots)" if config["leaderboard"]
-                     else " (plots)"))
+    run_folder = new_run_folder(config)
+    with run_folder as folder:  # appears whole, once everything is written
+        write_results(folder, [r.row() for r in rows], summary, config, per_seed, notes, made)
+        written = write_plots(folder, plots, summary, per_seed)
+        if config["leaderboard"]:
+            written += write_leaderboard(folder, config, summary, families, notes, made)
+    try:  # the run folder now holds the results; never delete through a planted link
+        refuse_links("config.output", output, store.folder)
+    except ConfigError as exc:
+        print(f"warning: {exc}; the finished units are left in place", file=sys.stderr)
+    else:
+        shutil.rmtree(store.folder, ignore_errors=True)
+        with contextlib.suppress(OSError):  # the sweeps' folder, once no other sweep is kept
+            store.folder.parent.rmdir()
+    print(f"\nwrote {run_folder.path}/episodes.csv, summary.csv, results.json and "
+          f"{len(written)} other files" + (" (leaderboard.md, leaderboard.csv, plots)"
+                                           if config["leaderboard"] else " (plots)"))
     return 0
 
 

@@ -41,6 +41,10 @@ restate it; a different ``max_steps`` (at most ``MAX_STEPS``, 10**6) needs
 (``gym.make(max_episode_steps=...)``, ``max_cycles``), so that the env and the episode loop stop
 together. ``env_kwargs`` may set neither limit.
 
+``name`` (default ``run``) names the run folder and every experiment's ``name`` its plot files:
+each is one plain path component (`bounce_gym.files.check_path_component`: no ``/``, ``\\``,
+control characters or leading ``.``, at most 100 bytes).
+
 Optional keys: ``rl_models`` — the folder of ``models/`` to load instead of the experiment name,
 or a list of them; an entry may be ``{folder: <name>, env_kwargs: {privileged: true}}`` to run
 models trained with another observation (only ``privileged`` and ``history`` may differ, so the
@@ -82,6 +86,7 @@ from bounce_gym.envs.registration import (
     is_pettingzoo_id,
 )
 from bounce_gym.errors import ConfigError
+from bounce_gym.files import check_path_component
 from bounce_gym.validate import integer
 from experiments.executors import executor_settings
 
@@ -158,6 +163,7 @@ def validate_config(config: object) -> dict:
     config.setdefault("output", "runs")
     config.setdefault("models", "models")
     config.setdefault("leaderboard", False)
+    check_path_component("config.name", config["name"], "a name for the run folder")
     if "executor" in config:
         config["executor"] = executor_settings(config["executor"], "config.executor")
     if not config["experiments"]:
@@ -168,6 +174,7 @@ def validate_config(config: object) -> dict:
         if not isinstance(exp, Mapping):
             raise ConfigError(f"{where}: expected a mapping, got {type(exp).__name__}")
         _check_keys(where, exp, _EXPERIMENT_KEYS, required=("name", "env"))
+        check_path_component(f"{where}.name", exp["name"], "a name for the plot files")
         exp.setdefault("env_kwargs", {})
         patrol = exp["env"] == PATROL_ENV
         exp.setdefault("policies", list(PATROL_POLICY_KINDS if patrol else POLICY_KINDS))

@@ -35,6 +35,10 @@ retries (docs/choices.md, "A Ray address must answer before Ray connects"); so i
 
 Every executor keeps at most ``workers`` units in flight, so a pool that breaks or a cluster
 that is lost loses no more than that.
+
+The `UnitStore` signs every result it keeps with the user's key (`bounce_gym.trust`) and reads
+back only what that key signed: a result file planted in or copied into the store is never
+unpickled, only reported (one ``warning:`` line) and its unit run again.
 """
 
 from __future__ import annotations
@@ -48,12 +52,14 @@ import os
 import pickle
 import re
 import socket
+import sys
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import atomic_write
+from bounce_gym.files import atomic_write, open_no_follow
+from bounce_gym.trust import secret_key, sign, verify
 from bounce_gym.validate import integer
 
 EXECUTOR_KINDS = ("local", "ray")
@@ -65,6 +71,9 @@ POOL_START_METHOD = ("forkserver" if "forkserver" in multiprocessing.get_all_sta
 #: what a unit's error says when its process died instead of returning or raising
 WORKER_DIED = "worker died"
 _KEY = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.=+-]*")
+#: a stored unit's file name ends so (`UnitStore`)
+UNIT_SUFFIX = ".unit"
+_UNIT_MAGIC = "bounce_gym-unit"
 _RAY_MISSING = "executor: ray is not installed; pip install bounce-gym[distributed]"
 
 
@@ -95,24 +104,86 @@ class UnitFailure:
 
 
 class UnitStore:
-    """Finished units' results, one pickle file ``<key>.pkl`` per unit in ``folder``, each
-    written atomically (`bounce_gym.files.atomic_write`), so that a sweep interrupted at any
-    instant leaves only whole results."""
+    """Finished units' results, one file ``<key>.unit`` per unit in ``folder``, each written
+    atomically (`bounce_gym.files.atomic_write`), so that a sweep interrupted at any instant
+    leaves only whole results.
+
+    A result is a pickle (rows and plot data of any kind), and unpickling runs whatever the file
+    says; so each file is signed with the user's key (`bounce_gym.trust`, kept outside the
+    output folder) and read back only if the signature holds. The file is one line
+    ``bounce_gym-unit <hex HMAC-SHA256>`` and then the pickle; the signature covers the pickle,
+    the unit's key and the folder's name (a sweep's fingerprint), so a file moved to another
+    unit or sweep is not taken either. A file that is unsigned, signed with another key,
+    changed, truncated or not a regular file is one ``warning:`` line on stderr and its unit
+    runs again (`stored`); it is never unpickled. Results are signed where `Executor.run` saves
+    them — the process that started the sweep — so workers (a pool, a Ray cluster) need no key.
+    The key is read when the store is made, so a missing or unreadable key is reported before
+    any unit runs."""
 
     def __init__(self, folder: Path) -> None:
         self.folder = Path(folder)
+        secret_key()  # made or read now: a problem with it is reported before any unit runs
 
     def _path(self, key: str) -> Path:
-        return self.folder / f"{key}.pkl"
+        return self.folder / f"{key}{UNIT_SUFFIX}"
 
-    def done(self, key: str) -> bool:
-        return self._path(key).is_file()
-
-    def load(self, key: str) -> object:
-        return pickle.loads(self._path(key).read_bytes())
+    def _purpose(self, key: str) -> str:
+        return f"unit {self.folder.name}/{key}"
 
     def save(self, key: str, result: object) -> None:
-        atomic_write(self._path(key), pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+        data = pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
+        header = f"{_UNIT_MAGIC} {sign(data, self._purpose(key))}\n".encode()
+        atomic_write(self._path(key), header + data)
+
+    def load(self, key: str) -> object:
+        """The stored result of unit ``key``; `FileNotFoundError` if there is none, and
+        `StoredUnitError` if its file fails the check (class docstring)."""
+        data = self._verified(key, _read_regular(self._path(key)))
+        try:
+            return pickle.loads(data)  # noqa: S301  (signed with the user's key)
+        except Exception as exc:  # signed, but this code cannot rebuild it (e.g. a class moved)
+            raise StoredUnitError(f"cannot be unpickled ({error_text(exc)})") from None
+
+    def stored(self, keys: Iterable[str]) -> dict[str, object]:
+        """The results of ``keys`` the store holds and vouches for; each file that fails the
+        check is one warning line on stderr, and its unit is left out (to run again)."""
+        out = {}
+        for key in keys:
+            try:
+                out[key] = self.load(key)
+            except FileNotFoundError:
+                continue
+            except (OSError, StoredUnitError) as exc:
+                why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+                print(f"warning: {self._path(key)}: not taken as a unit result ({why}); "
+                      "running the unit again", file=sys.stderr)
+        return out
+
+    def _verified(self, key: str, raw: bytes) -> bytes:
+        head, newline, data = raw.partition(b"\n")
+        magic, _, signature = head.partition(b" ")
+        if not newline or magic != _UNIT_MAGIC.encode():
+            raise StoredUnitError("not signed: no signature line")
+        if not verify(data, signature.decode("ascii", "replace"), self._purpose(key)):
+            raise StoredUnitError("its signature does not match your key: signed with "
+                                  "another, or changed or cut short since")
+        return data
+
+
+class StoredUnitError(Exception):
+    """A stored unit's file that is not taken (`UnitStore`): it fails the check, or, though
+    signed, this code cannot unpickle it; the message says why."""
+
+
+def _read_regular(path: Path) -> bytes:
+    """The bytes of the regular file ``path``, never through a symbolic link nor waiting on a
+    pipe planted at its name (`bounce_gym.files.open_no_follow`; `StoredUnitError`)."""
+    try:
+        fd = open_no_follow(path, os.O_RDONLY)
+    except ConfigError as exc:
+        raise StoredUnitError(str(exc).removeprefix(f"{path}: ")) from None
+    with os.fdopen(fd, "rb") as fh:
+        return fh.read()
 
 
 def error_text(exc: BaseException) -> str:
@@ -130,9 +201,10 @@ class Executor:
 
     def run(self, units: Iterable[Unit], store: UnitStore, progress: bool = True,
             desc: str = "units") -> tuple[dict[str, object], list[UnitFailure]]:
-        """Run every unit ``store`` does not hold, saving each result as it finishes; returns
-        every unit's result by key (stored ones included) and the units that failed for good,
-        in the order given. One progress bar counts all units, stored ones from the start."""
+        """Run every unit ``store`` does not hold (or holds in a file that fails its check,
+        `UnitStore.stored`), saving each result as it finishes; returns every unit's result by
+        key (stored ones included) and the units that failed for good, in the order given. One
+        progress bar counts all units, stored ones from the start."""
         from tqdm import tqdm
 
         units = list(units)
@@ -140,7 +212,7 @@ class Executor:
         if len(set(keys)) != len(keys):
             twice = sorted({k for k in keys if keys.count(k) > 1})
             raise ValueError(f"unit keys must be unique in a sweep, repeated: {twice[:5]}")
-        results = {u.key: store.load(u.key) for u in units if store.done(u.key)}
+        results = store.stored(keys)
         pending = [u for u in units if u.key not in results]
         failed: dict[str, UnitFailure] = {}
         with tqdm(total=len(units), initial=len(results), desc=desc, unit="unit",

@@ -15,7 +15,11 @@ process's setup in the canonical order (`Family.absorb`).
 Finished units are kept in a `UnitStore` under ``<output>/<name>-units/<fingerprint>/``; the
 fingerprint (`fingerprint`) covers the configuration without its executor, the manifests of its
 model folders, the package version and the source commit, so that a sweep started again with
-the same inputs skips the units already done, and one with other inputs starts afresh.
+the same inputs skips the units already done, and one with other inputs starts afresh. Each
+unit's `UnitResult` is kept as a pickle signed with the user's key, by the process that runs
+the sweep (workers need no key), and read back only if the signature holds for that unit of
+that fingerprint: a planted or foreign file is re-run, never unpickled
+(`experiments.executors.UnitStore`).
 """
 
 from __future__ import annotations

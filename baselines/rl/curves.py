@@ -87,7 +87,7 @@ def learning_curves(folder: Path, window: int = WINDOW) -> list[Run]:
     runs: dict[str, Run] = {}
     for path in sorted(folder.iterdir()):
         match = _MONITOR.fullmatch(path.name)
-        if not match:
+        if not match or not path.is_file():  # not a pipe or a folder of that name
             continue
         columns = read_monitor(path)
         if not len(columns["l"]):

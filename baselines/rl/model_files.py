@@ -50,7 +50,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import atomic_file, atomic_write, locked
+from bounce_gym.files import atomic_file, atomic_write, check_path_component, locked
 from bounce_gym.trust import add_trusted, digest, sign, trusted_digests, verify
 
 ALGOS = ("ppo", "dqn", "recurrentppo")
@@ -94,11 +94,9 @@ def run_name(algo: str, variant: str | None = None) -> str:
 
 
 def check_folder_name(field: str, name: str) -> None:
-    """A folder of ``models/`` is named by one plain path component (no ``/``, ``..``)."""
-    if not name or name in (".", "..") or Path(name).name != name or "\\" in name \
-            or "\0" in name:
-        raise ConfigError(f"{field}: expected the name of a folder in models/ (no '/' or '..'), "
-                          f"got {name!r}")
+    """A folder of ``models/`` is named by one plain path component
+    (`bounce_gym.files.check_path_component`)."""
+    check_path_component(field, name, "the name of a folder in models/")
 
 
 def model_files(folder: Path) -> list[Path]:

@@ -10,7 +10,8 @@ reports (``is_success``, ``localized``, ``coverage``; `baselines.rl.train_env.MO
 The file is a log, appended to (and flushed) at the end of every episode while training runs, so
 that it can be watched; a crash may leave a partial last line. A resumed run first rewrites it
 (atomically) with exactly the episodes finished before its checkpoint, then appends: the file
-never counts an episode twice.
+never counts an episode twice. A new file is written whole (its two header lines) and renamed
+into place; the file is never opened through a symbolic link at its name (`open_monitor_file`).
 """
 
 from __future__ import annotations
@@ -18,32 +19,57 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 from pathlib import Path
 
 import numpy as np
 
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import atomic_write
+from bounce_gym.files import atomic_write, open_no_follow
 
 SUFFIX = ".monitor.csv"
 
 
 def open_monitor_file(path: Path, t_start: float, env_id: str, keys: tuple[str, ...],
-                      keep_rows: int | None = None):
-    """An SB3 ``ResultsWriter`` on ``path``: a new file (``keep_rows`` None), or the first
-    ``keep_rows`` episodes of the existing one, appended to."""
-    from stable_baselines3.common.monitor import ResultsWriter
-
-    if keep_rows is not None:
-        _truncate(path, keep_rows)
+                      keep_rows: int | None = None) -> MonitorWriter:
+    """A writer of SB3's monitor format on ``path`` (for a ``VecMonitor``'s ``results_writer``):
+    a new file (``keep_rows`` None), or the first ``keep_rows`` episodes of the existing one,
+    appended to. The file is read and appended to without following a symbolic link: a link at
+    its name is a `ConfigError`, and nothing is read or written through it."""
+    fields = ("r", "l", "t", *keys)
+    if keep_rows is None:
+        head = io.StringIO()
+        head.write(f"#{json.dumps({'t_start': t_start, 'env_id': env_id})}\n")
+        csv.DictWriter(head, fieldnames=fields).writeheader()
+        atomic_write(path, head.getvalue().encode())
     else:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    return ResultsWriter(str(path), header={"t_start": t_start, "env_id": env_id},
-                         extra_keys=keys, override_existing=keep_rows is None)
+        _truncate(path, keep_rows)
+    return MonitorWriter(path, fields)
+
+
+class MonitorWriter:
+    """Appends one row per finished episode to a monitor file and flushes it (what SB3's
+    ``ResultsWriter`` does, but never through a symbolic link at the file's name)."""
+
+    def __init__(self, path: Path, fields: tuple[str, ...]) -> None:
+        fd = open_no_follow(path, os.O_WRONLY | os.O_APPEND)
+        self.file = os.fdopen(fd, "a", newline="\n", encoding="utf-8")
+        self.writer = csv.DictWriter(self.file, fieldnames=fields)
+
+    def write_row(self, episode: dict[str, float]) -> None:
+        self.writer.writerow(episode)
+        self.file.flush()
+
+    def close(self) -> None:
+        self.file.close()
 
 
 def _truncate(path: Path, rows: int) -> None:
-    lines = path.read_text(encoding="utf-8").splitlines(keepends=True) if path.is_file() else []
+    try:
+        with os.fdopen(open_no_follow(path, os.O_RDONLY), encoding="utf-8") as fh:
+            lines = fh.read().splitlines(keepends=True)
+    except FileNotFoundError:
+        lines = []
     complete = [line for line in lines[2:] if line.endswith("\n")]
     if len(lines) < 2 or len(complete) < rows:
         raise ConfigError(f"config.resume: the monitor file {path} holds "

@@ -38,11 +38,13 @@ checked by `baselines.rl.train_config`, whose docstring gives every number's ran
 checkpoints ``checkpoints/<run>_seed<seed>_<steps>_steps.zip`` (every ``checkpoint_every`` steps,
 at the start of an iteration, and at the end), never overwritten; the per-episode monitor file
 ``<run>_seed<seed>.monitor.csv`` (`baselines.rl.monitor`), from which ``bounce-gym train`` and
-``bounce-gym curves`` draw the learning curves (`baselines.rl.curves`). Model files are
-written atomically and recorded with their sha256 in the folder's ``manifest.json``, against
-damage (`baselines.rl.model_files`); each carries its configuration and the wrappers the
-evaluation must rebuild (frame stack, VecNormalize statistics; `baselines.rl.wrappers`), and is
-loaded as data, nothing in it unpickled (`baselines.rl.model_load`).
+``bounce-gym curves`` draw the learning curves (`baselines.rl.curves`). A symbolic link at the
+monitor file's name, or at ``checkpoints`` (``tensorboard``), is a `ConfigError` before any
+training: nothing is written through one. Model files are written atomically and recorded with
+their sha256 in the folder's ``manifest.json``, against damage (`baselines.rl.model_files`);
+each carries its configuration and the wrappers the evaluation must rebuild (frame stack,
+VecNormalize statistics; `baselines.rl.wrappers`), and is loaded as data, nothing in it
+unpickled (`baselines.rl.model_load`).
 
 **Resuming** (``resume: true``, ``--resume``) continues every seed from its newest checkpoint —
 weights, optimiser, step count, random streams and the envs mid-episode (`baselines.rl.resume`)
@@ -98,7 +100,7 @@ from baselines.rl.train_config import (
 )
 from baselines.rl.train_env import attach_monitor_file, make_train_env
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import check_writable
+from bounce_gym.files import check_writable, refuse_links
 
 __all__ = ["Run", "finished", "make_train_env", "prepare", "train", "train_seed",
            "validate_train_config"]
@@ -123,6 +125,15 @@ class Run:
 
     def checkpoint(self, steps: int) -> Path:
         return self.checkpoint_folder / f"{self.stem}_{steps}_steps.zip"
+
+    def check_links(self) -> None:
+        """A `ConfigError` if a symbolic link stands where the run writes in place or into a
+        folder of its own: the monitor file, ``checkpoints/``, ``tensorboard/`` (whole files
+        are renamed over their names and need no check; `bounce_gym.files`)."""
+        refuse_links("config.models", self.folder, self.monitor)
+        refuse_links("config.models", self.folder, self.checkpoint_folder)
+        if self.config["tensorboard"]:
+            refuse_links("config.models", self.folder, self.folder / "tensorboard")
 
     def checkpoints(self) -> dict[int, Path]:
         """This run's checkpoints by step count."""
@@ -149,6 +160,8 @@ def prepare(config: Mapping, folder: Path | None = None) -> dict:
     config = validate_train_config(config, folder)  # the quick checks first, before torch
     runs = [Run(config, seed) for seed in config["seeds"]]
     check_writable("config.models", runs[0].folder)
+    for run in runs:
+        run.check_links()
     _check_checkpoints(config, runs)
     if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError("config.tensorboard: needs the tensorboard package "
@@ -252,6 +265,7 @@ def _train_run(run: Run, progress: bool, extra_callbacks: list, log) -> Path:
             return {"config": config, "wrappers": describe(env)}
 
         def save_checkpoint(model) -> None:
+            run.check_links()  # also a link made since the run started
             save_model(model, run.checkpoint(model.num_timesteps), metadata(),
                        resume=capture(model), overwrite=False)
 

@@ -60,6 +60,7 @@ from gymnasium.utils import seeding
 from pettingzoo import AECEnv, ParallelEnv
 
 from bounce_gym.envs.actions import action_space, to_angle
+from bounce_gym.envs.aec_actions import check_dead_action
 from bounce_gym.envs.base import EnvBase
 from bounce_gym.envs.parallel_step import check_parallel_actions, finish_parallel_step
 from bounce_gym.errors import ConfigError
@@ -181,7 +182,8 @@ class MultiBounceAEC(_MultiBase, AECEnv):
     """The event-driven AEC form: the next robot to bump is the next agent to act.
 
     Decisions are collected from every blocked robot (lowest index first); then the world runs
-    until some robot bumps again. A robot is truncated after ``max_cycles`` decisions; a truncated
+    until some robot bumps again. A bad action raises `ActionError` (naming the agent and what
+    is allowed) before anything changes; a done robot's only action is None. A robot is truncated after ``max_cycles`` decisions; a truncated
     robot that bumps keeps its last angle. Requires ``step_mode="bounce"``.
     """
 
@@ -225,6 +227,7 @@ class MultiBounceAEC(_MultiBase, AECEnv):
     def step(self, action) -> None:
         agent = self.agent_selection
         if self.terminations[agent] or self.truncations[agent]:
+            check_dead_action(agent, action)
             self._was_dead_step(action)
             if self.agents and not self._deads_waiting():
                 self.agent_selection = self._advance()

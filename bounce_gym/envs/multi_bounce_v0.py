@@ -1,8 +1,10 @@
 """PettingZoo-style module for the multi-robot environment: ``env()``, ``parallel_env()``.
 
 ``parallel_env(**kwargs)`` is the native parallel form (`MultiBounceEnv`); ``env(**kwargs)`` the
-event-driven AEC form (`MultiBounceAEC`) wrapped in PettingZoo's order-enforcing and
-assert-out-of-bounds wrappers; ``raw_env`` is the unwrapped AEC class.
+event-driven AEC form (`MultiBounceAEC`) wrapped in PettingZoo's order-enforcing wrapper (the env
+itself refuses a bad action with `ActionError`, naming the agent and what is allowed; PettingZoo's
+assert-out-of-bounds wrapper would answer a bare ``AssertionError`` first); ``raw_env`` is the
+unwrapped AEC class.
 """
 
 from pettingzoo.utils import wrappers
@@ -13,7 +15,7 @@ raw_env = MultiBounceAEC
 
 
 def env(**kwargs) -> wrappers.OrderEnforcingWrapper:
-    return wrappers.OrderEnforcingWrapper(wrappers.AssertOutOfBoundsWrapper(MultiBounceAEC(**kwargs)))
+    return wrappers.OrderEnforcingWrapper(MultiBounceAEC(**kwargs))
 
 
 def parallel_env(**kwargs) -> MultiBounceEnv:

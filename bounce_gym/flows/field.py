@@ -8,7 +8,8 @@ Layout (the order of CF files from ROMS, HYCOM or Copernicus after choosing one 
 * ``depth``: (L,) metres, positive down, strictly increasing: **layer 0 is the surface** (the
   thesis counts layers from 1; docs/choices.md, "Drifter layers count from the surface").
 * ``x`` (Nx,), ``y`` (Ny,): strictly increasing node coordinates, metres (``crs="xy"``) or
-  degrees east / north (``crs="lonlat"``). Node (j, i) is the centre of grid cell (j, i).
+  degrees east / north (``crs="lonlat"``: latitudes in [-90, 90], longitudes in [-360, 360]
+  spanning at most 360°). Node (j, i) is the centre of grid cell (j, i).
 * ``time``: (T,) seconds, strictly increasing, or None; ``time_origin`` optionally names the
   instant of ``time == 0`` (an ISO 8601 string, as read from CF units ``seconds since ...``).
 * ``land``: (L, Ny, Nx) bool, per layer (deeper layers may have more land: the seafloor). Land
@@ -36,12 +37,15 @@ import numpy as np
 
 from bounce_gym.errors import InvalidFlowError
 
-__all__ = ["CRS", "METRES_PER_DEGREE", "TIME_OUTSIDE", "FlowField"]
+__all__ = ["CRS", "MAX_LONGITUDE", "METRES_PER_DEGREE", "TIME_OUTSIDE", "FlowField"]
 
 #: Coordinate systems: metres east/north, or degrees of longitude/latitude.
 CRS = ("xy", "lonlat")
 #: Metres per degree of latitude (1 nautical mile = 1852 m = one minute of arc).
 METRES_PER_DEGREE = 1852.0 * 60.0
+#: Longitudes lie in [-MAX_LONGITUDE, MAX_LONGITUDE] degrees (both the -180..180 and the 0..360
+#: conventions, and a grid that crosses either seam) and span at most one turn.
+MAX_LONGITUDE = 360.0
 #: What sampling at a time outside ``[time[0], time[-1]]`` does: raise, or hold the end snapshot.
 TIME_OUTSIDE = ("error", "hold")
 
@@ -85,6 +89,11 @@ class FlowField:
         if crs == "lonlat" and (self.y[0] < -90 or self.y[-1] > 90):
             raise InvalidFlowError(f"y: latitudes must lie in [-90, 90], got [{self.y[0]}, "
                                    f"{self.y[-1]}]")
+        if crs == "lonlat" and (self.x[0] < -MAX_LONGITUDE or self.x[-1] > MAX_LONGITUDE
+                                or self.x[-1] - self.x[0] > 360):
+            raise InvalidFlowError(f"x: longitudes must lie in [-{MAX_LONGITUDE:g}, "
+                                   f"{MAX_LONGITUDE:g}] and span at most 360 degrees, got "
+                                   f"[{self.x[0]}, {self.x[-1]}]")
         if depth is None:
             if n_layers != 1:
                 raise InvalidFlowError(f"depth: required for {n_layers} layers")

@@ -25,6 +25,12 @@ file's dimensions may come in any order and any coordinate may be decreasing (bo
 reordered: no value changes); a ``positive: up`` vertical coordinate becomes depth = -z; a file
 without a vertical dimension is one layer at 0 m.
 
+Before any array is read, the file's header is checked (`bounce_gym.flows.nc_checks`): u may
+declare at most ``max_values`` values (cells x layers x times; default 5·10^7, or
+``$BOUNCE_GYM_MAX_FLOW_VALUES``), no variable that is read may have a larger dimension or
+chunk, or more than 10^6 chunks, no attribute more than 2^20 values, and a classic file must be
+as long as its header says; strings where numbers are expected are refused from their dtype.
+
 Nothing is regridded: a curvilinear grid (2-D longitude/latitude), a dimension that is not x, y,
 depth or time, units other than m/s for velocities, metres or degrees for x/y, metres for depth
 and a CF time unit for time all raise `FlowFileError`, as does everything `FlowField` refuses
@@ -45,8 +51,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from bounce_gym.errors import FlowFileError, InvalidFlowError
+from bounce_gym.errors import BounceGymError, FlowFileError, InvalidFlowError
 from bounce_gym.files import atomic_path
+from bounce_gym.flows import nc_checks
 from bounce_gym.flows.field import FlowField
 
 if TYPE_CHECKING:
@@ -144,29 +151,61 @@ def save_flow(field: FlowField, path) -> Path:
 
 
 # -- reading ----------------------------------------------------------------------------------
-def load_flow(path, mapping: Mapping[str, str] | None = None) -> FlowField:
+def load_flow(path, mapping: Mapping[str, str] | None = None, *,
+              max_values: int | None = None) -> FlowField:
     """Read a flow field from a NetCDF file (see the module docstring for ``mapping``).
 
+    ``max_values`` caps the values (cells x layers x times) the file may declare
+    (`bounce_gym.flows.nc_checks`: default 5·10^7, or ``$BOUNCE_GYM_MAX_FLOW_VALUES``); it, the
+    chunking, the attributes and a classic file's length are checked from the header before any
+    array is read.
+
     Raises:
-        FlowFileError: the file is missing or not NetCDF, or a variable, dimension or unit does
-            not describe a valid field; the message names the file, the key and the variable.
+        FlowFileError: the file is missing, not NetCDF, truncated or too large, or a variable,
+            dimension or unit does not describe a valid field; one line naming the file, the key
+            and the variable.
     """
     path = Path(path)
     if not path.is_file():
         raise FlowFileError(f"{path}: no such file")
+    cap = nc_checks.max_values(max_values)
+    _check_file(path, cap)
     xr = _xr()
     try:
         ds = xr.open_dataset(path, engine=ENGINE, decode_times=False, decode_timedelta=False,
                              mask_and_scale=True)
-    except (OSError, ValueError) as exc:
-        raise FlowFileError(f"{path}: not a readable NetCDF file ({exc})") from None
+    except (OSError, ValueError, RuntimeError) as exc:
+        raise FlowFileError(f"{path}: not a readable NetCDF file ({_one_line(exc)})") from None
     with ds:
-        return flow_from_dataset(ds, mapping, source=str(path), name=path.stem)
+        return flow_from_dataset(ds, mapping, source=str(path), name=path.stem, max_values=cap)
+
+
+def _check_file(path: Path, cap: int) -> None:
+    """`check_classic`, then `check_header` on the file opened with netCDF4 (which reads only
+    its header)."""
+    import netCDF4
+
+    try:
+        nc_checks.check_classic(path)
+        with netCDF4.Dataset(path) as nc:
+            nc_checks.check_header(nc, path, cap)
+    except BounceGymError:
+        raise
+    except (OSError, RuntimeError, ValueError, UnicodeError) as exc:
+        raise FlowFileError(f"{path}: not a readable NetCDF file ({_one_line(exc)})") from None
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
 
 
 def flow_from_dataset(ds: xr.Dataset, mapping: Mapping[str, str] | None = None, *,
-                      source: str = "dataset", name: str | None = None) -> FlowField:
-    """A `FlowField` from an open dataset (see `load_flow`); ``source`` prefixes messages."""
+                      source: str = "dataset", name: str | None = None,
+                      max_values: int | None = None) -> FlowField:
+    """A `FlowField` from an open dataset (see `load_flow`); ``source`` prefixes messages.
+    ``max_values`` caps the values u may declare, as in `load_flow`; nothing is read before the
+    variables to read are checked against it."""
+    cap = nc_checks.max_values(max_values)
     names = _check_mapping(mapping, ds, source)
     u_name = names.get("u") or _find_velocity(ds, "u", _U_STANDARD, U_NAMES, source)
     v_name = names.get("v") or _find_velocity(ds, "v", _V_STANDARD, V_NAMES, source)
@@ -177,8 +216,10 @@ def flow_from_dataset(ds: xr.Dataset, mapping: Mapping[str, str] | None = None, 
                             f"from u's ({u_name!r}) {dict(u_var.sizes)}")
     for key, var in (("u", u_var), ("v", v_var)):
         _check_velocity_units(var, key, source)
+        _check_readable(var, f"{key} ({var.name!r})", source, cap, "real numbers in m/s")
     roles = _dimension_roles(ds, u_var, names, source)
-    coords = {role: _coordinate(ds, dim, role, names, source) for role, dim in roles.items()}
+    coords = {role: _coordinate(ds, dim, role, names, source, cap)
+              for role, dim in roles.items()}
     crs = _crs(ds, roles, names, source)
     order = [roles[r] for r in _ROLE_ORDER if r in roles]
     flips = {roles[r]: slice(None, None, -1) for r, c in coords.items()
@@ -188,7 +229,7 @@ def flow_from_dataset(ds: xr.Dataset, mapping: Mapping[str, str] | None = None, 
     coords = {r: (c[::-1] if roles[r] in flips else c) for r, c in coords.items()}
     if "depth" not in roles:
         u, v = u[None], v[None]
-    land = _land_mask(ds, roles, names, flips, source)
+    land = _land_mask(ds, roles, names, flips, source, cap)
     time_origin = None
     if "time" in roles:
         coords["time"], time_origin = _time(ds[names.get("time", roles["time"])], coords["time"],
@@ -205,6 +246,15 @@ def flow_from_dataset(ds: xr.Dataset, mapping: Mapping[str, str] | None = None, 
         if key in roles and key not in names:
             label = f"{key} ({roles[key]!r})"
         raise FlowFileError(f"{source}: {label}: {rest}") from None
+
+
+def _check_readable(var, label: str, source: str, cap: int, what: str,
+                    kinds: str = "iuf", hint: str = "") -> None:
+    """Before ``var`` is read: its dtype (one of ``kinds``), declared size and chunking."""
+    if var.dtype.kind not in kinds:
+        raise FlowFileError(f"{source}: {label}: expected {what}, got dtype {var.dtype}{hint}")
+    nc_checks.check_variable(source, label, dict(var.sizes), var.encoding.get("chunksizes"),
+                             cap)
 
 
 def _check_mapping(mapping, ds, source: str) -> dict[str, str]:
@@ -308,14 +358,13 @@ def _role_of(ds, dim: str) -> str | None:
     return None
 
 
-def _coordinate(ds, dim: str, role: str, names: dict[str, str], source: str) -> np.ndarray:
+def _coordinate(ds, dim: str, role: str, names: dict[str, str], source: str,
+                cap: int) -> np.ndarray:
     var = ds[names.get(role, dim)]
-    values = np.asarray(var.values)
     label = f"{role} ({var.name!r})"
-    if values.dtype.kind not in "iuf":
-        raise FlowFileError(f"{source}: {label}: expected numbers, got dtype {values.dtype} "
-                            "(open the file with decode_times=False)")
-    values = values.astype(np.float64)
+    _check_readable(var, label, source, cap, "numbers",
+                    hint=" (open the file with decode_times=False)")
+    values = np.asarray(var.values).astype(np.float64)
     steps = np.diff(values)
     if len(values) > 1 and not (np.all(steps > 0) or np.all(steps < 0)):
         raise FlowFileError(f"{source}: {label}: not monotonic (values must strictly increase "
@@ -352,7 +401,7 @@ def _crs(ds, roles: dict[str, str], names: dict[str, str], source: str) -> str:
     return kinds["x"]
 
 
-def _land_mask(ds, roles, names, flips, source: str):
+def _land_mask(ds, roles, names, flips, source: str, cap: int):
     key = "land" if "land" in names else "water" if "water" in names else None
     if key is None:
         if "land" not in ds.data_vars or "flag_meanings" not in ds["land"].attrs:
@@ -365,6 +414,8 @@ def _land_mask(ds, roles, names, flips, source: str):
         raise FlowFileError(f"{source}: {key} ({var.name!r}): expected dimensions (y, x) or "
                             f"(depth, y, x) of u, got {var.dims}")
     order = [roles[r] for r in ("depth", "y", "x") if r in roles and roles[r] in var.dims]
+    _check_readable(var, f"{key} ({var.name!r})", source, cap, "a mask of numbers or booleans",
+                    "biuf")
     values = var.transpose(*order).isel({d: s for d, s in flips.items() if d in var.dims}).values
     if values.dtype.kind == "f" and np.isnan(values).any():
         raise FlowFileError(f"{source}: {key} ({var.name!r}): NaN in the mask")

@@ -9,8 +9,6 @@ same layout `World.occupancy` returns. Cell ``(row, col)`` is the square
 from __future__ import annotations
 
 import numpy as np
-import shapely
-from shapely.geometry import Polygon
 
 from bounce_gym.errors import InvalidWorldError
 from bounce_gym.worlds.world import World
@@ -19,8 +17,12 @@ from bounce_gym.worlds.world import World
 def world_from_grid(free: np.ndarray, cell_size: float = 1.0, name: str | None = None) -> World:
     """Build the free-space polygon of a grid of free cells.
 
-    Every ring starts at its lowest, then leftmost vertex, and the holes are sorted by that vertex
-    (bottom to top, then left to right), so equal grids give equal worlds.
+    The rings are traced straight from the grid (`_boundary_rings`): no polygon union, so the
+    time grows with the number of boundary edges, not with the number of holes times anything
+    (a 1200 x 1200 map with 160,000 holes loads in seconds). Every ring keeps only its corners;
+    the holes are sorted by their lowest, then leftmost vertex (bottom to top, then left to
+    right), so equal grids give equal worlds — the same vertices, in the same order, as the
+    union of the free cells gave before.
 
     Raises:
         InvalidWorldError: no free cell, free cells not 4-connected, or a diagonal pinch (two
@@ -38,46 +40,87 @@ def world_from_grid(free: np.ndarray, cell_size: float = 1.0, name: str | None =
     _check_pinches(grid)
     if not grid.any():
         raise InvalidWorldError("grid: has no free cell")
-    x0, y0, x1, y1 = (cell_size * v for v in _free_rectangles(grid))
-    union = shapely.unary_union(shapely.box(x0, y0, x1, y1))
-    if not isinstance(union, Polygon):
+    rings, outer = _boundary_rings(grid)
+    if outer.sum() != 1:
         raise InvalidWorldError(
-            f"grid: free cells form {len(union.geoms)} separate regions; a world must be connected"
+            f"grid: free cells form {int(outer.sum())} separate regions; a world must be connected"
         )
-    union = union.simplify(0)  # drop the collinear vertices between rectangles
-    # holes in a fixed order (by the lowest, then leftmost vertex), not the union's arbitrary one
-    holes = sorted((_canonical(h.coords) for h in union.interiors), key=lambda h: (h[0, 1], h[0, 0]))
-    return World(_canonical(union.exterior.coords), holes, name=name)
+    k = int(np.flatnonzero(outer)[0])
+    holes = [cell_size * r for r in rings[:k] + rings[k + 1:]]
+    return World(cell_size * rings[k], holes, name=name)
 
 
-def _free_rectangles(grid: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The free cells as few axis-aligned rectangles ``(col0, row0, col1, row1)`` (cell units).
+def _boundary_rings(grid: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """The boundary rings of the free cells (cell units) and which of them are outer rings.
 
-    Each row splits into maximal runs of free cells; runs with the same columns in consecutive
-    rows merge into one rectangle. Unioning these instead of single cells gives the same
-    polygon, with far fewer pieces for the polygon union (a 3000 x 3000 map loads in well
-    under a second).
+    The boundary edges (`_boundary_edges`) form disjoint cycles; each is labelled by its lowest,
+    then leftmost vertex, ordered from the edge leaving that vertex (`_cycles`) and cut down to
+    its corners. A ring starts one corner after that vertex (a lone rectangle: at it) — the
+    order the former polygon union left in the world — and the rings come sorted by it.
     """
-    pad = np.zeros((grid.shape[0], grid.shape[1] + 2), dtype=np.int8)
-    pad[:, 1:-1] = grid
-    step = np.diff(pad, axis=1)
-    row, c0 = np.nonzero(step == 1)  # row-major order, so the k-th start pairs with the k-th end
-    c1 = np.nonzero(step == -1)[1]
-    order = np.lexsort((row, c1, c0))  # the runs of one column span, bottom to top
-    row, c0, c1 = row[order], c0[order], c1[order]
-    new = np.ones(len(row), dtype=bool)
-    new[1:] = (c0[1:] != c0[:-1]) | (c1[1:] != c1[:-1]) | (row[1:] != row[:-1] + 1)
-    first = np.flatnonzero(new)
-    last = np.append(first[1:], len(row)) - 1
-    return c0[first], row[first], c1[first], row[last] + 1
+    start, step = _boundary_edges(grid)
+    width = grid.shape[1] + 1
+    start_id = start[:, 1] * width + start[:, 0]
+    leaving = np.empty((grid.shape[0] + 1) * width, dtype=np.int64)
+    leaving[start_id] = np.arange(len(start_id))
+    label, rank = _cycles(start_id, leaving[start_id + step[:, 1] * width + step[:, 0]], leaving)
+    order = np.lexsort((-rank, label))
+    label, start, step = label[order], start[order], step[order]
+    new_ring = np.r_[True, label[1:] != label[:-1]]
+    ring_start = np.flatnonzero(new_ring)
+    previous = np.arange(len(label)) - 1
+    previous[ring_start] = np.r_[ring_start[1:], len(label)] - 1
+    kept = np.flatnonzero(np.any(step != step[previous], axis=1))  # the corners
+    bounds = np.searchsorted((np.cumsum(new_ring) - 1)[kept], np.arange(len(ring_start) + 1))
+    index = np.arange(len(kept))
+    if len(ring_start) > 1 or len(kept) > 4:  # the union gave back a lone box as it was built
+        index = index + 1  # each ring from its second corner on, the first one last
+        index[bounds[1:] - 1] = bounds[:-1]
+    points = start[kept[index]].astype(np.float64)
+    outer = step[ring_start, 0] == 1  # a ring leaves its lowest-leftmost vertex east iff CCW
+    return np.split(points, bounds[1:-1]), outer
 
 
-def _canonical(coords) -> np.ndarray:
-    """A ring started at its bottom-most, then left-most vertex, so equality does not depend on
-    the vertex order the polygon union happened to return."""
-    ring = np.asarray(coords)[:-1]
-    start = np.lexsort((ring[:, 0], ring[:, 1]))[0]
-    return np.roll(ring, -start, axis=0)
+def _boundary_edges(grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every unit edge between a free and a blocked cell (or the outside): its start vertex
+    (x, y) and unit step, directed with the free cell on its left, so outer rings run
+    counter-clockwise and holes clockwise."""
+    pad = np.zeros((grid.shape[0] + 2, grid.shape[1] + 2), dtype=bool)
+    pad[1:-1, 1:-1] = grid
+    below, above = pad[:-1, 1:-1], pad[1:, 1:-1]  # the cells under and over y = row
+    left, right = pad[1:-1, :-1], pad[1:-1, 1:]  # the cells left and right of x = col
+    starts, steps = [], []
+    for edges, (dx, dy), (ox, oy) in (
+        (above & ~below, (1, 0), (0, 0)),  # east along y = row, free above
+        (left & ~right, (0, 1), (0, 0)),  # north along x = col, free on the left
+        (below & ~above, (-1, 0), (1, 0)),  # west, free below
+        (right & ~left, (0, -1), (0, 1)),  # south, free on the right
+    ):
+        row, col = np.nonzero(edges)
+        starts.append(np.column_stack((col + ox, row + oy)))
+        steps.append(np.broadcast_to((dx, dy), (len(row), 2)))
+    return np.concatenate(starts), np.concatenate(steps)
+
+
+def _cycles(start_id: np.ndarray, nxt: np.ndarray, leaving: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """For edges that form disjoint cycles (``nxt``: each edge's successor; without diagonal
+    pinches every boundary vertex has one edge in and one out): each edge's cycle label, the
+    smallest start vertex id of its cycle, and its rank, the steps from it to the cycle's last
+    edge when the cycle starts at the edge leaving that vertex (``leaving``: vertex -> edge).
+    Both by pointer doubling: O(edges x log(longest cycle))."""
+    label, jump = start_id, nxt
+    while True:  # a round that changes no label: every window spans its whole cycle
+        merged = np.minimum(label, label[jump])
+        if np.array_equal(merged, label):
+            break
+        label, jump = merged, jump[jump]
+    last = nxt == leaving[label]  # the edge before the cycle's first
+    rank = (~last).astype(np.int64)
+    jump = np.where(last, np.arange(len(nxt)), nxt)
+    while not np.array_equal(jump, jump[jump]):
+        rank, jump = rank + rank[jump], jump[jump]
+    return label, rank
 
 
 def _check_pinches(grid: np.ndarray) -> None:

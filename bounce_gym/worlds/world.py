@@ -13,73 +13,21 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 import shapely
-from shapely.geometry import LinearRing, Polygon
+from shapely.geometry import Polygon
 
 from bounce_gym.errors import InvalidWorldError
 from bounce_gym.worlds import raycast
+from bounce_gym.worlds.rings import (
+    as_ring,
+    check_holes,
+    check_ring_shape,
+    checked_holes,
+    edges,
+    signed_area,
+)
 
 #: Relative tolerance (times the world's diameter) for geometric predicates.
 REL_TOL = 1e-9
-
-
-def _as_ring(points: object, label: str) -> np.ndarray:
-    try:
-        ring = np.asarray(points, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidWorldError(f"{label}: vertices must be a sequence of (x, y) numbers") from exc
-    if ring.ndim != 2 or ring.shape[1] != 2:
-        raise InvalidWorldError(
-            f"{label}: vertices must have shape (n, 2), got shape {ring.shape}"
-        )
-    if len(ring) > 1 and np.array_equal(ring[0], ring[-1]):
-        ring = ring[:-1]  # a closing vertex equal to the first is the usual GeoJSON habit
-    if len(ring) < 3:
-        raise InvalidWorldError(f"{label}: a ring needs at least 3 vertices, got {len(ring)}")
-    if not np.all(np.isfinite(ring)):
-        bad = int(np.flatnonzero(~np.all(np.isfinite(ring), axis=1))[0])
-        raise InvalidWorldError(f"{label}: vertex {bad} is not finite: {ring[bad].tolist()}")
-    return ring
-
-
-def _signed_area(ring: np.ndarray) -> float:
-    """Shoelace area, positive for a counter-clockwise ring. Coordinates are taken relative to
-    the first vertex, so a small ring far from the origin (map coordinates in metres of a
-    projected system) keeps its digits instead of cancelling products of huge numbers."""
-    rel = ring - ring[0]
-    x, y = rel[:, 0], rel[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-
-
-def _check_ring_shape(ring: np.ndarray, label: str, tol: float) -> None:
-    """Reject zero-length edges, repeated vertices, spikes and self-intersections."""
-    nxt = np.roll(ring, -1, axis=0)
-    lengths = np.hypot(*(nxt - ring).T)
-    if np.any(lengths <= tol):
-        k = int(np.argmax(lengths <= tol))
-        raise InvalidWorldError(
-            f"{label}: zero-length edge between vertices {k} and {(k + 1) % len(ring)} "
-            f"at {ring[k].tolist()} (repeated vertex)"
-        )
-    _, first, counts = np.unique(ring, axis=0, return_index=True, return_counts=True)
-    if np.any(counts > 1):
-        k = int(first[np.argmax(counts > 1)])
-        raise InvalidWorldError(f"{label}: vertex {ring[k].tolist()} is repeated")
-    t_out = (nxt - ring) / lengths[:, None]
-    t_in = np.roll(t_out, 1, axis=0)
-    cross = t_in[:, 0] * t_out[:, 1] - t_in[:, 1] * t_out[:, 0]
-    dot = np.sum(t_in * t_out, axis=1)
-    spikes = (np.abs(cross) <= 1e-12) & (dot < 0)
-    if np.any(spikes):
-        k = int(np.argmax(spikes))
-        raise InvalidWorldError(
-            f"{label}: collinear-degenerate vertex {k} at {ring[k].tolist()}: "
-            "the boundary folds back on itself"
-        )
-    if not LinearRing(ring).is_simple:
-        reason = shapely.is_valid_reason(Polygon(ring))
-        raise InvalidWorldError(f"{label}: ring self-intersects ({reason})")
-    if abs(_signed_area(ring)) <= tol * tol:
-        raise InvalidWorldError(f"{label}: ring has zero area (all vertices collinear)")
 
 
 class World:
@@ -120,37 +68,18 @@ class World:
         holes: Sequence[Sequence[Sequence[float]] | np.ndarray] = (),
         name: str | None = None,
     ) -> None:
-        outer_ring = _as_ring(outer, "outer ring")
+        outer_ring = as_ring(outer, "outer ring")
         span = np.ptp(outer_ring, axis=0)
         tol = REL_TOL * max(float(np.hypot(*span)), 1e-300)
-        _check_ring_shape(outer_ring, "outer ring", tol)
-        if _signed_area(outer_ring) < 0:
+        check_ring_shape(outer_ring, "outer ring", tol)
+        if signed_area(outer_ring) < 0:
             outer_ring = outer_ring[::-1].copy()
-        hole_rings = []
         if isinstance(holes, np.ndarray) and holes.ndim == 2:
             raise InvalidWorldError("holes: expected a list of rings, got a single (n, 2) array")
-        for k, hole in enumerate(holes):
-            ring = _as_ring(hole, f"hole {k}")
-            _check_ring_shape(ring, f"hole {k}", tol)
-            if _signed_area(ring) > 0:
-                ring = ring[::-1].copy()
-            hole_rings.append(ring)
-        _check_holes(outer_ring, hole_rings)
+        hole_rings = checked_holes(holes, tol)
+        check_holes(outer_ring, hole_rings)
 
-        rings = [outer_ring, *hole_rings]
-        starts, ends, ring_ids, reflex = [], [], [], []
-        for r, ring in enumerate(rings):
-            nxt = np.roll(ring, -1, axis=0)
-            starts.append(ring)
-            ends.append(nxt)
-            ring_ids.append(np.full(len(ring), r, dtype=np.int64))
-            t_out = nxt - ring
-            t_in = ring - np.roll(ring, 1, axis=0)
-            cross = t_in[:, 0] * t_out[:, 1] - t_in[:, 1] * t_out[:, 0]
-            scale = np.hypot(*t_in.T) * np.hypot(*t_out.T)
-            reflex.append(cross < -1e-12 * scale)  # free space on the left: a right turn is reflex
-        edge_start = np.concatenate(starts)
-        edge_end = np.concatenate(ends)
+        edge_start, edge_end, edge_ring, reflex = edges([outer_ring, *hole_rings])
         vec = edge_end - edge_start
         lengths = np.hypot(vec[:, 0], vec[:, 1])
         tangents = vec / lengths[:, None]
@@ -162,11 +91,11 @@ class World:
         set_(self, "holes", tuple(_frozen(h) for h in hole_rings))
         set_(self, "edge_start", _frozen(edge_start))
         set_(self, "edge_end", _frozen(edge_end))
-        set_(self, "edge_ring", _frozen(np.concatenate(ring_ids)))
+        set_(self, "edge_ring", _frozen(edge_ring))
         set_(self, "tangents", _frozen(tangents))
         set_(self, "normals", _frozen(normals))
         set_(self, "lengths", _frozen(lengths))
-        set_(self, "reflex", _frozen(np.concatenate(reflex)))
+        set_(self, "reflex", _frozen(reflex))
         set_(self, "tol", tol)
 
     # -- identity ---------------------------------------------------------------------------
@@ -386,19 +315,3 @@ def _frozen(array: np.ndarray) -> np.ndarray:
     array = np.ascontiguousarray(array)
     array.setflags(write=False)
     return array
-
-
-def _check_holes(outer: np.ndarray, holes: list[np.ndarray]) -> None:
-    shell = Polygon(outer)
-    shell_ring = LinearRing(outer)
-    polys = [Polygon(h) for h in holes]
-    for k, (hole, poly) in enumerate(zip(holes, polys, strict=True)):
-        if not shell.contains(poly):
-            raise InvalidWorldError(f"hole {k}: not inside the outer ring")
-        if shell_ring.intersects(LinearRing(hole)):
-            raise InvalidWorldError(f"hole {k}: touches the outer ring")
-    for i in range(len(polys)):
-        for j in range(i + 1, len(polys)):
-            if polys[i].intersects(polys[j]):
-                what = "overlap" if polys[i].intersection(polys[j]).area > 0 else "touch"
-                raise InvalidWorldError(f"holes {i} and {j} {what}; holes must be disjoint")

@@ -98,3 +98,36 @@ def test_uncrowded_placement_draws_the_same_positions_as_before(kwargs, total, f
     env.reset(seed=3)
     assert env.core.state.position.sum() == total
     assert env.core.state.position[0].tolist() == first
+
+
+def _count_room_cuts(monkeypatch) -> list:
+    """Each crowded round samples the room left once: count those rounds."""
+    import bounce_gym.dynamics.backends.base as base
+
+    rounds = []
+    sample_in = base.sample_in
+    monkeypatch.setattr(base, "sample_in", lambda *a, **k: rounds.append(1) or sample_in(*a, **k))
+    return rounds
+
+
+@pytest.mark.timeout(60)  # a hang guard only
+def test_900_robots_that_jam_a_square_fail_after_a_few_rounds_not_one_per_robot(monkeypatch):
+    rounds = _count_room_cuts(monkeypatch)
+    env = MultiBounceEnv(world="square", n_robots=900, robot_radius=0.14)  # passes the area bound
+    with pytest.raises(ConfigError, match=r"^n_robots: placed \d{3} of 900 robots of "
+                                          r"robot_radius=0.14 in world 'square' at random"):
+        env.reset(seed=0)
+    assert 0 < len(rounds) <= 30  # one round per seated robot took 294 (and seconds) before
+
+
+@pytest.mark.timeout(60)  # a hang guard only
+@pytest.mark.parametrize("seed", [0, 1])
+def test_900_crowded_robots_that_fit_are_seated_in_a_few_rounds(monkeypatch, seed):
+    rounds = _count_room_cuts(monkeypatch)
+    env = MultiBounceEnv(world="square", n_robots=900, robot_radius=0.12)
+    env.reset(seed=seed)
+    position = env.core.state.position
+    gap = np.linalg.norm(position[:, None] - position[None], axis=2)
+    np.fill_diagonal(gap, np.inf)
+    assert gap.min() >= 0.24 - 1e-9 and env.options.world.contains(position, 0.12).all()
+    assert 0 < len(rounds) <= 20  # 92 before

@@ -398,6 +398,17 @@ def test_unreadable_flow_file_is_a_config_error(tmp_path):
         DrifterEnv(flow=path)
 
 
+def test_a_flow_file_is_capped_by_flow_kwargs(tmp_path):
+    path = save_flow(get("two_sink", n_layers=3), tmp_path / "basin.nc")
+    with pytest.raises(ConfigError, match=r"^flow: .*basin.nc: u \('u'\): declares [\d,]+ values "
+                                          r".*at most 100 are read"):
+        DrifterEnv(flow=path, flow_kwargs={"max_values": 100})
+    with pytest.raises(ConfigError, match="^flow_kwargs: a NetCDF file takes only 'mapping' and "
+                                          "'max_values', got \\['hours'\\]"):
+        DrifterEnv(flow=path, flow_kwargs={"hours": 6})
+    assert DrifterEnv(flow=path, flow_kwargs={"max_values": 10**6}).options.field.n_layers == 3
+
+
 def test_unknown_arguments_and_reset_options():
     with pytest.raises(TypeError, match="deploy"):
         DrifterEnv(deploy=[(0, 1, 1)])

@@ -11,6 +11,7 @@ from pathlib import Path
 import yaml
 
 from experiments.config import load_config
+from experiments.run_folders import finished_runs
 
 ROOT = Path(__file__).parents[2]
 #: experiments of the default configuration: fixed angles with the best in hindsight, patrols
@@ -41,5 +42,5 @@ def checksums(run: Path) -> dict[str, str]:
 def take_run(folder: Path, label: str) -> Path:
     """Move the one run folder in ``folder/runs`` to ``folder/<label>`` (so that the next run
     of the same configuration writes a folder of its own) and return its new place."""
-    (run,) = [p for p in (folder / "runs").iterdir() if not p.name.endswith("-units")]
+    (run,) = finished_runs(folder / "runs")
     return Path(shutil.move(str(run), str(folder / label)))

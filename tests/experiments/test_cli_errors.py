@@ -55,7 +55,8 @@ def _experiment(**overrides) -> dict:
      "config.experiments[1].max_steps: 7 differs from the horizon 200 that "
      "bounce_gym/BounceNavigation-v0 registers"),
     (_experiment(policies=["rl"], name="../x"),
-     "config.experiments[1].name (the folder of its rl models): expected the name of a folder"),
+     "config.experiments[1].name: expected a name for the plot files (one path component), got "
+     "'../x': it contains '/'"),
     (_experiment(policies=["rl"], rl_models="../x"),
      "config.experiments[1].rl_models: expected the name of a folder"),
 ])

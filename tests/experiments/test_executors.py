@@ -2,7 +2,9 @@
 leave the other units running, and a worker that dies, on the in-process executor and the local
 process pool (the Ray executor: test_ray_executor.py)."""
 
+import os
 import pickle
+from pathlib import Path
 
 import pytest
 import sweep_units
@@ -28,13 +30,99 @@ def _squares(n: int) -> list[Unit]:
     return [Unit(f"sq{k}", sweep_units.square, (k,)) for k in range(n)]
 
 
-def test_the_store_keeps_results_atomically_one_file_per_unit(tmp_path):
+def test_the_store_keeps_results_atomically_one_signed_file_per_unit(tmp_path):
     store = UnitStore(tmp_path / "units")
-    assert not store.done("a")
+    with pytest.raises(FileNotFoundError):
+        store.load("a")
     store.save("a", {"rows": [1, 2]})
-    assert store.done("a") and store.load("a") == {"rows": [1, 2]}
-    assert [p.name for p in (tmp_path / "units").iterdir()] == ["a.pkl"]
-    assert pickle.loads((tmp_path / "units/a.pkl").read_bytes()) == {"rows": [1, 2]}
+    assert store.load("a") == {"rows": [1, 2]} and store.stored(["a", "b"]) == {"a": {"rows": [1, 2]}}
+    assert [p.name for p in (tmp_path / "units").iterdir()] == ["a.unit"]
+    head, _, data = (tmp_path / "units/a.unit").read_bytes().partition(b"\n")
+    assert head.startswith(b"bounce_gym-unit ") and len(head.split()[1]) == 64
+    assert pickle.loads(data) == {"rows": [1, 2]}
+
+
+class _Plant:
+    """Unpickled, it creates ``marker``: what a planted unit file could run."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return (Path.touch, (Path(self.marker),))
+
+
+def _forged(store, marker):
+    """Unit files that must not be unpickled: a plain pickle, one signed with another key, one
+    cut short, one signed for another key of the store, a link to a good one, a pipe."""
+    payload = pickle.dumps(_Plant(marker))
+    good = (store.folder / "good.unit").read_bytes()
+    head = good.partition(b"\n")[0]
+    return {
+        "plain pickle": payload,
+        "other key": b"bounce_gym-unit " + b"0" * 64 + b"\n" + payload,
+        "no newline": b"bounce_gym-unit " + head.split()[1],
+        "cut short": good[:-5],
+        "signed for another unit": good,
+        "payload swapped": head + b"\n" + payload,
+    }
+
+
+def test_unit_files_the_user_did_not_sign_are_never_unpickled(tmp_path, capsys):
+    store = UnitStore(tmp_path / "units")
+    store.save("good", _Plant(tmp_path / "signed-ran"))
+    store.load("good")
+    assert (tmp_path / "signed-ran").exists()  # the control: a signed file is unpickled
+    marker = tmp_path / "planted-ran"
+    forged = _forged(store, marker)
+    keys = [f"k{n}" for n in range(len(forged))]
+    for key, data in zip(keys, forged.values(), strict=True):
+        (tmp_path / "units" / f"{key}.unit").write_bytes(data)
+    os.symlink(tmp_path / "units/good.unit", tmp_path / "units/link.unit")
+    os.mkfifo(tmp_path / "units/pipe.unit")
+    assert store.stored([*keys, "link", "pipe", "missing"]) == {}
+    assert not marker.exists()
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == len(keys) + 2
+    assert all(line.startswith("warning: ") and line.endswith("running the unit again")
+               for line in lines)
+    assert "symbolic link" in lines[-2] and "not a regular file" in lines[-1]
+
+
+def test_a_signed_unit_file_this_code_cannot_unpickle_is_a_warning_too(tmp_path, capsys):
+    from bounce_gym.trust import sign
+
+    store = UnitStore(tmp_path / "units")
+    data = b"cno_such_module_here\nThing\n."  # a pickle of a class that is gone
+    (tmp_path / "units").mkdir()
+    (tmp_path / "units/a.unit").write_bytes(
+        b"bounce_gym-unit " + sign(data, "unit units/a").encode() + b"\n" + data)
+    assert store.stored(["a"]) == {}
+    assert "cannot be unpickled (ModuleNotFoundError" in capsys.readouterr().err
+
+
+def test_a_unit_file_signed_by_another_user_runs_again(tmp_path, monkeypatch, capsys):
+    from bounce_gym.trust import HOME_VARIABLE
+
+    calls = tmp_path / "calls"
+    units = [Unit(u.key, sweep_units.count_calls, (calls, u.fn, *u.args)) for u in _squares(3)]
+    monkeypatch.setenv(HOME_VARIABLE, str(tmp_path / "someone-else"))
+    make_executor(workers=1).run(units, UnitStore(tmp_path / "units"), progress=False)
+    monkeypatch.undo()
+    results, _ = make_executor(workers=1).run(units, UnitStore(tmp_path / "units"),
+                                              progress=False)
+    assert results == {"sq0": 0, "sq1": 1, "sq2": 4}
+    assert len(list(calls.iterdir())) == 6  # every unit ran again under this user's key
+    assert capsys.readouterr().err.count("does not match your key") == 3
+
+
+def test_the_store_needs_the_users_key_before_any_unit_runs(tmp_path, monkeypatch):
+    from bounce_gym.trust import HOME_VARIABLE
+
+    (tmp_path / "home").write_text("a file, not a folder")
+    monkeypatch.setenv(HOME_VARIABLE, str(tmp_path / "home"))
+    with pytest.raises(ConfigError, match=HOME_VARIABLE):
+        UnitStore(tmp_path / "units")
 
 
 @pytest.mark.parametrize("key", ["", "a/b", "../x", ".hidden", "a b", "-x"])
@@ -84,7 +172,7 @@ def test_a_unit_failing_for_good_is_reported_while_the_others_complete(tmp_path,
                                                                       progress=False)
     assert results == {"sq0": 0, "sq1": 1, "sq2": 4}
     assert failures == [UnitFailure("bad", "ValueError: unit 7 cannot be done", 3)]
-    assert not store.done("bad")
+    assert store.stored(["bad"]) == {}
 
 
 @pytest.mark.parametrize("workers", LOCAL)

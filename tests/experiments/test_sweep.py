@@ -63,12 +63,12 @@ def test_a_killed_sweep_started_again_runs_only_the_rest_and_writes_the_same_fil
     env = {**os.environ, "PYTHONPATH": str(sweep_runs.ROOT)}
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 300
-    while len(list(store.glob("*/*.pkl"))) < 3 and proc.poll() is None \
+    while len(list(store.glob("*/*.unit"))) < 3 and proc.poll() is None \
             and time.monotonic() < deadline:
         time.sleep(0.02)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
-    kept = len(list(store.glob("*/*.pkl")))
+    kept = len(list(store.glob("*/*.unit")))
     assert proc.returncode == -signal.SIGKILL and kept >= 3
     assert not [p for p in (folder / "runs").iterdir() if not p.name.endswith("-units")]
     done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)

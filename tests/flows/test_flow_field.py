@@ -82,6 +82,9 @@ def test_land_mask_given_overrides_values_and_broadcasts_over_layers():
     (dict(land=np.zeros((4, 5))), "land", "bool"),
     (dict(land=np.ones((4, 5), dtype=bool)), "land", "no water"),
     (dict(y=[0.0, 10.0, 20.0, 95.0], crs="lonlat"), "y", "latitudes"),
+    (dict(x=[0.0, 250.0, 500.0, 750.0, 1000.0], crs="lonlat"), "x", r"longitudes must lie in "
+                                                                 r"\[-360, 360\]"),
+    (dict(x=[-180.0, -90.0, 0.0, 90.0, 181.0], crs="lonlat"), "x", "span at most 360 degrees"),
     (dict(u=np.full((2, 3, 4, 5), np.inf)), "u", "infinite"),
     (dict(x=["a", "b", "c", "d", "e"]), "x", "real numbers"),
 ])  # fmt: skip

@@ -8,8 +8,8 @@ import pytest
 import xarray as xr
 
 import bounce_gym.files as files
-from bounce_gym.errors import FlowFileError
-from bounce_gym.flows import FlowField, load_flow, save_flow
+from bounce_gym.errors import ConfigError, FlowFileError
+from bounce_gym.flows import FlowField, flow_from_dataset, load_flow, save_flow
 
 VEL = {"units": "m s-1"}
 
@@ -243,3 +243,189 @@ def test_bad_mappings(tmp_path):
     with pytest.raises(FlowFileError, match="mapping: expected a dict"):
         load_flow(path, mapping=["u"])
     assert load_flow(path, mapping={"u": "u", "x": "x"}).shape == (3, 4)
+
+
+# -- what a file may declare: checked from the header, before any array is read ---------------
+def _declared(path, ny: int, nx: int, **var_kwargs) -> None:
+    """u, v on (y, x) of the given lengths with no data written: a few KB on disk."""
+    import netCDF4
+
+    with netCDF4.Dataset(path, "w") as nc:
+        nc.createDimension("y", ny)
+        nc.createDimension("x", nx)
+        for name in ("x", "y"):
+            nc.createVariable(name, "f8", (name,)).units = "m"
+        for name in ("u", "v"):
+            nc.createVariable(name, "f4", ("y", "x"), **var_kwargs).units = "m s-1"
+
+
+def _peak_bytes(call) -> int:
+    """The most memory (numpy arrays included) allocated while ``call`` ran."""
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        call()
+    except FlowFileError:
+        pass
+    finally:
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+    return peak
+
+
+@pytest.mark.parametrize("cells", [10**8, 10**9])
+def test_a_huge_declared_field_is_refused_before_any_array_is_read(tmp_path, cells):
+    path = tmp_path / "huge.nc"
+    _declared(path, 10_000, cells // 10_000)
+    with pytest.raises(FlowFileError, match=rf"^{path}: u \('u'\): declares {cells:,} values \(y "
+                                            r"10000 x x \d+\); at most 50,000,000 are read"):
+        load_flow(path)
+    assert _peak_bytes(lambda: load_flow(path)) < 20 * 2**20  # reading u alone is 400 MB+
+
+
+def test_the_cap_counts_cells_layers_and_times_and_can_be_changed(tmp_path, monkeypatch):
+    path = save_flow(field(), tmp_path / "f.nc")  # u: 2 layers x 3 times x 4 x 5 = 120 values
+    with pytest.raises(FlowFileError, match=r"u \('u'\): declares 120 values \(depth 2 x time 3 x "
+                                            r"lat 4 x lon 5\); at most 119 are read"):
+        load_flow(path, max_values=119)
+    assert same(load_flow(path, max_values=120), field())
+    monkeypatch.setenv("BOUNCE_GYM_MAX_FLOW_VALUES", "119")
+    with pytest.raises(FlowFileError, match="at most 119 are read"):
+        load_flow(path)
+    assert load_flow(path, max_values=120).shape == (4, 5)  # the argument wins
+    monkeypatch.setenv("BOUNCE_GYM_MAX_FLOW_VALUES", "lots")
+    with pytest.raises(ConfigError, match=r"^BOUNCE_GYM_MAX_FLOW_VALUES: expected a positive "
+                                          r"integer, got 'lots'"):
+        load_flow(path)
+    for bad in (0, -5, 1.5, True, "120"):
+        with pytest.raises(ConfigError, match="^max_values: expected an integer >= 1"):
+            load_flow(path, max_values=bad)
+
+
+def test_an_open_dataset_is_capped_too():
+    ds = good_dataset()
+    with pytest.raises(FlowFileError, match=r"^mine: u \('u'\): declares 12 values"):
+        flow_from_dataset(ds, source="mine", max_values=11)
+    assert flow_from_dataset(ds, max_values=12).shape == (3, 4)
+
+
+def test_a_huge_coordinate_xarray_would_index_on_open_is_refused_first(tmp_path):
+    import netCDF4
+
+    path = tmp_path / "obs.nc"
+    save_flow(field(), path)
+    with netCDF4.Dataset(path, "a") as nc:  # an unrelated dimension with a coordinate
+        nc.createDimension("obs", 10**9)
+        nc.createVariable("obs", "f8", ("obs",))
+    with pytest.raises(FlowFileError, match=r"^.*obs.nc: coordinate 'obs': declares "
+                                            r"1,000,000,000 values"):
+        load_flow(path)
+    assert _peak_bytes(lambda: load_flow(path)) < 20 * 2**20  # xarray would load 8 GB
+
+
+@pytest.mark.parametrize("chunks, cap, message", [
+    ((20, 10, 10), 1000, r"chunks of \(20, 10, 10\) \(2,000 values, 1 chunks for time 2 x y 10 "
+                         r"x x 10\); allowed are chunks of at most 1,000 values"),
+    ((1, 1, 1), None, r"chunks of \(1, 1, 1\) \(1 values, 2,000,000 chunks .*at most "
+                      r"1,000,000 chunks"),
+])
+def test_absurd_chunking_is_refused(tmp_path, chunks, cap, message):
+    """One value read decompresses its whole chunk; a million chunks are a million reads."""
+    import netCDF4
+
+    path = tmp_path / "chunky.nc"
+    n = 10 if cap else 1000
+    with netCDF4.Dataset(path, "w") as nc:
+        nc.createDimension("time", None)
+        for name in ("y", "x"):
+            nc.createDimension(name, n)
+            nc.createVariable(name, "f8", (name,)).units = "m"
+        nc.createVariable("time", "f8", ("time",)).units = "seconds"
+        for name in ("u", "v"):
+            var = nc.createVariable(name, "f4", ("time", "y", "x"), zlib=True, chunksizes=chunks)
+            var.units = "m s-1"
+        nc["time"][0:2] = [0.0, 1.0]
+        if cap:
+            nc["u"][0:2] = nc["v"][0:2] = 0.5
+    with pytest.raises(FlowFileError, match=rf"^{path}: u \('u'\): {message}"):
+        load_flow(path, max_values=cap)
+
+
+@pytest.mark.parametrize("where", ["global", "u"])
+def test_a_huge_attribute_is_refused(tmp_path, where):
+    import netCDF4
+
+    path = save_flow(field(), tmp_path / "f.nc")
+    with netCDF4.Dataset(path, "a") as nc:
+        (nc if where == "global" else nc["u"]).setncattr("junk", np.zeros(2**20 + 1, np.int8))
+    what = "global attribute" if where == "global" else "attribute of 'u':"
+    with pytest.raises(FlowFileError, match=rf"^{path}: {what} 'junk' has 1,048,577 values; at "
+                                            r"most 1,048,576 are read"):
+        load_flow(path)
+
+
+@pytest.mark.parametrize("fmt", ["NETCDF3_CLASSIC", "NETCDF3_64BIT_OFFSET",
+                                 "NETCDF3_64BIT_DATA", "NETCDF4"])
+@pytest.mark.parametrize("cut", [1, 0.5])
+def test_a_truncated_file_fails_in_one_line(tmp_path, fmt, cut):
+    """A classic file cut short read back zeros for the missing end, without an error."""
+    full = tmp_path / "full.nc"
+    xr.open_dataset(save_flow(field(), tmp_path / "f.nc"), decode_times=False).load().to_netcdf(
+        full, format=fmt, engine="netcdf4")
+    data = full.read_bytes()
+    path = tmp_path / "cut.nc"
+    path.write_bytes(data[: len(data) - 1] if cut == 1 else data[: len(data) // 2])
+    message = "not a readable NetCDF file" if fmt == "NETCDF4" else "truncated NetCDF (file|header)"
+    with pytest.raises(FlowFileError, match=rf"^{path}: {message}") as info:
+        load_flow(path)
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("content", [b"", b"not a netcdf file", b"CDF\x01" + b"\xff" * 60,
+                                     b"CDF\x02\x00\x00\x00\x00\x00\x00\x00\x0a\x7f\xff\xff\xff",
+                                     b"\x89HDF\r\n\x1a\n" + bytes(range(256)) * 4])
+def test_other_files_fail_in_one_line(tmp_path, content):
+    path = tmp_path / "junk.nc"
+    path.write_bytes(content)
+    with pytest.raises(FlowFileError, match=rf"^{path}: (not a readable NetCDF file|truncated "
+                                            r"NetCDF|corrupt NetCDF)") as info:
+        load_flow(path)
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("variable, message", [
+    ("u", r"u \('u'\): expected real numbers in m/s, got dtype <U"),
+    ("x", r"x \('x'\): expected numbers, got dtype <U"),
+    ("land", r"land \('land'\): expected a mask of numbers or booleans, got dtype <U"),
+])
+def test_strings_where_numbers_are_expected_are_refused_before_reading(tmp_path, variable,
+                                                                       message):
+    ds = good_dataset().assign(land=(("y", "x"), np.zeros((3, 4), np.int8),
+                                     {"flag_meanings": "water land"}))
+    text = np.full(ds[variable].shape, "a")
+    ds = (ds.assign_coords(x=("x", text, {"units": "m"})) if variable == "x"
+          else ds.assign({variable: (ds[variable].dims, text, ds[variable].attrs)}))
+    path = tmp_path / "strings.nc"
+    ds.to_netcdf(path)
+    with pytest.raises(FlowFileError, match=rf"^{path}: {message}"):
+        load_flow(path)
+
+
+@pytest.mark.parametrize("lon, ok", [
+    ([0.0, 500.0, 1000.0], False), ([-180.0, 0.0, 200.0], False), ([-400.0, -390.0, -380.0], False),
+    ([-180.0, 0.0, 180.0], True), ([0.0, 180.0, 359.5], True), ([170.0, 180.0, 190.0], True),
+    ([-360.0, -200.0, -1.0], True),
+])  # fmt: skip
+def test_longitudes_are_range_checked(tmp_path, lon, ok):
+    ones = np.ones((2, 3))
+    path = tmp_path / "lon.nc"
+    xr.Dataset({"u": (("lat", "lon"), ones, VEL), "v": (("lat", "lon"), ones, VEL)},
+               coords={"lon": ("lon", lon, {"units": "degrees_east"}),
+                       "lat": ("lat", [10.0, 20.0], {"units": "degrees_north"})}).to_netcdf(path)
+    if ok:
+        assert load_flow(path).x.tolist() == lon
+    else:
+        with pytest.raises(FlowFileError, match=rf"^{path}: x \('lon'\): longitudes must lie in "
+                                                r"\[-360, 360\] and span at most 360 degrees"):
+            load_flow(path)

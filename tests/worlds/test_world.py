@@ -63,6 +63,73 @@ def test_invalid_worlds_raise_with_a_named_problem(outer, holes, message):
         World(outer, holes)
 
 
+#: faults of one hole of `_many_holes` (unit squares at (3i + 1, 3j + 1) in a 60 x 60
+#: square), by the message they give
+HOLE_FAULTS = {
+    "zero-length edge": lambda x, y: [(x, y), (x + 1, y), (x + 1, y), (x, y + 1)],
+    "is repeated": lambda x, y: [(x, y), (x + 1, y), (x + 0.5, y + 0.5), (x + 1, y + 1),
+                                 (x, y + 1), (x + 0.5, y + 0.5)],
+    "collinear-degenerate": lambda x, y: [(x, y), (x + 1, y), (x + 0.5, y), (x + 0.5, y + 1)],
+    "self-intersects": lambda x, y: [(x, y), (x + 1, y + 1), (x + 1, y), (x, y + 1)],
+    "not finite": lambda x, y: [(x, y), (x + 1, y), (x, np.inf)],
+    "at least 3 vertices": lambda x, y: [(x, y), (x + 1, y)],
+    r"shape \(n, 2\)": lambda x, y: [(x, y, 0), (x + 1, y, 0), (x, y + 1, 0)],
+}
+BIG = [(0, 0), (60, 0), (60, 60), (0, 60)]
+
+
+def _many_holes(faults: dict[int, str] | None = None) -> list:
+    holes = [[(3 * i + 1, 3 * j + 1), (3 * i + 2, 3 * j + 1), (3 * i + 2, 3 * j + 2),
+              (3 * i + 1, 3 * j + 2)] for j in range(20) for i in range(20)]
+    for k, fault in (faults or {}).items():
+        holes[k] = HOLE_FAULTS[fault](*holes[k][0])
+    return holes
+
+
+@pytest.mark.parametrize("first", HOLE_FAULTS)
+@pytest.mark.parametrize("later", ["zero-length edge", "not finite", "self-intersects",
+                                   "at least 3 vertices"])
+def test_the_first_faulty_hole_of_many_is_the_one_reported(first, later):
+    """All holes are checked at once, with the message and the hole that checking them one by
+    one gave: the lowest-numbered faulty hole, whatever the faults of later holes."""
+    with pytest.raises(InvalidWorldError, match=rf"^hole 37: .*{first}"):
+        World(BIG, _many_holes({37: first, 38: later, 390: later}))
+
+
+def test_placement_faults_of_holes_come_after_every_holes_own_faults():
+    outside = _many_holes({38: "self-intersects"})
+    outside[5] = [(70, 70), (71, 70), (71, 71)]
+    with pytest.raises(InvalidWorldError, match="^hole 38: ring self-intersects"):
+        World(BIG, outside)
+    outside[38] = _many_holes()[38]
+    outside[4] = [(0, 4), (1, 4), (1, 5)]
+    with pytest.raises(InvalidWorldError, match="^hole 4: touches the outer ring"):
+        World(BIG, outside)
+
+
+def test_the_first_pair_of_meeting_holes_is_the_one_reported():
+    holes = _many_holes()
+    holes[41] = [(x + 1, y) for x, y in holes[40]]  # shares an edge with hole 40
+    holes[8] = [(x + 0.5, y) for x, y in holes[7]]  # overlaps hole 7
+    with pytest.raises(InvalidWorldError, match="^holes 7 and 8 overlap; holes must be disjoint"):
+        World(BIG, holes)
+    holes[8] = _many_holes()[8]
+    with pytest.raises(InvalidWorldError, match="^holes 40 and 41 touch"):
+        World(BIG, holes)
+
+
+def test_many_valid_holes_are_stored_clockwise_with_their_edges():
+    holes = _many_holes()
+    holes[::2] = [h[::-1] for h in holes[::2]]  # half of them clockwise already
+    world = World(BIG, holes)
+    assert len(world.holes) == 400 and world.area == 3600 - 400
+    for hole, given in zip(world.holes, holes, strict=True):
+        hx, hy = hole[:, 0], hole[:, 1]
+        assert np.dot(hx, np.roll(hy, -1)) - np.dot(np.roll(hx, -1), hy) < 0  # clockwise
+        assert sorted(map(tuple, hole.tolist())) == sorted(map(tuple, given))
+    assert world.reflex.sum() == 4 * 400 and world.n_edges == 4 + 4 * 400
+
+
 def test_world_is_immutable_and_pickles_by_value():
     w = World(SQUARE, [HOLE], name="box")
     with pytest.raises(AttributeError):

@@ -25,6 +25,8 @@ from bounce_gym.worlds.world import sample_in
 ROBOT_COLLISIONS = ("bounce", "ignore")
 #: Consecutive rejected start positions after which random placement samples only the room left.
 PLACEMENT_MISSES = 50
+#: Candidates drawn at once from the room left when placement is crowded.
+PLACEMENT_BATCH = 64
 
 
 class MotionBackend(ABC):
@@ -140,6 +142,9 @@ class MotionBackend(ABC):
         that overlaps no robot placed before (random sequential placement). Fails fast: at once
         when the robots' disks cover more than the free space they can reach (a necessary
         condition; checked on construction), and as soon as no room is left for the next robot.
+        After `PLACEMENT_MISSES` straight misses it draws batches of `PLACEMENT_BATCH` points
+        from the room left and seats every one that still fits, in turn (900 robots in the
+        10 x 10 square: about 10 cuts of the room instead of one per robot).
         """
         if not self.collide:
             return self.world.sample_free(rng, self.n_robots, self.radius)
@@ -154,19 +159,25 @@ class MotionBackend(ABC):
                 misses += 1
         if k == n:
             return chosen
-        # crowded: sample only where the next robot fits, until that room is gone
+        # crowded: sample only where the next robot fits, until that room is gone. A batch of
+        # candidates is uniform in the room as it was; taken in turn, each one that still fits
+        # is uniform in the room left at its turn (rejection from a superset), so one cut of
+        # the room seats a batch's worth of robots, not one.
         room = self.world.eroded(self.radius).difference(
             shapely.union_all(shapely.buffer(shapely.points(chosen[:k]), gap)))
         while k < n and room.area > self.world.tol**2:
-            candidates = sample_in(room, rng, 64)
+            candidates = sample_in(room, rng, PLACEMENT_BATCH)
             ok = self.world.contains(candidates, self.radius)
             ok &= np.all(np.linalg.norm(candidates[:, None] - chosen[None, :k], axis=2) > gap,
                          axis=1)
-            if not ok.any():
+            before = k
+            for p in candidates[ok]:
+                if k < n and np.all(np.hypot(*(chosen[before:k] - p).T) > gap):
+                    chosen[k], k = p, k + 1
+            if k == before:
                 break
-            p = candidates[np.argmax(ok)]
-            chosen[k], k = p, k + 1
-            room = room.difference(shapely.Point(p).buffer(gap))
+            room = room.difference(
+                shapely.union_all(shapely.buffer(shapely.points(chosen[before:k]), gap)))
         if k == n:
             return chosen
         raise ConfigError(

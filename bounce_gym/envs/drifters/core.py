@@ -115,9 +115,7 @@ class DrifterCore:
         if illegal.any():
             if self.options.illegal_action == "error":
                 k = int(np.flatnonzero(illegal)[0])
-                raise ActionError(f"action: {ACTIONS[int(actions[k])]} is illegal for drifter "
-                                  f"{k} in layer {int(self.fleet.layers()[k])} (no water there; "
-                                  f"legal actions: {np.flatnonzero(legal[k]).tolist()})")
+                raise self.illegal(k, int(actions[k]))
             actions = np.where(illegal, DRIFT, actions)
         self.fleet.step(actions, rng)
         self.steps += 1
@@ -140,6 +138,17 @@ class DrifterCore:
     def legal(self) -> np.ndarray:
         """(N, 3) bool, the legal actions now."""
         return self._legal.copy()
+
+    def is_legal(self, k: int, action: int) -> bool:
+        """Whether drifter ``k`` may take ``action`` now."""
+        return bool(self._legal[k, action])
+
+    def illegal(self, k: int, action: int, who: str = "action") -> ActionError:
+        """The error for drifter ``k`` taking the illegal ``action`` (with
+        ``illegal_action="error"``)."""
+        return ActionError(f"{who}: {ACTIONS[action]} is illegal for drifter {k} in layer "
+                           f"{int(self.fleet.layers()[k])} (no water there; legal actions: "
+                           f"{np.flatnonzero(self._legal[k]).tolist()})")
 
     # -- placement --------------------------------------------------------------------------
     def _check_placement(self, spec: object, where: str) -> None:

@@ -2,12 +2,12 @@
 
 ``parallel_env(**kwargs)`` is the native parallel form (`MultiDrifterEnv`); ``env(**kwargs)``
 its AEC form through PettingZoo's ``parallel_to_aec`` conversion (drifters choose in turn; the
-fleet moves once all have chosen), which also enforces the call order; ``raw_env`` is the same
+fleet moves once all have chosen), which also enforces the call order, with each action
+checked as it is given (`bounce_gym.envs.aec_actions`); ``raw_env`` is the same
 as ``env``.
 """
 
-from pettingzoo.utils.conversions import parallel_to_aec
-
+from bounce_gym.envs.aec_actions import checked_parallel_to_aec
 from bounce_gym.envs.drifters.multi_env import MultiDrifterEnv
 
 
@@ -16,7 +16,7 @@ def parallel_env(**kwargs) -> MultiDrifterEnv:
 
 
 def env(**kwargs):
-    return parallel_to_aec(MultiDrifterEnv(**kwargs))
+    return checked_parallel_to_aec(MultiDrifterEnv(**kwargs))
 
 
 raw_env = env

@@ -14,7 +14,8 @@ n drifters are deployed at chosen cells (thesis ch. 5, problem 1: deployment cel
 drifters visit every surface cell) and carried by the currents; each can rise, sink or drift
 (`DrifterEnv` has the details, backends and arguments). All act at once every step. The
 **AEC form** (``env()``) is PettingZoo's ``parallel_to_aec`` conversion of this env: the
-drifters choose in turn and the fleet moves once all have chosen.
+drifters choose in turn and the fleet moves once all have chosen; each action is checked
+(`check_action`) as it is given.
 
 ## Rewards
 
@@ -112,6 +113,16 @@ class MultiDrifterEnv(DrifterEnvBase, ParallelEnv):
         codes = np.array([action_code(actions[a], f"action of {a}") for a in self.possible_agents])
         obs, rewards, terminated, info = self.core.step(codes, self.np_random)
         return finish_parallel_step(self, obs, rewards, terminated, info)
+
+    def check_action(self, agent: str, action: object) -> int:
+        """The action code of ``agent``; `ActionError` naming the agent and what is allowed for
+        anything but 0, 1 or 2, and with ``illegal_action="error"`` for a move that is illegal
+        now. The AEC form checks each action with it as it is given."""
+        code = action_code(action, f"action of {agent}")
+        k = self.agent_index[agent]
+        if self.options.illegal_action == "error" and not self.core.is_legal(k, code):
+            raise self.core.illegal(k, code, f"action of {agent}")
+        return code
 
     def action_mask(self, agent: str) -> np.ndarray:
         """(3,) int8, the legal actions of ``agent`` now."""

@@ -7,7 +7,8 @@ naming it; a bad value raises `ConfigError` naming the argument and what is allo
 * ``flow``: a zoo name (`bounce_gym.flows.names`), the path of a NetCDF file (read with
   `bounce_gym.flows.load_flow`: the file is parsed as data by netCDF4/xarray, nothing in it is
   executed) or a `FlowField`; ``flow_kwargs``: the zoo builder's keyword arguments, or for a
-  file ``{"mapping": {...}}`` (`load_flow`'s variable/dimension mapping); none for a field.
+  file ``{"mapping": {...}, "max_values": n}`` (`load_flow`'s variable/dimension mapping and
+  cap on the values the file may declare, default 5·10^7); none for a field.
 * ``backend``: ``"cell"`` (the discrete model of thesis ch. 5, `DrifterCells`, stepped exactly:
   one step = one cell transition drawn from the model) or ``"continuous"`` (the `Drifters` RK4
   dynamics in the field's own time: one step = ``step_seconds`` seconds in ``substeps`` RK4
@@ -133,9 +134,10 @@ def resolve_flow(flow: object, flow_kwargs: object) -> FlowField:
                               "a zoo name or a file")
         return flow
     if isinstance(flow, os.PathLike) or (isinstance(flow, str) and Path(flow).suffix):
-        unknown = sorted(set(flow_kwargs) - {"mapping"})
+        unknown = sorted(set(flow_kwargs) - {"mapping", "max_values"})
         if unknown:
-            raise ConfigError(f"flow_kwargs: a NetCDF file takes only 'mapping', got {unknown}")
+            raise ConfigError(f"flow_kwargs: a NetCDF file takes only 'mapping' and "
+                              f"'max_values', got {unknown}")
         try:
             return flows.load_flow(flow, **flow_kwargs)
         except BounceGymError as exc:

@@ -32,7 +32,8 @@ start (n), attack started (1), attack progress elapsed / t_a (1), clock steps / 
 (1); with ``adversary_observes="positions"`` also which vertices a patroller occupies (n).
 
 The **AEC form** (``env()``) is PettingZoo's ``parallel_to_aec`` conversion: the agents choose
-in turn and the world moves once all have chosen.
+in turn and the world moves once all have chosen; each action is checked (`check_action`) as it
+is given.
 
 ## Rewards
 
@@ -243,12 +244,10 @@ class PatrolEnv(RendererOwner, ParallelEnv):
 
     def step(self, actions: Mapping):
         check_parallel_actions(self, actions)
-        codes = np.array([self._code(a, actions[a]) for a in self.possible_agents])
+        codes = np.array([self.check_action(a, actions[a]) for a in self.possible_agents])
         m = self.n_patrollers
         moves = self.board.neighbours[self._pos, codes[:m]]
         illegal = np.append(moves < 0, self._target >= 0 and codes[m] != 0)
-        if illegal.any() and self.options.illegal_action == "error":
-            self._refuse(int(np.flatnonzero(illegal)[0]), codes)
         caught = False
         if codes[m] > 0 and not illegal[m]:
             self._target, self._started = int(codes[m]) - 1, self.cycles
@@ -275,23 +274,29 @@ class PatrolEnv(RendererOwner, ParallelEnv):
             self.render()
         return result
 
-    def _code(self, agent: str, action: object) -> int:
+    def check_action(self, agent: str, action: object) -> int:
+        """The action code of ``agent``; `ActionError` naming the agent and what is allowed for
+        anything but an integer of its action space, and with ``illegal_action="error"`` for an
+        action that is illegal now. The AEC form checks each action with it as it is given."""
         size = self.action_space(agent).n
         value = np.asarray(action)
         if value.shape != () or value.dtype.kind not in "iu" or not 0 <= int(value) < size:
             raise ActionError(f"action of {agent}: expected an integer in [0, {size - 1}], got "
                               f"{action!r}")
-        return int(value)
+        code = int(value)
+        if self.options.illegal_action == "error" and not self.action_mask(agent)[code]:
+            self._refuse(agent, code)
+        return code
 
-    def _refuse(self, k: int, codes: np.ndarray) -> None:
-        agent = self.possible_agents[k]
+    def _refuse(self, agent: str, code: int) -> None:
         legal = np.flatnonzero(self.action_mask(agent)).tolist()
         if agent == ADVERSARY:
-            raise ActionError(f"action of {agent}: {codes[k]} is illegal, the attack started at "
+            raise ActionError(f"action of {agent}: {code} is illegal, the attack started at "
                               f"step {self._started}; the only legal action is {legal}")
         names = [f"{d} ({DIRECTIONS[d]})" for d in legal]
-        raise ActionError(f"action of {agent}: {codes[k]} ({DIRECTIONS[codes[k]]}) is illegal "
-                          f"at vertex {self._pos[k]} (no edge); legal actions are {names}")
+        vertex = self._pos[self.agent_index[agent]]
+        raise ActionError(f"action of {agent}: {code} ({DIRECTIONS[code]}) is illegal at vertex "
+                          f"{vertex} (no edge); legal actions are {names}")
 
     def _rewards(self) -> np.ndarray:
         """Per agent (patrollers, then the adversary); zero-sum."""

@@ -3,12 +3,11 @@
 
 ``parallel_env(**kwargs)`` is the native parallel form (`PatrolEnv`); ``env(**kwargs)`` its AEC
 form through PettingZoo's ``parallel_to_aec`` conversion (the agents choose in turn; the world
-moves once all have chosen), which also enforces the call order; ``raw_env`` is the same as
-``env``.
+moves once all have chosen), which also enforces the call order, with each action checked as
+it is given (`bounce_gym.envs.aec_actions`); ``raw_env`` is the same as ``env``.
 """
 
-from pettingzoo.utils.conversions import parallel_to_aec
-
+from bounce_gym.envs.aec_actions import checked_parallel_to_aec
 from bounce_gym.envs.patrol.env import PatrolEnv
 
 
@@ -17,7 +16,7 @@ def parallel_env(**kwargs) -> PatrolEnv:
 
 
 def env(**kwargs):
-    return parallel_to_aec(PatrolEnv(**kwargs))
+    return checked_parallel_to_aec(PatrolEnv(**kwargs))
 
 
 raw_env = env

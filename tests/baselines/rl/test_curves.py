@@ -54,6 +54,35 @@ def test_a_resumed_run_keeps_exactly_the_episodes_before_its_checkpoint(tmp_path
         open_monitor_file(path, 0.0, "x", ("is_success",), keep_rows=6)
 
 
+def test_the_monitor_file_is_written_as_sb3_writes_it(tmp_path):
+    from stable_baselines3.common.monitor import ResultsWriter
+
+    theirs = ResultsWriter(str(tmp_path / "a.monitor.csv"), header={"t_start": 1.5, "env_id": "x"},
+                           extra_keys=("is_success",))
+    ours = open_monitor_file(tmp_path / "b.monitor.csv", 1.5, "x", ("is_success",))
+    for writer in (theirs, ours):
+        writer.write_row({"r": -1.0, "l": 7, "t": 0.25, "is_success": True})
+        writer.close()
+    assert (tmp_path / "a.monitor.csv").read_bytes() == (tmp_path / "b.monitor.csv").read_bytes()
+
+
+def test_a_monitor_file_planted_as_a_link_is_never_written_through(tmp_path):
+    """A new file replaces the link (its target untouched); a resumed run, which would read and
+    append to the file, refuses it."""
+    victim = _monitor(tmp_path / "victim.csv", [(-1.0, 1, 0.1, True)] * 4)
+    before = victim.read_bytes()
+    link = tmp_path / "ppo_seed0.monitor.csv"
+    link.symlink_to(victim)
+    with pytest.raises(ConfigError, match="ppo_seed0.monitor.csv: is a symbolic link"):
+        open_monitor_file(link, 0.0, "x", ("is_success",), keep_rows=2)
+    assert victim.read_bytes() == before and link.is_symlink()
+    writer = open_monitor_file(link, 0.0, "x", ("is_success",))
+    writer.write_row({"r": 2.0, "l": 3, "t": 0.5, "is_success": False})
+    writer.close()
+    assert victim.read_bytes() == before and not link.is_symlink()
+    assert read_monitor(link)["r"].tolist() == [2.0]
+
+
 def test_curves_per_seed_and_across_seeds(tmp_path):
     for seed, value in ((0, 1.0), (10, 3.0)):
         _monitor(tmp_path / f"ppo_seed{seed}.monitor.csv",

@@ -71,3 +71,35 @@ def test_gymnasium_check_env_with_a_tick_cost(step_mode):
     env = gym.make(LOC, step_mode=step_mode,
                    task_kwargs={"filter_factory": "combinatorial", "tick_cost": 0.5})
     check_env(env.unwrapped, skip_render_check=True)
+
+
+@pytest.mark.parametrize("step_mode", ["bounce", "tick"])
+def test_a_long_episode_keeps_no_per_step_state(step_mode):
+    """Step time stays flat over a long episode because nothing grows with the steps taken:
+    after a warm-up, 5,000 more steps of the same episode leave the memory the env holds where
+    it was. A history kept per step (a list in the task, the filter or the
+    info) grows by at least a few dozen bytes a step, far past the bound."""
+    import gc
+    import tracemalloc
+
+    env = gym.make(LOC, step_mode=step_mode, max_episode_steps=None, task_kwargs={
+        "filter_factory": "combinatorial", "terminate_when_localized": False}).unwrapped
+    env.reset(seed=0)
+    actions = np.random.default_rng(0).integers(0, env.action_space.n, size=6_000).tolist()
+
+    def run(part):
+        for action in part:
+            env.step(action)
+
+    run(actions[:1_000])
+    gc.collect()
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        run(actions[1_000:])
+        gc.collect()
+        grown = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert grown < 16_384  # bytes, over 5,000 steps
+    assert env.unwrapped.core.task.filter.size <= env.unwrapped.cell_model().n_cells
