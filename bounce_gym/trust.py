@@ -29,6 +29,7 @@ import os
 import secrets
 from pathlib import Path
 
+from bounce_gym.documents import read_document
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_write, locked
 
@@ -99,12 +100,12 @@ def _trusted_path() -> Path:
 def trusted_digests() -> frozenset[str]:
     """The sha256 digests the user has trusted (`add_trusted`)."""
     path = _trusted_path()
+    if not path.exists():
+        return frozenset()
     try:
-        raw = path.read_bytes() if path.is_file() else b"[]"
-        entries = json.loads(raw)
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{HOME_VARIABLE}: {path} cannot be read ({exc}); delete it and trust "
-                          "the files again") from None
+        entries = read_document(path, HOME_VARIABLE, fmt="json")
+    except ConfigError as exc:
+        raise ConfigError(f"{exc}; delete it and trust the files again") from None
     if not isinstance(entries, list) or not all(isinstance(d, str) for d in entries):
         raise ConfigError(f"{HOME_VARIABLE}: {path} is not a list of sha256 digests")
     return frozenset(entries)

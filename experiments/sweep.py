@@ -71,23 +71,26 @@ _PREPARED: dict[str, Prepared] = {}
 
 
 def _cache_key(experiment: Mapping, models: str) -> str:
-    return json.dumps([experiment, models], sort_keys=True, default=str)
+    """What an experiment is prepared from: all of it but its seeds (each unit carries its own
+    few, so that a unit's arguments and this key stay small however many seeds there are)."""
+    return json.dumps([{k: v for k, v in experiment.items() if k != "seeds"}, models],
+                      sort_keys=True, default=str)
 
 
-def prepared(config: Mapping, k: int) -> Prepared:
-    """Experiment ``k`` of a validated configuration, prepared once in this process."""
-    experiment = config["experiments"][k]
-    key = _cache_key(experiment, config["models"])
+def prepared(experiment: Mapping, models: str, k: int) -> Prepared:
+    """Experiment ``k`` of a validated configuration (``models``: its models folder), prepared
+    once in this process."""
+    key = _cache_key(experiment, models)
     if key not in _PREPARED:
-        _PREPARED[key] = prepare_experiment(experiment, Path(config["models"]),
-                                            f"config.experiments[{k}]")
+        _PREPARED[key] = prepare_experiment(experiment, Path(models), f"config.experiments[{k}]")
     return _PREPARED[key]
 
 
 def prepare_all(config: Mapping) -> list[Prepared]:
     """Every experiment of a validated configuration prepared here (so that every mistake is
     reported before any unit runs), and kept for the units that run in this process."""
-    return [prepared(config, k) for k in range(len(config["experiments"]))]
+    return [prepared(experiment, config["models"], k)
+            for k, experiment in enumerate(config["experiments"])]
 
 
 def release(experiments: list[Prepared]) -> None:
@@ -102,10 +105,12 @@ def release(experiments: list[Prepared]) -> None:
         del _PREPARED[key]
 
 
-def run_unit(config: Mapping, k: int, entrant: int, seeds: list[int], first: bool) -> UnitResult:
-    """Policy ``entrant`` of experiment ``k`` on ``seeds``; with ``first`` (the chunk holding
-    the experiment's first seed), that seed's plot data."""
-    one = prepared(config, k)
+def run_unit(experiment: Mapping, models: str, k: int, entrant: int, seeds: list[int],
+             first: bool) -> UnitResult:
+    """Policy ``entrant`` of experiment ``k`` (without its seeds; ``models``: the models
+    folder) on ``seeds``; with ``first`` (the chunk holding the experiment's first seed), that
+    seed's plot data."""
+    one = prepared(experiment, models, k)
     experiment, family, who = one.experiment, one.family, one.entrants[entrant]
     rows, plot_data = [], None
     for seed in seeds:
@@ -136,10 +141,12 @@ def units(config: Mapping, experiments: list[Prepared]) -> tuple[list[Unit], dic
     words (for failures)."""
     out, describe = [], {}
     for k, one in enumerate(experiments):
+        experiment = {key: v for key, v in one.experiment.items() if key != "seeds"}
         for e, who in enumerate(one.entrants):
             for j, seeds in enumerate(chunks(one.experiment["seeds"])):
                 key = f"{k}-{e}-{j}"
-                out.append(Unit(key, run_unit, (config, k, e, seeds, j == 0)))
+                out.append(Unit(key, run_unit,
+                                (experiment, config["models"], k, e, seeds, j == 0)))
                 describe[key] = (f"experiment {one.experiment['name']}, policy "
                                  f"{who.policy.name}, seeds {seeds[0]}..{seeds[-1]}")
     return out, describe

@@ -47,6 +47,10 @@ class Deployment:
         return len(self.states)
 
 
+#: relative tolerance within which two absorption times count as equal (Alg. 5.2's argmax)
+TIE_RTOL = 1e-9
+
+
 def deployment_locations(behavior: PersistentBehavior, seed: int = 0) -> Deployment:
     """Alg. 5.2 DEPLOYMENTLOCATIONS(𝓑, 𝓣, C, a): one seeded random cell per persistent group,
     then for every transient group one cell per source component (module docstring). ``|C|`` is
@@ -58,7 +62,10 @@ def deployment_locations(behavior: PersistentBehavior, seed: int = 0) -> Deploym
         local = cells - behavior.offset
         for comp in source_components(behavior.graph, local):
             times = behavior.absorption_time[comp]
-            chosen.append(behavior.offset + int(comp[np.argmax(times)]))
+            # the longest absorption time; cells whose times agree to rounding (symmetric
+            # flows give exact ties that the solver's last bits decide) go to the lowest index
+            near = np.flatnonzero(times >= times.max() * (1.0 - TIE_RTOL))
+            chosen.append(behavior.offset + int(comp[near[np.argmin(comp[near])]]))
     return _deployment(chosen, "Alg. 5.2")
 
 

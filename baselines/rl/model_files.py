@@ -49,6 +49,7 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
+from bounce_gym.documents import Limits, parse_document
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_file, atomic_write, check_path_component, locked
 from bounce_gym.trust import add_trusted, digest, sign, trusted_digests, verify
@@ -76,6 +77,8 @@ SIGNATURE_PURPOSE = "resume"
 MAX_FILE_BYTES = 1 << 30
 #: The most bytes of a JSON entry (uncompressed) or a manifest.
 MAX_JSON_BYTES = 16 << 20
+#: how a manifest and a model's JSON entries are read (`bounce_gym.documents`)
+_JSON_LIMITS = Limits(bytes=MAX_JSON_BYTES)
 #: The most bytes of a resume state (uncompressed); it is hashed before anything else.
 MAX_RESUME_BYTES = 4 << 30
 _MAX_SIGNATURE_BYTES = 256
@@ -124,10 +127,9 @@ def _manifest(folder: Path) -> dict[str, list[str]]:
     path = folder / MANIFEST
     if not path.is_file():
         return {}
-    try:
-        entries = json.loads(_read(path, MAX_JSON_BYTES, "model manifest"))
-    except (ValueError, RecursionError) as exc:
-        raise ConfigError(f"model manifest {path}: cannot be read ({exc})") from None
+    entries = parse_document(f"model manifest {path}", _read(path, MAX_JSON_BYTES,
+                                                            "model manifest"),
+                             fmt="json", limits=_JSON_LIMITS)
     if not isinstance(entries, dict) or not all(
             isinstance(v, list) and all(isinstance(d, str) for d in v) for v in entries.values()):
         raise ConfigError(f"model manifest {path}: expected a mapping of file names to lists of "
@@ -279,10 +281,8 @@ def _json_entry(archive: zipfile.ZipFile, sizes: dict[str, int], name: str, path
     if sizes[name] > MAX_JSON_BYTES:
         raise ConfigError(f"model {path}: its entry {name!r} holds {sizes[name]} bytes, more than "
                           f"the {MAX_JSON_BYTES} a model file's JSON may")
-    try:
-        value = json.loads(archive.read(name))
-    except (ValueError, RecursionError) as exc:
-        raise ConfigError(f"model {path}: its entry {name!r} is not JSON ({exc})") from None
+    value = parse_document(f"model {path}: its entry {name!r}", archive.read(name), fmt="json",
+                           limits=_JSON_LIMITS)
     if not isinstance(value, dict):
         raise ConfigError(f"model {path}: its entry {name!r} is not a JSON object")
     return value

@@ -24,10 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
+from bounce_gym.documents import parse_document
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_write, open_no_follow
 
 SUFFIX = ".monitor.csv"
+#: the largest monitor file read (about ten million episodes)
+MAX_MONITOR_BYTES = 1 << 30
 
 
 def open_monitor_file(path: Path, t_start: float, env_id: str, keys: tuple[str, ...],
@@ -82,14 +85,18 @@ def read_monitor(path: Path) -> dict[str, np.ndarray]:
     """The columns of a monitor file as float arrays (``True``/``False`` as 1/0), plus
     ``steps``: the env steps of the run when each episode ended, counted as SB3's plots count
     them (the cumulative sum of the lengths). A partial last line is left out."""
-    lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+    size = path.stat().st_size
+    if size > MAX_MONITOR_BYTES:
+        raise ConfigError(f"monitor file {path}: {size} bytes, more than the {MAX_MONITOR_BYTES} "
+                          "a monitor file may hold")
+    try:
+        lines = path.read_bytes().decode("utf-8").splitlines(keepends=True)
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"monitor file {path}: not UTF-8 text (byte {exc.start})") from None
     if not lines or not lines[0].startswith("#"):
         raise ConfigError(f"monitor file {path}: expected a first line '#{{...}}' (SB3's "
                           "monitor format)")
-    try:
-        json.loads(lines[0][1:])
-    except ValueError as exc:
-        raise ConfigError(f"monitor file {path}: its first line is not JSON ({exc})") from None
+    parse_document(f"monitor file {path}: its first line", lines[0][1:].encode(), fmt="json")
     body = [line for line in lines[1:] if line.endswith("\n")]
     reader = csv.DictReader(io.StringIO("".join(body)))
     columns: dict[str, list[float]] = {name: [] for name in reader.fieldnames or []}

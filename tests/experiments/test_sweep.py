@@ -158,13 +158,13 @@ def test_the_command_reports_failed_units_writes_nothing_and_a_rerun_finishes(re
 @pytest.mark.parametrize(
     ("flags", "block", "message"),
     [
-        (["--workers", "0"], None, "error: --workers: expected an integer >= 1, got 0"),
-        (["--workers", "two"], None, "error: --workers: expected an integer >= 1, got 'two'"),
+        (["--workers", "0"], None, "error: --workers: expected an integer in [1, 1024], got 0"),
+        (["--workers", "two"], None, "error: --workers: expected an integer in [1, 1024], got 'two'"),
         (["--executor", "dask"], None,
          "error: --executor: expected one of ('local', 'ray'), got 'dask'"),
         (["--address", "head:6379"], None,
          "error: --address: only for the ray executor (config.executor.kind: ray)"),
-        ([], {"workers": 0}, "error: config.executor.workers: expected an integer >= 1, got 0"),
+        ([], {"workers": 0}, "error: config.executor.workers: expected an integer in [1, 1024], got 0"),
         ([], {"kind": "ray", "nodes": 3}, "error: config.executor: unknown keys ['nodes']"),
     ],
 )

@@ -123,8 +123,8 @@ def test_the_executor_key_and_flags_are_checked_before_training(tmp_path, capsys
     config = _write(tmp_path, executor={"kind": "local", "workers": 0})
     assert train.main([str(config), "--no-progress"]) == 2
     assert capsys.readouterr().err.splitlines() == [
-        "error: config.executor.workers: expected an integer >= 1, got 0"]
+        "error: config.executor.workers: expected an integer in [1, 1024], got 0"]
     assert train.main([str(_write(tmp_path)), "--workers", "0", "--no-progress"]) == 2
     assert capsys.readouterr().err.splitlines() == [
-        "error: --workers: expected an integer >= 1, got 0"]
+        "error: --workers: expected an integer in [1, 1024], got 0"]
     assert not (tmp_path / "models").exists()

@@ -229,7 +229,7 @@ def _config(change):
     (_without("policy.pth"), r"its weights do not fit the ppo model its configuration "
                              r"describes \(ValueError"),
     (_without("data"), r"not a readable Stable-Baselines3 model file \(it has no 'data' entry"),
-    (lambda e: {**e, "data": b"{" * 100_000}, r"its entry 'data' is not JSON"),
+    (lambda e: {**e, "data": b"{" * 100_000}, r"its entry 'data': lists and mappings nest 100000 deep"),
     (lambda e: {**e, "data": b"[1]"}, r"its entry 'data' is not a JSON object"),
     (lambda e: {**e, "policy.pth": b"not torch"}, r"its weights do not fit the ppo model"),
     (lambda e: {**e, "extra.pth": e["policy.pth"]}, r"holds weights 'extra.pth', which a ppo "
