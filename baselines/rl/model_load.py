@@ -17,6 +17,7 @@ builds tensors and plain containers only and refuses any other global.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import io
 import json
@@ -25,6 +26,7 @@ import pickle
 import re
 import warnings
 import zipfile
+from collections.abc import Iterator
 
 from baselines.rl.model_files import DATA_ENTRY, METADATA_ENTRY, ZIP_ERRORS, ModelFile
 from baselines.rl.train_config import (
@@ -64,8 +66,9 @@ def load_model_file(trained: ModelFile, observation_space, action_space, **load_
     _check_weights(trained, weights)
     custom_objects = _custom_objects(trained, template, saved)
     try:
-        return type(template).load(io.BytesIO(trained.data), device="cpu",
-                                   custom_objects=custom_objects, **load_kwargs)
+        with _torch_quiet():
+            return type(template).load(io.BytesIO(trained.data), device="cpu",
+                                       custom_objects=custom_objects, **load_kwargs)
     except _LOAD_ERRORS as exc:
         raise ConfigError(f"model {trained.path}: its weights do not fit the {trained.algo} model "
                           f"its configuration describes ({_reason(exc)})") from None
@@ -197,11 +200,20 @@ def _variables(trained: ModelFile) -> object:
 
     try:
         with zipfile.ZipFile(io.BytesIO(trained.data)) as archive, \
-                archive.open(VARIABLES_ENTRY) as entry:
+                archive.open(VARIABLES_ENTRY) as entry, _torch_quiet():
             return torch.load(io.BytesIO(entry.read()), map_location="cpu", weights_only=True)
     except _LOAD_ERRORS as exc:
         raise ConfigError(f"model {trained.path}: its {VARIABLES_ENTRY!r} cannot be read as "
                           f"torch weights ({_reason(exc)})") from None
+
+
+@contextlib.contextmanager
+def _torch_quiet() -> Iterator[None]:
+    """torch's warnings about what it reads (e.g. "Detected pickle protocol 4" in a weights
+    entry that is a plain pickle) not shown: a file it refuses is one line, a `ConfigError`."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=UserWarning, module="torch")
+        yield
 
 
 def _reason(exc: BaseException) -> str:

@@ -15,10 +15,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
-from bounce_gym.errors import ActionError, BounceGymError, ConfigError, FlowFileError
 from hostile_cases import Sandbox, evaluation, training
 from hostile_files import flow_file
+
+from bounce_gym.errors import ActionError, BounceGymError, ConfigError, FlowFileError
 
 
 @dataclass(frozen=True)

@@ -148,7 +148,7 @@ def _yaml_text() -> list[Case]:
         ("encoded surrogate", b"name: \xed\xa0\x80\n", "not UTF-8 text: byte 0xed"),
         ("BOM then a mistake", "\ufeffname: x\n", "config: missing key 'experiments'"),
         ("two BOMs", "\ufeff\ufeffname: x\n", "config: missing key 'experiments'"),
-        ("raw NUL", b"name: a\x00b\n", "config: c.yaml:"),
+        ("raw NUL", b"name: a\x00b\n", "control characters are not allowed: U+0000"),
         ("escaped NUL", _nav_yaml().replace("name: a", 'name: "a\\0b"'),
          "control character U+0000"),
         ("escaped NUL in a key", 'experiments: []\n"a\\0": 1\n', "control character U+0000"),
@@ -158,8 +158,9 @@ def _yaml_text() -> list[Case]:
         ("escaped ESC in env id", _nav_yaml().replace(
             "env: bounce_gym/BounceNavigation-v0", 'env: "bounce_gym/\\e[2J"'),
          "control character U+001B"),
-        ("lone surrogate", 'name: "\\ud800"\nexperiments: []\n', "config: c.yaml:"),
-        ("raw vertical tab", "name: a\x0bb\nexperiments: []\n", "config: c.yaml:"),
+        ("lone surrogate", 'name: "\\ud800"\nexperiments: []\n', "invalid Unicode character escape"),
+        ("raw vertical tab", "name: a\x0bb\nexperiments: []\n",
+         "control characters are not allowed: U+000B"),
         ("5000 deep flow", "experiments: " + "[" * 5000 + "]" * 5000,
          "nest more than 32 deep"),
         ("1500 deep block", "name: x\nexperiments:\n"
@@ -179,10 +180,10 @@ def _yaml_text() -> list[Case]:
          "more than 120000 nodes"),
         ("laughs as seeds", _nav_yaml(seeds="*l5") .replace(
             "experiments:", "x:\n" + laughs(5, "  ") + "experiments:"),
-         "config: c.yaml:"),
+         "more than 120000 nodes"),
         ("laughs of long strings", "x:\n  s0: &s0 '" + "x" * 100_000 + "'\n  s1: &s1 ["
          + ", ".join(["*s0"] * 100) + "]\n  s2: [" + ", ".join(["*s1"] * 100) + "]\n"
-         + _nav_yaml(), "config: c.yaml:"),
+         + _nav_yaml(), "more than 4194304 characters of strings"),
         ("self alias", "experiments: &e [*e]\n", "names no anchor before it"),
         ("unknown alias", "experiments: *nowhere\n", "names no anchor before it"),
         ("merge of itself", "a: &a {<<: *a}\nexperiments: []\n", "names no anchor before it"),
@@ -193,11 +194,11 @@ def _yaml_text() -> list[Case]:
         ("integer key", "1: 1\nexperiments: []\n", "found a key that is not a string: 1"),
         ("null key", "~: 1\nexperiments: []\n", "found a key that is not a string: None"),
         ("list key", "? [a, b]\n: 1\nexperiments: []\n", "config: c.yaml: not valid YAML"),
-        ("integer of 5000 digits", _nav_yaml(seeds="[1" + "0" * 5000 + "]"), "config: c.yaml:"),
+        ("integer of 5000 digits", _nav_yaml(seeds="[1" + "0" * 5000 + "]"), "is too large; integers lie between"),
         ("hex integer of 5000 digits", _nav_yaml(seeds="[0x" + "f" * 5000 + "]"),
-         "config: c.yaml:"),
+         "is too large; integers lie between"),
         ("sexagesimal integer", _nav_yaml(seeds="[" + ":59" * 3000 + "]").replace(
-            "[:", "[1:"), "config: c.yaml:"),
+            "[:", "[1:"), "is too large; integers lie between"),
         ("float of 5000 digits", _nav_yaml("  max_steps: 1." + "1" * 5000 + "\n").replace(
             "  max_steps: 5\n", ""), "max_steps: expected int, got float"),
         ("timestamp name", "name: 2001-12-14\nexperiments: []\n",
@@ -235,7 +236,8 @@ def _yaml_text() -> list[Case]:
                 return (f"%TAG !p! tag:yaml.org,2002:python/object/apply:\n---\n"
                         f"name: !p!os.system ['{cmd}']\nexperiments: []\n")
             return f"name: {template.format(cmd=cmd)}\n" + _nav_yaml()
-        out.append(eval_case(c, f"payload: {name}", text, "config: c.yaml:"))
+        out.append(eval_case(c, f"payload: {name}", text,
+                             "could not determine a constructor for the tag"))
     return out
 
 
@@ -318,34 +320,34 @@ def _config_content() -> list[Case]:
         ("unknown env argument", evaluation(experiment(env_kwargs={"colour": 1})),
          f"{x}.env_kwargs: BounceEnv() got an unexpected keyword argument 'colour'"),
         ("unknown world", evaluation(experiment(env_kwargs={"world": "atlantis"})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: world: unknown world 'atlantis'"),
         ("world a number", evaluation(experiment(env_kwargs={"world": 3})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: world: expected a zoo name"),
         ("missing map file", evaluation(experiment(env_kwargs={"world": "nowhere.json"})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: world: map file 'nowhere.json' does not exist"),
         ("angles a string", evaluation(experiment(env_kwargs={**NAV, "angles": "x"})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: angles: expected a list"),
         ("angles empty", evaluation(experiment(env_kwargs={**NAV, "angles": []})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: angles: the set of bounce angles is empty"),
         ("angles NaN", _nav_yaml("  env_kwargs: {world: square, angles: [.nan]}\n"),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: angles[0]: expected a finite number, got nan"),
         ("angles inf", _nav_yaml("  env_kwargs: {world: square, angles: [.inf]}\n"),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: angles[0]: expected a finite number, got inf"),
         ("history negative", evaluation(experiment(env_kwargs={**NAV, "history": -1})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: history: expected an integer in [0, 10000]"),
         ("history huge", evaluation(experiment(env_kwargs={**NAV, "history": 10**12})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: history: expected an integer in [0, 10000]"),
         ("backend unknown", evaluation(experiment(env_kwargs={**NAV, "backend": "quantum"})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: backend: expected one of"),
         ("task_kwargs unknown", evaluation(experiment(env_kwargs={**NAV, "task_kwargs": {
-            "colour": 1}})), f"{x}.env_kwargs:"),
+            "colour": 1}})), f"{x}.env_kwargs: task_kwargs for 'navigation'"),
         ("noise unknown", evaluation(experiment(env_kwargs={**NAV, "noise": {"type": "x"}})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: noise.type: unknown noise model 'x'"),
         ("env_kwargs sets the horizon", evaluation(experiment(env_kwargs={
             "max_episode_steps": 3})), f"{x}.env_kwargs.max_episode_steps: not allowed"),
         ("robots a billion", evaluation(experiment(env="bounce_gym/MultiBounce-v0",
                                                    env_kwargs={"n_robots": 10**9})),
-         f"{x}.env_kwargs:"),
+         f"{x}.env_kwargs: n_robots: expected an integer in [1, 10000]"),
         ("multi-robot sets max_cycles", evaluation(experiment(
             env="bounce_gym/MultiBounce-v0", env_kwargs={"max_cycles": 3})),
          f"{x}.env_kwargs.max_cycles: not allowed"),
@@ -779,15 +781,18 @@ def _tune() -> list[Case]:
 
 
 # -- flags -----------------------------------------------------------------------------------
+def _arguments(box: Sandbox, argv: list[str]) -> list[str]:
+    """``argv`` after a valid evaluation configuration ``c.yaml``, a valid training
+    configuration ``t.yaml`` and a user folder with a short key are written (``{c}``, ``{t}``
+    and ``{here}`` in ``argv`` name them)."""
+    box.yaml("c.yaml", evaluation(executor=None))
+    box.yaml("t.yaml", training())
+    box.write("short-key/secret.key", b"short")
+    return [arg.format(c="c.yaml", t="t.yaml", here=box.here) for arg in argv]
+
+
 def _flag_case(name: str, argv: list[str], expect: str, **options) -> Case:
-    """``argv`` after a valid evaluation configuration ``c.yaml`` and training configuration
-    ``t.yaml`` are written (``{c}`` and ``{t}`` in ``argv`` name them)."""
-    def build(box: Sandbox) -> list[str]:
-        box.yaml("c.yaml", evaluation(executor=None))
-        box.yaml("t.yaml", training())
-        box.write("short-key/secret.key", b"short")
-        return [arg.format(c="c.yaml", t="t.yaml", here=box.here) for arg in argv]
-    return Case("flags", name, build, expect, **options)
+    return Case("flags", name, lambda box: _arguments(box, argv), expect, **options)
 
 
 def _flags() -> list[Case]:
@@ -917,7 +922,39 @@ def _flags() -> list[Case]:
     return out
 
 
+def _wrappers() -> list[Case]:
+    """The thin wrappers ``evaluate.py`` and ``train.py``, which parse as the command does."""
+    cases = [
+        ("evaluate.py --worker 2", ["evaluate.py", "{c}", "--worker", "2"],
+         "unrecognized arguments: --worker 2"),
+        ("evaluate.py --workers 0", ["evaluate.py", "{c}", "--workers", "0"],
+         "--workers: expected an integer in [1, 1024], got 0"),
+        ("evaluate.py of a missing file", ["evaluate.py", "nowhere.yaml"],
+         "config: file 'nowhere.yaml' does not exist"),
+        ("evaluate.py of a name that escapes", ["evaluate.py", "escape.yaml"],
+         "config.name: expected a name for the run folder"),
+        ("train.py --timestep 5", ["train.py", "{t}", "--timestep", "5"],
+         "unrecognized arguments: --timestep 5"),
+        ("train.py of gamma 5", ["train.py", "gamma.yaml"],
+         "config.hyperparams.gamma: expected a number in (0, 1], got 5"),
+        ("train.py --seeds x", ["train.py", "{t}", "--seeds", "x"],
+         "argument --seeds: invalid int value: 'x'"),
+        ("train.py of a YAML payload", ["train.py", "payload.yaml"],
+         "could not determine a constructor"),
+    ]
+
+    def build(box: Sandbox, argv: list[str]) -> list[str]:
+        box.yaml("escape.yaml", evaluation(name="../../ESCAPED"))
+        box.yaml("gamma.yaml", _hp(gamma=5))
+        box.write("payload.yaml",
+                  f"name: !!python/object/apply:os.system ['{box.touch_payload()}']\n")
+        return _arguments(box, argv)
+    return [Case("wrappers", name, lambda box, argv=argv: build(box, argv), expect)
+            for name, argv, expect in cases]
+
+
 def cases() -> list[Case]:
-    """Every command-line case of this module."""
-    return [*_yaml_text(), *_config_content(), *_training(), *_tune(), *_flags()]
+    """Every command-line case of this module (a case's arguments start with ``evaluate.py``
+    or ``train.py`` to run that wrapper instead of ``bounce-gym``)."""
+    return [*_yaml_text(), *_config_content(), *_training(), *_tune(), *_flags(), *_wrappers()]
 

@@ -19,7 +19,6 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
-
 from hostile_cases import NAV, Case, Sandbox, evaluation, experiment, training
 
 BOUNCE = "bounce_gym/Bounce-v0"
@@ -82,8 +81,9 @@ def _maps() -> list[Case]:
         ("Infinity in JSON", "m.json", '{"name": "x", "outer": [[Infinity, 0], [1, 0], [0, 1]]}',
          "Infinity is not a JSON number"),
         ("1e999 in JSON", "m.json", '{"name": "x", "outer": [[1e999, 0], [1, 0], [0, 1]]}',
-         "m.json"),
-        ("NaN in YAML", "m.yaml", "name: x\nouter: [[.nan, 0], [1, 0], [0, 1]]\n", "m.yaml"),
+         "the number 1e999 is too large; numbers must be finite"),
+        ("NaN in YAML", "m.yaml", "name: x\nouter: [[.nan, 0], [1, 0], [0, 1]]\n",
+         "vertex 0 is not finite"),
         ("coordinates as strings", "m.json", {"name": "x", "outer": [["0", "0"], [1, 0],
                                                                       [0, 1]]}, pair),
         ("coordinates as bools", "m.json", {"name": "x", "outer": [[True, 0], [1, 0], [0, 1]]},
@@ -91,7 +91,7 @@ def _maps() -> list[Case]:
         ("three coordinates", "m.json", {"name": "x", "outer": [[0, 0, 0], [1, 0, 0],
                                                                  [0, 1, 0]]}, pair),
         ("huge coordinate", "m.json", {"name": "x", "outer": [[0, 0], [10**400, 0], [0, 1]]},
-         "m.json"),
+         "is too large; integers lie between"),
         ("hole outside", "m.json", {"name": "x", "outer": SQUARE,
                                     "holes": [[[10, 10], [11, 10], [11, 11]]]},
          "invalid polygon"),
@@ -124,7 +124,7 @@ def _maps() -> list[Case]:
          "'cell_size' must be a finite number > 0"),
         ("cell_size NaN", "m.yaml", "name: x\ngrid: ['.']\ncell_size: .nan\n",
          "'cell_size' must be a finite number > 0"),
-        ("grid of aliased rows", "m.yaml", "name: bomb\n" + bomb_rows, "m.yaml:"),
+        ("grid of aliased rows", "m.yaml", "name: bomb\n" + bomb_rows, "more than 134217728 characters of strings"),
         ("grid 129 MiB", "m.json", lambda box: _sparse(box, "m.json", 129 << 20),
          "m.json: 135266304 bytes"),
         ("not UTF-8", "m.json", b'{"name": "\xff"}', "not UTF-8 text"),
@@ -138,7 +138,7 @@ def _maps() -> list[Case]:
     return out
 
 
-def _sparse(box: Sandbox, name: str, size: int) -> bytes:
+def _sparse(box: Sandbox, name: str, size: int) -> None:
     """A file of ``size`` bytes that takes no room (a hole); returns nothing more to write."""
     path = box.here / name
     with open(path, "wb") as fh:
@@ -149,7 +149,7 @@ def _sparse(box: Sandbox, name: str, size: int) -> bytes:
 # -- NetCDF flow files -----------------------------------------------------------------------
 def flow_file(path: Path, *, nx: int = 4, ny: int = 3, units: str = "m s-1",
               lon: np.ndarray | None = None, fmt: str = "NETCDF4", u: bool = True,
-              u_dtype: str = "f4", speed: float = 0.1, attrs: dict | None = None,
+              u_dtype: object = "f4", speed: float = 0.1, attrs: dict | None = None,
               declared: tuple[int, int] | None = None) -> Path:
     """A small flow file (one layer, ``ny`` x ``nx`` cells on longitude/latitude when ``lon`` is
     given, else on x/y in metres, every velocity ``speed``: NaN is land), or one that only
@@ -176,7 +176,7 @@ def flow_file(path: Path, *, nx: int = 4, ny: int = 3, units: str = "m s-1",
             var = nc.createVariable(name, u_dtype, ("depth", yname, xname),
                                     **({"chunksizes": (1, 1, nx)} if declared else {}))
             var.units = units
-            if declared is None and u_dtype != str:
+            if declared is None and u_dtype is not str:
                 var[:] = np.full((1, ny, nx), speed)
         for key, value in (attrs or {}).items():
             nc.setncattr(key, value)
@@ -213,40 +213,40 @@ def _flows() -> list[Case]:
     unreadable = "not a readable NetCDF file"
     cases = [
         ("text", lambda p: p.write_text("not a flow\n"), unreadable),
-        ("empty", lambda p: p.write_bytes(b""), "f.nc"),
+        ("empty", lambda p: p.write_bytes(b""), "not a readable NetCDF file"),
         ("HDF5 signature only", lambda p: p.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 100),
-         "f.nc"),
+         "not a readable NetCDF file"),
         ("classic magic and garbage", lambda p: p.write_bytes(b"CDF\x01" + b"\xff" * 64),
-         "f.nc"),
+         "corrupt NetCDF header"),
         ("classic header of 2**31 dimensions", lambda p: _classic_header(p, 2**31 - 1),
-         "f.nc"),
-        ("classic file cut in half", _truncated, "f.nc"),
+         "corrupt NetCDF header (it counts 2,147,483,647"),
+        ("classic file cut in half", _truncated, "truncated NetCDF file"),
         ("a billion cells declared", lambda p: flow_file(p, declared=(10_000, 100_000)),
-         "f.nc"),
-        ("10**8 cells declared", lambda p: flow_file(p, declared=(10_000, 10_000)), "f.nc"),
+         "declares 1,000,000,000 values"),
+        ("10**8 cells declared", lambda p: flow_file(p, declared=(10_000, 10_000)), "declares 100,000,000 values"),
         ("furlongs per fortnight", lambda p: flow_file(p, units="furlongs/fortnight"),
-         "f.nc"),
-        ("no units", lambda p: flow_file(p, units=""), "f.nc"),
+         "wrong units 'furlongs/fortnight'"),
+        ("no units", lambda p: flow_file(p, units=""), "wrong units ''"),
         ("longitudes of 1000 degrees", lambda p: flow_file(
-            p, lon=np.array([1000.0, 1000.1, 1000.2, 1000.3])), "f.nc"),
+            p, lon=np.array([1000.0, 1000.1, 1000.2, 1000.3])), "longitudes must lie in [-360, 360]"),
         ("longitudes spanning 720 degrees", lambda p: flow_file(
-            p, lon=np.array([-360.0, -100.0, 100.0, 360.0])), "f.nc"),
+            p, lon=np.array([-360.0, -100.0, 100.0, 360.0])), "span at most 360 degrees"),
         ("longitudes NaN", lambda p: flow_file(p, lon=np.array([0.0, np.nan, 1.0, 2.0])),
-         "f.nc"),
-        ("no u", lambda p: flow_file(p, u=False), "f.nc"),
-        ("u of strings", lambda p: flow_file(p, u_dtype=str), "f.nc"),
-        ("all land", lambda p: flow_file(p, speed=np.nan), "f.nc"),
-        ("infinite velocities", lambda p: flow_file(p, speed=np.inf), "f.nc"),
-        ("huge attribute", lambda p: flow_file(p, attrs={"title": "x" * (1 << 21)}), "f.nc"),
-        ("a folder", lambda p: p.mkdir(), "f.nc"),
-        ("a link to a device", lambda p: p.symlink_to("/dev/zero"), "f.nc"),
+         "not monotonic"),
+        ("no u", lambda p: flow_file(p, u=False), "u: missing"),
+        ("u of strings", lambda p: flow_file(p, u_dtype=str), "expected real numbers in m/s"),
+        ("all land", lambda p: flow_file(p, speed=np.nan), "has no water cell"),
+        ("infinite velocities", lambda p: flow_file(p, speed=np.inf), "infinite velocity"),
+        ("huge attribute", lambda p: flow_file(p, attrs={"title": "x" * (1 << 21)}), "global attribute 'title' has 2,097,152 values"),
+        ("a folder", lambda p: p.mkdir(), "f.nc: no such file"),
+        ("a link to a device", lambda p: p.symlink_to("/dev/zero"), "f.nc: no such file"),
     ]
     out = [_flow_case(name, make, expect) for name, make, expect in cases]
     out.append(_flow_case("a fleet on a billion cells",
-                          lambda p: flow_file(p, declared=(10_000, 100_000)), "f.nc",
+                          lambda p: flow_file(p, declared=(10_000, 100_000)), "declares 1,000,000,000 values",
                           multi=True))
     out.append(_flow_case("a fleet on furlongs", lambda p: flow_file(p, units="furlongs"),
-                          "f.nc", multi=True))
+                          "wrong units 'furlongs'", multi=True))
     return out
 
 
@@ -348,33 +348,34 @@ def _models() -> list[Case]:
         ("text", b"not a model\n", unreadable, None),
         ("empty", b"", unreadable, None),
         ("no data entry", zipped({"policy.pth": b"x"}), "it has no 'data' entry", None),
-        ("data not JSON", _with(data=b"\x80\x04K\x01."), "its entry 'data' is not JSON", None),
+        ("data not JSON", _with(data=b"\x80\x04K\x01."), "its entry 'data': not UTF-8 text",
+         None),
         ("data a list", _with(data=b"[1]"), "its entry 'data' is not a JSON object", None),
         ("data of a DQN", _with(data=b'{"policy_class": {"__module__": '
                                      b'"stable_baselines3.dqn.policies"}}'),
          "its name says ppo, but it holds a dqn policy", None),
         ("data deeply nested", _with(data=b"[" * 100_000 + b"]" * 100_000),
-         "its entry 'data' is not JSON", None),
+         "its entry 'data': lists and mappings nest 100000 deep", None),
         ("data a bomb", _with(data=bomb), "its entry 'data' holds 20971522 bytes", None),
         ("listed, with planted pickles and a key of its own",
          lambda box: zipped(_planted(box, extra=True)), "evil", True),
         ("pickle as policy weights", _with(policy__pth=lambda box: pickle.dumps(
-            Payload(box.marker))), "ppo_seed0.zip", True),
-        ("torch-saved payload as weights", _with(policy__pth=_torch_payload), "ppo_seed0.zip",
+            Payload(box.marker))), "(UnpicklingError: ", True),
+        ("torch-saved payload as weights", _with(policy__pth=_torch_payload), "Unsupported global: GLOBAL io.open",
          True),
         ("payload as torch variables", _with(pytorch_variables__pth=_torch_payload),
-         "ppo_seed0.zip", True),
+         "Unsupported global: GLOBAL io.open", True),
         ("optimizer weights a bomb", _with(policy__optimizer__pth=b"\0" * (80 << 20)),
-         "ppo_seed0.zip", None),
-        ("no metadata", _with(bounce_gym__json=None), "ppo_seed0.zip", None),
-        ("metadata not JSON", _with(bounce_gym__json=b"{"), "its entry 'bounce_gym.json' is "
-                                                            "not JSON", None),
+         "its entry 'policy.optimizer.pth' holds 83886080 bytes", None),
+        ("no metadata", _with(bounce_gym__json=None), "carries no training configuration", None),
+        ("metadata not JSON", _with(bounce_gym__json=b"{"), "its entry 'bounce_gym.json': not "
+                                                            "valid JSON", None),
         ("metadata trains gamma 5", _with(bounce_gym__json=_metadata(
-            hyperparams={"gamma": 5})), "ppo_seed0.zip", None),
+            hyperparams={"gamma": 5})), "config.hyperparams.gamma: expected a number in (0, 1]", None),
         ("metadata of another algorithm", _with(bounce_gym__json=_metadata(algo="dqn")),
-         "ppo_seed0.zip", None),
+         "its name says ppo, but its configuration says algo 'dqn'", None),
         ("metadata a payload name", _with(bounce_gym__json=_metadata(
-            name="../../ESCAPED")), "ppo_seed0.zip", None),
+            name="../../ESCAPED")), "config.name: expected the name of a folder", None),
         ("changed since the manifest", lambda box: box.trained.read_bytes() + b"\0",
          "has changed since it was saved", json.dumps({"ppo_seed0.zip": ["0" * 64]})),
         ("manifest not JSON", lambda box: box.trained.read_bytes(), "model manifest", "{"),
@@ -389,7 +390,7 @@ def _models() -> list[Case]:
     out.append(_model_case("larger than 1 GiB", lambda box: _sparse_model(box),
                            "holds more than the 1073741824 bytes"))
     out.append(_model_case("trained on another observation", lambda box:
-                           box.trained.read_bytes(), "ppo_seed0.zip",
+                           box.trained.read_bytes(), "but this env has Box(dtype=float32, shape=[27])",
                            exp=experiment(env_kwargs={**NAV, "history": 9}, policies=["rl"],
                                           rl_models="m")))
     out.append(_model_case("spaces described in many lines", _with(data=_spaces_in_lines),

@@ -34,7 +34,9 @@ at the end of the run (the folder's conftest).
 
 from __future__ import annotations
 
+import functools
 import gc
+import importlib.util
 import io
 import os
 import re
@@ -42,18 +44,19 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 
-import pytest
-
 import hostile_api
 import hostile_cases
 import hostile_files
+import pytest
+from hostile_cases import Case, Sandbox
+
 from bounce_gym.errors import BounceGymError
 from experiments.cli import main
-from hostile_cases import Case, Sandbox
 
 ROOT = Path(__file__).resolve().parents[2]
 #: CPU seconds a case may take after start-up
@@ -126,15 +129,41 @@ class Ran:
     err: str
 
 
+#: the thin wrappers of the command, in the checkout's top folder
+WRAPPERS = ("evaluate.py", "train.py")
+
+
+@functools.cache
+def wrapper(name: str):
+    """The module of a wrapper (`WRAPPERS`), imported from its file."""
+    spec = importlib.util.spec_from_file_location(name.removesuffix(".py"), ROOT / name)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def in_process(argv: list[str]) -> Ran:
-    """``bounce-gym <argv>`` in this process (exceptions other than its exit propagate)."""
+    """``bounce-gym <argv>`` (or the wrapper ``argv[0]`` names) in this process (exceptions
+    other than its exit propagate). Python warnings are added to stderr as a process of its
+    own would show them (Python's default filters: every warning but deprecations, import and
+    resource warnings), not as pytest collects them."""
     out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
+    with redirect_stdout(out), redirect_stderr(err), \
+            warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
+                         ResourceWarning):
+            warnings.simplefilter("ignore", category)
         try:
-            status = main(argv)
+            if argv[:1] and argv[0] in WRAPPERS:
+                status = wrapper(argv[0]).main(argv[1:])
+            else:
+                status = main(argv)
         except SystemExit as exc:
             status = exc.code
-    return Ran(status, out.getvalue(), err.getvalue())
+    shown = "".join(warnings.formatwarning(w.message, w.category, w.filename, w.lineno)
+                    for w in caught)
+    return Ran(status, out.getvalue(), shown + err.getvalue())
 
 
 def snapshot(root: Path) -> dict[str, tuple]:
@@ -278,13 +307,16 @@ def test_a_hostile_call_raises_the_package_error(case, box, tmp_path, request, m
 
 
 def run_child(argv: list[str], cwd: Path, timeout: float = 120) -> tuple[Ran, float, int]:
-    """``python -m experiments.cli <argv>`` as its own process: what it printed, its CPU
-    seconds (start-up included) and its peak resident memory (bytes)."""
+    """``python -m experiments.cli <argv>`` (or ``python <wrapper> <argv[1:]>``) as its own
+    process: what it printed, its CPU seconds (start-up included) and its peak resident memory
+    (bytes)."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
-        child = subprocess.Popen([sys.executable, "-m", "experiments.cli", *argv], cwd=cwd,
-                                 stdout=out, stderr=err, env=env)
+        command = [str(ROOT / argv[0]), *argv[1:]] if argv[:1] and argv[0] in WRAPPERS \
+            else ["-m", "experiments.cli", *argv]
+        child = subprocess.Popen([sys.executable, *command], cwd=cwd, stdout=out, stderr=err,
+                                 env=env)
         deadline = time.monotonic() + timeout
         while True:
             pid, status, usage = os.wait4(child.pid, os.WNOHANG)
