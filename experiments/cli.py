@@ -153,13 +153,19 @@ def executor_block(block: Mapping | None, flags: Mapping[str, str]) -> dict:
     starts."""
     from experiments.executors import check_ray_cluster, executor_settings
 
-    given = {key: int(value) if key == "workers" and value.isascii() and value.isdigit()
-             and len(value) <= 9 else value for key, value in flags.items() if value is not None}
+    given = {key: _number(value) if key == "workers" else value
+             for key, value in flags.items() if value is not None}
     names = {key: EXECUTOR_FLAGS[key] for key in given}
     settings = executor_settings({**(block or {}), **given}, "config.executor", names)
     if settings["address"] is not None:
         check_ray_cluster(names.get("address", "config.executor.address"), settings["address"])
     return settings
+
+
+def _number(text: str) -> int | str:
+    """A flag's digits as an int (of at most 9: no more is a count of workers); anything else
+    stays text, for the check to name."""
+    return int(text) if text.isascii() and text.isdigit() and len(text) <= 9 else text
 
 
 def add_executor_flags(parser: argparse.ArgumentParser) -> None:
@@ -224,9 +230,8 @@ def training_config(config: object, timesteps: int | None = None, resume: bool =
     cap = os.environ.get(MAX_TIMESTEPS)
     if cap is not None:
         if not (cap.isascii() and cap.isdigit() and len(cap) <= 18) or int(cap) < 1:
-            shown = cap if len(cap) <= 20 else f"{cap[:17]}..."
-            raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1 (of at most 18 "
-                              f"digits), got {shown!r}")
+            shown = cap if len(cap) <= 18 else f"{cap[:15]}..."  # no number of 19 digits is meant
+            raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {shown!r}")
         budget = config.get("total_timesteps", int(cap))
         config["total_timesteps"] = min(budget, int(cap)) if isinstance(budget, int) \
             else budget

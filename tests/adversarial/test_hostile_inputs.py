@@ -1,13 +1,16 @@
 """Issue 22's hostile-input suite: malformed configurations, maps, flow files, model files,
-unit files, flags, actions and env arguments, fed to the ``bounce-gym`` command and to the
-Python API (the catalogue: `hostile_cases`, `hostile_files`, `hostile_api`).
+unit files, flags, environment variables, actions and env arguments, fed to the ``bounce-gym``
+command (and its wrappers ``evaluate.py`` and ``train.py``) and to the Python API (the
+catalogue: `hostile_cases`, `hostile_files`, `hostile_api`).
 
 Each command-line case runs in a case folder two levels below the test's temporary folder, in
 this process (``experiments.cli.main``), and must end with
 
 * exit status 2 and exactly one line on stderr, ``error: ...`` containing what the case
-  expects, nothing on stdout, no traceback — or, for a unit file planted in an evaluation's
-  store, exit status 0 after ``warning:`` lines naming it (the unit runs again);
+  expects, nothing on stdout, no traceback (a Python warning counts as lines on stderr) — or,
+  for a unit file planted in an evaluation's store (class ``units``), exit status 0 after
+  ``warning:`` lines naming it (the unit runs again), and for a model file whose planted
+  pickles are never read (class ``loads``), exit status 0 and nothing on stderr;
 * nothing created, changed or removed in the temporary folder outside the output folder the
   case names (the user's bounce_gym folder, ``$BOUNCE_GYM_HOME``, lies elsewhere and may gain
   its key);
