@@ -243,8 +243,13 @@ def _construct_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode, deep: bo
 def _construct_int(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> int:
     """An integer of at most `MAX_DIGITS` digits: its value is checked (``0x``, ``0o`` and
     ``1:30`` forms are shorter than their value), and before it is converted, the length of
-    its text (which Python would otherwise refuse to convert, or convert slowly)."""
-    value = None if len(node.value) > 4 * MAX_DIGITS else \
+    its text (which Python would otherwise refuse to convert, or convert slowly). Plain
+    decimal digits (the 100,000 seeds of a configuration) are converted at once."""
+    text = node.value
+    if text.isdigit() and text.isascii() and (text[0] != "0" or text == "0") \
+            and len(text) <= MAX_DIGITS:
+        return int(text)
+    value = None if len(text) > 4 * MAX_DIGITS else \
         yaml.constructor.SafeConstructor.construct_yaml_int(loader, node)
     if value is None or not -_INT_BOUND < value < _INT_BOUND:
         raise yaml.constructor.ConstructorError(None, None, str(_too_long(node.value)),
@@ -281,45 +286,40 @@ def _yaml_problem(exc: yaml.YAMLError) -> str:
 
 
 def _check_events(text: str, limits: Limits) -> None:
-    """Depth, expanded size and clean strings, from the parser's events: nothing is built."""
-    # [anchor, expanded nodes so far, expanded characters so far] of each open collection
-    open_sizes: list[list] = []
+    """Depth, expanded size and clean strings, from the parser's events: nothing is built. The
+    running totals count every alias as a copy of the node its anchor names, whose size is what
+    the totals grew by from its start to its end."""
+    starts: list[tuple] = []  # (anchor, nodes, characters) as each open collection started
     sizes: dict[str, tuple[int, int]] = {}  # expanded (nodes, characters) of anchored nodes
     nodes = chars = 0
     for event in yaml.parse(text, Loader=_Loader):
-        if isinstance(event, yaml.CollectionStartEvent):
-            if len(open_sizes) == limits.depth:
-                raise _too_deep(f"more than {limits.depth}", limits)
-            open_sizes.append([event.anchor, 1, 0])
-            size = (1, 0)
-        elif isinstance(event, yaml.CollectionEndEvent):
-            anchor, *whole = open_sizes.pop()
-            if anchor is not None:
-                sizes[anchor] = tuple(whole)
-            if open_sizes:
-                open_sizes[-1][1] += whole[0]
-                open_sizes[-1][2] += whole[1]
-            continue
-        elif isinstance(event, yaml.ScalarEvent):
+        kind = type(event)
+        if kind is yaml.ScalarEvent:  # the most common first: a document is mostly scalars
             _check_text(event.value, event.start_mark)
-            size = (1, len(event.value))
+            nodes, chars = nodes + 1, chars + len(event.value)
             if event.anchor is not None:
-                sizes[event.anchor] = size
-        elif isinstance(event, yaml.AliasEvent):
+                sizes[event.anchor] = (1, len(event.value))
+        elif kind is yaml.AliasEvent:
             if event.anchor not in sizes:
                 raise _RefusedError(f"the alias *{event.anchor}{_at(event.start_mark)} names no "
-                               "anchor before it, or a node that contains it")
-            size = sizes[event.anchor]
+                                    "anchor before it, or a node that contains it")
+            nodes, chars = nodes + sizes[event.anchor][0], chars + sizes[event.anchor][1]
+        elif issubclass(kind, yaml.CollectionStartEvent):
+            if len(starts) == limits.depth:
+                raise _too_deep(f"more than {limits.depth}", limits)
+            starts.append((event.anchor, nodes, chars))
+            nodes += 1
+        elif issubclass(kind, yaml.CollectionEndEvent):
+            anchor, nodes_before, chars_before = starts.pop()
+            if anchor is not None:
+                sizes[anchor] = (nodes - nodes_before, chars - chars_before)
+            continue
         else:
             continue
-        nodes, chars = nodes + size[0], chars + size[1]
         if nodes > limits.nodes:
             raise _RefusedError(f"more than {limits.nodes} nodes with its aliases expanded"
-                           f"{_at(event.start_mark)}; at most {limits.nodes} are allowed")
+                                f"{_at(event.start_mark)}; at most {limits.nodes} are allowed")
         if chars > limits.bytes:
             raise _RefusedError(f"more than {limits.bytes} characters of strings with its "
-                           f"aliases expanded{_at(event.start_mark)}; at most {limits.bytes} "
-                           "are allowed")
-        if open_sizes and not isinstance(event, yaml.CollectionStartEvent):
-            open_sizes[-1][1] += size[0]
-            open_sizes[-1][2] += size[1]
+                                f"aliases expanded{_at(event.start_mark)}; at most "
+                                f"{limits.bytes} are allowed")
