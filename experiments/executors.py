@@ -137,7 +137,11 @@ class UnitStore:
         header = f"{_UNIT_MAGIC} {sign(data, self._purpose(key))}\n".encode()
         path = self._path(key)
         if path.is_dir() and not path.is_symlink():  # planted there, and reported (`stored`)
-            shutil.rmtree(path)
+            try:
+                shutil.rmtree(path)
+            except OSError as exc:
+                raise ConfigError(f"{path}: a folder planted at a unit's name cannot be removed "
+                                  f"({exc.strerror or exc}); remove it") from None
         atomic_write(path, header + data)
 
     def load(self, key: str) -> object:

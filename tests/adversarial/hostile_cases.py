@@ -888,9 +888,9 @@ def _flags() -> list[Case]:
         ("curves of nothing", ["curves", "nowhere"], "curves: 'nowhere' is not a folder"),
         ("trust a missing file", ["trust", "nowhere.zip"], "trust: file 'nowhere.zip' does "
                                                            "not exist"),
-        ("trust a folder", ["trust", "{here}"], "trust: file"),
+        ("trust a folder", ["trust", "{here}"], "' is not a file"),
         ("trust another name", ["trust", "{c}"], "trust: c.yaml: expected a name"),
-        ("trust a device", ["trust", "/dev/zero"], "trust: file '/dev/zero' does not exist"),
+        ("trust a device", ["trust", "/dev/zero"], "trust: file '/dev/zero' is not a file"),
     ]
     environment = [
         ("BOUNCE_GYM_MAX_TIMESTEPS x", ["train", "{t}"], "BOUNCE_GYM_MAX_TIMESTEPS: expected an "
