@@ -14,13 +14,18 @@ numbers; the defaults suit configurations):
   parser's event stream (flow brackets and block indentation alike), JSON by counting every
   opening bracket against the closing ones, those inside strings included, so neither reaches
   a recursive parser too deep;
-* aliases (YAML): the document has at most ``nodes`` nodes (default 10**6) with every alias
-  counted as a full copy of the node it names, each anchored node's size worked out once, as
-  the events stream by; so a "billion laughs" of nested aliases is refused without being
+* aliases (YAML): the document has at most ``nodes`` nodes (default 120,000: room for the
+  100,000 seeds an evaluation may list, while any document is read in well under a second)
+  and its strings at most ``bytes`` characters, with every alias counted as a full copy of
+  the node it names, each anchored node's size worked out once, as the events stream by; so a
+  "billion laughs" of nested aliases, or of one long string, is refused without being
   expanded, and so is an alias to a node that contains it;
+* numbers: an integer has at most `MAX_DIGITS` (100) digits, in any base YAML writes
+  (``0x``, ``0o``, ``1:30``), and a JSON number is finite (no ``NaN``, ``Infinity`` or
+  ``1e999``), so no number costs more to read, compare or print than a plain one;
 * data: mapping keys are strings and none repeats within its mapping (a merged ``<<`` mapping
-  may be overridden, as YAML intends); JSON has no ``NaN`` or ``Infinity``. A JSON document is
-  no bigger than its bytes, so its node count needs no check of its own.
+  may be overridden, as YAML intends). A JSON document is no bigger than its bytes, so its
+  node count needs no check of its own.
 
 YAML is parsed by libyaml (PyYAML's C parser) where PyYAML has it, and built by PyYAML's safe
 constructors only: no tag runs code or makes a Python object other than plain data. Every
@@ -31,9 +36,13 @@ calls the bytes) and, where the parser knows it, the line and column.
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import json
+import math
 import os
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -46,6 +55,9 @@ __all__ = ["FORMATS", "Limits", "parse_document", "read_document"]
 
 #: The formats `parse_document` reads.
 FORMATS = ("yaml", "json")
+#: The most digits of an integer a document may hold.
+MAX_DIGITS = 100
+_INT_BOUND = 10**MAX_DIGITS
 #: Characters no string of a document may hold: C0 controls but tab, line feed and carriage
 #: return; DEL and the C1 controls; lone surrogates (which JSON escapes can make).
 _FORBIDDEN = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f\ud800-\udfff]")
@@ -54,11 +66,12 @@ _FORBIDDEN = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f\ud800-\udfff]")
 @dataclass(frozen=True)
 class Limits:
     """What a document may hold (module docstring): ``bytes`` of file, lists and mappings
-    nested ``depth`` deep, ``nodes`` YAML nodes with aliases expanded."""
+    nested ``depth`` deep, ``nodes`` YAML nodes (and ``bytes`` characters of strings) with
+    aliases expanded."""
 
     bytes: int = 4 * 2**20
     depth: int = 32
-    nodes: int = 10**6
+    nodes: int = 120_000
 
 
 def read_document(path: str | Path, field: str | None = None, *, fmt: str = "yaml",
@@ -98,11 +111,28 @@ def parse_document(where: str, data: bytes, *, fmt: str = "yaml", limits: Limits
         raise error(f"{where}: not UTF-8 text: byte {data[exc.start]:#04x} at offset "
                     f"{exc.start}") from None
     try:
-        if fmt == "json":
-            return _json(text, data, limits)
-        return _yaml(text, limits)
+        with _collector_paused():
+            if fmt == "json":
+                return _json(text, data, limits)
+            return _yaml(text, limits)
     except _RefusedError as exc:
         raise error(f"{where}: {exc}") from None
+
+
+@contextlib.contextmanager
+def _collector_paused() -> Iterator[None]:
+    """Python's cyclic garbage collector paused while a document is built: its objects form no
+    cycles, and the passes the collector would make as they are allocated scan every object
+    of the process (in one that has imported torch, they doubled the time to read 100,000
+    seeds)."""
+    if not gc.isenabled():
+        yield
+        return
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.enable()
 
 
 class _RefusedError(Exception):
@@ -114,11 +144,12 @@ def _too_deep(depth: int | str, limits: Limits) -> _RefusedError:
                          "allowed")
 
 
-def _check_text(value: str, at: str) -> None:
+def _check_text(value: str, mark: yaml.Mark | None = None) -> None:
     found = _FORBIDDEN.search(value)
     if found:
         raise _RefusedError(f"control character U+{ord(found.group()):04X} in the string "
-                       f"{value[:40]!r}{at}; strings may not hold control characters")
+                            f"{value[:40]!r}{_at(mark)}; strings may not hold control "
+                            "characters")
 
 
 # -- JSON -------------------------------------------------------------------------------------
@@ -130,7 +161,8 @@ def _json(text: str, data: bytes, limits: Limits) -> object:
     if depth > limits.depth:
         raise _too_deep(depth, limits)
     try:
-        value = json.loads(text, object_pairs_hook=_unique_pairs, parse_constant=_no_constant)
+        value = json.loads(text, object_pairs_hook=_unique_pairs, parse_constant=_no_constant,
+                           parse_int=_json_int, parse_float=_json_float)
     except json.JSONDecodeError as exc:
         raise _RefusedError(f"not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}") \
             from None
@@ -151,16 +183,34 @@ def _no_constant(name: str) -> float:
     raise _RefusedError(f"{name} is not a JSON number; numbers must be finite")
 
 
+def _json_int(digits: str) -> int:
+    if len(digits.lstrip("-")) > MAX_DIGITS:
+        raise _too_long(digits)
+    return int(digits)
+
+
+def _json_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise _RefusedError(f"the number {text[:40]} is too large; numbers must be finite")
+    return value
+
+
+def _too_long(text: str) -> _RefusedError:
+    return _RefusedError(f"the integer {text[:20]}... is too large; integers lie between "
+                         f"-10**{MAX_DIGITS} and 10**{MAX_DIGITS}")
+
+
 def _check_strings(value: object) -> None:
     """Every string of a parsed JSON document (at most `Limits.depth` deep) is clean text."""
     if isinstance(value, str):
-        _check_text(value, "")
+        _check_text(value)
     elif isinstance(value, list):
         for item in value:
             _check_strings(item)
     elif isinstance(value, dict):
         for key, item in value.items():
-            _check_text(key, "")
+            _check_text(key)
             _check_strings(item)
 
 
@@ -190,7 +240,25 @@ def _construct_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode, deep: bo
     return loader.construct_mapping(node, deep=deep)
 
 
+def _construct_int(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> int:
+    """An integer of at most `MAX_DIGITS` digits: its value is checked (``0x``, ``0o`` and
+    ``1:30`` forms are shorter than their value), and before it is converted, the length of
+    its text (which Python would otherwise refuse to convert, or convert slowly). Plain
+    decimal digits (the 100,000 seeds of a configuration) are converted at once."""
+    text = node.value
+    if text.isdigit() and text.isascii() and (text[0] != "0" or text == "0") \
+            and len(text) <= MAX_DIGITS:
+        return int(text)
+    value = None if len(text) > 4 * MAX_DIGITS else \
+        yaml.constructor.SafeConstructor.construct_yaml_int(loader, node)
+    if value is None or not -_INT_BOUND < value < _INT_BOUND:
+        raise yaml.constructor.ConstructorError(None, None, str(_too_long(node.value)),
+                                                node.start_mark)
+    return value
+
+
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+_Loader.add_constructor("tag:yaml.org,2002:int", _construct_int)
 
 
 def _at(mark: yaml.Mark | None) -> str:
@@ -218,38 +286,40 @@ def _yaml_problem(exc: yaml.YAMLError) -> str:
 
 
 def _check_events(text: str, limits: Limits) -> None:
-    """Depth, expanded size and clean strings, from the parser's events: nothing is built."""
-    open_sizes: list[list] = []  # [anchor, expanded size so far] of each open collection
-    sizes: dict[str, int] = {}  # expanded size of each finished anchored node
-    total = 0
+    """Depth, expanded size and clean strings, from the parser's events: nothing is built. The
+    running totals count every alias as a copy of the node its anchor names, whose size is what
+    the totals grew by from its start to its end."""
+    starts: list[tuple] = []  # (anchor, nodes, characters) as each open collection started
+    sizes: dict[str, tuple[int, int]] = {}  # expanded (nodes, characters) of anchored nodes
+    nodes = chars = 0
     for event in yaml.parse(text, Loader=_Loader):
-        if isinstance(event, yaml.CollectionStartEvent):
-            if len(open_sizes) == limits.depth:
-                raise _too_deep(f"more than {limits.depth}", limits)
-            open_sizes.append([event.anchor, 1])
-            size = 1
-        elif isinstance(event, yaml.CollectionEndEvent):
-            anchor, whole = open_sizes.pop()
-            if anchor is not None:
-                sizes[anchor] = whole
-            if open_sizes:
-                open_sizes[-1][1] += whole
-            continue
-        elif isinstance(event, yaml.ScalarEvent):
-            _check_text(event.value, _at(event.start_mark))
-            size = 1
+        kind = type(event)
+        if kind is yaml.ScalarEvent:  # the most common first: a document is mostly scalars
+            _check_text(event.value, event.start_mark)
+            nodes, chars = nodes + 1, chars + len(event.value)
             if event.anchor is not None:
-                sizes[event.anchor] = 1
-        elif isinstance(event, yaml.AliasEvent):
+                sizes[event.anchor] = (1, len(event.value))
+        elif kind is yaml.AliasEvent:
             if event.anchor not in sizes:
                 raise _RefusedError(f"the alias *{event.anchor}{_at(event.start_mark)} names no "
-                               "anchor before it, or a node that contains it")
-            size = sizes[event.anchor]
+                                    "anchor before it, or a node that contains it")
+            nodes, chars = nodes + sizes[event.anchor][0], chars + sizes[event.anchor][1]
+        elif issubclass(kind, yaml.CollectionStartEvent):
+            if len(starts) == limits.depth:
+                raise _too_deep(f"more than {limits.depth}", limits)
+            starts.append((event.anchor, nodes, chars))
+            nodes += 1
+        elif issubclass(kind, yaml.CollectionEndEvent):
+            anchor, nodes_before, chars_before = starts.pop()
+            if anchor is not None:
+                sizes[anchor] = (nodes - nodes_before, chars - chars_before)
+            continue
         else:
             continue
-        total += size
-        if total > limits.nodes:
+        if nodes > limits.nodes:
             raise _RefusedError(f"more than {limits.nodes} nodes with its aliases expanded"
-                           f"{_at(event.start_mark)}; at most {limits.nodes} are allowed")
-        if open_sizes and not isinstance(event, yaml.CollectionStartEvent):
-            open_sizes[-1][1] += size
+                                f"{_at(event.start_mark)}; at most {limits.nodes} are allowed")
+        if chars > limits.bytes:
+            raise _RefusedError(f"more than {limits.bytes} characters of strings with its "
+                                f"aliases expanded{_at(event.start_mark)}; at most "
+                                f"{limits.bytes} are allowed")

@@ -26,6 +26,11 @@ class ConfigError(BounceGymError):
     """A constructor argument, rule, noise model or backend option is not allowed."""
 
 
+class UnknownArgumentError(ConfigError, TypeError):
+    """An env or task is given a keyword argument it does not take: a `ConfigError`, and a
+    `TypeError` as Python's own for an unexpected keyword argument is."""
+
+
 class InvalidFlowError(BounceGymError):
     """A flow field (velocities, coordinates, land mask) is not valid."""
 
@@ -44,9 +49,9 @@ def config_errors(field: str) -> Iterator[None]:
     """Report a bad environment construction as a `ConfigError` whose message starts with
     ``field`` (where the arguments came from, e.g. ``config.env_kwargs``).
 
-    Translated are this package's own errors (a bad map, world or option) and the `TypeError`
-    of an unknown or missing keyword argument (how the envs and tasks refuse an argument they
-    do not take); any other exception is a bug and passes through unchanged.
+    Translated are this package's own errors (a bad map, world, option or an unknown keyword
+    argument, `UnknownArgumentError`) and Python's `TypeError` of an unknown or missing keyword
+    argument; any other exception is a bug and passes through unchanged.
     """
     try:
         yield

@@ -240,11 +240,17 @@ def _fsync(path: Path) -> None:
             os.close(fd)
 
 
+def check_path_text(field: str, path: object) -> None:
+    """Raise `ConfigError` naming ``field`` if the path ``path`` holds a NUL character, which
+    no path can (the operating system would refuse it at its first use)."""
+    if "\0" in str(path):
+        raise ConfigError(f"{field}: {str(path)!r} contains a NUL character")
+
+
 def check_writable(field: str, folder: Path) -> None:
     """Raise `ConfigError` naming ``field`` unless ``folder`` is, or can be created as, a
     folder this process may write into; nothing is created."""
-    if "\0" in str(folder):
-        raise ConfigError(f"{field}: {str(folder)!r} contains a NUL character")
+    check_path_text(field, folder)
     existing = folder
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent

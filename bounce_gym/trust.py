@@ -82,8 +82,10 @@ def sign(data: bytes, purpose: str) -> str:
 
 
 def verify(data: bytes, signature: object, purpose: str) -> bool:
-    """Whether ``signature`` is `sign` ``(data, purpose)`` (compared in constant time)."""
-    return isinstance(signature, str) and hmac.compare_digest(sign(data, purpose), signature)
+    """Whether ``signature`` is `sign` ``(data, purpose)`` (compared in constant time; a
+    signature read from a file may hold anything, which is no signature)."""
+    return isinstance(signature, str) and signature.isascii() \
+        and hmac.compare_digest(sign(data, purpose), signature)
 
 
 def digest(data: bytes) -> str:

@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import ConfigError, UnknownArgumentError
 
 
 def _is_number(value: object) -> bool:
@@ -76,11 +76,16 @@ def flag(field: str, value: object) -> bool:
 def keyword_arguments(table: Mapping, kwargs: Mapping, defaults: Mapping | None = None,
                       fixed: Sequence[str] = (), who: str = "the environment") -> dict:
     """The arguments of ``table`` (name -> default) with ``defaults`` and then ``kwargs`` laid
-    over them; a name not in the table, or one of ``fixed``, is the `TypeError` Python raises for
-    an unexpected keyword argument of ``who``."""
+    over them; a name not in the table, or one of ``fixed``, is refused (`unexpected`)."""
     values = {**table, **(defaults or {})}
     for name in kwargs:
         if name not in values or name in fixed:
-            raise TypeError(f"{who}() got an unexpected keyword argument {name!r}")
+            raise unexpected(who, name)
     values.update(kwargs)
     return values
+
+
+def unexpected(who: str, name: str) -> UnknownArgumentError:
+    """The error of a keyword argument ``name`` that ``who`` does not take: Python's message
+    for it, as a `ConfigError` that is also the `TypeError` Python raises."""
+    return UnknownArgumentError(f"{who}() got an unexpected keyword argument {name!r}")

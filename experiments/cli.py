@@ -153,13 +153,19 @@ def executor_block(block: Mapping | None, flags: Mapping[str, str]) -> dict:
     starts."""
     from experiments.executors import check_ray_cluster, executor_settings
 
-    given = {key: int(value) if key == "workers" and value.isascii() and value.isdigit()
-             else value for key, value in flags.items() if value is not None}
+    given = {key: _number(value) if key == "workers" else value
+             for key, value in flags.items() if value is not None}
     names = {key: EXECUTOR_FLAGS[key] for key in given}
     settings = executor_settings({**(block or {}), **given}, "config.executor", names)
     if settings["address"] is not None:
         check_ray_cluster(names.get("address", "config.executor.address"), settings["address"])
     return settings
+
+
+def _number(text: str) -> int | str:
+    """A flag's digits as an int (of at most 9: no more is a count of workers); anything else
+    stays text, for the check to name."""
+    return int(text) if text.isascii() and text.isdigit() and len(text) <= 9 else text
 
 
 def add_executor_flags(parser: argparse.ArgumentParser) -> None:
@@ -223,8 +229,9 @@ def training_config(config: object, timesteps: int | None = None, resume: bool =
         config["resume"] = True
     cap = os.environ.get(MAX_TIMESTEPS)
     if cap is not None:
-        if not (cap.isascii() and cap.isdigit()) or int(cap) < 1:
-            raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {cap!r}")
+        if not (cap.isascii() and cap.isdigit() and len(cap) <= 18) or int(cap) < 1:
+            shown = cap if len(cap) <= 18 else f"{cap[:15]}..."  # no number of 19 digits is meant
+            raise ConfigError(f"{MAX_TIMESTEPS}: expected an integer >= 1, got {shown!r}")
         budget = config.get("total_timesteps", int(cap))
         config["total_timesteps"] = min(budget, int(cap)) if isinstance(budget, int) \
             else budget
@@ -297,7 +304,12 @@ def trust(paths: list[str]) -> int:
 class Parser(argparse.ArgumentParser):
     """argparse's parser, whose usage mistakes (an unknown flag, a value of the wrong type or
     not among the choices) are one line ``error: ...`` and exit status 2, as every mistake of
-    the command is; ``--help`` shows the usage. Its subcommands' parsers are of this class."""
+    the command is; ``--help`` shows the usage. A flag is given in full: argparse's
+    abbreviations (``--worker`` for ``--workers``) are refused as unknown flags, so that a
+    typo never becomes another flag. Its subcommands' parsers are of this class."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **{**kwargs, "allow_abbrev": False})
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"error: {message} (see {self.prog} --help)\n")

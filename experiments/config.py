@@ -81,12 +81,13 @@ from baselines.seeds import EVALUATION_SEEDS_START
 from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
+    GYMNASIUM_IDS,
     PETTINGZOO_ENVS,
     is_drifter_id,
     is_pettingzoo_id,
 )
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import check_path_component
+from bounce_gym.files import check_path_component, check_path_text
 from bounce_gym.validate import integer
 from experiments.executors import executor_settings
 
@@ -129,7 +130,7 @@ def configs_folder() -> Path:
 
 def load_config(path: str | Path | None = None) -> dict:
     """The YAML configuration at ``path`` (the default configuration if ``None``), read within
-    the limits of `bounce_gym.documents` (4 MiB, nesting 32 deep, 10**6 nodes with aliases
+    the limits of `bounce_gym.documents` (4 MiB, nesting 32 deep, 120,000 nodes with aliases
     expanded) but otherwise unvalidated; relative map files in ``env_kwargs.world`` resolved
     against the file's folder."""
     file = configs_folder() / DEFAULT_CONFIG_NAME if path is None else Path(path)
@@ -164,6 +165,8 @@ def validate_config(config: object) -> dict:
     config.setdefault("models", "models")
     config.setdefault("leaderboard", False)
     check_path_component("config.name", config["name"], "a name for the run folder")
+    for key in ("output", "models"):
+        check_path_text(f"config.{key}", config[key])
     if "executor" in config:
         config["executor"] = executor_settings(config["executor"], "config.executor")
     if not config["experiments"]:
@@ -183,10 +186,9 @@ def validate_config(config: object) -> dict:
         names.add(exp["name"])
         if is_pettingzoo_id(exp["env"]):
             _check_multi_robot(where, exp)
-        elif exp["env"] not in gym.registry:
-            known = sorted(i for i in gym.registry if i.startswith("bounce_gym/"))
+        elif exp["env"] not in GYMNASIUM_IDS:
             raise ConfigError(f"{where}.env: unknown environment id {exp['env']!r}; registered: "
-                              f"{known + _PARALLEL_IDS}")
+                              f"{[*GYMNASIUM_IDS, *_PARALLEL_IDS]}")
         elif "planner_kwargs" in exp:
             raise ConfigError(f"{where}.planner_kwargs: only for multi-robot experiments "
                               f"(env one of {_PARALLEL_IDS})")
@@ -199,6 +201,10 @@ def validate_config(config: object) -> dict:
         unknown = [p for p in exp["policies"] if p not in kinds]
         if unknown:
             raise ConfigError(f"{where}.policies: unknown {unknown}; allowed are {kinds}")
+        if not exp["policies"]:
+            raise ConfigError(f"{where}.policies: expected a non-empty list of {kinds}")
+        if len(set(exp["policies"])) != len(exp["policies"]):
+            raise ConfigError(f"{where}.policies: each policy once, got {exp['policies']}")
         _check_adversaries(where, exp, patrol)
         if "rl_models" in exp or "rl" in exp["policies"] or "rl" in exp.get("adversaries", []):
             exp["rl_models"] = _model_folders(where, exp)

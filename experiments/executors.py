@@ -51,6 +51,7 @@ import multiprocessing
 import os
 import pickle
 import re
+import shutil
 import socket
 import sys
 from collections.abc import Callable, Iterable, Iterator, Mapping
@@ -115,7 +116,8 @@ class UnitStore:
     the unit's key and the folder's name (a sweep's fingerprint), so a file moved to another
     unit or sweep is not taken either. A file that is unsigned, signed with another key,
     changed, truncated or not a regular file is one ``warning:`` line on stderr and its unit
-    runs again (`stored`); it is never unpickled. Results are signed where `Executor.run` saves
+    runs again (`stored`); it is never unpickled, and its result replaces it (a folder planted
+    at its name is removed, a link replaced, never followed). Results are signed where `Executor.run` saves
     them — the process that started the sweep — so workers (a pool, a Ray cluster) need no key.
     The key is read when the store is made, so a missing or unreadable key is reported before
     any unit runs."""
@@ -133,7 +135,14 @@ class UnitStore:
     def save(self, key: str, result: object) -> None:
         data = pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
         header = f"{_UNIT_MAGIC} {sign(data, self._purpose(key))}\n".encode()
-        atomic_write(self._path(key), header + data)
+        path = self._path(key)
+        if path.is_dir() and not path.is_symlink():  # planted there, and reported (`stored`)
+            try:
+                shutil.rmtree(path)
+            except OSError as exc:
+                raise ConfigError(f"{path}: a folder planted at a unit's name cannot be removed "
+                                  f"({exc.strerror or exc}); remove it") from None
+        atomic_write(path, header + data)
 
     def load(self, key: str) -> object:
         """The stored result of unit ``key``; `FileNotFoundError` if there is none, and

@@ -29,7 +29,8 @@ here, not by Tune, so trial k has the same hyperparameters on every machine.
 ``return`` or ``success``; ``--scheduler`` ``fifo`` or ``asha``; ``--workers`` in [1, 1024];
 ``--address`` a Ray address as `experiments.executors` describes them, whose cluster answers
 within its ``CONNECT_TIMEOUT``. Then, before the search space is read (`trial_configs`):
-``--trials`` in [1, `MAX_TRIALS` = 10,000] and ``--seed`` in [0, 2**32 - 1]. The search
+``--trials`` in [1, `MAX_TRIALS` = 10,000], ``--seed`` in [0, 2**32 - 1] and the
+configuration's ``name`` at most 95 bytes (its folder's name adds ``-tune``). The search
 space's bounds are checked against the hyperparameters' ranges (`experiments.search_space`),
 and then every trial is prepared, so that no mistake waits for a trial to start.
 """
@@ -52,7 +53,7 @@ from baselines.rl.monitor import read_monitor
 from baselines.rl.train import Run, finished, prepare, train_seed
 from baselines.rl.train_config import POLICIES
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import atomic_write
+from bounce_gym.files import MAX_NAME_BYTES, atomic_write
 from bounce_gym.validate import integer
 from experiments.executors import check_ray_cluster, executor_settings, init_ray
 from experiments.search_space import load_search_space, sample
@@ -65,6 +66,8 @@ MAX_TRIALS = 10_000
 MAX_DRAW_SEED = 2**32 - 1
 #: Reports to Tune per trial (at most; at rollout ends).
 REPORTS = 10
+#: What the training name gets in the name of the search's folder.
+TUNE_SUFFIX = "-tune"
 
 
 @dataclass(frozen=True)
@@ -81,7 +84,7 @@ class Trial:
 
 def search_folder(config: Mapping) -> Path:
     """``<models>/<name>-tune``: where the trials of a configuration are saved."""
-    return Path(config.get("models", "models")) / f"{config['name']}-tune"
+    return Path(config.get("models", "models")) / f"{config['name']}{TUNE_SUFFIX}"
 
 
 def trial_configs(config: dict, space_path: Path, trials: int, seed: int,
@@ -94,8 +97,9 @@ def trial_configs(config: dict, space_path: Path, trials: int, seed: int,
     integer("--seed", seed, 0, MAX_DRAW_SEED)
     if not isinstance(config, dict):
         prepare(config, folder)  # reports what is wrong with it
+    _check_room_for_suffix(config.get("name"))
     space = load_search_space(space_path)
-    base = {**config, "name": f"{config['name']}-tune",
+    base = {**config, "name": f"{config['name']}{TUNE_SUFFIX}",
             "models": str(Path(config.get("models", "models")).resolve())}
     base.pop("seed", None)
     seeds = config.get("seeds", [config.get("seed", 0)])
@@ -111,6 +115,17 @@ def trial_configs(config: dict, space_path: Path, trials: int, seed: int,
         except ConfigError as exc:
             raise ConfigError(f"search: trial {k} ({drawn}): {exc}") from None
     return out
+
+
+def _check_room_for_suffix(name: object) -> None:
+    """The search's folder is ``<name>-tune``: a name that is one path component only without
+    the suffix is refused for what it is (the name's other checks come with the
+    configuration's)."""
+    most = MAX_NAME_BYTES - len(TUNE_SUFFIX)
+    if isinstance(name, str) and most < len(name.encode("utf-8")) <= MAX_NAME_BYTES:
+        raise ConfigError(f"config.name: a search saves into models/<name>{TUNE_SUFFIX}, so the "
+                          f"name may have at most {most} bytes; it has "
+                          f"{len(name.encode('utf-8'))}")
 
 
 def check_search(metric: str, scheduler: str, workers: int | None,

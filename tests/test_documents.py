@@ -100,8 +100,8 @@ def test_nesting_up_to_the_limit_is_read():
 
 @pytest.mark.timeout(30)  # a hang guard only: the bomb is never expanded
 def test_an_alias_bomb_is_refused_without_being_expanded():
-    with pytest.raises(ConfigError, match=r"^t.yaml: more than 1000000 nodes with its aliases "
-                                          r"expanded at line \d+, column \d+; at most 1000000 "
+    with pytest.raises(ConfigError, match=r"^t.yaml: more than 120000 nodes with its aliases "
+                                          r"expanded at line \d+, column \d+; at most 120000 "
                                           r"are allowed$"):
         _yaml(LAUGHS)
     # the same under a key of a configuration, and as a merged mapping
@@ -149,7 +149,38 @@ def test_size_utf8_and_files(tmp_path):
 def test_the_callers_error_class_is_raised(tmp_path):
     path = tmp_path / "map.yaml"
     path.write_text(LAUGHS, encoding="utf-8")
-    with pytest.raises(MapFormatError, match=rf"^{path}: more than 1000000 nodes"):
+    with pytest.raises(MapFormatError, match=rf"^{path}: more than 120000 nodes"):
         read_document(path, error=MapFormatError)
     with pytest.raises(ValueError, match="fmt: expected one of"):
         parse_document("x", b"", fmt="toml")
+
+
+def test_an_aliased_string_counts_its_characters_each_time():
+    # one aliased row used to make a 120 KB map file into a 20,000 x 20,000 grid (18 s, 3.5 GB)
+    text = "row: &r '" + "." * 1000 + "'\ngrid: [" + ", ".join(["*r"] * 9) + "]\n"
+    # the row, 1,000 characters, ten times, and the keys' 7
+    assert len(_yaml(text, bytes=10_007)["grid"]) == 9
+    with pytest.raises(ConfigError, match=r"^t.yaml: more than 10006 characters of strings "
+                                          r"with its aliases expanded at line 2, column \d+"):
+        _yaml(text, bytes=10_006)
+
+
+@pytest.mark.parametrize(("text", "fmt"), [
+    ("a: 1" + "0" * 5000, "yaml"),  # Python refuses to convert more than 4,300 digits
+    ("a: 0x" + "f" * 90, "yaml"),  # short as written, 10**108 in value
+    ("a: 1" + ":59" * 60, "yaml"),  # sexagesimal
+    ("[1" + "0" * 100 + "]", "json"),
+])
+def test_integers_have_at_most_100_digits(text, fmt):
+    with pytest.raises(ConfigError, match=r"is too large; integers lie between -10\*\*100 and "
+                                          r"10\*\*100"):
+        parse_document("t", text.encode(), fmt=fmt)
+    assert _yaml("a: " + "9" * 100) == {"a": 10**100 - 1}
+    assert _yaml("a: [0, 007, 0x10, -12, 1_000]") == {"a": [0, 7, 16, -12, 1000]}
+
+
+def test_a_json_number_beyond_a_float_is_refused():
+    with pytest.raises(ConfigError, match="the number -1e999 is too large; numbers must be "
+                                          "finite"):
+        _json("[-1e999]")
+    assert _json("[1e308, 1.5]") == [1e308, 1.5]

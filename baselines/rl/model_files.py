@@ -196,7 +196,8 @@ def trust(path: Path) -> str:
     its resume state is a pickle, and unpickling it runs whatever it says. A trusted file whose
     folder's manifest lists other digests also loads (it was replaced on purpose)."""
     if not path.is_file():
-        raise ConfigError(f"trust: file {str(path)!r} does not exist")
+        what = "is not a file" if path.exists() else "does not exist"
+        raise ConfigError(f"trust: file {str(path)!r} {what}")
     _check_name(path, "trust:")
     sha256 = digest(_read(path, MAX_FILE_BYTES, "trust:"))
     add_trusted(sha256)

@@ -17,6 +17,7 @@ builds tensors and plain containers only and refuses any other global.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import io
 import json
@@ -25,6 +26,7 @@ import pickle
 import re
 import warnings
 import zipfile
+from collections.abc import Iterator
 
 from baselines.rl.model_files import DATA_ENTRY, METADATA_ENTRY, ZIP_ERRORS, ModelFile
 from baselines.rl.train_config import (
@@ -60,12 +62,13 @@ def load_model_file(trained: ModelFile, observation_space, action_space, **load_
     file that does not fit them or is not a model this package saved."""
     template = _template(trained, observation_space, action_space)
     saved, weights = _saved(template)
-    _check_spaces(trained, saved, observation_space, action_space)
+    _check_spaces(trained, saved)
     _check_weights(trained, weights)
     custom_objects = _custom_objects(trained, template, saved)
     try:
-        return type(template).load(io.BytesIO(trained.data), device="cpu",
-                                   custom_objects=custom_objects, **load_kwargs)
+        with _torch_quiet():
+            return type(template).load(io.BytesIO(trained.data), device="cpu",
+                                       custom_objects=custom_objects, **load_kwargs)
     except _LOAD_ERRORS as exc:
         raise ConfigError(f"model {trained.path}: its weights do not fit the {trained.algo} model "
                           f"its configuration describes ({_reason(exc)})") from None
@@ -150,12 +153,18 @@ def _describe(space: object) -> str:
     if not isinstance(space, dict):
         return "(no space)"
     kind = re.fullmatch(r"<class '(?:\w+\.)*(\w+)'>", str(space.get(":type:")))
-    fields = ", ".join(f"{name.strip('_')}={space[name]}" for name in _SPACE_FIELDS
+    fields = ", ".join(f"{name.strip('_')}={_shown(space[name])}" for name in _SPACE_FIELDS
                        if name in space)
     return f"{kind.group(1) if kind else '?'}({fields})"
 
 
-def _check_spaces(trained: ModelFile, saved: dict, observation_space, action_space) -> None:
+def _shown(value: object) -> str:
+    """A value of a file's JSON in one short line (a file may put anything there)."""
+    text = " ".join(str(value).split())
+    return text if len(text) <= 40 else f"{text[:37]}..."
+
+
+def _check_spaces(trained: ModelFile, saved: dict) -> None:
     """The file's spaces are of the kind, shape and type of the template's (their JSON
     descriptions; the spaces themselves are the template's)."""
     keys = ("observation_space", "action_space")
@@ -163,8 +172,8 @@ def _check_spaces(trained: ModelFile, saved: dict, observation_space, action_spa
     if [_describe(space) for space in theirs] != [_describe(saved[key]) for key in keys]:
         raise ConfigError(
             f"model {trained.path}: trained for observations {_describe(theirs[0])} and actions "
-            f"{_describe(theirs[1])}, but this env has {observation_space} and {action_space} "
-            "(train with the same env_kwargs)")
+            f"{_describe(theirs[1])}, but this env has {_describe(saved[keys[0]])} and "
+            f"{_describe(saved[keys[1]])} (train with the same env_kwargs)")
 
 
 def _check_weights(trained: ModelFile, weights: dict[str, int]) -> None:
@@ -191,11 +200,20 @@ def _variables(trained: ModelFile) -> object:
 
     try:
         with zipfile.ZipFile(io.BytesIO(trained.data)) as archive, \
-                archive.open(VARIABLES_ENTRY) as entry:
+                archive.open(VARIABLES_ENTRY) as entry, _torch_quiet():
             return torch.load(io.BytesIO(entry.read()), map_location="cpu", weights_only=True)
     except _LOAD_ERRORS as exc:
         raise ConfigError(f"model {trained.path}: its {VARIABLES_ENTRY!r} cannot be read as "
                           f"torch weights ({_reason(exc)})") from None
+
+
+@contextlib.contextmanager
+def _torch_quiet() -> Iterator[None]:
+    """torch's warnings about what it reads (e.g. "Detected pickle protocol 4" in a weights
+    entry that is a plain pickle) not shown: a file it refuses is one line, a `ConfigError`."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=UserWarning, module="torch")
+        yield
 
 
 def _reason(exc: BaseException) -> str:

@@ -53,10 +53,12 @@ from baselines.seeds import EVALUATION_SEEDS_START
 from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
+    GYMNASIUM_IDS,
     PETTINGZOO_ENVS,
     is_pettingzoo_id,
 )
 from bounce_gym.errors import ConfigError
+from bounce_gym.files import check_path_text
 from bounce_gym.validate import integer, number
 
 MULTI_ALGOS = ("ppo",)
@@ -151,9 +153,9 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
         raise ConfigError(f"config.algo: expected one of {ALGOS}, got {config['algo']!r}")
     _check_role(config)
     multi = is_multi(config)
-    if not is_pettingzoo_id(config["env"]) and config["env"] not in gym.registry:
-        raise ConfigError(f"config.env: unknown environment id {config['env']!r}; multi-robot "
-                          f"ids are {[*PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]}")
+    if not is_pettingzoo_id(config["env"]) and config["env"] not in GYMNASIUM_IDS:
+        raise ConfigError(f"config.env: unknown environment id {config['env']!r}; registered: "
+                          f"{[*GYMNASIUM_IDS, *PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]}")
     if "hyperparams_file" in config:
         _merge_file(config, folder)
         _check_types(config)
@@ -177,6 +179,7 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
                 "tensorboard": False, "models": "models", "resume": False, "torch_threads": 1}
     for key, value in defaults.items():
         config.setdefault(key, value)
+    check_path_text("config.models", config["models"])
     for key, least, most in (("n_envs", 1, MAX_ENVS), ("n_stack", 1, MAX_STACK),
                              ("checkpoint_every", 0, MAX_TIMESTEPS),
                              ("torch_threads", 1, 4 * (os.cpu_count() or 1))):

@@ -110,6 +110,11 @@ PATROL_PETTINGZOO_ENVS = {
 }
 
 
+#: the Gymnasium ids of this package (another package's, e.g. ``CartPole-v1``, has none of its
+#: tasks, planners or evaluation families)
+GYMNASIUM_IDS = (*GYM_ENVS, *DRIFTER_GYM_ENVS)
+
+
 def is_pettingzoo_id(env_id: str) -> bool:
     """Whether ``env_id`` is one of the multi-robot PettingZoo ids (not a Gymnasium id)."""
     return (env_id in PETTINGZOO_ENVS or env_id in DRIFTER_PETTINGZOO_ENVS

@@ -347,5 +347,9 @@ def _ring(value: object, field: str, source: str) -> list[list[float]]:
             raise MapFormatError(
                 f"{source}: '{field}' vertex {k} must be a pair of numbers [x, y], got {vertex!r}"
             )
-        ring.append([float(vertex[0]), float(vertex[1])])
+        try:
+            ring.append([float(vertex[0]), float(vertex[1])])
+        except OverflowError:  # an int beyond a float's range
+            raise MapFormatError(f"{source}: '{field}' vertex {k}: a coordinate is too large "
+                                 "for a float") from None
     return ring

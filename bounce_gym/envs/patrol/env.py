@@ -105,7 +105,10 @@ class PatrolEnv(RendererOwner, ParallelEnv):
                  sensor_range: float = 6.0, visibility_rule: str = "corners",
                  attack_time: int = 20, adversary_observes: str = "strategy",
                  strategy: object = None, start: object = None, max_cycles: int = 500,
-                 illegal_action: str = "stay", render_mode: str | None = None) -> None:
+                 illegal_action: str = "stay", render_mode: str | None = None,
+                 **unknown) -> None:
+        if unknown:  # refused as every env refuses one (`bounce_gym.validate.unexpected`)
+            raise validate.unexpected("PatrolEnv", next(iter(unknown)))
         self.options = parse_options(world, cell_size, corner_rule, n_patrollers, sensor_range,
                                      visibility_rule, attack_time, adversary_observes, strategy,
                                      start, max_cycles, illegal_action, render_mode)
