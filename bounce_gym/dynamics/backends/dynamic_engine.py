@@ -1,0 +1,202 @@
+"""The pymunk space of ``physics="dynamic"``: disk robots with mass, static walls, contacts.
+
+`DynamicEngine` owns one `pymunk.Space` holding
+
+* the **walls**: one static `pymunk.Segment` (radius 0) per world edge;
+* the **robots**: dynamic bodies of mass m and the moment of a uniform disk (m r² / 2), each
+  carrying a `pymunk.Circle` of the robot radius. Robots collide with walls and — with
+  ``robot_collisions="bounce"`` — with each other.
+
+Its controller (`bounce_gym.dynamics.backends.pymunk_dynamic`) pushes the robots with forces and
+torques; the engine's solver resolves every contact, with the restitution e and the Coulomb
+friction μ given (each shape carries √e and √μ: pymunk multiplies the two shapes' values).
+
+**Nothing but the bodies carries over from one step to the next.** Chipmunk, the engine under
+pymunk, keeps three kinds of hidden state, and each is switched off:
+
+* *Warm starting*: a contact that persists starts the next step's solve from last step's impulse,
+  scaled by the ratio of the step lengths. With steps whose length varies by orders of magnitude
+  (a free flight of seconds, then contact steps of milliseconds) that scaling throws robots off
+  walls, and it is state a rebuilt space lacks. The contact handler zeroes each contact's
+  accumulated impulses before the solver runs, so every step solves its contacts from scratch.
+* *Position correction*: overlapping shapes are pushed apart by a separate "bias" velocity that
+  is spent in the next step, whatever its length. ``collision_bias = 1`` turns it off; the
+  stepping rule of the controller keeps overlaps below a tiny depth instead.
+* *Order*: the solver visits contacts in the order the broad phase finds them, which depends on
+  the history of its bounding-box tree and on shape ids. `canonicalize` removes every robot shape
+  and adds it back with the same ids, so that the tree, its cached pairs and therefore the order
+  are functions of the bodies alone.
+
+The controller calls `canonicalize` at the start of every drive, so a space rebuilt from the
+robot state (after unpickling, which drops the space) continues bit for bit as the original
+would have.
+
+The contact handler is the **bump sensor's raw signal**: after a step, `contacts` lists every
+robot–wall and robot–robot contact of that step as (robot, kind, index, nx, ny), the normal
+pointing from the robot's centre to the contact; the controller decides which of them press the
+bumper.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pymunk
+from pymunk._chipmunk import lib as _chipmunk
+
+from bounce_gym.worlds import World
+
+#: kinds of contact in `DynamicEngine.contacts`
+WALL, ROBOT = 0, 1
+_ROBOT_TYPE, _WALL_TYPE = 1, 2
+_CAT_WALL, _CAT_ROBOT = 0x1, 0x2
+
+
+class DynamicEngine:
+    """One pymunk space for ``n_robots`` disks of ``radius`` and ``mass`` in ``world``.
+
+    Args:
+        world: the walls.
+        n_robots: number of robot bodies.
+        radius: robot radius in world units (> 0).
+        mass: robot mass.
+        restitution: coefficient of restitution of every contact.
+        friction: friction coefficient of every contact.
+        iterations: solver iterations per step.
+        collide: whether robots collide with each other.
+    """
+
+    def __init__(self, world: World, n_robots: int, radius: float, mass: float,
+                 restitution: float, friction: float, iterations: int, collide: bool) -> None:
+        self.world = world
+        self.n_robots = n_robots
+        self.radius = radius
+        self.mass = mass
+        self.moment = 0.5 * mass * radius * radius
+        self.restitution = restitution
+        self.friction = friction
+        self.iterations = iterations
+        self.collide = collide
+        self._space: pymunk.Space | None = None
+        #: contacts of the last step: (robot, WALL or ROBOT, edge or robot, nx, ny)
+        self.contacts: list[tuple[int, int, int, float, float]] = []
+
+    # -- the space ----------------------------------------------------------------------------
+    @property
+    def space(self) -> pymunk.Space:
+        if self._space is None:
+            self._build()
+        return self._space
+
+    def _build(self) -> None:
+        space = pymunk.Space()
+        space.gravity = (0.0, 0.0)
+        space.damping = 1.0
+        space.iterations = self.iterations
+        space.collision_bias = 1.0  # no position correction: see the module docstring
+        space.collision_slop = 0.0
+        elasticity, friction = math.sqrt(self.restitution), math.sqrt(self.friction)
+        wall_filter = pymunk.ShapeFilter(categories=_CAT_WALL, mask=_CAT_ROBOT)
+        edge_of: dict[pymunk.Shape, int] = {}
+        for k, (a, b) in enumerate(zip(self.world.edge_start.tolist(),
+                                       self.world.edge_end.tolist(), strict=True)):
+            wall = pymunk.Segment(space.static_body, tuple(a), tuple(b), 0.0)
+            wall.collision_type = _WALL_TYPE
+            wall.filter = wall_filter
+            wall.elasticity, wall.friction = elasticity, friction
+            edge_of[wall] = k
+        space.add(*edge_of)
+        self._id_base = _chipmunk.cpSpaceGetShapeIDCounter(space._space)
+        mask = _CAT_WALL | (_CAT_ROBOT if self.collide else 0)
+        robot_filter = pymunk.ShapeFilter(categories=_CAT_ROBOT, mask=mask)
+        bodies, disks = [], []
+        for _ in range(self.n_robots):
+            body = pymunk.Body(self.mass, self.moment)
+            disk = pymunk.Circle(body, self.radius)
+            disk.collision_type = _ROBOT_TYPE
+            disk.filter = robot_filter
+            disk.elasticity, disk.friction = elasticity, friction
+            bodies.append(body)
+            disks.append(disk)
+        space.add(*bodies, *disks)
+        space.on_collision(_ROBOT_TYPE, _WALL_TYPE, pre_solve=self._on_wall)
+        if self.collide:
+            space.on_collision(_ROBOT_TYPE, _ROBOT_TYPE, pre_solve=self._on_robot)
+        self._edge_of = edge_of
+        self._robot_of = {disk: i for i, disk in enumerate(disks)}
+        self._bodies = bodies
+        self._disks = disks
+        self._space = space
+
+    def canonicalize(self) -> None:
+        """Remove every robot shape and add it back, with the ids it had when the space was
+        built: the broad phase then depends on the bodies only (see the module docstring)."""
+        space = self.space
+        space.remove(*self._disks)
+        _chipmunk.cpSpaceSetShapeIDCounter(space._space, self._id_base)
+        space.add(*self._disks)
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        for key in ("_space", "_edge_of", "_robot_of", "_bodies", "_disks", "_id_base"):
+            state.pop(key, None)
+        state["_space"] = None
+        return state
+
+    # -- bodies -------------------------------------------------------------------------------
+    def set_bodies(self, position: np.ndarray, angle: np.ndarray, velocity: np.ndarray,
+                   omega: np.ndarray) -> None:
+        """Place every body: position (m, 2), unwrapped angle (m,), velocity (m, 2), angular
+        velocity (m,)."""
+        self.space  # noqa: B018  (builds the space on first use)
+        for i, body in enumerate(self._bodies):
+            body.position = (float(position[i, 0]), float(position[i, 1]))
+            body.angle = float(angle[i])
+            body.velocity = (float(velocity[i, 0]), float(velocity[i, 1]))
+            body.angular_velocity = float(omega[i])
+
+    def read(self) -> list[tuple[float, float, float, float, float, float]]:
+        """Every body as (x, y, unwrapped angle, vx, vy, angular velocity)."""
+        out = []
+        for body in self._bodies:
+            (x, y), (vx, vy) = body.position, body.velocity
+            out.append((x, y, body.angle, vx, vy, body.angular_velocity))
+        return out
+
+    def push(self, loads: list[tuple[float, float, float]]) -> None:
+        """Force (fx, fy) and torque of every body for the next step (cleared by the step)."""
+        for body, (fx, fy, torque) in zip(self._bodies, loads, strict=True):
+            body.force = (fx, fy)
+            body.torque = torque
+
+    def step(self, dt: float) -> list[tuple[int, int, int, float, float]]:
+        """Advance the space by ``dt`` seconds; returns `contacts`."""
+        self.contacts = []
+        self.space.step(dt)
+        return self.contacts
+
+    # -- the contact handler ------------------------------------------------------------------
+    def _on_wall(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        _forget_impulses(arbiter)
+        robot, wall = arbiter.shapes
+        n = arbiter.normal  # from the robot to the wall
+        self.contacts.append((self._robot_of[robot], WALL, self._edge_of[wall], n.x, n.y))
+
+    def _on_robot(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        _forget_impulses(arbiter)
+        a, b = arbiter.shapes
+        n = arbiter.normal  # from a to b
+        i, j = self._robot_of[a], self._robot_of[b]
+        self.contacts.append((i, ROBOT, j, n.x, n.y))
+        self.contacts.append((j, ROBOT, i, -n.x, -n.y))
+
+
+def _forget_impulses(arbiter: pymunk.Arbiter) -> None:
+    """Zero the impulses a persisting contact carries from the last step (warm starting), before
+    the solver uses them. pymunk has no public setter; its own pickling writes these fields."""
+    arb = arbiter._arbiter
+    for k in range(arb.count):
+        contact = arb.contacts[k]
+        contact.jnAcc = 0.0
+        contact.jtAcc = 0.0

@@ -1,0 +1,581 @@
+"""``physics="dynamic"``: bouncing robots as rigid bodies with motors, a bumper and a clock.
+
+Every robot is a pymunk body — mass, the moment of a uniform disk — in a space of static walls
+(`bounce_gym.dynamics.backends.dynamic_engine`). Nothing sets positions: a **motor controller**
+pushes each body with a force (at most mass × ``max_acceleration``: the wheels' traction) and a
+torque (at most moment × the turn acceleration 2 ``max_acceleration`` / ``wheel_base``) towards
+the velocity and turn rate it commands, and pymunk's solver resolves every contact with the
+configured restitution and friction. Defaults: an iRobot Create 2 (`bounce_gym.dynamics.platform`).
+
+**The controller** of each robot is a state machine. It acts at *control instants*, every
+``control_period`` h after the start of its current phase: there it reads the bumper and sets
+the velocity the motors reach by the next instant.
+
+* ``DRIVE``: speed up along the heading by at most ``max_acceleration`` × h per period, up to
+  ``cruise_speed``; the drive direction follows the body's heading. The **bumper** is the
+  engine's contact callback restricted to the front arc: a contact whose point lies within
+  ± ``bumper_arc`` / 2 of the heading presses it, and the robot switches to BRAKE at once.
+* ``BRAKE``: slow down by ``max_acceleration`` × h per period along the current velocity
+  (a glancing robot slides along the wall meanwhile; friction slows it too). At rest (speed and
+  turn rate below 1e-9 of their scales) it is **blocked**: ``RobotState.blocked`` is set, and
+  the contact that pressed the bumper (the most frontal one) is its ``contact_edge`` /
+  ``contact_robot`` / ``contact_normal``, which the bounce rules read.
+* ``BLOCKED``: hold still until given a bounce angle. The rule and the noise model
+  (`bounce_gym.dynamics.BounceDynamics`) give the rotation to execute: counter-clockwise by
+  φ plus the noise for Alam's relative rule (the papers' robots turn counter-clockwise by
+  φ; Alam, Bobadilla & Shell 2018, §II), the shorter way to the new heading for the rules
+  defined by the boundary normal.
+* ``TURN``: turn in place by that rotation with the time-optimal profile of
+  `bounce_gym.dynamics.turn_profile` (turn acceleration, ``turn_rate``); if contacts disturbed
+  the turn, a correcting turn follows. A robot still moving when a turn is commanded brakes
+  first.
+* ``WAIT``: turned; hold still until the next tick boundary, where the controller reads the
+  bumper: pressed → blocked again (another bump, as a rotation that still faces the wall in the
+  papers), else DRIVE from rest.
+* ``HOLD``: a robot told to wait during a turn command (`command_turns`) brakes and holds;
+  it drives on when the command ends.
+
+**Ticks and the clock.** One tick lasts τ = ``step_length`` / cruise speed seconds, so
+``step_length`` keeps its meaning: the distance driven in a tick at cruise speed. A bump tick
+is the tick in which a blocked robot gets its angle and starts turning: its bump count rises and
+its clock restarts at 0. Every later tick — turning, waiting, driving, braking — adds 1 to the
+clock, so the clock counts the ticks since the last bump, turning time included. ``tick`` runs
+one tick; ``bounce`` runs the bump tick, then ticks until the end of the tick in which some
+robot becomes blocked, as on the exact backends. Turn commands (`command_turns`) last whole
+ticks, until every commanded robot has finished its turn; every clock advances by one per tick.
+The observation and action API of the environments is unchanged.
+
+**Stepping rule** (conservative advancement). pymunk moves a body in a step along a straight
+segment, with the velocity it had when the step began, and then integrates forces and solves
+contacts. So before each step the motion of every robot in it is known exactly, and the step is
+as long as possible such that
+
+* it ends at the next event: a control instant of a robot that needs one (speeding up,
+  braking, turning, just bumped), a tick boundary that some robot waits for, the end of the
+  drive window;
+* no robot reaches a wall deeper than ``DEPTH`` (2e-7 robot radii): the robot's path is
+  cast (`bounce_gym.worlds.World.first_hit`, a swept disk) against the walls with the radius
+  shrunk by that depth, and the step ends where the robot is half as deep — so a free flight
+  at cruise speed is **one engine step** up to the wall, where the engine detects the overlap
+  and the bumper fires;
+* no two robots come closer than 2 radii − ``DEPTH`` (closed-form contact times of the
+  relative motion, `bounce_gym.dynamics.backends.base.contact_times`), again stopping at half;
+* a robot touching something moves at most half a radius.
+
+**Why nothing passes through a wall or a robot.** A robot moves in a step along the segment
+its velocity gives, and the step ends before that segment takes it deeper than ``DEPTH`` into
+any wall or robot it can reach: every feature along the segment is in the cast. To pass through
+a wall (a zero-thickness segment) or a robot, its centre would have to get within the radius
+minus that depth of it, which the cast forbids; Chipmunk's collision test is discrete, but every
+step ends with overlaps of at most ``DEPTH`` ≪ radius, where its contact normal points the right
+way and restitution ≤ 1 makes the solver stop or reflect the approach. The only step allowed to
+go deeper is a guard step of 1e-9 ticks after a robot has crept to ``DEPTH`` (solver residuals),
+which moves it by 1e-9 of a tick's travel.
+
+**Determinism, pickling.** Randomness enters only through the angles given. The engine keeps no
+state between steps but the bodies (see `DynamicEngine`); pickling drops the pymunk space, and
+the next drive rebuilds it from the robots' positions, angles, velocities and turn rates, which
+are stored exactly, so a pickled and restored episode continues bit for bit.
+
+The robot's phase and bumper are exposed for renderers: `phase` (codes of `PHASES`) and
+`bumper_pressed`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bounce_gym.dynamics.backends.base import MotionBackend, close_pairs, contact_times
+from bounce_gym.dynamics.backends.dynamic_engine import ROBOT, WALL, DynamicEngine
+from bounce_gym.dynamics.platform import PhysicsParams
+from bounce_gym.dynamics.rules import TWO_PI
+from bounce_gym.dynamics.state import NO_CONTACT, RobotState
+from bounce_gym.dynamics.turn_profile import turn_profile
+from bounce_gym.errors import ConfigError
+from bounce_gym.worlds.raycast import first_hit_scalar
+
+DRIVE, BRAKE, BLOCKED, TURN, WAIT, HOLD = range(6)
+PHASES = ("drive", "brake", "blocked", "turn", "wait", "hold")
+#: Deepest a robot may reach into a wall or another robot, relative to the radius; steps aim at
+#: half of it.
+DEPTH = 2e-7
+#: A robot touching something may reach this many times ``DEPTH`` into what it touches: the
+#: solver stops every approach up to rounding, and this room keeps its residual creep from
+#: shortening the steps. The robot moves at most `CONTACT_REACH` radii per step meanwhile.
+CREEP = 100.0
+CONTACT_REACH = 0.5
+#: Speeds below this fraction of the cruise speed (turn rates below this fraction of
+#: cruise speed / radius) count as rest.
+REST = 1e-9
+#: A turn is done when the heading is within this many radians of the target.
+TURN_TOL = 1e-9
+#: Length of a guard step, in ticks, when a robot has crept to ``DEPTH``.
+GUARD = 1e-9
+#: Consecutive guard steps after which a drive declares itself stuck (a bug).
+MAX_GUARDS = 100_000
+#: A bumper contact must lie this far (in cosine) inside the arc: an exactly tangential touch
+#: does not press the bumper.
+ARC_MARGIN = 1e-6
+
+
+class _Robot:
+    """One robot's body state (as last read from the engine) and controller state."""
+
+    __slots__ = ("x", "y", "angle", "vx", "vy", "w", "phase", "speed", "tvx", "tvy", "tw",
+                 "origin", "count", "next", "target", "profile", "index", "settle",
+                 "bump_tick", "commanded", "latch", "cast")
+
+    def __init__(self, x: float, y: float, angle: float) -> None:
+        self.x, self.y, self.angle = x, y, angle
+        self.vx = self.vy = self.w = 0.0
+        self.phase = DRIVE
+        self.speed = 0.0  # DRIVE: the speed set point
+        self.tvx = self.tvy = self.tw = 0.0  # braking and turning: the velocity set points
+        self.origin, self.count, self.next = 0.0, 0, 0.0  # the control grid; next instant
+        self.target = angle  # TURN: the unwrapped heading to reach
+        self.profile: tuple[float, ...] = ()  # TURN: turn rates, one per period
+        self.index = 0  # TURN: position in the profile
+        self.settle = False  # TURN: braking to rest before the profile
+        self.bump_tick = False  # the current tick is this robot's bump tick
+        self.commanded = False  # turning in the current turn command
+        #: the contact that pressed the bumper: (kind, index, nx, ny), normal towards the robot
+        self.latch: tuple[int, int, float, float] | None = None
+        #: cached first wall along the velocity: (x, y, dx, dy, depth, distance, nx, ny)
+        self.cast: tuple[float, ...] | None = None
+
+    def __getstate__(self) -> dict:
+        return {k: getattr(self, k) for k in self.__slots__}
+
+    def __setstate__(self, state: dict) -> None:
+        for k, v in state.items():
+            setattr(self, k, v)
+
+
+class DynamicBackend(MotionBackend):
+    """Rigid-body robots with motors and bumpers; see the module docstring."""
+
+    name = "pymunk"
+    turns_take_time = True
+
+    def __init__(self, world, n_robots, radius, step_length, robot_collisions,
+                 params: PhysicsParams) -> None:
+        if not radius > 0:
+            raise ConfigError(f"robot_radius: physics='dynamic' simulates bodies of a size and "
+                              f"needs robot_radius > 0, got {radius!r}")
+        super().__init__(world, n_robots, radius, step_length, robot_collisions)
+        self.params = params
+        scale = params.world_scale
+        self.cruise = params.cruise_speed / scale  # world units per second
+        self.accel = params.max_acceleration / scale
+        self.turn_rate = math.radians(params.turn_rate)
+        self.turn_accel = params.turn_acceleration
+        self.period = params.control_period
+        #: seconds per tick
+        self.tick_seconds = self.step_length / self.cruise
+        self.cos_arc = math.cos(math.radians(params.bumper_arc) / 2) + ARC_MARGIN
+        self.depth = DEPTH * self.radius
+        self._rest_v = REST * self.cruise
+        self._rest_w = REST * self.cruise / self.radius
+        self.engine = DynamicEngine(world, self.n_robots, self.radius, params.mass,
+                                    params.restitution, params.friction, params.iterations,
+                                    self.collide)
+        self._robots: list[_Robot] = []
+        self._now = 0.0  # seconds since reset
+        self._tick = 0  # ticks since reset
+        self._commanding = False
+        self._placed = False  # whether the engine's bodies hold the robots' state
+
+    # -- renderer hooks -----------------------------------------------------------------------
+    @property
+    def phase(self) -> np.ndarray:
+        """(m,) phase of every robot, an index into `PHASES`."""
+        return np.array([r.phase for r in self._robots], dtype=np.int8)
+
+    @property
+    def bumper_pressed(self) -> np.ndarray:
+        """(m,) whether each robot's bumper is pressed by a contact of the last engine step."""
+        return np.array([self._pressed(i, r) is not None for i, r in enumerate(self._robots)])
+
+    # -- MotionBackend ------------------------------------------------------------------------
+    def reset(self, state: RobotState) -> None:
+        if state.n_robots != self.n_robots:
+            raise ConfigError(f"state: expected {self.n_robots} robots, got {state.n_robots}")
+        self.check_start(state)
+        self._robots = [_Robot(float(p[0]), float(p[1]), float(h))
+                        for p, h in zip(state.position, state.heading, strict=True)]
+        self._now, self._tick, self._commanding = 0.0, 0, False
+        self.engine.contacts = []
+        self._placed = False
+        self.update_contacts(state, np.arange(self.n_robots))
+
+    def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
+        """Blocked robots are those whose controller is in BLOCKED; write their contacts."""
+        for i in np.asarray(robots, dtype=np.int64).tolist():
+            r = self._robots[i]
+            state.blocked[i] = r.phase == BLOCKED
+            if r.phase == BLOCKED and r.latch is not None:
+                kind, k, nx, ny = r.latch
+                state.contact_edge[i] = k if kind == WALL else NO_CONTACT
+                state.contact_robot[i] = k if kind == ROBOT else NO_CONTACT
+                state.contact_normal[i] = nx, ny
+            else:
+                state.contact_edge[i] = NO_CONTACT
+                state.contact_robot[i] = NO_CONTACT
+
+    def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
+        if until_first_block and state.blocked.any():
+            return 0
+        self._check_drive_window(max_ticks, until_first_block)
+        end = None if until_first_block else self._tick + int(max_ticks)
+        return self._run(state, end, until_first_block)
+
+    def begin_turns(self, state: RobotState, robots: np.ndarray, rotations: np.ndarray) -> None:
+        """Bump ticks of ``robots``: each starts turning in place by its rotation (radians,
+        counter-clockwise positive). The caller counts the bump and restarts the clock."""
+        for i, rotation in zip(robots.tolist(), rotations.tolist(), strict=True):
+            r = self._robots[i]
+            self._start_turn(r, rotation)
+            r.bump_tick = True
+            state.blocked[i] = False
+        self.update_contacts(state, robots)
+
+    def command_turns(self, state: RobotState, robots: np.ndarray,
+                      rotations: np.ndarray) -> int:
+        """A turn command: ``robots`` turn in place by ``rotations`` (radians, counter-clockwise
+        positive; added to a turn in progress); every driving robot brakes and holds. The command
+        lasts until every commanded robot has turned, rounded up to whole ticks (at least one);
+        then the waiting robots drive on. Every clock advances by one per tick. Returns the
+        ticks."""
+        for r in self._robots:
+            if r.phase == DRIVE:
+                r.phase = HOLD
+                self._start_brake(r)
+        for i, rotation in zip(robots.tolist(), rotations.tolist(), strict=True):
+            r = self._robots[i]
+            if r.phase == TURN:
+                r.target += rotation
+            else:
+                self._start_turn(r, rotation)
+            r.commanded = True
+            state.blocked[i] = False
+        self.update_contacts(state, robots)
+        self._commanding = True
+        return self._run(state, None, False)
+
+    # -- the drive loop -----------------------------------------------------------------------
+    def _run(self, state: RobotState, end: int | None, until_first_block: bool) -> int:
+        """Step the engine from the current tick boundary until tick ``end`` (None: until the
+        command ends, or — ``until_first_block`` — the end of the tick in which a robot
+        blocks). Returns the ticks elapsed."""
+        self._prepare_engine()
+        start = self._tick
+        tau = self.tick_seconds
+        guards = 0
+        while True:
+            self._decide(state)
+            at_boundary = self._now == self._tick * tau
+            if until_first_block and end is None and state.blocked.any():
+                end = self._tick if at_boundary else self._tick + 1
+            if self._commanding and at_boundary and self._tick > start and self._command_done():
+                end = self._tick
+                self._commanding = False
+                self._release(state)
+            if end is not None and self._tick >= end and at_boundary:
+                break
+            event = self._next_event(end)
+            safe = self._safe_interval(event - self._now)
+            if safe < event - self._now:
+                if safe < GUARD * tau:
+                    guards += 1
+                    if guards > MAX_GUARDS:
+                        raise RuntimeError("pymunk dynamic: robots are stuck at the contact "
+                                           "depth (stepping bug)")
+                    safe = GUARD * tau
+                else:
+                    guards = 0
+                dt, now = safe, self._now + safe
+            elif math.isfinite(event):
+                dt, now = event - self._now, event
+            else:
+                raise RuntimeError("pymunk dynamic: nothing moves and nothing is awaited")
+            self._step(state, dt)
+            self._advance_clock(state, now)
+            self._bumpers()
+            if self._now == self._tick * tau:
+                self._boundary(state)
+        elapsed = self._tick - start
+        state.ticks += elapsed
+        self._write_state(state)
+        return elapsed
+
+    def _prepare_engine(self) -> None:
+        """Put the robots into the engine (after a reset or unpickling) and make its contact
+        order canonical (`DynamicEngine.canonicalize`)."""
+        if not self._placed:
+            robots = self._robots
+            self.engine.set_bodies(np.array([[r.x, r.y] for r in robots]),
+                                   np.array([r.angle for r in robots]),
+                                   np.array([[r.vx, r.vy] for r in robots]),
+                                   np.array([r.w for r in robots]))
+            self._placed = True
+        self.engine.canonicalize()
+
+    def _next_event(self, end: int | None) -> float:
+        """The earliest control instant, waited-for tick boundary or window end (inf if
+        none: then only the stepping rule ends the step)."""
+        event = math.inf if end is None else end * self.tick_seconds
+        waiting = False
+        for r in self._robots:
+            if r.next < event:
+                event = r.next
+            waiting = waiting or r.phase == WAIT or (r.phase == HOLD and self._commanding)
+        if waiting:
+            event = min(event, (self._tick + 1) * self.tick_seconds)
+        return event
+
+    def _advance_clock(self, state: RobotState, now: float) -> None:
+        """Move the time to ``now``; every tick boundary passed adds a tick to every clock but
+        that of a robot in its bump tick."""
+        tau = self.tick_seconds
+        while (self._tick + 1) * tau <= now:
+            self._tick += 1
+            for i, r in enumerate(self._robots):
+                if r.bump_tick:
+                    r.bump_tick = False
+                else:
+                    state.clock[i] += 1
+        self._now = now
+
+    def _write_state(self, state: RobotState) -> None:
+        for i, r in enumerate(self._robots):
+            state.position[i] = r.x, r.y
+            heading = r.angle % TWO_PI
+            state.heading[i] = 0.0 if heading >= TWO_PI else heading  # -1e-20 % 2π is 2π
+
+    # -- one engine step ----------------------------------------------------------------------
+    def _step(self, state: RobotState, dt: float) -> None:
+        """Push every robot towards its set points for ``dt`` seconds, step and read the
+        bodies."""
+        mass, moment = self.engine.mass, self.engine.moment
+        fmax, tmax = self.accel * dt, self.turn_accel * dt
+        loads = []
+        for r in self._robots:
+            if r.phase == DRIVE:
+                tvx, tvy = r.speed * math.cos(r.angle), r.speed * math.sin(r.angle)
+            else:
+                tvx, tvy = r.tvx, r.tvy
+            dvx, dvy, dw = tvx - r.vx, tvy - r.vy, r.tw - r.w
+            norm = math.hypot(dvx, dvy)
+            if norm > fmax:  # traction: at most mass x max_acceleration
+                dvx, dvy = dvx * (fmax / norm), dvy * (fmax / norm)
+            if abs(dw) > tmax:
+                dw = math.copysign(tmax, dw)
+            loads.append((mass * dvx / dt, mass * dvy / dt, moment * dw / dt))
+        self.engine.push(loads)
+        self.engine.step(dt)
+        for i, (r, (x, y, angle, vx, vy, w)) in enumerate(zip(self._robots, self.engine.read(),
+                                                               strict=True)):
+            travelled = math.hypot(x - r.x, y - r.y)
+            state.odometer[i] += travelled
+            cast = r.cast
+            if cast is not None and cast[0] == r.x and cast[1] == r.y and vx == r.vx \
+                    and vy == r.vy:
+                # same straight line: the first wall along it is the same, nearer
+                r.cast = (x, y, *cast[2:5], cast[5] - travelled, cast[6], cast[7])
+            r.x, r.y, r.angle, r.vx, r.vy, r.w = x, y, angle, vx, vy, w
+
+    def _bumpers(self) -> None:
+        """Driving robots whose bumper is pressed brake, starting now."""
+        for i, r in enumerate(self._robots):
+            if r.phase == DRIVE:
+                latch = self._pressed(i, r)
+                if latch is not None:
+                    r.phase, r.latch = BRAKE, latch
+                    self._start_brake(r)
+
+    def _pressed(self, i: int, r: _Robot) -> tuple[int, int, float, float] | None:
+        """The most frontal contact of robot ``i`` in its bumper arc in the last step, as
+        (kind, index, nx, ny) with the normal pointing at the robot; None if none."""
+        dx, dy = math.cos(r.angle), math.sin(r.angle)
+        best, front = None, self.cos_arc
+        for robot, kind, k, nx, ny in self.engine.contacts:
+            ahead = nx * dx + ny * dy
+            if robot == i and ahead > front:
+                best, front = (kind, k, -nx, -ny), ahead
+        return best
+
+    # -- the stepping rule --------------------------------------------------------------------
+    def _safe_interval(self, horizon: float) -> float:
+        """The longest step (at most ``horizon``) that keeps every robot within ``DEPTH`` of
+        every wall and robot it does not touch yet, and within ``CREEP`` x ``DEPTH`` of what it
+        touches (see the module docstring)."""
+        touching = {c[0] for c in self.engine.contacts}
+        limit = horizon
+        for i, r in enumerate(self._robots):
+            speed = math.hypot(r.vx, r.vy)
+            if speed == 0.0:
+                continue
+            if i in touching:
+                reach = self._wall_reach(r, speed, CREEP * self.depth)
+                limit = min(limit, reach / speed, CONTACT_REACH * self.radius / speed)
+            else:
+                limit = min(limit, self._wall_reach(r, speed, self.depth) / speed)
+        if self.collide:
+            limit = min(limit, self._pair_reach(limit))
+        return limit
+
+    def _wall_reach(self, r: _Robot, speed: float, depth: float) -> float:
+        """Distance the robot may travel along its velocity: to ``depth`` / 2 into the first wall
+        it approaches or — already that deep — to ``depth``."""
+        dx, dy = r.vx / speed, r.vy / speed
+        cast = r.cast
+        if cast is not None and cast[0] == r.x and cast[1] == r.y and cast[2] == dx \
+                and cast[3] == dy and cast[4] == depth:
+            distance, nx, ny = cast[5], cast[6], cast[7]
+        else:
+            distance, _, _, nx, ny = first_hit_scalar(self.world, r.x, r.y, dx, dy,
+                                                      self.radius - depth)
+            r.cast = (r.x, r.y, dx, dy, depth, distance, nx, ny)
+        approach = -(dx * nx + dy * ny)  # depth gained per unit travelled
+        if approach <= 0.0:
+            return distance
+        early = distance - 0.5 * depth / approach
+        return early if early > 0.0 else distance
+
+    def _pair_reach(self, horizon: float) -> float:
+        """The longest step (at most ``horizon``) in which no two approaching robots get closer
+        than 2 radii − ``DEPTH`` (− ``CREEP`` x ``DEPTH`` if they touch), stopping at half that
+        depth where they are not yet there."""
+        robots = self._robots
+        position = np.array([[r.x, r.y] for r in robots])
+        velocity = np.array([[r.vx, r.vy] for r in robots])
+        if not np.any(velocity):
+            return horizon
+        fastest = float(np.max(np.hypot(velocity[:, 0], velocity[:, 1])))
+        span = fastest * horizon if math.isfinite(horizon) else math.inf
+        if math.isfinite(span):
+            first, second = close_pairs(position + 0.5 * horizon * velocity,
+                                        (2 * self.radius + span) * 1.001)
+        else:
+            first, second = close_pairs(position, math.inf)
+        if len(first) == 0:
+            return horizon
+        dp, dv = position[first] - position[second], velocity[first] - velocity[second]
+        touch = np.hypot(dp[:, 0], dp[:, 1]) < 2 * self.radius
+        depth = np.where(touch, CREEP * self.depth, self.depth)
+        times = np.full(len(first), np.inf)
+        for allowed in np.unique(depth):  # contact_times takes one radius per call
+            sel = depth == allowed
+            half = contact_times(dp[sel], dv[sel], self.radius - 0.25 * allowed)
+            full = contact_times(dp[sel], dv[sel], self.radius - 0.5 * allowed)
+            times[sel] = np.where(half > 0.0, half, full)
+        return min(horizon, float(times.min()))
+
+    # -- the controller -----------------------------------------------------------------------
+    def _decide(self, state: RobotState) -> None:
+        """Run the control instants that are due."""
+        for i, r in enumerate(self._robots):
+            if r.next <= self._now:
+                self._instant(state, i, r)
+
+    def _instant(self, state: RobotState, i: int, r: _Robot) -> None:
+        """A control instant of robot ``i``: read its state and set the set points that its
+        motors reach by the next instant."""
+        r.count += 1
+        r.next = r.origin + r.count * self.period
+        if r.phase == DRIVE:
+            if r.speed >= self.cruise:
+                r.next = math.inf  # cruising: nothing to decide until the bumper fires
+            r.speed = min(r.speed + self.accel * self.period, self.cruise)
+        elif r.phase in (BRAKE, HOLD) or (r.phase == TURN and r.settle):
+            if not (self._at_rest(r) and r.tvx == 0.0 and r.tvy == 0.0):
+                self._brake_set_point(r)
+            elif r.phase == BRAKE:
+                r.phase, r.next = BLOCKED, math.inf
+                state.blocked[i] = True
+                self.update_contacts(state, np.array([i]))
+            elif r.phase == HOLD:
+                r.next = math.inf
+            else:
+                r.settle = False
+                self._plan_turn(r)
+        elif r.index < len(r.profile):  # TURN
+            r.tw = r.profile[r.index]
+            r.index += 1
+        elif r.index == len(r.profile):
+            r.tw = 0.0  # the last period of the profile brings the turn to rest
+            r.index += 1
+        elif abs(r.target - r.angle) > TURN_TOL:
+            self._plan_turn(r)  # a correction: contacts disturbed the turn
+        else:
+            r.phase, r.next = WAIT, math.inf
+
+    def _start_turn(self, r: _Robot, rotation: float) -> None:
+        r.phase, r.latch = TURN, None
+        r.target = r.angle + rotation
+        r.settle = True  # brake to rest first (immediate when at rest)
+        r.tvx = r.tvy = r.tw = 0.0
+        self._restart_grid(r)
+
+    def _start_brake(self, r: _Robot) -> None:
+        self._restart_grid(r)
+        r.tw = 0.0
+
+    def _restart_grid(self, r: _Robot) -> None:
+        """Control instants from now on: now, now + h, now + 2h, ..."""
+        r.origin, r.count, r.next = self._now, 0, self._now
+
+    def _brake_set_point(self, r: _Robot) -> None:
+        speed = math.hypot(r.vx, r.vy)
+        keep = max(0.0, 1.0 - self.accel * self.period / speed) if speed > 0.0 else 0.0
+        r.tvx, r.tvy, r.tw = r.vx * keep, r.vy * keep, 0.0
+
+    def _plan_turn(self, r: _Robot) -> None:
+        """Start the turn profile from rest towards ``r.target`` at the current instant."""
+        r.profile = turn_profile(r.target - r.angle, self.turn_rate, self.turn_accel,
+                                 self.period)
+        if r.profile:
+            r.tw, r.index = r.profile[0], 1
+        else:
+            r.tw, r.phase, r.next = 0.0, WAIT, math.inf
+
+    def _at_rest(self, r: _Robot) -> bool:
+        return math.hypot(r.vx, r.vy) <= self._rest_v and abs(r.w) <= self._rest_w
+
+    def _command_done(self) -> bool:
+        return all(not r.commanded or r.phase == WAIT for r in self._robots)
+
+    def _boundary(self, state: RobotState) -> None:
+        """A tick boundary: waiting robots read their bumper (pressed → blocked, else drive);
+        during a turn command they wait for its end."""
+        if self._commanding:
+            return
+        for i, r in enumerate(self._robots):
+            if r.phase == WAIT:
+                self._leave_rest(state, i, r)
+
+    def _release(self, state: RobotState) -> None:
+        """The end of a turn command: turned and holding robots read their bumper."""
+        for i, r in enumerate(self._robots):
+            r.commanded = False
+            if r.phase in (WAIT, HOLD):
+                self._leave_rest(state, i, r)
+
+    def _leave_rest(self, state: RobotState, i: int, r: _Robot) -> None:
+        latch = self._pressed(i, r)
+        if latch is not None:
+            r.phase, r.latch, r.next = BLOCKED, latch, math.inf
+            r.tvx = r.tvy = r.tw = 0.0
+            state.blocked[i] = True
+            self.update_contacts(state, np.array([i]))
+        else:
+            r.phase, r.speed, r.tvx, r.tvy, r.tw = DRIVE, 0.0, 0.0, 0.0, 0.0
+            self._restart_grid(r)
+            self.update_contacts(state, np.array([i]))
+
+    # -- pickling -----------------------------------------------------------------------------
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._placed = False  # the engine lost its space: put the robots back before stepping
