@@ -26,9 +26,12 @@ hardware experiments of Alam, Bobadilla & Shell 2017 (§VI) and Alam & Bobadilla
 * **Restitution 0** (assumed): the sprung bumper absorbs the impact; the robot does not rebound.
 * **Friction 0.3** (assumed): a plastic bumper on painted walls and on another bumper, a common
   textbook value for plastic on wood or paint.
-* **Control period 0.1 s** (chosen): the controller reads the bumper and sets the wheel speeds
-  ten times a second. The OI streams sensor data every 15 ms, so a real controller can react
-  faster; a shorter period is more faithful and costs more steps per bounce.
+* **Control period 0.25 s** (chosen): the controller updates its wheel speed set points four
+  times a second, each time to the mean of the time-optimal speed profile over the coming
+  period, so that the robot is where a continuously accelerating one would be at every update
+  (`bounce_gym.dynamics.profiles`); within a period it moves at that mean. The bumper is a
+  reflex and acts at once. A shorter period follows the ramps more finely and costs more engine
+  steps per bounce (the OI streams sensor data every 15 ms).
 
 Lengths in the world are in *world units*; ``world_scale`` says how many metres one unit is
 (default 1: the lab maps' 1-unit cells are 1 m squares). `PhysicsParams` holds the SI values as
@@ -71,7 +74,8 @@ class PhysicsParams:
             heading).
         restitution: coefficient of restitution of every contact, in [0, 1].
         friction: Coulomb friction coefficient of every contact.
-        control_period: s, how often the controller reads the bumper and sets the wheel speeds.
+        control_period: s, how often the controller sets the wheel speeds (the time resolution
+            of speeding up, braking and turning).
         iterations: iterations of pymunk's contact solver per engine step.
     """
 
@@ -85,7 +89,7 @@ class PhysicsParams:
     bumper_arc: float = 180.0
     restitution: float = 0.0
     friction: float = 0.3
-    control_period: float = 0.1
+    control_period: float = 0.25
     iterations: int = 10
 
     @property

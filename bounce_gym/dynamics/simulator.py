@@ -188,7 +188,10 @@ class BounceDynamics:
         """
         state = self._require_state()
         params = self._parameters(params)
-        if self.n_robots == 1 and state.blocked[0] and not self._timed:
+        if self._timed:  # the bump tick and the drive in one window: turns take ticks
+            self._rotate(np.flatnonzero(state.blocked), params)
+            return self.backend.drive(state, np.inf, until_first_block=True)
+        if self.n_robots == 1 and state.blocked[0]:
             # one robot: the rotation tick (in which a blocked robot does not drive), then the
             # drive to the next contact — on the scalar path where the backend has one
             state.ticks += 1

@@ -120,12 +120,14 @@ class DynamicEngine:
             bodies.append(body)
             disks.append(disk)
         space.add(*bodies, *disks)
-        space.on_collision(_ROBOT_TYPE, _WALL_TYPE, pre_solve=self._on_wall)
+        space.on_collision(_ROBOT_TYPE, _WALL_TYPE, pre_solve=self._on_contact)
         if self.collide:
-            space.on_collision(_ROBOT_TYPE, _ROBOT_TYPE, pre_solve=self._on_robot)
-        self._edge_of = edge_of
-        self._robot_of = {disk: i for i, disk in enumerate(disks)}
+            space.on_collision(_ROBOT_TYPE, _ROBOT_TYPE, pre_solve=self._on_contact)
+        # Chipmunk's shapes and bodies, as the contact handler and the body accessors see them
+        self._edge_of = {wall._shape: k for wall, k in edge_of.items()}
+        self._robot_of = {disk._shape: i for i, disk in enumerate(disks)}
         self._bodies = bodies
+        self._cp_bodies = [body._body for body in bodies]
         self._disks = disks
         self._space = space
 
@@ -139,7 +141,8 @@ class DynamicEngine:
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
-        for key in ("_space", "_edge_of", "_robot_of", "_bodies", "_disks", "_id_base"):
+        for key in ("_space", "_edge_of", "_robot_of", "_bodies", "_cp_bodies", "_disks",
+                    "_id_base"):
             state.pop(key, None)
         state["_space"] = None
         return state
@@ -159,16 +162,23 @@ class DynamicEngine:
     def read(self) -> list[tuple[float, float, float, float, float, float]]:
         """Every body as (x, y, unwrapped angle, vx, vy, angular velocity)."""
         out = []
-        for body in self._bodies:
-            (x, y), (vx, vy) = body.position, body.velocity
-            out.append((x, y, body.angle, vx, vy, body.angular_velocity))
+        for body in self._cp_bodies:
+            p, v = _chipmunk.cpBodyGetPosition(body), _chipmunk.cpBodyGetVelocity(body)
+            out.append((p.x, p.y, _chipmunk.cpBodyGetAngle(body), v.x, v.y,
+                        _chipmunk.cpBodyGetAngularVelocity(body)))
         return out
+
+    def set_velocity(self, i: int, vx: float, vy: float, w: float) -> None:
+        """Set robot ``i``'s velocity and angular velocity (the motors' impulse)."""
+        body = self._cp_bodies[i]
+        _chipmunk.cpBodySetVelocity(body, (vx, vy))
+        _chipmunk.cpBodySetAngularVelocity(body, w)
 
     def push(self, loads: list[tuple[float, float, float]]) -> None:
         """Force (fx, fy) and torque of every body for the next step (cleared by the step)."""
-        for body, (fx, fy, torque) in zip(self._bodies, loads, strict=True):
-            body.force = (fx, fy)
-            body.torque = torque
+        for body, (fx, fy, torque) in zip(self._cp_bodies, loads, strict=True):
+            _chipmunk.cpBodySetForce(body, (fx, fy))
+            _chipmunk.cpBodySetTorque(body, torque)
 
     def step(self, dt: float) -> list[tuple[int, int, int, float, float]]:
         """Advance the space by ``dt`` seconds; returns `contacts`."""
@@ -177,26 +187,26 @@ class DynamicEngine:
         return self.contacts
 
     # -- the contact handler ------------------------------------------------------------------
-    def _on_wall(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        _forget_impulses(arbiter)
-        robot, wall = arbiter.shapes
-        n = arbiter.normal  # from the robot to the wall
-        self.contacts.append((self._robot_of[robot], WALL, self._edge_of[wall], n.x, n.y))
-
-    def _on_robot(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        _forget_impulses(arbiter)
-        a, b = arbiter.shapes
-        n = arbiter.normal  # from a to b
-        i, j = self._robot_of[a], self._robot_of[b]
-        self.contacts.append((i, ROBOT, j, n.x, n.y))
-        self.contacts.append((j, ROBOT, i, -n.x, -n.y))
-
-
-def _forget_impulses(arbiter: pymunk.Arbiter) -> None:
-    """Zero the impulses a persisting contact carries from the last step (warm starting), before
-    the solver uses them. pymunk has no public setter; its own pickling writes these fields."""
-    arb = arbiter._arbiter
-    for k in range(arb.count):
-        contact = arb.contacts[k]
-        contact.jnAcc = 0.0
-        contact.jtAcc = 0.0
+    def _on_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        """Record the contact for the bump sensor, and zero the impulses it carries over from
+        the last step (warm starting) before the solver uses them. Reads Chipmunk's arbiter
+        (shapes a and b, normal from a to b) directly: pymunk has no setter for the impulses
+        (its own pickling writes them) and its wrappers cost more than the step."""
+        arb = arbiter._arbiter
+        for k in range(arb.count):
+            contact = arb.contacts[k]
+            contact.jnAcc = 0.0
+            contact.jtAcc = 0.0
+        n = arb.n
+        robot = self._robot_of.get(arb.a)
+        if robot is None:  # a is the wall
+            other, robot, nx, ny = arb.a, self._robot_of[arb.b], -n.x, -n.y
+        else:
+            other, nx, ny = arb.b, n.x, n.y
+        edge = self._edge_of.get(other)
+        if edge is not None:
+            self.contacts.append((robot, WALL, edge, nx, ny))
+        else:
+            j = self._robot_of[other]
+            self.contacts.append((robot, ROBOT, j, nx, ny))
+            self.contacts.append((j, ROBOT, robot, -nx, -ny))

@@ -90,9 +90,9 @@ import numpy as np
 from bounce_gym.dynamics.backends.base import MotionBackend, close_pairs, contact_times
 from bounce_gym.dynamics.backends.dynamic_engine import ROBOT, WALL, DynamicEngine
 from bounce_gym.dynamics.platform import PhysicsParams
+from bounce_gym.dynamics.profiles import SlowDown, SpeedUp, Turn
 from bounce_gym.dynamics.rules import TWO_PI
 from bounce_gym.dynamics.state import NO_CONTACT, RobotState
-from bounce_gym.dynamics.turn_profile import turn_profile
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds.raycast import first_hit_scalar
 
@@ -113,6 +113,9 @@ REST = 1e-9
 TURN_TOL = 1e-9
 #: Length of a guard step, in ticks, when a robot has crept to ``DEPTH``.
 GUARD = 1e-9
+#: Velocity directions (unit vectors) this close (L1) share their cast: the path then deviates
+#: from the cached line by at most this fraction of its length, far below ``DEPTH``.
+SAME_LINE = 1e-12
 #: Consecutive guard steps after which a drive declares itself stuck (a bug).
 MAX_GUARDS = 100_000
 #: A bumper contact must lie this far (in cosine) inside the arc: an exactly tangential touch
@@ -124,20 +127,22 @@ class _Robot:
     """One robot's body state (as last read from the engine) and controller state."""
 
     __slots__ = ("x", "y", "angle", "vx", "vy", "w", "phase", "speed", "tvx", "tvy", "tw",
-                 "origin", "count", "next", "target", "profile", "index", "settle",
+                 "origin", "count", "next", "profile", "spin", "target", "settle",
                  "bump_tick", "commanded", "latch", "cast")
 
     def __init__(self, x: float, y: float, angle: float) -> None:
         self.x, self.y, self.angle = x, y, angle
         self.vx = self.vy = self.w = 0.0
         self.phase = DRIVE
-        self.speed = 0.0  # DRIVE: the speed set point
-        self.tvx = self.tvy = self.tw = 0.0  # braking and turning: the velocity set points
-        self.origin, self.count, self.next = 0.0, 0, 0.0  # the control grid; next instant
+        self.speed = 0.0  # DRIVE: the speed of the current period
+        self.tvx = self.tvy = self.tw = 0.0  # other phases: the velocity of the current period
+        #: the current profile's start, the instants since then, and the next instant
+        self.origin, self.count, self.next = 0.0, 0, 0.0
+        #: the current profile: SpeedUp (DRIVE), SlowDown (braking) or Turn (TURN)
+        self.profile: SpeedUp | SlowDown | Turn | None = None
+        self.spin: SlowDown | None = None  # braking: the turn rate's slow-down (signed by w)
         self.target = angle  # TURN: the unwrapped heading to reach
-        self.profile: tuple[float, ...] = ()  # TURN: turn rates, one per period
-        self.index = 0  # TURN: position in the profile
-        self.settle = False  # TURN: braking to rest before the profile
+        self.settle = False  # TURN: braking to rest before turning
         self.bump_tick = False  # the current tick is this robot's bump tick
         self.commanded = False  # turning in the current turn command
         #: the contact that pressed the bumper: (kind, index, nx, ny), normal towards the robot
@@ -205,6 +210,8 @@ class DynamicBackend(MotionBackend):
         self.check_start(state)
         self._robots = [_Robot(float(p[0]), float(p[1]), float(h))
                         for p, h in zip(state.position, state.heading, strict=True)]
+        for r in self._robots:
+            r.profile = SpeedUp(self.cruise, self.accel)
         self._now, self._tick, self._commanding = 0.0, 0, False
         self.engine.contacts = []
         self._placed = False
@@ -285,6 +292,13 @@ class DynamicBackend(MotionBackend):
             if end is not None and self._tick >= end and at_boundary:
                 break
             event = self._next_event(end)
+            if self._resting():
+                if not math.isfinite(event):
+                    raise RuntimeError("pymunk dynamic: nothing moves and nothing is awaited")
+                self._advance_clock(state, event)  # nothing moves: no engine step needed
+                if self._now == self._tick * tau:
+                    self._boundary(state)
+                continue
             safe = self._safe_interval(event - self._now)
             if safe < event - self._now:
                 if safe < GUARD * tau:
@@ -309,6 +323,11 @@ class DynamicBackend(MotionBackend):
         state.ticks += elapsed
         self._write_state(state)
         return elapsed
+
+    def _resting(self) -> bool:
+        """Whether every robot stands still with no decision due (waiting or blocked)."""
+        return all(r.next == math.inf and r.phase != DRIVE and r.vx == 0.0 and r.vy == 0.0
+                   and r.w == 0.0 for r in self._robots)
 
     def _prepare_engine(self) -> None:
         """Put the robots into the engine (after a reset or unpickling) and make its contact
@@ -380,10 +399,12 @@ class DynamicBackend(MotionBackend):
             travelled = math.hypot(x - r.x, y - r.y)
             state.odometer[i] += travelled
             cast = r.cast
-            if cast is not None and cast[0] == r.x and cast[1] == r.y and vx == r.vx \
-                    and vy == r.vy:
-                # same straight line: the first wall along it is the same, nearer
-                r.cast = (x, y, *cast[2:5], cast[5] - travelled, cast[6], cast[7])
+            if cast is not None and cast[0] == r.x and cast[1] == r.y and travelled > 0.0:
+                speed = math.hypot(vx, vy)
+                if speed > 0.0 and abs(cast[2] - vx / speed) + abs(cast[3] - vy / speed) \
+                        <= SAME_LINE:
+                    # on along the same line: the first wall along it is the same, nearer
+                    r.cast = (x, y, *cast[2:5], cast[5] - travelled, cast[6], cast[7])
             r.x, r.y, r.angle, r.vx, r.vy, r.w = x, y, angle, vx, vy, w
 
     def _bumpers(self) -> None:
@@ -413,9 +434,10 @@ class DynamicBackend(MotionBackend):
         touches (see the module docstring)."""
         touching = {c[0] for c in self.engine.contacts}
         limit = horizon
+        slow = 0.5 * self.depth / horizon  # slower robots cannot get half DEPTH deep in time
         for i, r in enumerate(self._robots):
             speed = math.hypot(r.vx, r.vy)
-            if speed == 0.0:
+            if speed <= slow:
                 continue
             if i in touching:
                 reach = self._wall_reach(r, speed, CREEP * self.depth)
@@ -431,8 +453,8 @@ class DynamicBackend(MotionBackend):
         it approaches or — already that deep — to ``depth``."""
         dx, dy = r.vx / speed, r.vy / speed
         cast = r.cast
-        if cast is not None and cast[0] == r.x and cast[1] == r.y and cast[2] == dx \
-                and cast[3] == dy and cast[4] == depth:
+        if cast is not None and cast[0] == r.x and cast[1] == r.y and cast[4] == depth \
+                and abs(cast[2] - dx) + abs(cast[3] - dy) <= SAME_LINE:
             distance, nx, ny = cast[5], cast[6], cast[7]
         else:
             distance, _, _, nx, ny = first_hit_scalar(self.world, r.x, r.y, dx, dy,
@@ -481,17 +503,31 @@ class DynamicBackend(MotionBackend):
                 self._instant(state, i, r)
 
     def _instant(self, state: RobotState, i: int, r: _Robot) -> None:
-        """A control instant of robot ``i``: read its state and set the set points that its
-        motors reach by the next instant."""
+        """A control instant of robot ``i``: set the velocity and turn rate of the coming period
+        to the means of its profile over the period (the motors' impulse)."""
+        h = self.period
+        t = self._now - r.origin
         r.count += 1
-        r.next = r.origin + r.count * self.period
+        r.next = r.origin + r.count * h
+        end = r.next - r.origin
         if r.phase == DRIVE:
-            if r.speed >= self.cruise:
-                r.next = math.inf  # cruising: nothing to decide until the bumper fires
-            r.speed = min(r.speed + self.accel * self.period, self.cruise)
+            if t >= r.profile.duration:
+                r.speed, r.next = self.cruise, math.inf  # cruising until the bumper fires
+            else:
+                r.speed = r.profile.mean(t, end)
+            c, s = math.cos(r.angle), math.sin(r.angle)
+            self._kick(i, r, r.speed * c, r.speed * s, 0.0)
         elif r.phase in (BRAKE, HOLD) or (r.phase == TURN and r.settle):
-            if not (self._at_rest(r) and r.tvx == 0.0 and r.tvy == 0.0):
-                self._brake_set_point(r)
+            if t < max(r.profile.duration, r.spin.duration):
+                speed = math.hypot(r.vx, r.vy)
+                keep = r.profile.mean(t, end) / speed if speed > 0.0 else 0.0
+                self._kick(i, r, r.vx * keep, r.vy * keep,
+                           math.copysign(r.spin.mean(t, end), r.w))
+                return
+            self._kick(i, r, 0.0, 0.0, 0.0)
+            if not self._at_rest(r):  # pushed meanwhile: brake again from here
+                self._start_brake(r)
+                self._instant(state, i, r)
             elif r.phase == BRAKE:
                 r.phase, r.next = BLOCKED, math.inf
                 state.blocked[i] = True
@@ -500,46 +536,64 @@ class DynamicBackend(MotionBackend):
                 r.next = math.inf
             else:
                 r.settle = False
-                self._plan_turn(r)
-        elif r.index < len(r.profile):  # TURN
-            r.tw = r.profile[r.index]
-            r.index += 1
-        elif r.index == len(r.profile):
-            r.tw = 0.0  # the last period of the profile brings the turn to rest
-            r.index += 1
-        elif abs(r.target - r.angle) > TURN_TOL:
-            self._plan_turn(r)  # a correction: contacts disturbed the turn
+                self._plan_turn(state, i, r)
+        elif self._now < r.origin + r.profile.duration:  # TURN (ends at that very instant)
+            plateau = r.profile.plateau_end()
+            if t >= r.profile.ramp and end < plateau:  # no change of rate until the last ramp
+                r.count = max(r.count, math.floor(plateau / h))
+                r.next = r.origin + r.count * h
+                end = r.next - r.origin
+            if end > r.profile.duration:
+                r.next, end = r.origin + r.profile.duration, r.profile.duration
+            self._kick(i, r, 0.0, 0.0, r.profile.mean(t, end))
         else:
-            r.phase, r.next = WAIT, math.inf
+            self._kick(i, r, 0.0, 0.0, 0.0)
+            if abs(r.target - r.angle) > TURN_TOL:
+                self._plan_turn(state, i, r)  # a correction: contacts disturbed the turn
+            else:
+                r.phase, r.next = WAIT, math.inf
+
+    def _kick(self, i: int, r: _Robot, vx: float, vy: float, w: float) -> None:
+        """Set the period's velocity and turn rate; the body jumps to them, by at most the
+        change the motors make in a period (``max_acceleration`` x h, turn acceleration x h)."""
+        r.tvx, r.tvy, r.tw = vx, vy, w
+        h = self.period
+        dvx, dvy, dw = vx - r.vx, vy - r.vy, w - r.w
+        budget = self.accel * h
+        norm = math.hypot(dvx, dvy)
+        if norm > budget:
+            vx, vy = r.vx + dvx * (budget / norm), r.vy + dvy * (budget / norm)
+        if abs(dw) > self.turn_accel * h:
+            w = r.w + math.copysign(self.turn_accel * h, dw)
+        if (vx, vy, w) != (r.vx, r.vy, r.w):
+            r.vx, r.vy, r.w = vx, vy, w
+            self.engine.set_velocity(i, vx, vy, w)
 
     def _start_turn(self, r: _Robot, rotation: float) -> None:
         r.phase, r.latch = TURN, None
         r.target = r.angle + rotation
-        r.settle = True  # brake to rest first (immediate when at rest)
-        r.tvx = r.tvy = r.tw = 0.0
-        self._restart_grid(r)
+        r.settle = True  # brake to rest first (at once when at rest)
+        self._start_brake(r)
 
     def _start_brake(self, r: _Robot) -> None:
+        """Slow the robot (and its spin) to rest from its current velocity, from now."""
+        r.profile = SlowDown(math.hypot(r.vx, r.vy), self.accel)
+        r.spin = SlowDown(abs(r.w), self.turn_accel)
         self._restart_grid(r)
-        r.tw = 0.0
 
     def _restart_grid(self, r: _Robot) -> None:
         """Control instants from now on: now, now + h, now + 2h, ..."""
         r.origin, r.count, r.next = self._now, 0, self._now
 
-    def _brake_set_point(self, r: _Robot) -> None:
-        speed = math.hypot(r.vx, r.vy)
-        keep = max(0.0, 1.0 - self.accel * self.period / speed) if speed > 0.0 else 0.0
-        r.tvx, r.tvy, r.tw = r.vx * keep, r.vy * keep, 0.0
-
-    def _plan_turn(self, r: _Robot) -> None:
-        """Start the turn profile from rest towards ``r.target`` at the current instant."""
-        r.profile = turn_profile(r.target - r.angle, self.turn_rate, self.turn_accel,
-                                 self.period)
-        if r.profile:
-            r.tw, r.index = r.profile[0], 1
-        else:
-            r.tw, r.phase, r.next = 0.0, WAIT, math.inf
+    def _plan_turn(self, state: RobotState, i: int, r: _Robot) -> None:
+        """Turn from rest towards ``r.target``, starting at this instant."""
+        delta = r.target - r.angle
+        if delta == 0.0:
+            r.phase, r.next = WAIT, math.inf
+            return
+        r.profile = Turn(delta, self.turn_rate, self.turn_accel, self.period)
+        self._restart_grid(r)
+        self._instant(state, i, r)
 
     def _at_rest(self, r: _Robot) -> bool:
         return math.hypot(r.vx, r.vy) <= self._rest_v and abs(r.w) <= self._rest_w
@@ -567,11 +621,10 @@ class DynamicBackend(MotionBackend):
         latch = self._pressed(i, r)
         if latch is not None:
             r.phase, r.latch, r.next = BLOCKED, latch, math.inf
-            r.tvx = r.tvy = r.tw = 0.0
             state.blocked[i] = True
             self.update_contacts(state, np.array([i]))
         else:
-            r.phase, r.speed, r.tvx, r.tvy, r.tw = DRIVE, 0.0, 0.0, 0.0, 0.0
+            r.phase, r.speed, r.profile = DRIVE, 0.0, SpeedUp(self.cruise, self.accel)
             self._restart_grid(r)
             self.update_contacts(state, np.array([i]))
 
