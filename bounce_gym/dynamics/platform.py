@@ -44,6 +44,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 
+from bounce_gym.dynamics.profiles import Turn
 from bounce_gym.errors import ConfigError
 from bounce_gym.validate import integer, number
 
@@ -101,6 +102,20 @@ class PhysicsParams:
     def max_turn_rate(self) -> float:
         """rad/s: both wheels at ``max_speed`` in opposite directions."""
         return 2.0 * self.max_speed / self.wheel_base
+
+    def tick_seconds(self, step_length: float) -> float:
+        """Duration of a tick: the time to drive ``step_length`` world units at cruise speed."""
+        return step_length * self.world_scale / self.cruise_speed
+
+    def overhead_ticks(self, step_length: float) -> int:
+        """An upper bound on the ticks a bounce spends beyond driving at cruise speed: a full
+        turn (2π, at the turn rate and acceleration), the time lost speeding up and braking,
+        and a control period for each, rounded up, plus one."""
+        turn = Turn(2 * math.pi, math.radians(self.turn_rate), self.turn_acceleration,
+                    self.control_period).duration
+        speed = 1.5 * self.cruise_speed / self.max_acceleration
+        seconds = turn + speed + 3 * self.control_period
+        return math.ceil(seconds / self.tick_seconds(step_length)) + 1
 
 
 #: Parameters that may be ``inf`` (the limit of an ideal robot), with their lower bounds.

@@ -92,9 +92,12 @@ class BounceDynamics:
         radius: robot disk radius (0 = point robot).
         step_length: distance per tick.
         robot_collisions: ``"bounce"`` or ``"ignore"``.
-        backend_options: extra arguments of the backend (`make_backend`: ``physics`` and
-            ``physics_params`` of pymunk, whose default is ``physics="dynamic"``; ``cell``:
-            ``n_bins``, ``corner_rule``).
+        backend_options: extra arguments of the backend (``cell``: ``n_bins``,
+            ``corner_rule``, ``min_sep_cells``).
+        physics: ``"ideal"`` or ``"dynamic"`` (`PHYSICS`); None: ``"dynamic"`` on pymunk,
+            ``"ideal"`` elsewhere.
+        physics_params: with ``"dynamic"``, the physical parameters
+            (`bounce_gym.dynamics.platform.physics_params`: a dict or a `PhysicsParams`).
 
     Randomness comes only from the generator passed to `reset`.
     """
@@ -111,12 +114,19 @@ class BounceDynamics:
         step_length: float = 1.0,
         robot_collisions: str = "ignore",
         backend_options: dict | None = None,
+        physics: str | None = None,
+        physics_params: object = None,
     ) -> None:
         self.rule_name = rule
         self.rule = get_rule(rule)
         self.noise: NoiseModel = make_noise(noise)
+        options = dict(backend_options or {})
+        if physics is not None:
+            options["physics"] = physics
+        if physics_params is not None:
+            options["physics_params"] = physics_params
         self.backend = make_backend(backend, world, n_robots, radius, step_length, robot_collisions,
-                                    **(backend_options or {}))
+                                    **options)
         #: scalar fast path for a lone robot on a backend that can drive robots independently
         self._scalar_path = n_robots == 1 and self.backend.drives_independently
         self._lone = np.zeros(1, dtype=np.int64)
