@@ -4,7 +4,8 @@ The motor controller of ``physics="dynamic"`` (`bounce_gym.dynamics.backends.pym
 commands its wheels at control instants, a period h apart. Between two instants it holds one
 velocity: the **mean** of the continuous profile over the period, so that the robot is exactly
 where the continuous profile would have it at every instant, however long the period. The three
-profiles, each with ``mean(u, v)`` over the times u < v since its start and ``duration``:
+profiles, each with ``mean(u, v, span)`` over the times u < v since its start and
+``duration``:
 
 * `SpeedUp` — from rest to the cruise speed at constant acceleration, then cruising;
 * `SlowDown` — from a speed to rest at constant deceleration;
@@ -41,12 +42,12 @@ class SpeedUp:
             return 0.5 * self.accel * t * t
         return 0.5 * self.top * reach + self.top * (t - reach)
 
-    def mean(self, u: float, v: float) -> float:
-        if v <= u:
-            return 0.0
+    def mean(self, u: float, v: float, span: float) -> float:
+        """The mean speed over [u, v], as the distance covered divided by ``span`` (the
+        length of the step as the caller computes it, so that speed x span is the distance)."""
         if u >= self.duration:
             return self.top
-        return (self.distance(v) - self.distance(u)) / (v - u)
+        return (self.distance(v) - self.distance(u)) / span
 
 
 @dataclass(frozen=True)
@@ -66,10 +67,11 @@ class SlowDown:
             return 0.5 * self.start * stop
         return self.start * t - 0.5 * self.accel * t * t
 
-    def mean(self, u: float, v: float) -> float:
-        if v <= u or u >= self.duration:
+    def mean(self, u: float, v: float, span: float) -> float:
+        """The mean speed over [u, v]: distance covered / ``span`` (see `SpeedUp.mean`)."""
+        if u >= self.duration:
             return 0.0
-        return (self.distance(v) - self.distance(u)) / (v - u)
+        return (self.distance(v) - self.distance(u)) / span
 
 
 class Turn:
@@ -118,10 +120,12 @@ class Turn:
                 turned = size - 0.5 * self.accel * (end - t) ** 2
         return math.copysign(turned, self.delta)
 
-    def mean(self, u: float, v: float) -> float:
-        if v <= u or u >= self.duration:
+    def mean(self, u: float, v: float, span: float) -> float:
+        """The mean turn rate over [u, v]: angle turned / ``span`` (see `SpeedUp.mean`); the
+        angles of consecutive periods add up to ``delta`` exactly, up to rounding."""
+        if u >= self.duration:
             return 0.0
-        return (self.angle(v) - self.angle(u)) / (v - u)
+        return (self.angle(v) - self.angle(u)) / span
 
     def plateau_end(self) -> float:
         """When the turn rate starts falling (the start of the last ramp)."""

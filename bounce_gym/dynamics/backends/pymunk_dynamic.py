@@ -101,16 +101,18 @@ PHASES = ("drive", "brake", "blocked", "turn", "wait", "hold")
 #: Deepest a robot may reach into a wall or another robot, relative to the radius; steps aim at
 #: half of it.
 DEPTH = 2e-7
-#: A robot touching something may reach this many times ``DEPTH`` into what it touches: the
-#: solver stops every approach up to rounding, and this room keeps its residual creep from
-#: shortening the steps. The robot moves at most `CONTACT_REACH` radii per step meanwhile.
-CREEP = 100.0
+#: What a robot touches it may reach this many times ``DEPTH`` into; beyond, a step deepens
+#: a contact by at most 1 % of that. The solver stops every approach, so only kicks of the
+#: motors and the residuals of a stack of contacts ever approach a touched wall or robot.
+TOUCH = 50.0
+#: A robot touching something moves at most this many radii per step.
 CONTACT_REACH = 0.5
 #: Speeds below this fraction of the cruise speed (turn rates below this fraction of
 #: cruise speed / radius) count as rest.
 REST = 1e-9
-#: A turn is done when the heading is within this many radians of the target.
-TURN_TOL = 1e-9
+#: A turn is done when the heading is within this many radians of the target (else a
+#: correcting turn follows).
+TURN_TOL = 1e-12
 #: Length of a guard step, in ticks, when a robot has crept to ``DEPTH``.
 GUARD = 1e-9
 #: Velocity directions (unit vectors) this close (L1) share their cast: the path then deviates
@@ -147,7 +149,7 @@ class _Robot:
         self.commanded = False  # turning in the current turn command
         #: the contact that pressed the bumper: (kind, index, nx, ny), normal towards the robot
         self.latch: tuple[int, int, float, float] | None = None
-        #: cached first wall along the velocity: (x, y, dx, dy, depth, distance, nx, ny)
+        #: cached first wall along the velocity: (x, y, dx, dy, touched, distance, nx, ny)
         self.cast: tuple[float, ...] | None = None
 
     def __getstate__(self) -> dict:
@@ -187,6 +189,11 @@ class DynamicBackend(MotionBackend):
                                     params.restitution, params.friction, params.iterations,
                                     self.collide)
         self._robots: list[_Robot] = []
+        #: per wall: start, direction and squared length, as plain floats
+        self._segments = [(a[0], a[1], b[0] - a[0], b[1] - a[1],
+                           (b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2)
+                          for a, b in zip(world.edge_start.tolist(), world.edge_end.tolist(),
+                                          strict=True)]
         self._now = 0.0  # seconds since reset
         self._tick = 0  # ticks since reset
         self._commanding = False
@@ -429,47 +436,74 @@ class DynamicBackend(MotionBackend):
 
     # -- the stepping rule --------------------------------------------------------------------
     def _safe_interval(self, horizon: float) -> float:
-        """The longest step (at most ``horizon``) that keeps every robot within ``DEPTH`` of
-        every wall and robot it does not touch yet, and within ``CREEP`` x ``DEPTH`` of what it
-        touches (see the module docstring)."""
-        touching = {c[0] for c in self.engine.contacts}
+        """The longest step (at most ``horizon``) in which no robot gets more than ``DEPTH``
+        deep into a wall or robot it does not touch yet, nor more than ``TOUCH`` x ``DEPTH``
+        into one it touches (see the module docstring)."""
+        walls: dict[int, set[int]] = {}
+        pairs: set[tuple[int, int]] = set()
         limit = horizon
-        slow = 0.5 * self.depth / horizon  # slower robots cannot get half DEPTH deep in time
+        for i, kind, k, nx, ny in self.engine.contacts:
+            r = self._robots[i]
+            if kind == WALL:
+                walls.setdefault(i, set()).add(k)
+                limit = min(limit, self._touch_limit(r.vx * nx + r.vy * ny,
+                                                     self.radius - self._edge_distance(r, k)))
+            elif i < k:
+                o = self._robots[k]
+                pairs.add((i, k))
+                gap = math.hypot(o.x - r.x, o.y - r.y)
+                limit = min(limit, self._touch_limit((r.vx - o.vx) * nx + (r.vy - o.vy) * ny,
+                                                     2 * self.radius - gap))
+        slow = 0.5 * self.depth / limit  # slower robots cannot get half DEPTH deep in time
         for i, r in enumerate(self._robots):
             speed = math.hypot(r.vx, r.vy)
             if speed <= slow:
                 continue
-            if i in touching:
-                reach = self._wall_reach(r, speed, CREEP * self.depth)
-                limit = min(limit, reach / speed, CONTACT_REACH * self.radius / speed)
-            else:
-                limit = min(limit, self._wall_reach(r, speed, self.depth) / speed)
+            touched = frozenset(walls.get(i, ()))
+            limit = min(limit, self._wall_reach(r, speed, touched) / speed)
+            if touched or any(i in p for p in pairs):
+                limit = min(limit, CONTACT_REACH * self.radius / speed)
         if self.collide:
-            limit = min(limit, self._pair_reach(limit))
+            limit = min(limit, self._pair_reach(limit, pairs))
         return limit
 
-    def _wall_reach(self, r: _Robot, speed: float, depth: float) -> float:
-        """Distance the robot may travel along its velocity: to ``depth`` / 2 into the first wall
-        it approaches or — already that deep — to ``depth``."""
+    def _touch_limit(self, approach: float, depth: float) -> float:
+        """The longest step in which a contact of ``depth`` approached at speed ``approach``
+        stays within ``TOUCH`` x ``DEPTH`` — or deepens by 1 % of that, once beyond."""
+        if approach <= 0.0:
+            return math.inf
+        room = TOUCH * self.depth
+        return max(room - depth, 0.01 * room) / approach
+
+    def _edge_distance(self, r: _Robot, k: int) -> float:
+        """Distance from the robot's centre to wall segment ``k``."""
+        ax, ay, ex, ey, length2 = self._segments[k]
+        u = min(max(((r.x - ax) * ex + (r.y - ay) * ey) / length2, 0.0), 1.0)
+        return math.hypot(r.x - ax - u * ex, r.y - ay - u * ey)
+
+    def _wall_reach(self, r: _Robot, speed: float, touched: frozenset) -> float:
+        """Distance the robot may travel along its velocity before it is half ``DEPTH`` (or,
+        already that deep, ``DEPTH``) into a wall it approaches and does not touch yet (the
+        walls in ``touched``, and their end vertices, are the solver's)."""
         dx, dy = r.vx / speed, r.vy / speed
         cast = r.cast
-        if cast is not None and cast[0] == r.x and cast[1] == r.y and cast[4] == depth \
+        if cast is not None and cast[0] == r.x and cast[1] == r.y and cast[4] == touched \
                 and abs(cast[2] - dx) + abs(cast[3] - dy) <= SAME_LINE:
             distance, nx, ny = cast[5], cast[6], cast[7]
         else:
             distance, _, _, nx, ny = first_hit_scalar(self.world, r.x, r.y, dx, dy,
-                                                      self.radius - depth)
-            r.cast = (r.x, r.y, dx, dy, depth, distance, nx, ny)
+                                                      self.radius - self.depth, touched)
+            r.cast = (r.x, r.y, dx, dy, touched, distance, nx, ny)
         approach = -(dx * nx + dy * ny)  # depth gained per unit travelled
         if approach <= 0.0:
             return distance
-        early = distance - 0.5 * depth / approach
+        # half DEPTH past the first touch, along the path: as deep as the angle makes it
+        early = distance - self.depth / approach + 0.5 * self.depth
         return early if early > 0.0 else distance
 
-    def _pair_reach(self, horizon: float) -> float:
-        """The longest step (at most ``horizon``) in which no two approaching robots get closer
-        than 2 radii − ``DEPTH`` (− ``CREEP`` x ``DEPTH`` if they touch), stopping at half that
-        depth where they are not yet there."""
+    def _pair_reach(self, horizon: float, touching: set[tuple[int, int]]) -> float:
+        """The longest step (at most ``horizon``) in which no two approaching robots that do
+        not touch yet get closer than 2 radii − ``DEPTH``, stopping at half that depth."""
         robots = self._robots
         position = np.array([[r.x, r.y] for r in robots])
         velocity = np.array([[r.vx, r.vy] for r in robots])
@@ -482,17 +516,18 @@ class DynamicBackend(MotionBackend):
                                         (2 * self.radius + span) * 1.001)
         else:
             first, second = close_pairs(position, math.inf)
+        if touching:
+            free = np.array([(i, j) not in touching for i, j in zip(first.tolist(),
+                                                                     second.tolist(),
+                                                                     strict=True)], dtype=bool)
+            first, second = first[free], second[free]
         if len(first) == 0:
             return horizon
         dp, dv = position[first] - position[second], velocity[first] - velocity[second]
-        touch = np.hypot(dp[:, 0], dp[:, 1]) < 2 * self.radius
-        depth = np.where(touch, CREEP * self.depth, self.depth)
-        times = np.full(len(first), np.inf)
-        for allowed in np.unique(depth):  # contact_times takes one radius per call
-            sel = depth == allowed
-            half = contact_times(dp[sel], dv[sel], self.radius - 0.25 * allowed)
-            full = contact_times(dp[sel], dv[sel], self.radius - 0.5 * allowed)
-            times[sel] = np.where(half > 0.0, half, full)
+        touch = contact_times(dp, dv, self.radius)  # inf for pairs that never touch
+        with np.errstate(divide="ignore"):  # ... such as pairs moving alike
+            # half DEPTH past the first touch, along the relative path
+            times = touch + 0.5 * self.depth / np.hypot(dv[:, 0], dv[:, 1])
         return min(horizon, float(times.min()))
 
     # -- the controller -----------------------------------------------------------------------
@@ -514,15 +549,17 @@ class DynamicBackend(MotionBackend):
             if t >= r.profile.duration:
                 r.speed, r.next = self.cruise, math.inf  # cruising until the bumper fires
             else:
-                r.speed = r.profile.mean(t, end)
+                r.speed = r.profile.mean(t, end, r.next - self._now)
             c, s = math.cos(r.angle), math.sin(r.angle)
             self._kick(i, r, r.speed * c, r.speed * s, 0.0)
         elif r.phase in (BRAKE, HOLD) or (r.phase == TURN and r.settle):
             if t < max(r.profile.duration, r.spin.duration):
+                # never faster than now: contacts may have slowed the robot below its profile
                 speed = math.hypot(r.vx, r.vy)
-                keep = r.profile.mean(t, end) / speed if speed > 0.0 else 0.0
-                self._kick(i, r, r.vx * keep, r.vy * keep,
-                           math.copysign(r.spin.mean(t, end), r.w))
+                span = r.next - self._now
+                keep = min(r.profile.mean(t, end, span) / speed, 1.0) if speed > 0.0 else 0.0
+                spin = math.copysign(min(r.spin.mean(t, end, span), abs(r.w)), r.w)
+                self._kick(i, r, r.vx * keep, r.vy * keep, spin)
                 return
             self._kick(i, r, 0.0, 0.0, 0.0)
             if not self._at_rest(r):  # pushed meanwhile: brake again from here
@@ -545,7 +582,7 @@ class DynamicBackend(MotionBackend):
                 end = r.next - r.origin
             if end > r.profile.duration:
                 r.next, end = r.origin + r.profile.duration, r.profile.duration
-            self._kick(i, r, 0.0, 0.0, r.profile.mean(t, end))
+            self._kick(i, r, 0.0, 0.0, r.profile.mean(t, end, r.next - self._now))
         else:
             self._kick(i, r, 0.0, 0.0, 0.0)
             if abs(r.target - r.angle) > TURN_TOL:
