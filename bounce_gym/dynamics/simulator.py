@@ -310,6 +310,12 @@ class BounceDynamics:
         robots turn; the shorter way to the rule's heading for the rules set by the boundary
         normal — and the backend starts it."""
         state = self.state
+        if self._plain_relative and len(idx) == 1:  # a lone robot's bump in plain floats
+            i = int(idx[0])
+            state.bumps[i] += 1
+            state.clock[i] = 0
+            self.backend.begin_turns(state, idx, [float(params[i]) % TWO_PI])
+            return
         if self.rule_name == "relative":
             rotation = np.mod(params[idx], TWO_PI)
         else:

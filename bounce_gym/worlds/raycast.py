@@ -240,7 +240,10 @@ def _cast_one(f: _Features, radius: float, ox: float, oy: float, dx: float,
             tv = np.where((disc > (GRAZE * radius) ** 2) & (b < 0) & (c >= -2.0 * radius * f.ttol),
                           np.maximum(-b - np.sqrt(disc), 0.0), np.inf)
         if skip:  # a vertex starts its edge and ends the previous one of its ring
-            tv[np.isin(f.vid, list(skip)) | np.isin(f.vprev, list(skip))] = np.inf
+            for j, (start, end) in enumerate(zip(f.vid.tolist(), f.vprev.tolist(),
+                                                 strict=True)):
+                if start in skip or end in skip:
+                    tv[j] = np.inf
         kv = int(np.argmin(tv))
         if tv[kv] < distance:
             distance = float(tv[kv])

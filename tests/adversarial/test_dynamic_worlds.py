@@ -4,7 +4,7 @@ units out, thin walls, needles, combs, 2,000-gons — with actuation noise, alon
 colliding, while clocks, ticks and contacts stay consistent (`bounce_adversarial.checked_loop`).
 
 The quick form runs a few dozen bounces per world; the slow form (``-m slow``) more than 10⁵
-bounces in all, every rule and noise model.
+bounces in all, every rule and noisy model.
 """
 
 import itertools
@@ -49,10 +49,10 @@ def test_quick(tally, world):
 @pytest.mark.timeout(1800)
 @pytest.mark.parametrize("world", WORLDS, ids=_id)
 def test_slow(tally, world):
-    """Every rule x noisy model: one robot (100 bounces each) and four colliding robots (25
-    bounce steps each) — 10 x (100 + ~60) bounces per world, over 10⁵ over the 72 worlds."""
+    """Every rule x noisy model: one robot (130 bounces each) and four colliding robots (30
+    bounce steps each) — over 10⁵ bounces over the 63 worlds (106,000 when written)."""
     index = WORLDS.index(world)
     for k, (rule, noise) in enumerate(COMBOS):
-        _run(tally, world, rule, noise, 0.002, 100, 1000 * index + k)
-        _run(tally, world, rule, noise, 0.01, 25, 1000 * index + k, n_robots=4,
+        _run(tally, world, rule, noise, 0.002, 130, 1000 * index + k)
+        _run(tally, world, rule, noise, 0.01, 30, 1000 * index + k, n_robots=4,
              robot_collisions="bounce")

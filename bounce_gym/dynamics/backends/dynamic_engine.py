@@ -174,11 +174,13 @@ class DynamicEngine:
         _chipmunk.cpBodySetVelocity(body, (vx, vy))
         _chipmunk.cpBodySetAngularVelocity(body, w)
 
-    def push(self, loads: list[tuple[float, float, float]]) -> None:
-        """Force (fx, fy) and torque of every body for the next step (cleared by the step)."""
-        for body, (fx, fy, torque) in zip(self._cp_bodies, loads, strict=True):
-            _chipmunk.cpBodySetForce(body, (fx, fy))
-            _chipmunk.cpBodySetTorque(body, torque)
+    def push(self, loads: dict[int, tuple[float, float, float]]) -> None:
+        """Force (fx, fy) and torque of robots for the next step (cleared by the step), by
+        robot."""
+        bodies = self._cp_bodies
+        for i, (fx, fy, torque) in loads.items():
+            _chipmunk.cpBodySetForce(bodies[i], (fx, fy))
+            _chipmunk.cpBodySetTorque(bodies[i], torque)
 
     def step(self, dt: float) -> list[tuple[int, int, int, float, float]]:
         """Advance the space by ``dt`` seconds; returns `contacts`."""

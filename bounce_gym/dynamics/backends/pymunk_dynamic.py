@@ -97,6 +97,7 @@ from bounce_gym.errors import ConfigError
 from bounce_gym.worlds.raycast import first_hit_scalar
 
 DRIVE, BRAKE, BLOCKED, TURN, WAIT, HOLD = range(6)
+NOTHING: frozenset = frozenset()
 PHASES = ("drive", "brake", "blocked", "turn", "wait", "hold")
 #: Deepest a robot may reach into a wall or another robot, relative to the radius; steps aim at
 #: half of it.
@@ -227,16 +228,21 @@ class DynamicBackend(MotionBackend):
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
         """Blocked robots are those whose controller is in BLOCKED; write their contacts."""
         for i in np.asarray(robots, dtype=np.int64).tolist():
-            r = self._robots[i]
-            state.blocked[i] = r.phase == BLOCKED
-            if r.phase == BLOCKED and r.latch is not None:
-                kind, k, nx, ny = r.latch
-                state.contact_edge[i] = k if kind == WALL else NO_CONTACT
-                state.contact_robot[i] = k if kind == ROBOT else NO_CONTACT
-                state.contact_normal[i] = nx, ny
-            else:
-                state.contact_edge[i] = NO_CONTACT
-                state.contact_robot[i] = NO_CONTACT
+            self._write_contact(state, i, self._robots[i])
+
+    @staticmethod
+    def _write_contact(state: RobotState, i: int, r: _Robot) -> None:
+        """Robot ``i``'s blocked flag and contact, from its controller."""
+        blocked = r.phase == BLOCKED
+        state.blocked[i] = blocked
+        if blocked and r.latch is not None:
+            kind, k, nx, ny = r.latch
+            state.contact_edge[i] = k if kind == WALL else NO_CONTACT
+            state.contact_robot[i] = k if kind == ROBOT else NO_CONTACT
+            state.contact_normal[i] = nx, ny
+        else:
+            state.contact_edge[i] = NO_CONTACT
+            state.contact_robot[i] = NO_CONTACT
 
     def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
         if until_first_block and state.blocked.any():
@@ -245,15 +251,15 @@ class DynamicBackend(MotionBackend):
         end = None if until_first_block else self._tick + int(max_ticks)
         return self._run(state, end, until_first_block)
 
-    def begin_turns(self, state: RobotState, robots: np.ndarray, rotations: np.ndarray) -> None:
+    def begin_turns(self, state: RobotState, robots: np.ndarray, rotations) -> None:
         """Bump ticks of ``robots``: each starts turning in place by its rotation (radians,
-        counter-clockwise positive). The caller counts the bump and restarts the clock."""
-        for i, rotation in zip(robots.tolist(), rotations.tolist(), strict=True):
+        counter-clockwise positive; an array or a list). The caller counts the bump and
+        restarts the clock."""
+        for i, rotation in zip(robots.tolist(), list(rotations), strict=True):
             r = self._robots[i]
-            self._start_turn(r, rotation)
+            self._start_turn(r, float(rotation))
             r.bump_tick = True
-            state.blocked[i] = False
-        self.update_contacts(state, robots)
+            self._write_contact(state, i, r)
 
     def command_turns(self, state: RobotState, robots: np.ndarray,
                       rotations: np.ndarray) -> int:
@@ -290,16 +296,17 @@ class DynamicBackend(MotionBackend):
         while True:
             self._decide(state)
             at_boundary = self._now == self._tick * tau
-            if until_first_block and end is None and state.blocked.any():
+            event, resting, blocked = self._next_event(end)
+            if until_first_block and end is None and blocked:
                 end = self._tick if at_boundary else self._tick + 1
+                event = min(event, end * tau)
             if self._commanding and at_boundary and self._tick > start and self._command_done():
-                end = self._tick
+                end = self._tick  # the window closes here, at this boundary
                 self._commanding = False
                 self._release(state)
             if end is not None and self._tick >= end and at_boundary:
                 break
-            event = self._next_event(end)
-            if self._resting():
+            if resting:
                 if not math.isfinite(event):
                     raise RuntimeError("pymunk dynamic: nothing moves and nothing is awaited")
                 self._advance_clock(state, event)  # nothing moves: no engine step needed
@@ -331,11 +338,6 @@ class DynamicBackend(MotionBackend):
         self._write_state(state)
         return elapsed
 
-    def _resting(self) -> bool:
-        """Whether every robot stands still with no decision due (waiting or blocked)."""
-        return all(r.next == math.inf and r.phase != DRIVE and r.vx == 0.0 and r.vy == 0.0
-                   and r.w == 0.0 for r in self._robots)
-
     def _prepare_engine(self) -> None:
         """Put the robots into the engine (after a reset or unpickling) and make its contact
         order canonical (`DynamicEngine.canonicalize`)."""
@@ -348,18 +350,24 @@ class DynamicBackend(MotionBackend):
             self._placed = True
         self.engine.canonicalize()
 
-    def _next_event(self, end: int | None) -> float:
-        """The earliest control instant, waited-for tick boundary or window end (inf if
-        none: then only the stepping rule ends the step)."""
+    def _next_event(self, end: int | None) -> tuple[float, bool, bool]:
+        """The earliest control instant, waited-for tick boundary or window end (inf if none:
+        then only the stepping rule ends the step); whether every robot stands still with no
+        decision due (waiting or blocked: no engine step is needed until then); and whether some
+        robot is blocked."""
         event = math.inf if end is None else end * self.tick_seconds
-        waiting = False
+        waiting, resting, blocked = False, True, False
         for r in self._robots:
             if r.next < event:
                 event = r.next
-            waiting = waiting or r.phase == WAIT or (r.phase == HOLD and self._commanding)
+            phase = r.phase
+            blocked = blocked or phase == BLOCKED
+            waiting = waiting or phase == WAIT or (phase == HOLD and self._commanding)
+            resting = resting and r.next == math.inf and phase != DRIVE and r.vx == 0.0 \
+                and r.vy == 0.0 and r.w == 0.0
         if waiting:
             event = min(event, (self._tick + 1) * self.tick_seconds)
-        return event
+        return event, resting, blocked
 
     def _advance_clock(self, state: RobotState, now: float) -> None:
         """Move the time to ``now``; every tick boundary passed adds a tick to every clock but
@@ -386,20 +394,23 @@ class DynamicBackend(MotionBackend):
         bodies."""
         mass, moment = self.engine.mass, self.engine.moment
         fmax, tmax = self.accel * dt, self.turn_accel * dt
-        loads = []
-        for r in self._robots:
+        loads = {}
+        for i, r in enumerate(self._robots):
             if r.phase == DRIVE:
                 tvx, tvy = r.speed * math.cos(r.angle), r.speed * math.sin(r.angle)
             else:
                 tvx, tvy = r.tvx, r.tvy
             dvx, dvy, dw = tvx - r.vx, tvy - r.vy, r.tw - r.w
+            if dvx == 0.0 and dvy == 0.0 and dw == 0.0:
+                continue  # on its set points: no force (the engine clears forces every step)
             norm = math.hypot(dvx, dvy)
             if norm > fmax:  # traction: at most mass x max_acceleration
                 dvx, dvy = dvx * (fmax / norm), dvy * (fmax / norm)
             if abs(dw) > tmax:
                 dw = math.copysign(tmax, dw)
-            loads.append((mass * dvx / dt, mass * dvy / dt, moment * dw / dt))
-        self.engine.push(loads)
+            loads[i] = (mass * dvx / dt, mass * dvy / dt, moment * dw / dt)
+        if loads:
+            self.engine.push(loads)
         self.engine.step(dt)
         for i, (r, (x, y, angle, vx, vy, w)) in enumerate(zip(self._robots, self.engine.read(),
                                                                strict=True)):
@@ -442,26 +453,30 @@ class DynamicBackend(MotionBackend):
         walls: dict[int, set[int]] = {}
         pairs: set[tuple[int, int]] = set()
         limit = horizon
-        for i, kind, k, nx, ny in self.engine.contacts:
-            r = self._robots[i]
+        robots = self._robots
+        for i, kind, k, nx, ny in self.engine.contacts:  # what each robot touches
+            r = robots[i]
             if kind == WALL:
-                walls.setdefault(i, set()).add(k)
-                limit = min(limit, self._touch_limit(r.vx * nx + r.vy * ny,
-                                                     self.radius - self._edge_distance(r, k)))
+                approach = r.vx * nx + r.vy * ny
+                if approach > 0.0:  # a wall it leaves cannot be in its way: cast as usual
+                    walls.setdefault(i, set()).add(k)
+                    limit = min(limit, self._touch_limit(
+                        approach, self.radius - self._edge_distance(r, k)))
             elif i < k:
-                o = self._robots[k]
+                o = robots[k]
                 pairs.add((i, k))
                 gap = math.hypot(o.x - r.x, o.y - r.y)
                 limit = min(limit, self._touch_limit((r.vx - o.vx) * nx + (r.vy - o.vy) * ny,
                                                      2 * self.radius - gap))
         slow = 0.5 * self.depth / limit  # slower robots cannot get half DEPTH deep in time
-        for i, r in enumerate(self._robots):
+        touching = {c[0] for c in self.engine.contacts}
+        for i, r in enumerate(robots):
             speed = math.hypot(r.vx, r.vy)
             if speed <= slow:
                 continue
-            touched = frozenset(walls.get(i, ()))
+            touched = frozenset(walls[i]) if i in walls else NOTHING
             limit = min(limit, self._wall_reach(r, speed, touched) / speed)
-            if touched or any(i in p for p in pairs):
+            if i in touching:
                 limit = min(limit, CONTACT_REACH * self.radius / speed)
         if self.collide:
             limit = min(limit, self._pair_reach(limit, pairs))
@@ -567,41 +582,43 @@ class DynamicBackend(MotionBackend):
                 self._instant(state, i, r)
             elif r.phase == BRAKE:
                 r.phase, r.next = BLOCKED, math.inf
-                state.blocked[i] = True
-                self.update_contacts(state, np.array([i]))
+                self._write_contact(state, i, r)
             elif r.phase == HOLD:
                 r.next = math.inf
             else:
                 r.settle = False
                 self._plan_turn(state, i, r)
         elif self._now < r.origin + r.profile.duration:  # TURN (ends at that very instant)
-            plateau = r.profile.plateau_end()
-            if t >= r.profile.ramp and end < plateau:  # no change of rate until the last ramp
-                r.count = max(r.count, math.floor(plateau / h))
-                r.next = r.origin + r.count * h
-                end = r.next - r.origin
-            if end > r.profile.duration:
-                r.next, end = r.origin + r.profile.duration, r.profile.duration
-            self._kick(i, r, 0.0, 0.0, r.profile.mean(t, end, r.next - self._now))
+            # a turn in place is commanded in its segments — speeding up, at the turn rate,
+            # slowing down — each at its mean rate: the heading is exact at their ends, and
+            # turning a disk in place changes nothing else the engine sees
+            turn = r.profile
+            r.next = min(r.origin + bp for bp in (turn.ramp, turn.plateau_end(), turn.duration)
+                         if r.origin + bp > self._now)
+            end = r.next - r.origin
+            self._kick(i, r, 0.0, 0.0, turn.mean(t, end, r.next - self._now),
+                       max(h, turn.ramp))
         else:
-            self._kick(i, r, 0.0, 0.0, 0.0)
+            self._kick(i, r, 0.0, 0.0, 0.0, max(h, r.profile.ramp))
             if abs(r.target - r.angle) > TURN_TOL:
                 self._plan_turn(state, i, r)  # a correction: contacts disturbed the turn
             else:
                 r.phase, r.next = WAIT, math.inf
 
-    def _kick(self, i: int, r: _Robot, vx: float, vy: float, w: float) -> None:
-        """Set the period's velocity and turn rate; the body jumps to them, by at most the
-        change the motors make in a period (``max_acceleration`` x h, turn acceleration x h)."""
+    def _kick(self, i: int, r: _Robot, vx: float, vy: float, w: float,
+              seconds: float | None = None) -> None:
+        """Set the velocity and turn rate of the coming period (segment); the body jumps to
+        them, by at most the change the motors make in ``seconds`` (default: a period) at
+        ``max_acceleration`` and the turn acceleration."""
         r.tvx, r.tvy, r.tw = vx, vy, w
-        h = self.period
+        seconds = self.period if seconds is None else seconds
         dvx, dvy, dw = vx - r.vx, vy - r.vy, w - r.w
-        budget = self.accel * h
+        budget = self.accel * seconds
         norm = math.hypot(dvx, dvy)
         if norm > budget:
             vx, vy = r.vx + dvx * (budget / norm), r.vy + dvy * (budget / norm)
-        if abs(dw) > self.turn_accel * h:
-            w = r.w + math.copysign(self.turn_accel * h, dw)
+        if abs(dw) > self.turn_accel * seconds:
+            w = r.w + math.copysign(self.turn_accel * seconds, dw)
         if (vx, vy, w) != (r.vx, r.vy, r.w):
             r.vx, r.vy, r.w = vx, vy, w
             self.engine.set_velocity(i, vx, vy, w)
@@ -658,12 +675,10 @@ class DynamicBackend(MotionBackend):
         latch = self._pressed(i, r)
         if latch is not None:
             r.phase, r.latch, r.next = BLOCKED, latch, math.inf
-            state.blocked[i] = True
-            self.update_contacts(state, np.array([i]))
         else:
             r.phase, r.speed, r.profile = DRIVE, 0.0, SpeedUp(self.cruise, self.accel)
             self._restart_grid(r)
-            self.update_contacts(state, np.array([i]))
+        self._write_contact(state, i, r)
 
     # -- pickling -----------------------------------------------------------------------------
     def __setstate__(self, state: dict) -> None:
