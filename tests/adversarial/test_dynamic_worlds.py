@@ -10,8 +10,16 @@ bounces in all, every rule and noisy model.
 import itertools
 
 import pytest
-from bounce_adversarial import KINDS, NOISES, RULE_NAMES, TRANSFORMS, InvariantError, \
-    make_world, run_checked, scale_label
+from bounce_adversarial import (
+    KINDS,
+    NOISES,
+    RULE_NAMES,
+    TRANSFORMS,
+    InvariantError,
+    make_world,
+    run_checked,
+    scale_label,
+)
 
 WORLDS = [(kind, scale, shift) for kind in KINDS for scale, shift in TRANSFORMS]
 COMBOS = list(itertools.product(RULE_NAMES, [n for n in NOISES if n != "exact"]))

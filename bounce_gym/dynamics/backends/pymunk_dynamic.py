@@ -1,84 +1,93 @@
 """``physics="dynamic"``: bouncing robots as rigid bodies with motors, a bumper and a clock.
 
 Every robot is a pymunk body — mass, the moment of a uniform disk — in a space of static walls
-(`bounce_gym.dynamics.backends.dynamic_engine`). Nothing sets positions: a **motor controller**
-pushes each body with a force (at most mass × ``max_acceleration``: the wheels' traction) and a
-torque (at most moment × the turn acceleration 2 ``max_acceleration`` / ``wheel_base``) towards
-the velocity and turn rate it commands, and pymunk's solver resolves every contact with the
-configured restitution and friction. Defaults: an iRobot Create 2 (`bounce_gym.dynamics.platform`).
+(`bounce_gym.dynamics.backends.dynamic_engine`), and pymunk's solver resolves every contact with
+the configured restitution and friction. Defaults: an iRobot Create 2
+(`bounce_gym.dynamics.platform`, which cites the source of each number).
 
-**The controller** of each robot is a state machine. It acts at *control instants*, every
-``control_period`` h after the start of its current phase: there it reads the bumper and sets
-the velocity the motors reach by the next instant.
+**Motors.** Nothing sets positions. At each *control instant* the controller sets the velocity
+and turn rate of the coming period and the body jumps to them (the motors' impulse): the
+**mean**, over the period, of a time-optimal continuous profile limited by ``max_acceleration``,
+the turn acceleration 2 ``max_acceleration`` / ``wheel_base``, ``cruise_speed`` and
+``turn_rate`` (`bounce_gym.dynamics.profiles`). The robot is therefore exactly where the
+continuously accelerating robot would be at every instant; it moves at that mean in between.
+Between instants the motors hold the set point against whatever the contacts do with a force of
+at most mass × ``max_acceleration`` (the wheels' traction) and the matching torque. Instants come
+every ``control_period`` h while a robot speeds up or brakes; a turn in place is commanded in
+its own segments (speeding up, at the turn rate, slowing down): a disk turning in place changes
+nothing the engine sees but its heading, which is exact at the segments' ends.
 
-* ``DRIVE``: speed up along the heading by at most ``max_acceleration`` × h per period, up to
-  ``cruise_speed``; the drive direction follows the body's heading. The **bumper** is the
-  engine's contact callback restricted to the front arc: a contact whose point lies within
-  ± ``bumper_arc`` / 2 of the heading presses it, and the robot switches to BRAKE at once.
-* ``BRAKE``: slow down by ``max_acceleration`` × h per period along the current velocity
-  (a glancing robot slides along the wall meanwhile; friction slows it too). At rest (speed and
-  turn rate below 1e-9 of their scales) it is **blocked**: ``RobotState.blocked`` is set, and
-  the contact that pressed the bumper (the most frontal one) is its ``contact_edge`` /
-  ``contact_robot`` / ``contact_normal``, which the bounce rules read.
+**The controller** of each robot is a state machine:
+
+* ``DRIVE``: speed up along the heading to the cruise speed; the drive direction follows the
+  body's heading. The **bumper** is the engine's contact callback restricted to the front arc: a
+  contact point within ± ``bumper_arc`` / 2 of the heading presses it, and the robot brakes at
+  once (a reflex, not waiting for an instant).
+* ``BRAKE``: slow down at ``max_acceleration`` along the current velocity — a glancing robot
+  slides along the wall meanwhile, friction slowing it too. At rest (speed and turn rate below
+  1e-9 of their scales) it is **blocked**: ``RobotState.blocked`` is set, and the contact that
+  pressed the bumper (the most frontal) is its ``contact_edge`` / ``contact_robot`` /
+  ``contact_normal``, which the bounce rules read.
 * ``BLOCKED``: hold still until given a bounce angle. The rule and the noise model
-  (`bounce_gym.dynamics.BounceDynamics`) give the rotation to execute: counter-clockwise by
-  φ plus the noise for Alam's relative rule (the papers' robots turn counter-clockwise by
-  φ; Alam, Bobadilla & Shell 2018, §II), the shorter way to the new heading for the rules
-  defined by the boundary normal.
-* ``TURN``: turn in place by that rotation with the time-optimal profile of
-  `bounce_gym.dynamics.turn_profile` (turn acceleration, ``turn_rate``); if contacts disturbed
-  the turn, a correcting turn follows. A robot still moving when a turn is commanded brakes
-  first.
+  (`bounce_gym.dynamics.BounceDynamics`) give the rotation to execute: counter-clockwise by φ
+  plus the noise for Alam's relative rule (the papers' robots turn counter-clockwise by φ,
+  "commanding a constant angular velocity for a fixed period of time": Alam, Bobadilla & Shell
+  2018, §II), the shorter way to the new heading for the rules set by the boundary normal.
+* ``TURN``: turn in place by that rotation, the time-optimal rest-to-rest profile; if contacts
+  disturbed it, a correcting turn follows. A robot still moving when told to turn brakes first.
 * ``WAIT``: turned; hold still until the next tick boundary, where the controller reads the
-  bumper: pressed → blocked again (another bump, as a rotation that still faces the wall in the
+  bumper: pressed → blocked again (another bump, as when a rotation still faces the wall in the
   papers), else DRIVE from rest.
-* ``HOLD``: a robot told to wait during a turn command (`command_turns`) brakes and holds;
-  it drives on when the command ends.
+* ``HOLD``: a robot told to wait during a turn command (`command_turns`) brakes and holds; it
+  drives on when the command ends.
 
 **Ticks and the clock.** One tick lasts τ = ``step_length`` / cruise speed seconds, so
-``step_length`` keeps its meaning: the distance driven in a tick at cruise speed. A bump tick
+``step_length`` keeps its meaning: the distance driven in a tick at cruise speed. The bump tick
 is the tick in which a blocked robot gets its angle and starts turning: its bump count rises and
 its clock restarts at 0. Every later tick — turning, waiting, driving, braking — adds 1 to the
 clock, so the clock counts the ticks since the last bump, turning time included. ``tick`` runs
-one tick; ``bounce`` runs the bump tick, then ticks until the end of the tick in which some
-robot becomes blocked, as on the exact backends. Turn commands (`command_turns`) last whole
-ticks, until every commanded robot has finished its turn; every clock advances by one per tick.
-The observation and action API of the environments is unchanged.
+one tick; ``bounce`` the bump tick and then ticks until the end of the tick in which some robot
+is blocked, as on the exact backends. Turn commands (`command_turns`) last whole ticks, until
+every commanded robot has turned; every clock advances by one per tick. The observations and
+actions of the environments are unchanged.
 
-**Stepping rule** (conservative advancement). pymunk moves a body in a step along a straight
-segment, with the velocity it had when the step began, and then integrates forces and solves
-contacts. So before each step the motion of every robot in it is known exactly, and the step is
-as long as possible such that
+**Stepping rule** (conservative advancement). pymunk moves each body in a step along a straight
+segment, with the velocity it had when the step began, and only then integrates forces and
+solves contacts. So before each step the motion of every robot in it is known exactly, and the
+step is the longest that
 
-* it ends at the next event: a control instant of a robot that needs one (speeding up,
-  braking, turning, just bumped), a tick boundary that some robot waits for, the end of the
-  drive window;
-* no robot reaches a wall deeper than ``DEPTH`` (2e-7 robot radii): the robot's path is
-  cast (`bounce_gym.worlds.World.first_hit`, a swept disk) against the walls with the radius
-  shrunk by that depth, and the step ends where the robot is half as deep — so a free flight
-  at cruise speed is **one engine step** up to the wall, where the engine detects the overlap
-  and the bumper fires;
-* no two robots come closer than 2 radii − ``DEPTH`` (closed-form contact times of the
-  relative motion, `bounce_gym.dynamics.backends.base.contact_times`), again stopping at half;
-* a robot touching something moves at most half a radius.
+* ends at the next event: a control instant, a tick boundary some robot waits for, the end of
+  the drive window (when every robot stands still and waits, time moves on without a step);
+* takes no robot more than half ``DEPTH`` (1e-7 radii) past its first touch with a wall or
+  robot it does not touch yet: its path is cast against the walls (`bounce_gym.worlds.
+  raycast.first_hit_scalar`, a swept disk of the radius less ``DEPTH``), robot pairs by the
+  closed-form contact time of their relative motion (`bounce_gym.dynamics.backends.base.
+  contact_times`). A free flight at cruise speed is therefore **one engine step** up to the
+  wall, where the engine sees the overlap and the bumper fires;
+* takes no robot deeper than ``TOUCH`` × ``DEPTH`` into what it already touches (from its
+  approach speed; once that deep, by at most 1 % of that per step): the solver stops every
+  approach, so only the motors' impulses and a stack's solver residuals approach a touched wall;
+* moves a robot that touches something by at most half its radius.
 
-**Why nothing passes through a wall or a robot.** A robot moves in a step along the segment
-its velocity gives, and the step ends before that segment takes it deeper than ``DEPTH`` into
-any wall or robot it can reach: every feature along the segment is in the cast. To pass through
-a wall (a zero-thickness segment) or a robot, its centre would have to get within the radius
-minus that depth of it, which the cast forbids; Chipmunk's collision test is discrete, but every
-step ends with overlaps of at most ``DEPTH`` ≪ radius, where its contact normal points the right
-way and restitution ≤ 1 makes the solver stop or reflect the approach. The only step allowed to
-go deeper is a guard step of 1e-9 ticks after a robot has crept to ``DEPTH`` (solver residuals),
-which moves it by 1e-9 of a tick's travel.
+A hundred solver iterations (ten times pymunk's default) keep a disk from creeping into a narrow
+wedge of walls, where the two contact normals nearly oppose each other.
+
+**Why nothing passes through a wall or a robot.** A step moves each robot along a known
+segment, and ends before the segment takes it deeper than ``DEPTH`` into any wall or robot along
+it — all are in the cast — or deeper than ``TOUCH`` × ``DEPTH`` (2e-5 radii, or by 1 % of that
+a step beyond) into one it touches. To pass a wall (a zero-thickness segment) or a robot, a
+robot's centre would have to come within less than its radius of it, half a radius at least
+deeper than any step allows; and Chipmunk, whose collision test is discrete, sees every overlap
+at the end of the step that makes it, while it is a hair deep, with its normal pointing the
+right way, so the solver stops the approach (restitution ≤ 1). Only a guard step of 1e-9 ticks,
+taken when a robot has crept to the limit, moves without the bound.
 
 **Determinism, pickling.** Randomness enters only through the angles given. The engine keeps no
-state between steps but the bodies (see `DynamicEngine`); pickling drops the pymunk space, and
-the next drive rebuilds it from the robots' positions, angles, velocities and turn rates, which
-are stored exactly, so a pickled and restored episode continues bit for bit.
+state between steps but the bodies (`DynamicEngine`); pickling drops the pymunk space, and the
+next drive rebuilds it from the robots' positions, angles, velocities and turn rates, stored
+exactly, so a pickled and restored run continues bit for bit.
 
-The robot's phase and bumper are exposed for renderers: `phase` (codes of `PHASES`) and
-`bumper_pressed`.
+Renderers read each robot's phase and bumper: `phase` (codes of `PHASES`), `bumper_pressed`.
 """
 
 from __future__ import annotations
