@@ -26,6 +26,9 @@ VARIANTS = [
     dict(),
     dict(backend="pymunk", physics="ideal"),
     dict(backend="pymunk"),  # physics="dynamic"
+    dict(backend="pymunk", task="coverage", step_mode="tick", turn_angles=[45, -45]),
+    dict(backend="pymunk", world="grid_20x12", task="monitoring", angles=[[90], [135], [45, 90],
+                                                                          [120]]),
     dict(action_type="continuous", step_mode="tick", history=2, privileged=True),
     dict(task="coverage", n_robots=3, robot_collisions="ignore", robot_radius=0.0),
     dict(world="grid_20x12", task="monitoring", angles=[[90], [135], [45, 90], [120]]),
