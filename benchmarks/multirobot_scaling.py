@@ -2,8 +2,9 @@
 
 Run with ``python -m benchmarks.multirobot_scaling`` (``--steps``, ``--repeats``, ``--ms``,
 ``--step-mode``, ``--unscaled``). Prints agent-steps/s (one agent-step = one robot's share of a parallel env step) at m = 20, 50,
-100 on the kinematic and pymunk backends (``step_mode="bounce"``, ``robot_collisions="bounce"``,
-robot radius 0.3, step length 1, random discrete actions), and the ratio of the rate at the
+100 on the kinematic and pymunk backends (both ``physics="ideal"``; ``step_mode="bounce"``,
+``robot_collisions="bounce"``, robot radius 0.3, step length 1, random discrete actions), and
+the ratio of the rate at the
 largest m to the rate at m = 20 against the target 0.8: the cost per robot-step should not grow
 with m. PettingZoo's ``pistonball_v6`` (20 pistons, random actions, no rendering) is measured in
 the same run as the anchor when ``pettingzoo.butterfly`` imports. Asserts nothing.
@@ -43,7 +44,8 @@ def multi_env(m: int, backend: str, n_steps: int, step_mode: str = "bounce",
               world=None) -> Callable[[], int]:
     """A reset env and a function that runs ``n_steps`` parallel steps, returning agent-steps."""
     env = MultiBounceEnv(world=scaled_grid(m) if world is None else world, n_robots=m,
-                         backend=backend, step_mode=step_mode, max_cycles=10**9)
+                         backend=backend, physics="ideal", step_mode=step_mode,
+                         max_cycles=10**9)
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     n_actions = env.action_space(env.possible_agents[0]).n

@@ -4,7 +4,8 @@ Run with ``make bench`` (or ``python -m benchmarks.run``). Prints a table; asser
 Each row is the best of ``--repeats`` timed runs on one process (one core).
 
 Core rows (issue #2): one robot and 1024 independent robots on the kinematic backend, one robot
-and 20 colliding robots on the pymunk backend, in ``two_rooms`` and ``grid_15x15``.
+and 20 colliding robots on the pymunk backend (its exact model, ``physics="ideal"``), in
+``two_rooms`` and ``grid_15x15``.
 Env rows (issue #3): `BounceEnv` steps/s in bounce mode through ``gym.make`` (with Gymnasium's
 default wrappers) on both backends, Gymnasium's ``CartPole-v1`` in the same run as the floor for
 a Python env, and `MultiBounceEnv` with 20 robots (agent-steps/s).
@@ -49,7 +50,7 @@ def _time(setup: Callable[[], Callable[[], int]], repeats: int) -> float:
 
 
 def single_robot(world, backend: str, n_bounces: int) -> Callable[[], int]:
-    dyn = BounceDynamics(world, 1, backend=backend, radius=0.0)
+    dyn = BounceDynamics(world, 1, backend=backend, radius=0.0, physics="ideal")
     dyn.reset(np.random.default_rng(0))
     dyn.drive_to_contact()
     angles = np.random.default_rng(1).uniform(0.2, 2 * np.pi - 0.2, n_bounces)
@@ -77,7 +78,8 @@ def independent_robots(world, n_robots: int, n_rounds: int) -> Callable[[], int]
 
 
 def colliding_robots(world, backend: str, n_robots: int, n_steps: int) -> Callable[[], int]:
-    dyn = BounceDynamics(world, n_robots, backend=backend, radius=0.3, robot_collisions="bounce")
+    dyn = BounceDynamics(world, n_robots, backend=backend, radius=0.3, robot_collisions="bounce",
+                         physics="ideal")
     dyn.reset(np.random.default_rng(0))
     dyn.drive_to_contact()
     angles = np.random.default_rng(1).uniform(0.2, 2 * np.pi - 0.2, (n_steps, n_robots))
@@ -128,7 +130,7 @@ def env_rows(quick: bool) -> list[tuple[str, str, str, Callable[[], Callable[[],
         ("two_rooms", "kinematic", "Bounce-v0 steps",
          lambda: gym_steps("bounce_gym/Bounce-v0", n, backend="kinematic")),
         ("two_rooms", "pymunk", "Bounce-v0 steps",
-         lambda: gym_steps("bounce_gym/Bounce-v0", n, backend="pymunk")),
+         lambda: gym_steps("bounce_gym/Bounce-v0", n, backend="pymunk", physics="ideal")),
         ("-", "gymnasium", "CartPole-v1 steps", lambda: gym_steps("CartPole-v1", n)),
         ("grid_15x15", "kinematic", "MultiBounce 20 robots",
          lambda: multi_steps(20, n // 20)),

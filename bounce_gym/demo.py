@@ -2,8 +2,9 @@
 
 It prints what the robots sensed and did: the bump/clock string a robot with only a contact
 sensor and a clock observes, how much of the free space a bounce policy covers, whether the exact
-kinematic backend and the pymunk physics backend agree on the walls hit, and how a team of robots
-that bump into each other fares.
+kinematic backend and the pymunk engine's exact model (``physics="ideal"``) agree on the walls
+hit, and how a team of rigid-body robots (pymunk, ``physics="dynamic"``: iRobot Create 2s with
+motors and bumpers) that bump into each other fares.
 """
 
 from __future__ import annotations
@@ -39,7 +40,8 @@ def coverage(world_name: str, phi_deg: float, n_ticks: int, seed: int) -> float:
 
 
 def walls_hit(world_name: str, backend: str, n_bounces: int, seed: int) -> list[int]:
-    dyn = BounceDynamics(worlds.get(world_name), backend=backend, rule="relative")
+    dyn = BounceDynamics(worlds.get(world_name), backend=backend, rule="relative",
+                         physics="ideal")
     dyn.reset(np.random.default_rng(seed))
     dyn.drive_to_contact()
     angles = np.random.default_rng(seed + 1).uniform(0.3, 2 * np.pi - 0.3, n_bounces)
@@ -52,7 +54,7 @@ def walls_hit(world_name: str, backend: str, n_bounces: int, seed: int) -> list[
 
 def team(world_name: str, n_robots: int, n_steps: int, seed: int) -> dict[str, float]:
     dyn = BounceDynamics(worlds.get(world_name), n_robots, backend="pymunk", radius=0.3,
-                         robot_collisions="bounce")
+                         robot_collisions="bounce", physics="dynamic")
     state = dyn.reset(np.random.default_rng(seed))
     dyn.drive_to_contact()
     robot_bumps = 0
@@ -83,13 +85,14 @@ def main(argv: list[str] | None = None) -> None:
     kin = walls_hit("two_rooms", "kinematic", 50, seed)
     phy = walls_hit("two_rooms", "pymunk", 50, seed)
     same = sum(a == b for a, b in zip(kin, phy, strict=True))
-    print("\n3) Exact kinematic vs pymunk physics, 50 random bounces in two_rooms:")
+    print("\n3) Exact kinematic vs pymunk's exact model, 50 random bounces in two_rooms:")
     print(f"   walls hit (kinematic): {kin[:20]} ...")
     print(f"   walls hit (pymunk):    {phy[:20]} ...")
     print(f"   agreement: {same}/50 bounces hit the same wall")
 
     stats = team("grid_15x15", 6, 300, seed)
-    print("\n4) Six disk robots (r = 0.3) in grid_15x15, φ = 135°, pymunk, 300 bounce steps:")
+    print("\n4) Six rigid-body robots (r = 0.3) in grid_15x15, φ = 135°, pymunk dynamic physics, "
+          "300 bounce steps:")
     print(f"   {stats['ticks']} ticks, {stats['bumps']} bumps, of which {stats['robot_bumps']} "
           f"against another robot; {stats['distance']:.0f} cells driven in total")
 

@@ -13,6 +13,11 @@ every robot does one of two things per tick,
 A rotation that still faces the boundary leaves the robot blocked, so the next tick is another
 bump: corners give several bumps in a row, as in the papers' observation strings. Bounce-mode
 stepping (`bounce`) is tick stepping that only stops where some robot needs a new angle.
+
+On a backend whose rotations take time (``physics="dynamic"``, `MotionBackend.turns_take_time`)
+the bump tick *starts* the rotation, which the backend executes at a finite turn rate over as many
+ticks as it needs (the clock counts them), and a turn command lasts until the commanded turns are
+done; see `bounce_gym.dynamics.backends.pymunk_dynamic`.
 """
 
 from __future__ import annotations
@@ -23,19 +28,44 @@ import numpy as np
 
 from bounce_gym.dynamics.backends.base import MotionBackend
 from bounce_gym.dynamics.noise import Exact, NoiseModel, make_noise
+from bounce_gym.dynamics.platform import physics_params
 from bounce_gym.dynamics.rules import TWO_PI, check_parameters, get_rule, wrap
 from bounce_gym.dynamics.state import RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
 
 BACKEND_NAMES = ("kinematic", "pymunk", "cell")
+#: The motion models: ``ideal`` (the papers' exact idealisation: unit-speed straight drives,
+#: instant rotations) on every backend; ``dynamic`` (rigid bodies, motors, a bumper; the default
+#: of the pymunk backend) on pymunk only.
+PHYSICS = ("ideal", "dynamic")
 
 
 def make_backend(name: str, world: World, n_robots: int = 1, radius: float = 0.0,
                  step_length: float = 1.0, robot_collisions: str = "ignore",
                  **options: object) -> MotionBackend:
     """Build a motion backend by name (``kinematic``, ``pymunk`` or ``cell``); imports it on first
-    use. ``options`` go to the backend (the cell backend takes ``n_bins`` and ``corner_rule``)."""
+    use. ``options`` go to the backend: ``physics`` (`PHYSICS`; pymunk's default is
+    ``"dynamic"``, the others have only ``"ideal"``) and, for ``"dynamic"``, ``physics_params``
+    (`bounce_gym.dynamics.platform.physics_params`); the cell backend takes ``n_bins``,
+    ``corner_rule`` and ``min_sep_cells``."""
+    physics = options.pop("physics", None)
+    params = options.pop("physics_params", None)
+    if physics is not None and physics not in PHYSICS:
+        raise ConfigError(f"physics: expected one of {list(PHYSICS)}, got {physics!r}")
+    if name == "pymunk" and physics in (None, "dynamic"):
+        from bounce_gym.dynamics.backends.pymunk_dynamic import DynamicBackend
+        if options:
+            raise ConfigError(f"backend_options: physics 'dynamic' takes only physics_params, "
+                              f"got {sorted(options)}")
+        return DynamicBackend(world, n_robots, radius, step_length, robot_collisions,
+                              physics_params(params))
+    if physics == "dynamic":
+        raise ConfigError(f"physics: backend {name!r} simulates only 'ideal' motion; "
+                          "physics='dynamic' needs backend='pymunk'")
+    if params is not None:
+        raise ConfigError("physics_params: only physics='dynamic' (backend 'pymunk') takes "
+                          "physical parameters")
     if name == "kinematic":
         from bounce_gym.dynamics.backends.kinematic import KinematicBackend as Backend
     elif name == "pymunk":
@@ -55,13 +85,19 @@ class BounceDynamics:
     Args:
         world: the workspace.
         n_robots: number of robots.
-        backend: ``"kinematic"`` (exact, event-driven) or ``"pymunk"`` (physics engine).
+        backend: ``"kinematic"`` (exact, event-driven), ``"pymunk"`` (physics engine) or
+            ``"cell"``.
         rule: bounce rule name, see `bounce_gym.dynamics.rules.RULES`.
         noise: actuation noise (`bounce_gym.dynamics.noise.make_noise` accepts the forms).
         radius: robot disk radius (0 = point robot).
         step_length: distance per tick.
         robot_collisions: ``"bounce"`` or ``"ignore"``.
-        backend_options: extra arguments of the backend (``cell``: ``n_bins``, ``corner_rule``).
+        backend_options: extra arguments of the backend (``cell``: ``n_bins``,
+            ``corner_rule``, ``min_sep_cells``).
+        physics: ``"ideal"`` or ``"dynamic"`` (`PHYSICS`); None: ``"dynamic"`` on pymunk,
+            ``"ideal"`` elsewhere.
+        physics_params: with ``"dynamic"``, the physical parameters
+            (`bounce_gym.dynamics.platform.physics_params`: a dict or a `PhysicsParams`).
 
     Randomness comes only from the generator passed to `reset`.
     """
@@ -78,18 +114,27 @@ class BounceDynamics:
         step_length: float = 1.0,
         robot_collisions: str = "ignore",
         backend_options: dict | None = None,
+        physics: str | None = None,
+        physics_params: object = None,
     ) -> None:
         self.rule_name = rule
         self.rule = get_rule(rule)
         self.noise: NoiseModel = make_noise(noise)
+        options = dict(backend_options or {})
+        if physics is not None:
+            options["physics"] = physics
+        if physics_params is not None:
+            options["physics_params"] = physics_params
         self.backend = make_backend(backend, world, n_robots, radius, step_length, robot_collisions,
-                                    **(backend_options or {}))
+                                    **options)
         #: scalar fast path for a lone robot on a backend that can drive robots independently
         self._scalar_path = n_robots == 1 and self.backend.drives_independently
         self._lone = np.zeros(1, dtype=np.int64)
         #: Alam's rule on continuous headings without noise: one robot's bump in plain floats
         self._plain_relative = (rule == "relative" and isinstance(self.noise, Exact)
                                 and self.backend.bin_width is None)
+        #: rotations take time: the backend executes them (bump ticks start them)
+        self._timed = self.backend.turns_take_time
         self.rng: np.random.Generator | None = None
         self.state: RobotState | None = None
 
@@ -137,6 +182,10 @@ class BounceDynamics:
         state = self._require_state()
         params = self._parameters(params)
         bumping = state.blocked.copy()
+        if self._timed:  # the rotations start with the tick and take their time
+            self._rotate(np.flatnonzero(bumping), params)
+            self.backend.drive(state, 1, until_first_block=False)
+            return bumping
         self.backend.drive(state, 1, until_first_block=False)
         self._rotate(np.flatnonzero(bumping), params)
         return bumping
@@ -149,6 +198,9 @@ class BounceDynamics:
         """
         state = self._require_state()
         params = self._parameters(params)
+        if self._timed:  # the bump tick and the drive in one window: turns take ticks
+            self._rotate(np.flatnonzero(state.blocked), params)
+            return self.backend.drive(state, np.inf, until_first_block=True)
         if self.n_robots == 1 and state.blocked[0]:
             # one robot: the rotation tick (in which a blocked robot does not drive), then the
             # drive to the next contact — on the scalar path where the backend has one
@@ -169,6 +221,9 @@ class BounceDynamics:
         bounce); every other robot waits in place. The tick is not a bump: bump counts are
         unchanged and every clock advances by one tick. A robot that turns to face what it
         touches becomes blocked. Returns the (m,) mask of robots that turned.
+
+        Where rotations take time the command lasts until the turns are done, in whole ticks
+        (`MotionBackend.command_turns`), and every clock advances by one per tick.
         """
         state = self._require_state()
         try:
@@ -182,6 +237,12 @@ class BounceDynamics:
         if np.any(np.isinf(turns)):
             raise ConfigError(f"turns: expected finite angles or NaN, got {turns.tolist()}")
         idx = np.flatnonzero(turning)
+        if self._timed:
+            rotation = turns[idx]
+            if not isinstance(self.noise, Exact):
+                rotation = rotation + self.noise.sample(len(idx), self.rng)
+            self.backend.command_turns(state, idx, rotation)
+            return turning
         heading = state.heading[idx] + turns[idx]
         width = self.backend.bin_width
         if width is not None:
@@ -221,6 +282,9 @@ class BounceDynamics:
         if len(idx) == 0:
             return
         state = self.state
+        if self._timed:
+            self._begin_turns(idx, params)
+            return
         if self._plain_relative and len(idx) == 1:
             # wrap(θ + φ) in plain floats — bit for bit the rule's numpy result, 4 µs cheaper
             i = int(idx[0])
@@ -239,6 +303,29 @@ class BounceDynamics:
             state.bumps[idx] += 1
             state.clock[idx] = 0
         self.backend.update_contacts(state, idx)
+
+    def _begin_turns(self, idx: np.ndarray, params: np.ndarray) -> None:
+        """Bump ticks on a backend whose rotations take time: the rule and the noise give the
+        rotation to execute — counter-clockwise by φ for Alam's relative rule, as the papers'
+        robots turn; the shorter way to the rule's heading for the rules set by the boundary
+        normal — and the backend starts it."""
+        state = self.state
+        if self._plain_relative and len(idx) == 1:  # a lone robot's bump in plain floats
+            i = int(idx[0])
+            state.bumps[i] += 1
+            state.clock[i] = 0
+            self.backend.begin_turns(state, idx, [float(params[i]) % TWO_PI])
+            return
+        if self.rule_name == "relative":
+            rotation = np.mod(params[idx], TWO_PI)
+        else:
+            new = self.rule(state.heading[idx], state.contact_normal[idx], params[idx])
+            rotation = np.mod(new - state.heading[idx] + np.pi, TWO_PI) - np.pi
+        if not isinstance(self.noise, Exact):
+            rotation = rotation + self.noise.sample(len(idx), self.rng)
+        state.bumps[idx] += 1
+        state.clock[idx] = 0
+        self.backend.begin_turns(state, idx, rotation)
 
     def _parameters(self, params: object) -> np.ndarray:
         """Bounce parameters as an (m,) float array; a scalar applies to every robot."""

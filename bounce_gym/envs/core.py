@@ -8,7 +8,9 @@ Per robot the observation is what the robot senses (all values in [0, 1] unless 
   of them needs an angle; the others may be driving) and with turn commands. A lone robot in
   bounce mode ends every step against a wall, so there the observation starts with ``clock``
   (`BounceCore.observes_contact`);
-* ``clock`` — ticks since its last bump, divided by `EnvOptions.max_clock`;
+* ``clock`` — ticks since its last bump, divided by `EnvOptions.max_clock` (at most 1: a bound
+  on the ticks between bumps; under ``physics="dynamic"`` a robot pushed or sliding for longer
+  reads 1);
 * with ``history = k``: the k most recent (segment ticks / max_clock, angle / 360°) pairs, newest
   first, zero-padded — one pair per bump: the clock reading just before it and the angle used;
 * with ``privileged=True``: the true pose (x, y scaled to [0, 1], cos θ, sin θ in [-1, 1]);
@@ -133,9 +135,10 @@ class BounceCore:
         clock_before = state.clock.copy()
         bumps_before = state.bumps.copy()
         if turns is not None and not np.all(np.isnan(turns)):
-            self.dynamics.turn(turns)
+            ticks_before = state.ticks
+            self.dynamics.turn(turns)  # one tick, or as many as the turns take (dynamic)
             bumping[:] = False
-            ticks = 1
+            ticks = state.ticks - ticks_before
         elif self.options.step_mode == "bounce":
             ticks = self.dynamics.bounce(angles)
         else:
@@ -191,7 +194,7 @@ class BounceCore:
         """Push (clock before the bump, angle) onto the sensing history of the robots ``rows``
         that bumped (``clock_before`` and ``angles`` indexed by robot)."""
         self.history[rows, 1:] = self.history[rows, :-1]
-        self.history[rows, 0, 0] = clock_before[rows] / self.options.max_clock
+        self.history[rows, 0, 0] = np.minimum(clock_before[rows] / self.options.max_clock, 1.0)
         self.history[rows, 0, 1] = np.mod(angles[rows], 2 * np.pi) / (2 * np.pi)
 
     def _extend_trails(self) -> None:
@@ -213,7 +216,7 @@ class BounceCore:
         """(m, d) float32 observations, a fresh array every call."""
         state = self.dynamics.state
         opts = self.options
-        parts = [(state.clock / opts.max_clock)[:, None]]
+        parts = [np.minimum(state.clock / opts.max_clock, 1.0)[:, None]]
         if self.observes_contact:
             parts.insert(0, state.blocked[:, None].astype(np.float32))
         if opts.history:
@@ -237,7 +240,7 @@ class BounceCore:
         if opts.privileged or self.task.observation_size:
             return self.observation()[0]
         state = self.dynamics.state
-        values = [int(state.clock[0]) / opts.max_clock]
+        values = [min(int(state.clock[0]) / opts.max_clock, 1.0)]
         if self.observes_contact:
             values.insert(0, float(state.blocked[0]))
         if opts.history:

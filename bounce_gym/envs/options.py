@@ -18,6 +18,15 @@ Arguments (defaults of the single-robot env; the multi-robot envs start from ``g
   (the papers' discrete cell-to-cell model: cell size = ``step_length``, ``cell_bins``
   orientation bins, ``corner_rule``; relative rule and discrete actions whose angles are whole
   bins; one tick = one cell step or one rotation).
+* ``physics``: ``"ideal"`` (the papers' exact model: straight drives at one cell per tick,
+  rotations within a tick) or ``"dynamic"`` (rigid bodies with mass, motors of limited
+  acceleration and turn rate, a bumper, friction and restitution:
+  `bounce_gym.dynamics.backends.pymunk_dynamic`). None (default): ``"dynamic"`` on the pymunk
+  backend, ``"ideal"`` on the others, which have only that one.
+* ``physics_params``: with ``physics="dynamic"``, a dict of the physical parameters of
+  `bounce_gym.dynamics.platform.PhysicsParams` (SI units, angles in degrees; defaults: an iRobot
+  Create 2 and ``world_scale`` = 1 metre per world unit), e.g. ``{"cruise_speed": 0.3,
+  "friction": 0.0}``.
 * ``bounce_rule``: ``"relative"`` (Alam), ``"fixed"``, ``"specular"``, ``"monotonic"``,
   ``"nilles_relative"`` (Nilles).
 * ``angles``: the set Φ, in degrees (default 45, 90, 135); multi-robot: also one set per robot,
@@ -26,7 +35,10 @@ Arguments (defaults of the single-robot env; the multi-robot envs start from ``g
   like ``angles``.
 * ``noise``: None, ``{"type": "reliable", "r": 0.8, "eps_deg": 5}`` or
   ``{"type": "interval", "lo_deg": -5, "hi_deg": 5}``.
-* ``robot_radius`` (default 0, a point), ``step_length`` (default 1: one cell per tick).
+* ``robot_radius`` (default None: a point, or with ``physics="dynamic"`` — where point robots
+  do not exist — the Create 2's 0.17 m in world units, 0.17 / ``world_scale``),
+  ``step_length`` (default 1: one cell per tick; with ``physics="dynamic"`` the distance
+  driven in one tick at cruise speed).
 * ``step_mode``: ``"bounce"`` (one step = the bump, then driving to the next contact) or
   ``"tick"`` (one step = one tick).
 * ``action_type``: ``"discrete"`` or ``"continuous"``.
@@ -58,7 +70,9 @@ from bounce_gym import worlds
 from bounce_gym.cells import CORNER_RULES
 from bounce_gym.dynamics.backends.base import ROBOT_COLLISIONS
 from bounce_gym.dynamics.noise import NoiseModel, make_noise
+from bounce_gym.dynamics.platform import PLATFORM_RADIUS, PhysicsParams, physics_params
 from bounce_gym.dynamics.rules import RULES, check_parameters
+from bounce_gym.dynamics.simulator import PHYSICS
 from bounce_gym.errors import ConfigError, InvalidWorldError
 from bounce_gym.validate import integer, keyword_arguments
 from bounce_gym.validate import number as _number
@@ -80,11 +94,13 @@ ARGUMENTS: dict[str, object] = {
     "task": "free",
     "task_kwargs": None,
     "backend": "kinematic",
+    "physics": None,
+    "physics_params": None,
     "bounce_rule": "relative",
     "angles": (45.0, 90.0, 135.0),
     "angle_range": None,
     "noise": None,
-    "robot_radius": 0.0,
+    "robot_radius": None,
     "step_length": 1.0,
     "step_mode": "bounce",
     "action_type": "discrete",
@@ -123,15 +139,25 @@ class EnvOptions:
     corner_rule: str
     min_sep_cells: int = 0
     turn_angles: np.ndarray = field(default_factory=lambda: np.zeros(0))  # turn commands (multi)
+    physics: str = "ideal"
+    physics_params: PhysicsParams | None = None  # with physics="dynamic"
 
     @cached_property
     def max_clock(self) -> int:
-        """An upper bound on the clock: the longest straight drive, in ticks, plus one."""
-        return math.ceil(self.world.diameter / self.step_length) + 1
+        """An upper bound on the clock: the longest straight drive, in ticks, plus one — plus,
+        with ``physics="dynamic"``, the ticks a bounce spends turning, speeding up and braking
+        (`PhysicsParams.overhead_ticks`; the clock observation saturates at 1 beyond it)."""
+        ticks = math.ceil(self.world.diameter / self.step_length) + 1
+        if self.physics_params is not None:
+            ticks += self.physics_params.overhead_ticks(self.step_length)
+        return ticks
 
     @property
     def backend_options(self) -> dict:
-        """Extra arguments of the motion backend (the cell backend's grid; none otherwise)."""
+        """Extra arguments of the motion backend: the physics of pymunk, the cell backend's
+        grid; none otherwise."""
+        if self.backend == "pymunk":
+            return {"physics": self.physics, "physics_params": self.physics_params}
         if self.backend != "cell":
             return {}
         extra = {"min_sep_cells": self.min_sep_cells} if self.min_sep_cells else {}
@@ -263,6 +289,7 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
                           f"{backend!r}")
     turns = _turn_angles(values["turn_angles"], action_type,
                          cell_bins if backend == "cell" else None)
+    physics, params = _physics(backend, values["physics"], values["physics_params"])
     return EnvOptions(
         world=resolve_world(values["world"]),
         task=values["task"],
@@ -273,7 +300,7 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
         angles=angle_sets,
         angle_range=ranges,
         noise=noise_model,
-        robot_radius=_number("robot_radius", values["robot_radius"], minimum=0.0),
+        robot_radius=_radius(values["robot_radius"], params),
         step_length=_number("step_length", values["step_length"], minimum=0.0, strict=True),
         step_mode=_choice("step_mode", values["step_mode"], STEP_MODES),
         action_type=_choice("action_type", action_type, ACTION_TYPES),
@@ -285,7 +312,37 @@ def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Seque
         corner_rule=corner_rule,
         min_sep_cells=min_sep_cells,  # the cell backend validates it
         turn_angles=turns,
+        physics=physics,
+        physics_params=params,
     )
+
+
+def _physics(backend: str, physics: object, params: object) -> tuple[str, PhysicsParams | None]:
+    """The motion model and, for ``"dynamic"``, its validated physical parameters."""
+    if physics is None:
+        physics = "dynamic" if backend == "pymunk" else "ideal"
+    physics = _choice("physics", physics, PHYSICS)
+    if physics == "dynamic" and backend != "pymunk":
+        raise ConfigError(f"physics: backend {backend!r} simulates only 'ideal' motion; "
+                          "physics='dynamic' needs backend='pymunk'")
+    if physics != "dynamic":
+        if params is not None:
+            raise ConfigError(f"physics_params: only physics='dynamic' takes physical "
+                              f"parameters, got {params!r} with physics={physics!r}")
+        return physics, None
+    return physics, physics_params(params)
+
+
+def _radius(value: object, params: PhysicsParams | None) -> float:
+    """``robot_radius``: None is a point robot, or the platform's radius under dynamic
+    physics, where a body has a size."""
+    if value is None:
+        return 0.0 if params is None else PLATFORM_RADIUS / params.world_scale
+    radius = _number("robot_radius", value, minimum=0.0)
+    if params is not None and radius == 0.0:
+        raise ConfigError("robot_radius: physics='dynamic' simulates bodies of a size and needs "
+                          "robot_radius > 0 (None: the Create 2's 0.17 m / world_scale), got 0")
+    return radius
 
 
 def _turn_angles(value: object, action_type: str, n_bins: int | None) -> np.ndarray:

@@ -15,8 +15,8 @@ arrays with ``_key`` masks, as SyncVectorEnv builds them, except ``cell``, an (N
 (row, col) where SyncVectorEnv has an object array of tuples, and the masks of keys every env
 reports, which are one shared read-only all-True array.
 
-Not batched (a `ConfigError` says why): ``step_mode="tick"``, the pymunk backend, actuation
-noise, rendering and the localization task.
+Not batched (a `ConfigError` says why): ``step_mode="tick"``, the pymunk backend (its exact and
+its dynamic physics), actuation noise, rendering and the localization task.
 """
 
 from __future__ import annotations
@@ -323,6 +323,10 @@ def _unbatchable(opts, task) -> str | None:
     if opts.step_mode != "bounce":
         return ("step_mode 'tick' is not batched (a step is one tick of every robot: use "
                 "step_mode='bounce')")
+    if opts.backend == "pymunk" and opts.physics == "dynamic":
+        return ("physics 'dynamic' steps rigid bodies through turns and drives on one shared "
+                "clock, so its robots cannot each drive to their own contact (use "
+                "physics='ideal' on backend 'kinematic')")
     if opts.backend == "pymunk":
         return ("the pymunk backend steps all bodies in one physics space on a shared clock, "
                 "so its robots cannot each drive to their own contact")

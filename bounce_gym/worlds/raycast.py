@@ -90,7 +90,8 @@ class _Features:
     normals: np.ndarray
     vx: np.ndarray  # reflex vertices (disk radius > 0 only)
     vy: np.ndarray
-    vid: np.ndarray
+    vid: np.ndarray  # the edge each vertex starts
+    vprev: np.ndarray  # the edge each vertex ends
     ttol: float
 
 
@@ -118,10 +119,14 @@ def _features(world: World, radius: float) -> _Features:
         )
         vid = np.flatnonzero(world.reflex) if radius > 0 else np.empty(0, dtype=np.int64)
         verts = world.edge_start[vid]
+        prev = np.arange(world.n_edges) - 1
+        for ring in np.unique(world.edge_ring):
+            idx = np.flatnonzero(world.edge_ring == ring)
+            prev[idx[0]] = idx[-1]
         feats = _Features(
             mat=np.ascontiguousarray(mat), n_edges=len(ax), ax=ax.copy(), ay=ay.copy(),
             ex=ex.copy(), ey=ey.copy(), normals=world.normals,
-            vx=verts[:, 0].copy(), vy=verts[:, 1].copy(), vid=vid, ttol=ttol,
+            vx=verts[:, 0].copy(), vy=verts[:, 1].copy(), vid=vid, vprev=prev[vid], ttol=ttol,
         )
         cache[radius] = feats
     return feats
@@ -184,15 +189,17 @@ def _first_hit_one(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) ->
 
 
 def first_hit_scalar(world: World, ox: float, oy: float, dx: float, dy: float,
-                     radius: float = 0.0) -> tuple[float, int, int, float, float]:
+                     radius: float = 0.0, skip: frozenset = frozenset()
+                     ) -> tuple[float, int, int, float, float]:
     """`first_hit` of one ray from (ox, oy) along (dx, dy), in plain Python numbers:
     ``(distance, edge, vertex, nx, ny)``, bit for bit the values `first_hit` returns (the
-    single-robot hot path)."""
-    return _cast_one(_features(world, radius), radius, ox, oy, dx, dy)
+    single-robot hot path). The edges in ``skip``, and the reflex vertices at their ends, are
+    left out (a robot already touching them)."""
+    return _cast_one(_features(world, radius), radius, ox, oy, dx, dy, skip)
 
 
 def _cast_one(f: _Features, radius: float, ox: float, oy: float, dx: float,
-              dy: float) -> tuple[float, int, int, float, float]:
+              dy: float, skip: frozenset = frozenset()) -> tuple[float, int, int, float, float]:
     """One ray against prepared features. The edge tests come from the same matrix product as
     `_first_hit_chunk`, so they round alike; the choice among edges is a Python loop, cheaper
     than half a dozen numpy calls on the few edges of a typical world."""
@@ -203,6 +210,8 @@ def _cast_one(f: _Features, radius: float, ox: float, oy: float, dx: float,
     distance, edge = math.inf, 0
     for k in range(n):
         den = q[k]
+        if skip and k in skip:
+            continue
         if den >= 0.0 and q[n + k] >= 0.0 and q[2 * n + k] >= 0.0 and q[3 * n + k] >= 0.0:
             num = q[4 * n + k]
             if den == 0.0:  # numpy's x / 0: ±inf, or NaN for 0 / 0
@@ -230,6 +239,11 @@ def _cast_one(f: _Features, radius: float, ox: float, oy: float, dx: float,
         with np.errstate(invalid="ignore"):
             tv = np.where((disc > (GRAZE * radius) ** 2) & (b < 0) & (c >= -2.0 * radius * f.ttol),
                           np.maximum(-b - np.sqrt(disc), 0.0), np.inf)
+        if skip:  # a vertex starts its edge and ends the previous one of its ring
+            for j, (start, end) in enumerate(zip(f.vid.tolist(), f.vprev.tolist(),
+                                                 strict=True)):
+                if start in skip or end in skip:
+                    tv[j] = np.inf
         kv = int(np.argmin(tv))
         if tv[kv] < distance:
             distance = float(tv[kv])

@@ -19,6 +19,8 @@ import numpy as np
 import shapely
 
 from bounce_gym.dynamics import BounceDynamics
+from bounce_gym.dynamics.backends.pymunk_dynamic import DEPTH, TOUCH
+from bounce_gym.dynamics.platform import PLATFORM_RADIUS
 from bounce_gym.dynamics.rules import RULES
 from bounce_gym.worlds import World, generators
 
@@ -30,6 +32,8 @@ NOISES = {
     "interval": {"type": "interval", "lo_deg": -45, "hi_deg": 45},
 }
 RULE_NAMES = sorted(RULES)
+#: the motion models under test: "pymunk" is the pymunk backend's exact model (physics="ideal");
+#: "dynamic" its physics (physics="dynamic"), see `make_dynamics`
 BACKENDS = ("kinematic", "pymunk", "cell")
 KINDS = ("star", "rooms", "grid", "corridor", "needles", "holes", "gon2000", "star2000", "comb")
 SCALES = (1e-4, 1e-2, 1.0, 1e2, 1e5)
@@ -156,6 +160,14 @@ def escaped(world: World, points: np.ndarray, radius: float) -> np.ndarray:
     return out
 
 
+def sunk(world: World, points: np.ndarray, radius: float, depth: float) -> np.ndarray:
+    """Robots of ``physics="dynamic"`` out of the free space: outside the world, or deeper than
+    ``depth`` (+ `slack`) into a wall — a rigid-body contact overlaps by a hair
+    (`bounce_gym.dynamics.backends.pymunk_dynamic.DEPTH`)."""
+    inside = shapely.contains_xy(world.polygon, points[:, 0], points[:, 1])
+    return ~inside | (world.boundary_distance(points) < radius - depth - slack(world))
+
+
 class InvariantError(AssertionError):
     """An invariant failed; the message says which, where and after how many bounces."""
 
@@ -179,9 +191,18 @@ def run_checked(kind: str, world: World, backend: str, rule: str, noise: str, ra
 def make_dynamics(world: World, backend: str, rule: str, noise: str, radius: float,
                   step_length: float, n_robots: int = 1,
                   robot_collisions: str = "ignore") -> BounceDynamics:
+    """``backend`` "pymunk" is pymunk's exact model; "dynamic" is pymunk with
+    ``physics="dynamic"``, its world scaled so that the robot is a Create 2 (radius 0.17 m):
+    the physics is then the same at every scale of the map, and the scales test the numbers."""
+    if backend == "dynamic":
+        return BounceDynamics(world, n_robots, backend="pymunk", rule=rule, noise=NOISES[noise],
+                              radius=radius, step_length=step_length,
+                              robot_collisions=robot_collisions, physics="dynamic",
+                              physics_params={"world_scale": PLATFORM_RADIUS / radius})
     return BounceDynamics(world, n_robots, backend=backend, rule=rule, noise=NOISES[noise],
                           radius=radius, step_length=step_length,
-                          robot_collisions=robot_collisions)
+                          robot_collisions=robot_collisions,
+                          physics="ideal" if backend == "pymunk" else None)
 
 
 def angles_for(rule: str, backend: str, rng: np.random.Generator, shape) -> np.ndarray:
@@ -205,6 +226,9 @@ def checked_loop(dyn: BounceDynamics, n_bounces: int, seed: int) -> dict:
     radius, m = backend.radius, dyn.n_robots
     tol = slack(world)
     touch = 2 * backend.contact_tol + tol
+    #: physics="dynamic": rigid bodies in contact overlap by a hair — new contacts by ``DEPTH``
+    #: radii, touching ones by ``TOUCH`` times that, a stack's solver residuals a little more
+    depth = 2 * TOUCH * DEPTH * radius if backend.turns_take_time else 0.0
     state = dyn.reset(np.random.default_rng(seed))
     rng = np.random.default_rng(seed + 1)
     dyn.drive_to_contact()
@@ -221,7 +245,9 @@ def checked_loop(dyn: BounceDynamics, n_bounces: int, seed: int) -> dict:
         elapsed = dyn.bounce(params[k])
         if not _finite(state):
             raise fail("non-finite state", k)
-        if escaped(world, state.position, radius).any():
+        out = (sunk(world, state.position, radius, depth) if backend.turns_take_time
+               else escaped(world, state.position, radius))
+        if out.any():
             raise fail("escape from the free space", k)
         if state.ticks - ticks0 != elapsed or elapsed < 1:
             raise fail(f"ticks went {ticks0} -> {state.ticks} but bounce returned {elapsed}", k)
@@ -235,14 +261,19 @@ def checked_loop(dyn: BounceDynamics, n_bounces: int, seed: int) -> dict:
                 | (state.clock[~bumped] > clock0[~bumped] + elapsed)):
             raise fail(f"clocks {clock0.tolist()} -> {state.clock.tolist()} in {elapsed} ticks",
                        k)
-        # a tick drives step_length; a diagonal king move of the cell grid √2 cells
-        reach = backend.step_length * (math.sqrt(2) if backend.name == "cell" else 1.0)
+        # a tick drives step_length; a diagonal king move of the cell grid √2 cells; a rigid
+        # body pushed sideways by another one at most √2 cruise speeds (energy), then slows
+        reach = backend.step_length * (math.sqrt(2) if backend.name == "cell"
+                                       or (backend.turns_take_time and backend.collide) else 1.0)
         if np.any(state.odometer - odo0 > elapsed * reach + touch):
             raise fail("drove further than the ticks allow", k)
-        if backend.name != "cell":
+        if backend.turns_take_time:  # braked to rest after its bumper fired, maybe sliding
+            if np.any(state.blocked & (state.contact_edge < 0) & (state.contact_robot < 0)):
+                raise fail("a blocked robot has no bumper contact", k)
+        elif backend.name != "cell":
             _check_contacts(dyn, state, radius, touch, tol, fail, k)
         if backend.collide:
-            _check_disks(backend, state, radius, fail, k)
+            _check_disks(backend, state, radius, fail, k, depth)
     return {"bounces": int(state.bumps.sum()), "escapes": 0, "nonfinite": 0,
             "ticks": int(state.ticks)}
 
@@ -271,8 +302,9 @@ def _check_contacts(dyn, state, radius, touch, tol, fail, k) -> None:
         raise fail("a blocked robot touches nothing", k)
 
 
-def _check_disks(backend, state, radius, fail, k) -> None:
-    """Colliding robots never overlap (disks), or share a cell (the grid)."""
+def _check_disks(backend, state, radius, fail, k, depth=0.0) -> None:
+    """Colliding robots never overlap (disks; rigid bodies by at most ``depth``), or share a
+    cell (the grid)."""
     if backend.name == "cell":
         cells = backend.model.cell_of(state.position, state.heading) % backend.model.n_positions
         if len(set(cells.tolist())) < len(cells):
@@ -281,7 +313,7 @@ def _check_disks(backend, state, radius, fail, k) -> None:
     diff = state.position[:, None] - state.position[None]
     dist = np.hypot(diff[..., 0], diff[..., 1])
     np.fill_diagonal(dist, np.inf)
-    if dist.min() < 2 * radius - 1e-6 * radius - 10 * backend.world.tol:
+    if dist.min() < 2 * radius - depth - 1e-6 * radius - 10 * backend.world.tol:
         raise fail(f"disks overlap: closest centres {dist.min()} < 2R = {2 * radius}", k)
 
 
@@ -291,8 +323,8 @@ def trajectory_digest(rule: str, seed: int, n_bounces: int = 300, backend: str =
     """sha256 of the positions, headings, clocks and ticks of ``n_bounces`` bounces, built from
     ``seed`` alone (nothing is pickled): the same in every process for the same arguments."""
     world = make_world("holes", 0, 100.0, 1e6)
-    dyn = make_dynamics(world, backend, rule, noise, 0.002 if n_robots > 1 else 0.0,
-                        world.diameter / 40, n_robots,
+    radius = 0.002 if n_robots > 1 or backend == "dynamic" else 0.0
+    dyn = make_dynamics(world, backend, rule, noise, radius, world.diameter / 40, n_robots,
                         "bounce" if n_robots > 1 else "ignore")
     state = dyn.reset(np.random.default_rng(seed))
     dyn.drive_to_contact()

@@ -15,8 +15,8 @@ from bounce_adversarial import RULE_NAMES, make_dynamics, make_world, trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
-CASES = [(rule, backend) for rule in RULE_NAMES for backend in ("kinematic", "pymunk")] + [
-    ("relative", "cell")]
+CASES = [(rule, backend) for rule in RULE_NAMES
+         for backend in ("kinematic", "pymunk", "dynamic")] + [("relative", "cell")]
 
 
 @pytest.fixture(scope="module")
@@ -53,10 +53,12 @@ def test_spawned_worker_gives_the_same_trajectories(digests):
     assert got == digests
 
 
+@pytest.mark.parametrize("backend", ["kinematic", "dynamic"])
 @pytest.mark.parametrize("rule", RULE_NAMES)
-def test_pickled_dynamics_continue_identically(rule):
+def test_pickled_dynamics_continue_identically(rule, backend):
     world = make_world("holes", 0, 100.0, 1e6)
-    dyn = make_dynamics(world, "kinematic", rule, "reliable", 0.0, world.diameter / 40)
+    radius = 0.002 * world.diameter if backend == "dynamic" else 0.0
+    dyn = make_dynamics(world, backend, rule, "reliable", radius, world.diameter / 40)
     dyn.reset(np.random.default_rng(3))
     dyn.drive_to_contact()
     copy = pickle.loads(pickle.dumps(dyn))

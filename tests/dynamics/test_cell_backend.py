@@ -106,7 +106,7 @@ def test_multi_robot_grid_rules():
 
 
 def _bump_string(backend: str, world, position, heading, n_ticks: int, radius: float) -> str:
-    dyn = BounceDynamics(world, backend=backend, radius=radius)
+    dyn = BounceDynamics(world, backend=backend, physics="ideal", radius=radius)
     dyn.reset(np.random.default_rng(0), position=position[None], heading=[heading])
     return "".join("1" if dyn.tick(np.pi / 2)[0] else "0" for _ in range(n_ticks))
 

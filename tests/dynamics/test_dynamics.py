@@ -244,7 +244,7 @@ _ROLLOUT = """
 import hashlib, numpy as np
 from bounce_gym import worlds
 from bounce_gym.dynamics import BounceDynamics
-dyn = BounceDynamics(worlds.get("two_rooms"), 3, backend="{backend}", radius=0.2,
+dyn = BounceDynamics(worlds.get("two_rooms"), 3, backend="{backend}", physics="ideal", radius=0.2,
                      robot_collisions="bounce", noise={{"type": "reliable", "r": 0.8, "eps": 0.1}})
 dyn.reset(np.random.default_rng(123))
 angles = np.random.default_rng(7).uniform(0.2, 6.0, (300, 3))
@@ -271,7 +271,7 @@ def test_touching_robot_sliding_past_tangentially_is_no_contact(backend, dx):
     # robot 0 faces robot 1 (touching, radius 0.3) and is blocked; robot 1 drives east,
     # perpendicular to the line of centres: a graze, not a contact (this once stalled the
     # kinematic integrator when rounding made the pair look approaching)
-    dyn = BounceDynamics(worlds.get("grid_10x10"), 2, backend=backend, radius=0.3,
+    dyn = BounceDynamics(worlds.get("grid_10x10"), 2, backend=backend, physics="ideal", radius=0.3,
                          robot_collisions="bounce")
     dyn.reset(np.random.default_rng(0), position=[[2.7, 8.7], [2.7 + dx, 9.3]],
               heading=[math.pi / 2, 0.0])

@@ -25,7 +25,7 @@ def _random_world(seed: int, kind: str):
 
 
 def _run(world, backend: str, rule: str, radius: float, seed: int) -> np.ndarray:
-    dyn = BounceDynamics(world, backend=backend, rule=rule, radius=radius,
+    dyn = BounceDynamics(world, backend=backend, physics="ideal", rule=rule, radius=radius,
                          step_length=world.diameter / 40, noise={"type": "interval", "lo": -0.3, "hi": 0.3})
     state = dyn.reset(np.random.default_rng(seed))
     dyn.drive_to_contact()

@@ -95,7 +95,7 @@ def test_drives_with_the_broad_phase_equal_drives_with_all_pairs(monkeypatch, ba
     m, radius = 40, 0.3
 
     def run():
-        dyn = BounceDynamics(_box(9.0), m, backend=backend, radius=radius,
+        dyn = BounceDynamics(_box(9.0), m, backend=backend, physics="ideal", radius=radius,
                              robot_collisions="bounce",
                              noise={"type": "interval", "lo": -0.2, "hi": 0.2})
         state = dyn.reset(np.random.default_rng(3))

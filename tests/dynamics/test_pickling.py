@@ -29,7 +29,7 @@ def test_rules_pickle_by_name(rule):
 
 @pytest.mark.parametrize(("rule", "backend"), CASES)
 def test_dynamics_round_trip_continues_identically(rule, backend):
-    dyn = BounceDynamics(worlds.get("two_rooms"), 2, backend=backend, rule=rule,
+    dyn = BounceDynamics(worlds.get("two_rooms"), 2, backend=backend, physics="ideal", rule=rule,
                          noise={"type": "reliable", "r": 0.75, "eps_deg": 45})
     dyn.reset(np.random.default_rng(3))
     params = np.random.default_rng(4)

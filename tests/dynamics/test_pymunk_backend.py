@@ -45,7 +45,7 @@ def _pair(world, seed, radius=0.0, **kwargs):
     heading = rng.uniform(0, 2 * np.pi, 1)
     out = []
     for backend in ("kinematic", "pymunk"):
-        dyn = BounceDynamics(world, backend=backend, radius=radius, **kwargs)
+        dyn = BounceDynamics(world, backend=backend, physics="ideal", radius=radius, **kwargs)
         dyn.reset(np.random.default_rng(0), position=pos, heading=heading)
         out.append(dyn)
     return out
@@ -85,7 +85,7 @@ def test_tick_mode_and_corner_bumps_agree():
     """Tick stepping into a corner: the same bump string and clocks as the kinematic backend."""
     strings = []
     for backend in ("kinematic", "pymunk"):
-        dyn = BounceDynamics(SQUARE, backend=backend)
+        dyn = BounceDynamics(SQUARE, backend=backend, physics="ideal")
         dyn.reset(np.random.default_rng(0), position=[[9.5, 9.5]], heading=[np.radians(45)])
         strings.append("".join(str(int(dyn.tick(np.radians(90))[0])) for _ in range(40)))
         strings.append((dyn.state.clock.tolist(), dyn.state.position.round(9).tolist()))
@@ -100,7 +100,7 @@ def test_disk_passing_a_reflex_corner_is_stopped():
     """
     world = World([(-5, -5), (10, -5), (10, 5), (-5, 5)], [[(0, 0), (0, 2), (2, 2), (2, 0)]])
     for backend in ("kinematic", "pymunk"):
-        dyn = BounceDynamics(world, backend=backend, radius=0.3)
+        dyn = BounceDynamics(world, backend=backend, physics="ideal", radius=0.3)
         state = dyn.reset(np.random.default_rng(0), position=[[-3, -0.1]], heading=[0.0])
         dyn.drive_to_contact()
         assert state.contact_edge[0] == 4  # the hole's vertex (0, 0), which starts edge 4
@@ -110,7 +110,7 @@ def test_disk_passing_a_reflex_corner_is_stopped():
 
 @pytest.mark.parametrize("radius", [0.0, 0.3])
 def test_never_leaves_the_free_space(radius):
-    dyn = BounceDynamics(HOLED, backend="pymunk", radius=radius)
+    dyn = BounceDynamics(HOLED, backend="pymunk", physics="ideal", radius=radius)
     state = dyn.reset(np.random.default_rng(3))
     dyn.drive_to_contact()
     rng = np.random.default_rng(4)
@@ -140,7 +140,7 @@ def _same(run_a, run_b):
 
 @pytest.mark.parametrize("n_robots", [1, 4])
 def test_deterministic_and_pickle_round_trip_continues_identically(n_robots):
-    kwargs = {"backend": "pymunk", "radius": 0.5, "robot_collisions": "bounce",
+    kwargs = {"backend": "pymunk", "physics": "ideal", "radius": 0.5, "robot_collisions": "bounce",
               "noise": {"type": "reliable", "r": 0.7, "eps": 0.3}}
     a = BounceDynamics(HOLED, n_robots, **kwargs)
     b = BounceDynamics(HOLED, n_robots, **kwargs)
@@ -158,7 +158,7 @@ def test_multi_robot_never_overlap_and_agree_with_kinematic():
     m, radius = 5, 0.5
     runs = {}
     for backend in ("kinematic", "pymunk"):
-        dyn = BounceDynamics(HOLED, m, backend=backend, radius=radius, robot_collisions="bounce")
+        dyn = BounceDynamics(HOLED, m, backend=backend, physics="ideal", radius=radius, robot_collisions="bounce")
         state = dyn.reset(np.random.default_rng(21))
         rng = np.random.default_rng(22)
         robot_contacts, history = 0, []
@@ -177,7 +177,7 @@ def test_multi_robot_never_overlap_and_agree_with_kinematic():
 
 
 def test_head_on_robots_both_blocked():
-    dyn = BounceDynamics(SQUARE, 2, backend="pymunk", radius=0.5, robot_collisions="bounce")
+    dyn = BounceDynamics(SQUARE, 2, backend="pymunk", physics="ideal", radius=0.5, robot_collisions="bounce")
     state = dyn.reset(np.random.default_rng(0), position=[[2, 4], [8, 4]], heading=[0, np.pi])
     assert dyn.drive_to_contact() == 3
     assert state.blocked.all() and state.contact_robot.tolist() == [1, 0]
@@ -186,7 +186,7 @@ def test_head_on_robots_both_blocked():
 
 
 def test_one_space_per_backend_and_callbacks_are_the_sensor():
-    dyn = BounceDynamics(SQUARE, backend="pymunk")
+    dyn = BounceDynamics(SQUARE, backend="pymunk", physics="ideal")
     dyn.reset(np.random.default_rng(0), position=[[5, 5]], heading=[0.0])
     first = dyn.backend._space
     dyn.reset(np.random.default_rng(0), position=[[5, 5]], heading=[0.0])
@@ -196,7 +196,7 @@ def test_one_space_per_backend_and_callbacks_are_the_sensor():
     dyn.backend._build_space()
     with pytest.raises(RuntimeError, match="pymunk reported no contact between robot 0 and edge"):
         dyn.drive_to_contact()
-    pair = BounceDynamics(SQUARE, 2, backend="pymunk", radius=0.5, robot_collisions="bounce")
+    pair = BounceDynamics(SQUARE, 2, backend="pymunk", physics="ideal", radius=0.5, robot_collisions="bounce")
     pair.reset(np.random.default_rng(0), position=[[2, 4], [8, 4]], heading=[0, np.pi])
     pair.backend._on_touch = lambda arbiter, space, data: None
     pair.backend._build_space()
@@ -206,7 +206,7 @@ def test_one_space_per_backend_and_callbacks_are_the_sensor():
 
 def test_bad_start_positions_raise():
     backend = PymunkBackend(SQUARE, 2, 1.0, 1.0, "bounce")
-    dyn = BounceDynamics(SQUARE, 2, backend="pymunk", radius=1.0, robot_collisions="bounce")
+    dyn = BounceDynamics(SQUARE, 2, backend="pymunk", physics="ideal", radius=1.0, robot_collisions="bounce")
     assert backend.name == dyn.backend.name == "pymunk"
     with pytest.raises(ConfigError, match="not in the free space"):
         dyn.reset(np.random.default_rng(0), position=[[0.5, 4], [5, 4]])
@@ -222,7 +222,7 @@ def test_contact_due_at_once_is_sensed_without_moving():
     """
     results = []
     for backend in ("kinematic", "pymunk"):
-        dyn = BounceDynamics(SQUARE, 2, backend=backend, radius=0.5, robot_collisions="bounce")
+        dyn = BounceDynamics(SQUARE, 2, backend=backend, physics="ideal", radius=0.5, robot_collisions="bounce")
         state = dyn.reset(
             np.random.default_rng(0), position=[[4.5, 4], [5.5, 4]], heading=[0, np.pi / 2]
         )
@@ -236,7 +236,7 @@ def test_contact_due_at_once_is_sensed_without_moving():
 
 
 def test_one_physics_step_per_bounce():
-    dyn = BounceDynamics(HOLED, backend="pymunk", radius=0.3)
+    dyn = BounceDynamics(HOLED, backend="pymunk", physics="ideal", radius=0.3)
     dyn.reset(np.random.default_rng(5))
     dyn.drive_to_contact()
     space = dyn.backend._space
@@ -257,7 +257,7 @@ def test_no_escape_at_grid_vertices_with_45_degree_headings():
     rng = np.random.default_rng(9)
     for radius in (0.0, 0.25):
         for r, c in free[::3]:
-            dyn = BounceDynamics(GRID, backend="pymunk", radius=radius)
+            dyn = BounceDynamics(GRID, backend="pymunk", physics="ideal", radius=radius)
             start = [[xmin + c + 0.5, ymin + r + 0.5]]
             state = dyn.reset(rng, position=start, heading=[np.radians(45)])
             for phi in rng.choice(np.radians([45, 90, 135, 180, 225, 270]), 300):
@@ -275,7 +275,7 @@ def test_reused_space_gives_the_same_episodes_as_a_new_one():
             dyn.bounce(row)
         return dyn.state.position.copy(), dyn.state.clock.copy(), dyn.state.ticks
 
-    kwargs = dict(backend="pymunk", radius=0.4, robot_collisions="bounce")
+    kwargs = dict(backend="pymunk", physics="ideal", radius=0.4, robot_collisions="bounce")
     veteran = BounceDynamics(HOLED, 3, **kwargs)
     for seed in range(5):
         episode(veteran, seed)  # leaves robots resting, filters switched, contacts recorded
@@ -293,7 +293,7 @@ def test_lone_robot_drive_is_the_event_loop_bit_for_bit(backend, world, radius):
     """A lone robot's scalar `drive` against the general event loop, bit for bit: bounces,
     ticks and drive windows of whole, fractional and zero ticks, with and without stopping at
     the first block, on a step length that makes tick rounding matter."""
-    lean, loop = (BounceDynamics(world, backend=backend, radius=radius, step_length=0.7)
+    lean, loop = (BounceDynamics(world, backend=backend, physics="ideal", radius=radius, step_length=0.7)
                   for _ in range(2))
     loop.backend._drive_lone = loop.backend._drive_events  # route every drive to the loop
     for dyn in (lean, loop):

@@ -20,7 +20,11 @@ from bounce_gym.envs.registration import GYM_ENVS
 from bounce_gym.errors import ActionError, ConfigError
 
 IDS = list(GYM_ENVS)
-BACKENDS = ["kinematic", "pymunk"]
+#: the continuous models: exact (kinematic, pymunk ideal) and physical (pymunk dynamic)
+BACKENDS = [pytest.param({"backend": "kinematic"}, id="kinematic"),
+            pytest.param({"backend": "pymunk", "physics": "ideal"}, id="pymunk-ideal"),
+            pytest.param({"backend": "pymunk"}, id="pymunk-dynamic")]
+EXACT = BACKENDS[:2]
 ACTION_TYPES = ["discrete", "continuous"]
 STEP_MODES = ["bounce", "tick"]
 
@@ -75,7 +79,7 @@ def test_localization_filter_needs_discrete_actions():
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("env_id", IDS)
 def test_gymnasium_check_env(env_id, backend, action_type, step_mode):
-    env = make(env_id, backend=backend, action_type=action_type, step_mode=step_mode)
+    env = make(env_id, **backend, action_type=action_type, step_mode=step_mode)
     with no_warnings() as rec:
         check_env(env.unwrapped, skip_render_check=True)
     assert rec == []
@@ -88,7 +92,7 @@ def test_gymnasium_check_env(env_id, backend, action_type, step_mode):
 @pytest.mark.parametrize("env_id", IDS)
 def test_passive_env_checker(env_id, backend, action_type, step_mode):
     with no_warnings() as rec:
-        env = make(env_id, backend=backend, action_type=action_type, step_mode=step_mode)
+        env = make(env_id, **backend, action_type=action_type, step_mode=step_mode)
         env.reset(seed=1)
         env.action_space.seed(1)
         for _ in range(10):
@@ -123,8 +127,8 @@ def _assert_same_step(a, b, where):
 @pytest.mark.parametrize("env_id", IDS)
 def test_determinism_rollout(env_id, backend, step_mode):
     """Gymnasium's test_env_determinism_rollout: 50 exactly equal steps of two instances."""
-    env_1 = gym.make(env_id, backend=backend, step_mode=step_mode)
-    env_2 = gym.make(env_id, backend=backend, step_mode=step_mode)
+    env_1 = gym.make(env_id, **backend, step_mode=step_mode)
+    env_2 = gym.make(env_id, **backend, step_mode=step_mode)
     obs_1, info_1 = env_1.reset(seed=0)
     obs_2, info_2 = env_2.reset(seed=0)
     assert data_equivalence(obs_1, obs_2, exact=True)
@@ -148,7 +152,7 @@ def test_determinism_rollout(env_id, backend, step_mode):
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("env_id", IDS)
 def test_pickle_mid_episode(env_id, backend, wrapped):
-    env = gym.make(env_id, backend=backend)
+    env = gym.make(env_id, **backend)
     if not wrapped:
         env = env.unwrapped
     env.reset(seed=3)
@@ -200,8 +204,8 @@ def test_render_rgb_array_after_reset_and_step(env_id, step_mode):
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("env_id", IDS)
 def test_rendering_does_not_change_observations(env_id, backend):
-    plain = gym.make(env_id, backend=backend)
-    drawn = gym.make(env_id, backend=backend, render_mode="rgb_array")
+    plain = gym.make(env_id, **backend)
+    drawn = gym.make(env_id, **backend, render_mode="rgb_array")
     assert data_equivalence(plain.reset(seed=5), drawn.reset(seed=5), exact=True)
     drawn.render()
     plain.action_space.seed(5)
@@ -226,7 +230,7 @@ def test_memory_flat_over_10000_resets(backend):
     resets run untraced; a window of 1,000 resets is then measured with tracemalloc (< 100 kB,
     i.e. < 1 MB per 10,000 resets). The pymunk backend rebuilds its Space on every reset.
     """
-    envs = [gym.make(env_id, backend=backend).unwrapped for env_id in IDS]
+    envs = [gym.make(env_id, **backend).unwrapped for env_id in IDS]
     for seed, env in enumerate(envs):
         env.reset(seed=seed)
         env.step(env.action_space.sample())
@@ -256,10 +260,10 @@ def test_memory_flat_over_10000_resets(backend):
     assert growth < 100_000, f"{growth} bytes retained over 1,000 resets"
 
 
-@pytest.mark.parametrize("backend", ["kinematic", "pymunk"])
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_reset_leaves_no_cyclic_garbage(backend):
     """Memory of an old episode is freed by reference counting, not only by the cyclic GC."""
-    env = gym.make("bounce_gym/Bounce-v0", backend=backend).unwrapped
+    env = gym.make("bounce_gym/Bounce-v0", **backend).unwrapped
     env.reset(seed=0)
     env.step(0)
     gc.collect()
@@ -384,7 +388,7 @@ def test_step_before_reset_raises():
 def test_bounce_mode_every_step_ends_in_contact(env_id, backend):
     """Every bounce-mode step ends against a wall — so a lone robot's observation leaves out
     ``contact`` (it would always read 1) and starts with the clock."""
-    env = gym.make(env_id, backend=backend)
+    env = gym.make(env_id, **backend)
     base = env.unwrapped
     assert not base.core.observes_contact
     obs, info = env.reset(seed=11)
@@ -405,7 +409,7 @@ def test_bounce_mode_every_step_ends_in_contact(env_id, backend):
             assert base.robot_state.blocked[0]
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("backend", EXACT)
 def test_square_wall_loop_clock_bounce_mode(backend):
     """(1.5, 0.5) heading East in the 10 x 10 square, φ = 90° (relative): the CCW wall loop.
 
@@ -413,7 +417,7 @@ def test_square_wall_loop_clock_bounce_mode(backend):
     and drives 9.5 units = 10 ticks to (10, 10); every later bounce is 1 + 10 ticks along a
     10-unit wall.
     """
-    env = square_env(backend=backend)
+    env = square_env(**backend)
     obs, info = env.reset(seed=0, options={"start": SQUARE_LOOP_START})
     np.testing.assert_allclose(info["position"], [10.0, 0.5], atol=1e-9)
     assert (info["clock"], info["ticks"], info["bumps"]) == (9, 9, 0)
@@ -434,9 +438,9 @@ def test_square_wall_loop_clock_bounce_mode(backend):
         assert reward == 0.0 and not terminated and not truncated
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("backend", EXACT)
 def test_square_wall_loop_clock_tick_mode(backend):
-    env = square_env(backend=backend, step_mode="tick")
+    env = square_env(**backend, step_mode="tick")
     obs, info = env.reset(seed=0, options={"start": SQUARE_LOOP_START})
     assert obs[0] == 0.0 and obs[1] == 0.0 and info["clock"] == 0
     clocks, contacts = [], []
@@ -455,8 +459,8 @@ def test_square_wall_loop_clock_tick_mode(backend):
 def test_tick_and_bounce_mode_give_the_same_contacts(backend):
     rng = np.random.default_rng(2)
     actions = rng.integers(0, 3, size=30).tolist()
-    bounce = BounceEnv(backend=backend)
-    tick = BounceEnv(backend=backend, step_mode="tick")
+    bounce = BounceEnv(**backend)
+    tick = BounceEnv(**backend, step_mode="tick")
     _, info = bounce.reset(seed=7)
     expected = [(info["ticks"], info["bumps"], info["position"])]
     for a in actions:
@@ -544,7 +548,7 @@ def test_navigation_tick_mode_reaches_goal_and_charges_ticks():
 def test_navigation_bounce_mode_terminates_on_first_step(backend):
     """Reset drives to (10, 0.5); the first bounce turns North along x = 10 and enters the disc
     of radius 1 about (9.5, 5) after 4.5 - sqrt(0.75) = 3.63 units: 1 bump + 4 drive ticks."""
-    env = square_env(task="navigation", backend=backend,
+    env = square_env(task="navigation", **backend,
                      task_kwargs={"goal": {"position": [9.5, 5.0], "heading": math.pi / 2},
                                   "reward": "plan_cost", "w1": 1.0, "w2": 100.0,
                                   "goal_bonus": 50.0})

@@ -11,6 +11,7 @@ from pettingzoo.test import (
     api_test,
     max_cycles_test,
     parallel_api_test,
+    parallel_seed_test,
     render_test,
     seed_test,
     state_test,
@@ -23,7 +24,11 @@ from bounce_gym.errors import ActionError, ConfigError
 
 VARIANTS = [
     dict(),
-    dict(backend="pymunk"),
+    dict(backend="pymunk", physics="ideal"),
+    dict(backend="pymunk"),  # physics="dynamic"
+    dict(backend="pymunk", task="coverage", step_mode="tick", turn_angles=[45, -45]),
+    dict(backend="pymunk", world="grid_20x12", task="monitoring", angles=[[90], [135], [45, 90],
+                                                                          [120]]),
     dict(action_type="continuous", step_mode="tick", history=2, privileged=True),
     dict(task="coverage", n_robots=3, robot_collisions="ignore", robot_radius=0.0),
     dict(world="grid_20x12", task="monitoring", angles=[[90], [135], [45, 90], [120]]),
@@ -48,10 +53,18 @@ def test_aec_api(kwargs):
     api_test(multi_bounce_v0.env(**kwargs), num_cycles=200)
 
 
-@pytest.mark.parametrize("kwargs", [dict(), dict(backend="pymunk", noise={"type": "reliable",
-                                                                         "r": 0.5, "eps": 0.2})])
+NOISY = {"type": "reliable", "r": 0.5, "eps": 0.2}
+
+
+@pytest.mark.parametrize("kwargs", [dict(), dict(backend="pymunk", physics="ideal", noise=NOISY),
+                                    dict(backend="pymunk", noise=NOISY)])
 def test_seed_tests(kwargs):
     seed_test(lambda **kw: multi_bounce_v0.env(**kwargs, **kw), num_cycles=100)
+
+
+@pytest.mark.parametrize("kwargs", [dict(), dict(backend="pymunk", noise=NOISY)])
+def test_parallel_seed_test(kwargs):
+    parallel_seed_test(lambda **kw: multi_bounce_v0.parallel_env(**kwargs, **kw))
 
 
 def test_max_cycles():
@@ -82,10 +95,12 @@ def _rollout(env, seed, n_steps):
     return out
 
 
-@pytest.mark.parametrize("backend", ["kinematic", "pymunk"])
+@pytest.mark.parametrize("backend", [dict(backend="kinematic"),
+                                     dict(backend="pymunk", physics="ideal"),
+                                     dict(backend="pymunk")], ids=["kinematic", "ideal", "dynamic"])
 def test_multi_step_parallel_determinism(backend):
     """The released parallel_seed_test checks one step only (PettingZoo #1437): check 250."""
-    kwargs = dict(backend=backend, n_robots=5, noise={"type": "reliable", "r": 0.7, "eps": 0.3},
+    kwargs = dict(**backend, n_robots=5, noise={"type": "reliable", "r": 0.7, "eps": 0.3},
                   task="coverage", max_cycles=250)
     a = _rollout(MultiBounceEnv(**kwargs), 3, 250)
     b = _rollout(MultiBounceEnv(**kwargs), 3, 250)
@@ -95,8 +110,10 @@ def test_multi_step_parallel_determinism(backend):
     assert not data_equivalence(a, c, exact=True)
 
 
-def test_pickle_mid_episode_continues_identically():
-    env = MultiBounceEnv(n_robots=4, backend="pymunk", task="coverage",
+@pytest.mark.parametrize("physics", ["ideal", "dynamic"])
+def test_pickle_mid_episode_continues_identically(physics):
+    """Colliding robots too: the dynamic model's rebuilt space continues bit for bit."""
+    env = MultiBounceEnv(n_robots=4, backend="pymunk", physics=physics, task="coverage",
                          noise={"type": "interval", "lo": -0.1, "hi": 0.1})
     env.reset(seed=5)
     for _ in range(20):

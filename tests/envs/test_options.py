@@ -53,3 +53,42 @@ def test_history_is_bounded(history):
 
 def test_the_largest_history_is_accepted():
     assert parse_options({"history": 10_000}).history == 10_000
+
+
+def test_physics_defaults_per_backend():
+    """pymunk runs the rigid-body model unless told otherwise; the others have only the exact
+    one. Under dynamic physics the robot is a Create 2 unless sized."""
+    assert parse_options({}).physics == "ideal"
+    assert parse_options({"backend": "cell"}).physics == "ideal"
+    dynamic = parse_options({"backend": "pymunk"})
+    assert dynamic.physics == "dynamic" and dynamic.robot_radius == 0.17
+    assert dynamic.backend_options["physics"] == "dynamic"
+    scaled = parse_options({"backend": "pymunk", "physics_params": {"world_scale": 0.5}})
+    assert scaled.robot_radius == pytest.approx(0.34)  # 0.17 m in half-metre units
+    ideal = parse_options({"backend": "pymunk", "physics": "ideal"})
+    assert ideal.robot_radius == 0.0 and ideal.physics_params is None
+
+
+def test_the_clock_bound_allows_for_turning_and_speeding_up():
+    exact = parse_options({"backend": "pymunk", "physics": "ideal"})
+    slow_turns = parse_options({"backend": "pymunk", "physics_params": {"turn_rate": 10.0}})
+    assert exact.max_clock == parse_options({}).max_clock
+    assert slow_turns.max_clock >= exact.max_clock + 36 / 4  # a full turn: 36 s = 9 ticks
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"physics": "dynamic"}, "physics: backend 'kinematic' simulates only 'ideal'"),
+    ({"backend": "cell", "physics": "dynamic"}, "physics='dynamic' needs backend='pymunk'"),
+    ({"backend": "pymunk", "physics": "exact"}, r"physics: expected one of \['ideal', 'dynamic'\]"),
+    ({"backend": "pymunk", "physics": "ideal", "physics_params": {"mass": 2}},
+     "physics_params: only physics='dynamic'"),
+    ({"physics_params": {"mass": 2}}, "physics_params: only physics='dynamic'"),
+    ({"backend": "pymunk", "robot_radius": 0.0}, "robot_radius: physics='dynamic'"),
+    ({"backend": "pymunk", "physics_params": {"cruise_speed": -1}}, "cruise_speed"),
+    ({"backend": "pymunk", "physics_params": {"colour": 1}}, "unknown parameters"),
+    ({"backend": "pymunk", "physics_params": [1, 2]}, "physics_params: expected a mapping"),
+])
+def test_physics_options_are_one_line_config_errors(kwargs, match):
+    with pytest.raises(ConfigError, match=match) as err:
+        parse_options(kwargs)
+    assert "\n" not in str(err.value)

@@ -27,7 +27,7 @@ def test_parallel_api_with_turn_commands():
 def test_command_tick_turns_one_robot_and_the_others_wait(backend):
     kwargs = dict(GRID, backend=backend)
     if backend != "cell":
-        kwargs.update(robot_radius=0.3)
+        kwargs.update(robot_radius=0.3, physics="ideal")
     env = MultiBounceEnv(**kwargs)
     env.reset(seed=3)
     for _ in range(5):  # leave the start, so some robots are mid-drive

@@ -175,7 +175,8 @@ def test_bad_actions_raise_action_error(kwargs, actions):
 
 @pytest.mark.parametrize(("kwargs", "reason"), [
     ({"step_mode": "tick"}, "tick"),
-    ({"backend": "pymunk"}, "pymunk"),
+    ({"backend": "pymunk", "physics": "ideal"}, "pymunk"),
+    ({"backend": "pymunk"}, "physics 'dynamic'"),
     ({"noise": {"type": "interval", "lo_deg": -5, "hi_deg": 5}}, "noise"),
     ({"world": "lab_localization_a", "task": "localization", "angles": (45.0,),
       "backend": "cell", "task_kwargs": {"filter_factory": "combinatorial"}}, "filter"),

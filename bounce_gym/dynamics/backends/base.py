@@ -49,6 +49,9 @@ class MotionBackend(ABC):
     bin_width: float | None = None
     #: whether robots of radius 0 can still bump into each other (true on the cell grid)
     point_robots_collide: bool = False
+    #: whether rotations take time (``physics="dynamic"``): then `BounceDynamics` hands them to
+    #: `begin_turns` and `command_turns` instead of setting headings
+    turns_take_time: bool = False
 
     def __init__(
         self,
@@ -116,6 +119,16 @@ class MotionBackend(ABC):
     def drive_each(self, state: RobotState) -> np.ndarray:
         """Drive every unblocked robot to its own next contact (see `drives_independently`)."""
         raise ConfigError(f"backend {self.name!r} does not drive robots independently")
+
+    def begin_turns(self, state: RobotState, robots: np.ndarray, rotations: np.ndarray) -> None:
+        """Start the bump turns of ``robots`` by ``rotations`` (see `turns_take_time`)."""
+        raise ConfigError(f"backend {self.name!r} rotates robots instantly")
+
+    def command_turns(self, state: RobotState, robots: np.ndarray,
+                      rotations: np.ndarray) -> int:
+        """Run a turn command of ``robots`` by ``rotations``; returns its ticks (see
+        `turns_take_time`)."""
+        raise ConfigError(f"backend {self.name!r} rotates robots instantly")
 
     def check_start(self, state: RobotState) -> None:
         """Raise `ConfigError` unless every robot starts in the free space (``radius`` from the
