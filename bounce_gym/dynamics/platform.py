@@ -26,6 +26,13 @@ hardware experiments of Alam, Bobadilla & Shell 2017 (§VI) and Alam & Bobadilla
 * **Restitution 0** (assumed): the sprung bumper absorbs the impact; the robot does not rebound.
 * **Friction 0.3** (assumed): a plastic bumper on painted walls and on another bumper, a common
   textbook value for plastic on wood or paint.
+* **Stall: below half the commanded speed for 1 s** (assumed): the Create 2 reports a wheel
+  overcurrent (OI specification, sensor packet 14 "Wheel Overcurrents") when a wheel's motor
+  draws too much current — when it pushes at full force and barely turns — without publishing
+  the threshold or how long it takes to trip. A driving robot in contact whose speed along its
+  heading (the speed its wheels roll at) stays below ``stall_fraction`` of the commanded speed
+  for ``stall_time`` seconds stalls, which counts as a bump (see
+  `bounce_gym.dynamics.backends.pymunk_dynamic`).
 * **Control period 0.25 s** (chosen): the controller updates its wheel speed set points four
   times a second, each time to the mean of the time-optimal speed profile over the coming
   period, so that the robot is where a continuously accelerating one would be at every update
@@ -75,6 +82,9 @@ class PhysicsParams:
             heading).
         restitution: coefficient of restitution of every contact, in [0, 1].
         friction: Coulomb friction coefficient of every contact.
+        stall_fraction: a driving robot in contact stalls (a bump) when its speed along its
+            heading stays below this fraction of the commanded speed, in (0, 1] ...
+        stall_time: s, ... for this long.
         control_period: s, how often the controller sets the wheel speeds (the time resolution
             of speeding up, braking and turning).
         iterations: iterations of pymunk's contact solver per engine step (default 100, ten
@@ -92,6 +102,8 @@ class PhysicsParams:
     bumper_arc: float = 180.0
     restitution: float = 0.0
     friction: float = 0.3
+    stall_fraction: float = 0.5
+    stall_time: float = 1.0
     control_period: float = 0.25
     iterations: int = 100
 
@@ -121,7 +133,7 @@ class PhysicsParams:
 
 
 #: Parameters that may be ``inf`` (the limit of an ideal robot), with their lower bounds.
-_POSITIVE = ("world_scale", "mass", "wheel_base", "control_period")
+_POSITIVE = ("world_scale", "mass", "wheel_base", "control_period", "stall_time")
 _MAY_BE_INFINITE = ("max_speed", "max_acceleration", "turn_rate")
 
 
@@ -150,6 +162,9 @@ def physics_params(options: object, field: str = "physics_params") -> PhysicsPar
         if name in options:
             values[name] = number(f"{field}.{name}", options[name], minimum=0.0,
                                   strict=name in ("cruise_speed", "bumper_arc"))
+    if "stall_fraction" in options:
+        values["stall_fraction"] = number(f"{field}.stall_fraction", options["stall_fraction"],
+                                          minimum=0.0, maximum=1.0, strict=True)
     if "iterations" in options:
         values["iterations"] = integer(f"{field}.iterations", options["iterations"], 1, 1000)
     params = PhysicsParams(**values)

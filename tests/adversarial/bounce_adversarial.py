@@ -179,26 +179,31 @@ def _finite(state) -> bool:
 
 def run_checked(kind: str, world: World, backend: str, rule: str, noise: str, radius: float,
                 n_bounces: int, seed: int, n_robots: int = 1,
-                robot_collisions: str = "ignore") -> dict:
+                robot_collisions: str = "ignore", physics: dict | None = None) -> dict:
     """Bounce ``n_bounces`` times in ``world`` (built as ``kind``) and check every invariant
     after each bounce (see `checked_loop`). The cell backend steps cells of `grid_cell`; the
-    continuous ones drive 1/40 of the map per tick."""
+    continuous ones drive 1/40 of the map per tick. ``physics``: more physical parameters of
+    "dynamic"."""
     step = grid_cell(kind, world) if backend == "cell" else world.diameter / 40
-    dyn = make_dynamics(world, backend, rule, noise, radius, step, n_robots, robot_collisions)
+    dyn = make_dynamics(world, backend, rule, noise, radius, step, n_robots, robot_collisions,
+                        physics)
     return checked_loop(dyn, n_bounces, seed)
 
 
 def make_dynamics(world: World, backend: str, rule: str, noise: str, radius: float,
                   step_length: float, n_robots: int = 1,
-                  robot_collisions: str = "ignore") -> BounceDynamics:
+                  robot_collisions: str = "ignore",
+                  physics: dict | None = None) -> BounceDynamics:
     """``backend`` "pymunk" is pymunk's exact model; "dynamic" is pymunk with
     ``physics="dynamic"``, its world scaled so that the robot is a Create 2 (radius 0.17 m):
-    the physics is then the same at every scale of the map, and the scales test the numbers."""
+    the physics is then the same at every scale of the map, and the scales test the numbers.
+    ``physics``: more of its physical parameters."""
     if backend == "dynamic":
         return BounceDynamics(world, n_robots, backend="pymunk", rule=rule, noise=NOISES[noise],
                               radius=radius, step_length=step_length,
                               robot_collisions=robot_collisions, physics="dynamic",
-                              physics_params={"world_scale": PLATFORM_RADIUS / radius})
+                              physics_params={"world_scale": PLATFORM_RADIUS / radius,
+                                              **(physics or {})})
     return BounceDynamics(world, n_robots, backend=backend, rule=rule, noise=NOISES[noise],
                           radius=radius, step_length=step_length,
                           robot_collisions=robot_collisions,
@@ -267,7 +272,7 @@ def checked_loop(dyn: BounceDynamics, n_bounces: int, seed: int) -> dict:
                                        or (backend.turns_take_time and backend.collide) else 1.0)
         if np.any(state.odometer - odo0 > elapsed * reach + touch):
             raise fail("drove further than the ticks allow", k)
-        if backend.turns_take_time:  # braked to rest after its bumper fired, maybe sliding
+        if backend.turns_take_time:  # braked to rest after its bumper fired (or it stalled)
             if np.any(state.blocked & (state.contact_edge < 0) & (state.contact_robot < 0)):
                 raise fail("a blocked robot has no bumper contact", k)
         elif backend.name != "cell":

@@ -4,7 +4,8 @@ units out, thin walls, needles, combs, 2,000-gons — with actuation noise, alon
 colliding, while clocks, ticks and contacts stay consistent (`bounce_adversarial.checked_loop`).
 
 The quick form runs a few dozen bounces per world; the slow form (``-m slow``) more than 10⁵
-bounces in all, every rule and noisy model.
+bounces in all, every rule and noisy model, and colliding robots with a narrow, frictionless
+bumper that mostly stall rather than bump (`NARROW`).
 """
 
 import itertools
@@ -23,6 +24,9 @@ from bounce_adversarial import (
 
 WORLDS = [(kind, scale, shift) for kind in KINDS for scale, shift in TRANSFORMS]
 COMBOS = list(itertools.product(RULE_NAMES, [n for n in NOISES if n != "exact"]))
+#: a bumper that misses most contacts, and no friction to yaw robots onto it: robots slide,
+#: wedge, push each other and stall
+NARROW = {"bumper_arc": 20.0, "friction": 0.0}
 
 
 def _id(world) -> str:
@@ -58,9 +62,13 @@ def test_quick(tally, world):
 @pytest.mark.parametrize("world", WORLDS, ids=_id)
 def test_slow(tally, world):
     """Every rule x noisy model: one robot (130 bounces each) and four colliding robots (30
-    bounce steps each) — over 10⁵ bounces over the 63 worlds (106,000 when written)."""
+    bounce steps each) — over 10⁵ bounces over the 63 worlds (106,000 when written); then
+    four colliding robots with the `NARROW` bumper (60 bounce steps)."""
     index = WORLDS.index(world)
     for k, (rule, noise) in enumerate(COMBOS):
         _run(tally, world, rule, noise, 0.002, 130, 1000 * index + k)
         _run(tally, world, rule, noise, 0.01, 30, 1000 * index + k, n_robots=4,
              robot_collisions="bounce")
+    rule, noise = COMBOS[index % len(COMBOS)]
+    _run(tally, world, rule, noise, 0.01, 60, index, n_robots=4, robot_collisions="bounce",
+         physics=NARROW)

@@ -319,6 +319,9 @@ def test_defaults_are_a_create_2():
     ({"bumper_arc": 400}, "bumper_arc"),
     ({"control_period": math.inf}, "control_period"),
     ({"iterations": 0}, "iterations"),
+    ({"stall_fraction": 0}, "stall_fraction"),
+    ({"stall_fraction": 1.5}, "stall_fraction"),
+    ({"stall_time": math.inf}, "stall_time"),
     ({"max_acceleration": "fast"}, "max_acceleration"),
     ({"wheels": 2}, "unknown parameters"),
 ])

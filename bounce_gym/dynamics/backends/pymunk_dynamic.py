@@ -22,7 +22,12 @@ nothing the engine sees but its heading, which is exact at the segments' ends.
 * ``DRIVE``: speed up along the heading to the cruise speed; the drive direction follows the
   body's heading. The **bumper** is the engine's contact callback restricted to the front arc: a
   contact point within ± ``bumper_arc`` / 2 of the heading presses it, and the robot brakes at
-  once (a reflex, not waiting for an instant).
+  once (a reflex, not waiting for an instant). The **stall** sensor backs it up, as the Create
+  2's wheel overcurrent does: a driving robot that touches something and whose speed along its
+  heading (the speed its wheels roll at) stays below ``stall_fraction`` of the commanded speed
+  for ``stall_time`` seconds (defaults: half, 1 s) brakes too, latching the most frontal contact
+  it touched. That is a robot wedged in a corner, pressing walls outside a narrow bumper arc, or
+  pushed back or sideways by other robots — which the bumper alone would leave driving forever.
 * ``BRAKE``: slow down at ``max_acceleration`` along the current velocity — a glancing robot
   slides along the wall meanwhile, friction slowing it too. At rest (speed and turn rate below
   1e-9 of their scales) it is **blocked**: ``RobotState.blocked`` is set, and the contact that
@@ -40,6 +45,16 @@ nothing the engine sees but its heading, which is exact at the segments' ends.
   papers), else DRIVE from rest.
 * ``HOLD``: a robot told to wait during a turn command (`command_turns`) brakes and holds; it
   drives on when the command ends.
+
+**Every bounce step ends.** A driving robot whose bumper stays silent either keeps moving
+along its heading at least at ``stall_fraction`` of its speed, or stalls within ``stall_time``.
+The motors hold its heading (their torque exceeds the friction torque of a contact for every
+friction below ``wheel_base`` / radius), and the world is bounded, so it meets something ahead
+within the time to cross the world at that speed: its bumper or its stall stops it. A braking
+robot is at rest within its braking time unless something pushes it — only a driving robot
+does, until it stops; a turn ends once nothing disturbs it. Robots waiting at a tick boundary,
+blocked or holding need no engine step: the clock moves on to the next event. Time advances at
+every step, by at least a guard step.
 
 **Ticks and the clock.** One tick lasts τ = ``step_length`` / cruise speed seconds, so
 ``step_length`` keeps its meaning: the distance driven in a tick at cruise speed. The bump tick
@@ -140,7 +155,7 @@ class _Robot:
 
     __slots__ = ("x", "y", "angle", "vx", "vy", "w", "phase", "speed", "tvx", "tvy", "tw",
                  "origin", "count", "next", "profile", "spin", "target", "settle",
-                 "bump_tick", "commanded", "latch", "cast")
+                 "bump_tick", "commanded", "latch", "cast", "stall_at", "touch")
 
     def __init__(self, x: float, y: float, angle: float) -> None:
         self.x, self.y, self.angle = x, y, angle
@@ -161,6 +176,10 @@ class _Robot:
         self.latch: tuple[int, int, float, float] | None = None
         #: cached first wall along the velocity: (x, y, dx, dy, touched, distance, nx, ny)
         self.cast: tuple[float, ...] | None = None
+        #: DRIVE: when the robot stalls if it stays slow (inf while it is not slow), and the
+        #: most frontal contact it touched since it became slow, as ``latch``
+        self.stall_at = math.inf
+        self.touch: tuple[int, int, float, float] | None = None
 
     def __getstate__(self) -> dict:
         return {k: getattr(self, k) for k in self.__slots__}
@@ -192,6 +211,7 @@ class DynamicBackend(MotionBackend):
         #: seconds per tick
         self.tick_seconds = self.step_length / self.cruise
         self.cos_arc = math.cos(math.radians(params.bumper_arc) / 2) + ARC_MARGIN
+        self.stall_fraction, self.stall_time = params.stall_fraction, params.stall_time
         self.depth = DEPTH * self.radius
         self._rest_v = REST * self.cruise
         self._rest_w = REST * self.cruise / self.radius
@@ -370,11 +390,13 @@ class DynamicBackend(MotionBackend):
             if r.next < event:
                 event = r.next
             phase = r.phase
+            if phase == DRIVE and r.touch is not None and r.stall_at < event:
+                event = r.stall_at  # it stalls then if it stays slow
             blocked = blocked or phase == BLOCKED
             waiting = waiting or phase == WAIT or (phase == HOLD and self._commanding)
             resting = resting and r.next == math.inf and phase != DRIVE and r.vx == 0.0 \
                 and r.vy == 0.0 and r.w == 0.0
-        if waiting:
+        if waiting or self._commanding:  # a command ends at a tick boundary
             event = min(event, (self._tick + 1) * self.tick_seconds)
         return event, resting, blocked
 
@@ -435,24 +457,45 @@ class DynamicBackend(MotionBackend):
             r.x, r.y, r.angle, r.vx, r.vy, r.w = x, y, angle, vx, vy, w
 
     def _bumpers(self) -> None:
-        """Driving robots whose bumper is pressed brake, starting now."""
+        """Driving robots whose bumper is pressed, or whose wheels stall, brake, starting
+        now."""
         for i, r in enumerate(self._robots):
             if r.phase == DRIVE:
                 latch = self._pressed(i, r)
+                if latch is None:
+                    latch = self._stalled(i, r)
                 if latch is not None:
                     r.phase, r.latch = BRAKE, latch
                     self._start_brake(r)
 
-    def _pressed(self, i: int, r: _Robot) -> tuple[int, int, float, float] | None:
-        """The most frontal contact of robot ``i`` in its bumper arc in the last step, as
-        (kind, index, nx, ny) with the normal pointing at the robot; None if none."""
+    def _pressed(self, i: int, r: _Robot,
+                 front: float | None = None) -> tuple[int, int, float, float] | None:
+        """The most frontal contact of robot ``i`` in its bumper arc (or, given ``front``, the
+        cosine of its angle off the heading above that) in the last step, as (kind, index, nx,
+        ny) with the normal pointing at the robot; None if none."""
         dx, dy = math.cos(r.angle), math.sin(r.angle)
-        best, front = None, self.cos_arc
+        best, front = None, self.cos_arc if front is None else front
         for robot, kind, k, nx, ny in self.engine.contacts:
             ahead = nx * dx + ny * dy
             if robot == i and ahead > front:
                 best, front = (kind, k, -nx, -ny), ahead
         return best
+
+    def _stalled(self, i: int, r: _Robot) -> tuple[int, int, float, float] | None:
+        """The wheel overcurrent of a driving robot ``i`` whose bumper is silent: the contact
+        to latch if it has been slow (see the module docstring) for ``stall_time`` and touched
+        something meanwhile, else None. Its velocity holds until the next step, so a robot
+        slow after every step since it became slow has been slow throughout."""
+        forward = r.vx * math.cos(r.angle) + r.vy * math.sin(r.angle)
+        if forward >= self.stall_fraction * r.speed:
+            r.stall_at, r.touch = math.inf, None
+            return None
+        if r.stall_at == math.inf:
+            r.stall_at = self._now + self.stall_time
+        touch = self._pressed(i, r, -2.0)  # any contact, the most frontal
+        if touch is not None:
+            r.touch = touch
+        return r.touch if self._now >= r.stall_at and r.touch is not None else None
 
     # -- the stepping rule --------------------------------------------------------------------
     def _safe_interval(self, horizon: float) -> float:
@@ -466,9 +509,12 @@ class DynamicBackend(MotionBackend):
         for i, kind, k, nx, ny in self.engine.contacts:  # what each robot touches
             r = robots[i]
             if kind == WALL:
+                # the solver's, not the cast's: a wall it slides along or leaves cannot come
+                # nearer along its straight path (a segment is convex), and casting a disk that
+                # already overlaps it would stall the step
+                walls.setdefault(i, set()).add(k)
                 approach = r.vx * nx + r.vy * ny
-                if approach > 0.0:  # a wall it leaves cannot be in its way: cast as usual
-                    walls.setdefault(i, set()).add(k)
+                if approach > 0.0:
                     limit = min(limit, self._touch_limit(
                         approach, self.radius - self._edge_distance(r, k)))
             elif i < k:
@@ -686,6 +732,7 @@ class DynamicBackend(MotionBackend):
             r.phase, r.latch, r.next = BLOCKED, latch, math.inf
         else:
             r.phase, r.speed, r.profile = DRIVE, 0.0, SpeedUp(self.cruise, self.accel)
+            r.stall_at, r.touch = math.inf, None
             self._restart_grid(r)
         self._write_contact(state, i, r)
 
