@@ -104,6 +104,31 @@ def test_dynamic_phase_is_coloured_at_the_centre():
     env.close()
 
 
+def test_a_braking_robot_shows_its_latched_contact_before_it_is_blocked():
+    """physics="dynamic", ticks of 0.08 s: meeting the wall x = 10 at a glancing angle, the
+    bumper fires and the robot brakes, sliding up along the wall. In those ticks it is not
+    blocked yet (the state has no contact), but the backend reports the latched contact, which
+    is marked on the wall beside the robot, and the centre dot is the brake colour."""
+    env = BounceEnv(world=ROOM, robot_radius=RADIUS, render_mode="rgb_array", step_mode="tick",
+                    step_length=0.02, backend="pymunk")
+    env.reset(seed=0, options={"start": {"position": [9.0, 1.5], "heading": 0.6}})
+    backend = env.unwrapped.core.dynamics.backend
+    seen = []
+    while not env.robot_state.blocked[0]:
+        env.step(0)
+        seen.append(backend.phase_names()[0])
+        if seen[-1] == "brake":
+            assert not env.robot_state.blocked[0]
+            pressed, normal = backend.bumpers(env.robot_state)
+            np.testing.assert_allclose(normal[0], [-1.0, 0.0], atol=1e-9)
+            frame = env.render()
+            x, y = env.robot_state.position[0]
+            assert at(frame, x + RADIUS, y) == CONTACT
+            assert at(frame, x, y, (0.0, -0.2 * R_PX)) == PHASE_COLOURS["brake"]
+    assert "brake" in seen and seen[0] == "drive"
+    env.close()
+
+
 @pytest.mark.parametrize("backend", ["ideal", "kinematic"])
 def test_ideal_robots_have_no_phase_dot(backend):
     env = single(backend, step_mode="tick")
