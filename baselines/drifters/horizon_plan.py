@@ -11,7 +11,8 @@ legal u, ties to the lowest action code; ``V_0(x)`` is the model's predicted suc
 
 **Acting.** `HorizonReachPolicy` decides from the drifter's observation only: its layer, its
 clock (the step k) and its position, which the env observes with ``observe_pose=True``
-(`bounce_gym.envs.drifters.core.DrifterCore.observed_state`); ``info`` is never read.
+(`bounce_gym.envs.drifters.core.DrifterCore.observed_pose`), looked up in the model's (sub-)cells;
+``info`` is never read.
 """
 
 from __future__ import annotations
@@ -99,8 +100,8 @@ class HorizonReachPolicy(Policy):
 
     Args:
         horizon: the episode's horizon H (steps).
-        samples, seed: of the sampled model (`DrifterEnvBase.cell_model`); ``samples=None``
-            takes its default.
+        samples, seed, refine: of the sampled model (`DrifterEnvBase.cell_model`);
+            ``samples=None`` takes its default.
 
     Attributes:
         model, plan: the episode's model and `HorizonPlan` (after `reset`).
@@ -108,9 +109,10 @@ class HorizonReachPolicy(Policy):
 
     name = "value iteration (sampled GCM)"
 
-    def __init__(self, horizon: int, samples: int | None = None, seed: int = 0) -> None:
+    def __init__(self, horizon: int, samples: int | None = None, seed: int = 0,
+                 refine: int = 1) -> None:
         self.horizon = validate.integer("horizon", horizon, 1)
-        self.samples, self.seed = samples, seed
+        self.samples, self.seed, self.refine = samples, seed, refine
         self.model: DrifterCells | None = None
         self.plan: HorizonPlan | None = None
         self._plans: dict[bytes, HorizonPlan] = {}
@@ -126,24 +128,34 @@ class HorizonReachPolicy(Policy):
             raise ConfigError("env_kwargs.observe_pose: the sampled value iteration policy "
                               "acts on the observed position; set observe_pose=True")
         model = inner.cell_model(kind="sampled", samples=self.samples, seed=self.seed,
-                                 horizon=self.horizon)
+                                 horizon=self.horizon, refine=self.refine)
+        exact = inner.cell_model()
         if model is not self.model:
             self._plans.clear()
             self.model = model
-        goal = goal_states(model, task.region.states)
-        if goal.tobytes() not in self._plans:
-            self._plans[goal.tobytes()] = horizon_plan(model, goal, self.horizon)
-        self.plan = self._plans[goal.tobytes()]
-        self._decode = inner.core.observed_state
+            # the env's cell of every (sub-)cell of the model
+            self._parent = exact.state_at_point(*model.centre(np.arange(model.n_states)),
+                                                model.cells[:, 0])
+        key = np.asarray(task.region.states).tobytes()
+        if key not in self._plans:
+            goal = np.flatnonzero(np.isin(self._parent, task.region.states))
+            self._plans[key] = horizon_plan(model, goal, self.horizon)
+        self.plan = self._plans[key]
+        self._exact = exact
+        self._decode = inner.core.observed_pose
 
     def act(self, observation, info) -> int:
         if self.plan is None:
             raise ConfigError("HorizonReachPolicy: call reset(env) before act")
-        state, step = self._decode(np.asarray(observation)[None])
-        return int(self.plan.policy[min(int(step[0]), self.horizon - 1), int(state[0])])
+        x, y, layer, step = self._decode(np.asarray(observation)[None])
+        state = int(self.model.state_at_point(x, y, layer)[0])
+        return int(self.plan.policy[min(int(step[0]), self.horizon - 1), state])
 
     def predicted_success(self, state: int) -> float:
-        """The model's probability that the plan reaches the goal from ``state``."""
+        """The model's probability that the plan reaches the goal from the centre of the env's
+        cell ``state`` (where the env deploys a drifter)."""
         if self.plan is None:
             raise ConfigError("HorizonReachPolicy: no plan yet")
-        return self.plan.predicted_success(state)
+        x, y = self._exact.centre(np.array([state]))
+        fine = self.model.state_at_point(x, y, self._exact.cells[[state], 0])
+        return self.plan.predicted_success(int(fine[0]))

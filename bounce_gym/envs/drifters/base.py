@@ -11,7 +11,7 @@ from bounce_gym.cells.drifter import DrifterCells
 from bounce_gym.envs.drifters.core import DrifterCore
 from bounce_gym.envs.drifters.model_cache import sampled_model
 from bounce_gym.envs.drifters.options import parse_options
-from bounce_gym.envs.drifters.sampled import DEFAULT_SAMPLES, MAX_PARTICLES
+from bounce_gym.envs.drifters.sampled import DEFAULT_SAMPLES, MAX_PARTICLES, MAX_REFINE
 from bounce_gym.envs.render.owner import RendererOwner
 from bounce_gym.errors import ConfigError
 from bounce_gym.flows import FlowField
@@ -48,7 +48,7 @@ class DrifterEnvBase(RendererOwner):
         self.render_mode = render_mode
         self.field_style = field_style
         self._renderer = None
-        self._sampled: dict[tuple[int, int, int], DrifterCells] = {}
+        self._sampled: dict[tuple[int, int, int, int], DrifterCells] = {}
 
     @property
     def flow(self) -> FlowField:
@@ -61,7 +61,7 @@ class DrifterEnvBase(RendererOwner):
         return self.core.task
 
     def cell_model(self, kind: str = "exact", samples: int | None = None, seed: int | None = None,
-                   horizon: int | None = None) -> DrifterCells:
+                   horizon: int | None = None, refine: int | None = None) -> DrifterCells:
         """A discrete model of this env for planners.
 
         ``kind="exact"`` (default): the thesis' model (ch. 5 GCM, ``rho``, ``cell_map``, the
@@ -69,13 +69,15 @@ class DrifterEnvBase(RendererOwner):
         `SampledDrifterCells` whose drift is estimated from ``samples`` points per cell
         (default `DEFAULT_SAMPLES`, seed ``seed``, default 0) stepped by this env's own backend
         for one decision step, one matrix per step of a time-dependent field up to ``horizon``
-        steps (default ``clock_steps``) (`bounce_gym.envs.drifters.sampled`); kept in memory
+        steps (default ``clock_steps``), its states the ``refine`` x ``refine`` sub-cells of
+        every cell (default 1: the cells) (`bounce_gym.envs.drifters.sampled`); kept in memory
         and on disk (`bounce_gym.envs.drifters.model_cache`)."""
         if kind not in MODEL_KINDS:
             raise ConfigError(f"kind: expected one of {list(MODEL_KINDS)}, got {kind!r}")
         if kind == "exact":
             given = [name for name, value in (("samples", samples), ("seed", seed),
-                                              ("horizon", horizon)) if value is not None]
+                                              ("horizon", horizon), ("refine", refine))
+                     if value is not None]
             if given:
                 raise ConfigError(f"{given[0]}: only a sampled cell model takes it")
             return self.core.model
@@ -86,10 +88,11 @@ class DrifterEnvBase(RendererOwner):
                               f"convergence check), got {samples}")
         seed = integer("seed", 0 if seed is None else seed, 0)
         horizon = integer("horizon", self.core.clock_steps if horizon is None else horizon, 1)
-        key = (samples, seed, horizon)
+        refine = integer("refine", 1 if refine is None else refine, 1, MAX_REFINE)
+        key = (samples, seed, horizon, refine)
         if key not in self._sampled:
             self._sampled[key] = sampled_model(self.core.model, self.options, samples, seed,
-                                               horizon)
+                                               horizon, refine)
         return self._sampled[key]
 
     def _render_layer(self) -> int:

@@ -3,7 +3,7 @@ everything that defines it, under ``<home>/cache/drifter_gcm/`` (``home`` is
 `bounce_gym.trust.home`, the user's bounce_gym folder, ``$BOUNCE_GYM_HOME`` if set).
 
 The fingerprint is the sha256 of the flow field's arrays (velocities, axes, times, land) and of
-the settings that change the matrices: the backend, the start time, the step's duration,
+the settings that change the matrices: the refinement, the backend, the start time, the step's duration,
 substeps, diffusivity and land rule, the exact model's ρ and cell map (its states and vertical
 moves), the samples per cell, the seed, the horizon and the file format. A file holds the
 stacked drift matrices (CSR arrays) and a JSON header (a uint8 array, read with
@@ -27,7 +27,7 @@ from bounce_gym.cells.drifter import DrifterCells
 from bounce_gym.cells.sampled_drifter import SampledDrifterCells
 from bounce_gym.documents import parse_document
 from bounce_gym.envs.drifters.options import DrifterOptions
-from bounce_gym.envs.drifters.sampled import build_sampled_model
+from bounce_gym.envs.drifters.sampled import build_sampled_model, grid_model
 from bounce_gym.errors import BounceGymError
 from bounce_gym.files import atomic_file
 from bounce_gym.trust import home
@@ -39,14 +39,15 @@ FORMAT = 1
 _FOLDER = ("cache", "drifter_gcm")
 
 
-def fingerprint(options: DrifterOptions, samples: int, seed: int, horizon: int) -> str:
+def fingerprint(options: DrifterOptions, samples: int, seed: int, horizon: int,
+                refine: int) -> str:
     """The hex sha256 of everything that defines the sampled model (module docstring)."""
     field = options.field
     settings = {"format": FORMAT, "backend": options.backend, "start_time": options.start_time,
                 "step_seconds": options.step_seconds, "substeps": options.substeps,
                 "diffusivity": options.diffusivity, "land_rule": options.land_rule,
                 "rho": options.rho, "cell_map": options.cell_map, "samples": samples,
-                "seed": seed, "horizon": horizon, "crs": field.crs}
+                "seed": seed, "horizon": horizon, "refine": refine, "crs": field.crs}
     h = hashlib.sha256(json.dumps(settings, sort_keys=True).encode())
     for array in (field.u, field.v, field.x, field.y, field.depth, field.land, field.time):
         h.update(b"none" if array is None else
@@ -60,17 +61,17 @@ def cache_path(key: str) -> Path:
 
 
 def sampled_model(model: DrifterCells, options: DrifterOptions, samples: int, seed: int,
-                  horizon: int) -> SampledDrifterCells:
+                  horizon: int, refine: int = 1) -> SampledDrifterCells:
     """The sampled model from the cache, built and stored if missing, stale or corrupt."""
-    key = fingerprint(options, samples, seed, horizon)
+    key = fingerprint(options, samples, seed, horizon, refine)
     path = cache_path(key)
     if path.exists():
         try:
-            return _read(path, key, model)
+            return _read(path, key, grid_model(model, refine))
         except (BounceGymError, OSError, ValueError, KeyError, EOFError,
                 zipfile.BadZipFile) as exc:
             logger.warn(f"the sampled drifter model {path} is unusable ({exc}); rebuilding it")
-    built = build_sampled_model(model, options, samples, seed, horizon)
+    built = build_sampled_model(model, options, samples, seed, horizon, refine)
     _write(path, key, built)
     return built
 
