@@ -33,13 +33,13 @@ def test_one_cell_per_step_flow_gives_the_exact_drift_where_the_exact_model_is_p
     exact, sampled = env.cell_model(), env.cell_model(kind="sampled", samples=8)
     interior = np.flatnonzero(~exact.boundary)
     assert len(interior) > 0
-    D, E = sampled.drift_matrix().toarray(), exact.drift_matrix().toarray()
-    np.testing.assert_array_equal(D[interior], E[interior])
+    drift, exact_drift = sampled.drift_matrix().toarray(), exact.drift_matrix().toarray()
+    np.testing.assert_array_equal(drift[interior], exact_drift[interior])
     assert sampled.doubling_tv == 0.0  # every point of a cell lands in the same cell
     # the continuous env drifts after a vertical move: up = U P
     up = sampled.action_matrices()[1].toarray()
-    U = exact.action_matrices()[1].toarray()
-    np.testing.assert_array_equal(up, U @ D)
+    move_up = exact.action_matrices()[1].toarray()
+    np.testing.assert_array_equal(up, move_up @ drift)
 
 
 def test_cell_backend_estimate_converges_to_the_exact_model():
