@@ -23,6 +23,10 @@ import numpy as np
 from bounce_gym.cells.outcomes import BumpOutcomes
 from bounce_gym.markov.ssp import ReachPlan
 
+#: the weight of the GCM's success value of a leaf's state beside its rollout's outcome: small,
+#: so that it only breaks ties between leaves whose rollouts agree (e.g. all fail)
+MODEL_WEIGHT = 1e-3
+
 #: simulate(action, point, heading) -> outcomes, one per robot, and whether each reached the goal
 Simulate = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[BumpOutcomes, np.ndarray]]
 
@@ -57,7 +61,7 @@ def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: n
         weight, node, node_last = np.repeat(weight, a_n)[alive], child.ravel(), unique[:, 1]
         if len(point) == 0:
             break
-    value_s = value_c = None
+    value_s = value_c = value_p = None  # value_p: the success alone, without the tie-breaker
     change = (plan.w2 - plan.w1)
     for d in range(len(levels) - 1, -1, -1):
         lv = levels[d]
@@ -66,12 +70,16 @@ def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: n
         if value_s is None:  # below the tree: the GCM's values
             later_s, later_c = rollout(simulate, plan, out.end, out.heading, out.next_state,
                                        act, min(h - 1, rollout_steps))
+            # where rollouts tie (all fail), the model's own value of the state decides
+            later_p = later_s
+            later_s = later_s + MODEL_WEIGHT * plan.success[h - 1][np.maximum(out.next_state, 0)]
         else:
             safe = np.maximum(lv["child"], 0)
-            later_s, later_c = value_s[safe], value_c[safe]
+            later_s, later_c, later_p = value_s[safe], value_c[safe], value_p[safe]
         ok = lv["child"] >= 0
-        q_s = np.where(hit, 1.0, np.where(ok | (value_s is None) & (out.next_state >= 0),
-                                          later_s, 0.0))
+        reach = ok | (value_s is None) & (out.next_state >= 0)
+        q_s = np.where(hit, 1.0, np.where(reach, later_s, 0.0))
+        q_p = np.where(hit, 1.0, np.where(reach, later_p, 0.0))
         q_c = plan.w1 * (1.0 + out.ticks) + np.where(hit | (out.next_state < 0), 0.0, later_c)
         parent_last = lv["parent_last"][lv["parent"]]
         q_c = q_c + change * ((parent_last != act) & (parent_last < a_n))
@@ -83,11 +91,13 @@ def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: n
             -1, a_n)
         node_c = (np.bincount(flat, weights=lv["weight"] * q_c, minlength=size) / mass).reshape(
             -1, 1, a_n)
+        node_p = (np.bincount(flat, weights=lv["weight"] * q_p, minlength=size) / mass).reshape(
+            -1, a_n)
         best = plan.choose(node_s, node_c)[:, 0]
         rows = np.arange(len(best))
-        value_s, value_c = node_s[rows, best], node_c[rows, 0, best]
+        value_s, value_c, value_p = node_s[rows, best], node_c[rows, 0, best], node_p[rows, best]
     first = levels[0]
-    return int(best[0]), float(value_s[0]), first["out"], first["hit"]
+    return int(best[0]), float(value_p[0]), first["out"], first["hit"]
 
 
 def rollout(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: np.ndarray,
