@@ -6,7 +6,7 @@ goal radius 0.3, heading tolerance 10°, 200 steps), start and goal drawn as on 
 (cell centres and bin headings) from held-out seeds 10,000 + i, then run in the chosen backend.
 Feasible = the exact cell model's roadmap has a plan. Prints success on the feasible episodes
 with 95 % Wilson intervals, the sampled planner's mean predicted success (mean ± 95 % t-interval)
-and the model's build time; asserts nothing.
+and the model's build time (docs/sampled_models.md); asserts nothing.
 """
 
 from __future__ import annotations
@@ -38,15 +38,15 @@ def _episode(env, policy, seed: int, options: dict) -> bool:
             return bool(info["is_success"])
 
 
-def main(argv: list[str] | None = None) -> None:
+def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--backend", default="kinematic")
     parser.add_argument("--physics", default=None)
-    parser.add_argument("--samples", type=int, default=200)
+    parser.add_argument("--samples", type=int, default=50)
     parser.add_argument("--depth", type=int, default=3)
-    parser.add_argument("--reach", type=int, default=20)
-    parser.add_argument("--cell-size", type=float, default=None)
+    parser.add_argument("--reach", type=int, default=30)
+    parser.add_argument("--cell-size", type=float, default=0.25)
     parser.add_argument("--noise", action="store_true",
                         help="rotation noise: reliable, r = 0.9, eps = 5 degrees")
     args = parser.parse_args(argv)
@@ -86,14 +86,22 @@ def main(argv: list[str] | None = None) -> None:
         for label, mask in (("feasible", feasible), ("all", np.ones(len(rows), bool))):
             wins = int(sum(r[col] for r, m in zip(rows, mask, strict=True) if m))
             n = int(mask.sum())
+            if n == 0:
+                print(f"  {name:<22} success on {label:<8} —  n = 0")
+                continue
             lo, hi = wilson_interval(wins, n)
             print(f"  {name:<22} success on {label:<8} {wins / max(n, 1):.3f} [{lo:.3f}, {hi:.3f}]"
                   f"  n = {n}")
     pred = np.array([r[3] for r in rows], dtype=np.float64)
     for label, mask in (("feasible", feasible), ("all", np.ones(len(rows), bool))):
         p = pred[mask]
-        half = stats.t.ppf(0.975, len(p) - 1) * p.std(ddof=1) / np.sqrt(len(p))
+        if len(p) == 0:
+            continue
+        half = (stats.t.ppf(0.975, len(p) - 1) * p.std(ddof=1) / np.sqrt(len(p))
+                if len(p) > 1 else float("nan"))
         print(f"  predicted success on {label:<8} mean {p.mean():.3f} ± {half:.3f}  n = {len(p)}")
+    return {"feasible": feasible, "roadmap": np.array([r[1] for r in rows]),
+            "sampled": np.array([r[2] for r in rows]), "predicted": pred, "build_s": build}
 
 
 if __name__ == "__main__":

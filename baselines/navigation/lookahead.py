@@ -102,26 +102,33 @@ def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: n
 
 def rollout(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: np.ndarray,
             state: np.ndarray, last: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
-    """Robots at bump poses (in decision ``state``, −1: none, after angle ``last``) follow the
-    value iteration's policy of their state for up to ``steps`` bumps, simulated: whether each
-    reaches the goal, and its plan cost on the way (the rollout algorithm, Bertsekas, Tsitsiklis
-    & Wu, J. Heuristics 3, 1997: the base policy's value, exact for the particle in a
-    deterministic world, rather than the model's estimate of its state's)."""
-    n = len(point)
-    success, cost = np.zeros(n), np.zeros(n)
+    """Robots at bump poses (in decision ``state``, −1: none, after angle ``last``) play out
+    up to ``steps`` bumps under each base policy — the value iteration's policy of their state,
+    and each fixed angle of Φ — simulated; per robot the best base policy's outcome: whether it
+    reaches the goal, and its plan cost on the way (the rollout algorithm with several base
+    heuristics, Bertsekas, Tsitsiklis & Wu, J. Heuristics 3, 1997: their value, exact for the
+    particle in a deterministic world, rather than the model's estimate of its state's)."""
+    n, a_n = len(point), plan.n_actions
+    k = a_n + 1  # base policy 0: the value iteration's; 1 + i: always angle i
+    base = np.repeat(np.arange(k), n)
+    point, heading = np.tile(point, (k, 1)), np.tile(heading, k)
+    state = np.tile(np.asarray(state), k)
+    last = np.tile(np.asarray(last, dtype=np.int64), k)
+    success, cost = np.zeros(n * k), np.zeros(n * k)
     alive = state >= 0
-    last = np.asarray(last, dtype=np.int64).copy()
-    state = np.asarray(state).copy()
-    for k in range(steps):
+    for t in range(steps):
         idx = np.flatnonzero(alive)
         if len(idx) == 0:
             break
-        act = plan.policy[steps - k, state[idx], last[idx]].astype(np.int64)
+        act = np.where(base[idx] == 0, plan.policy[steps - t, np.maximum(state[idx], 0),
+                                                   last[idx]], base[idx] - 1).astype(np.int64)
         out, hit = simulate(act, point[idx], heading[idx])
         cost[idx] += plan.w1 * (1.0 + out.ticks) + (plan.w2 - plan.w1) * (act != last[idx])
         success[idx[hit]] = 1.0
         alive[idx] = ~hit & (out.next_state >= 0)
-        point, heading = point.copy(), heading.copy()
         point[idx], heading[idx], state[idx], last[idx] = out.end, out.heading, \
             out.next_state, act
-    return success, cost
+    success, cost = success.reshape(k, n), cost.reshape(k, n)
+    best = np.lexsort((cost, -success), axis=0)[0]
+    cols = np.arange(n)
+    return success[best, cols], cost[best, cols]
