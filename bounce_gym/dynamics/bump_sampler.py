@@ -35,6 +35,11 @@ from bounce_gym.dynamics.simulator import BounceDynamics
 #: every round — and a share `EXPLORE` (all, for a state no robot arrived in yet) from the
 #: sections. The outcomes are those of the last round.
 ROUNDS = 6
+#: how far (in world tolerances) a pose drawn on the sections is moved into the free space:
+#: below the backends' contact tolerance (10 tolerances), so it still touches the wall
+INSET = 2.0
+#: the largest distance between `World.eroded`'s chords and the arcs they approximate, in R
+CHORD_SAG = 1.5e-3
 EXPLORE = 0.0
 
 
@@ -92,8 +97,17 @@ def sample_outcomes(model: CellModel, angles: np.ndarray, samples: int,
         drawn = np.isin(state, measured)
         sampler = sections.sample if offset is None else functools.partial(
             sections.sample_heading, offset=offset)
-        point[drawn], heading[drawn], _ = sampler(cells[np.isin(cells, measured)],
-                                                  samples * len(angles), rng)
+        drawn_point, heading[drawn], normal = sampler(cells[np.isin(cells, measured)],
+                                                      samples * len(angles), rng)
+        # a hair into the free space (within the backends' contact tolerance): a disk's centre
+        # exactly on the eroded boundary may read as outside it by round-off
+        drawn_point = drawn_point + INSET * model.world.tol * normal
+        # on the chords that stand for a disk's arcs around corners (inside the arc by up to
+        # `CHORD_SAG` R) the pose is moved onto the arc's side; it then rarely reads as a
+        # contact and is dropped, while the pool brings the poses where robots really touch
+        outside = ~model.world.contains(drawn_point, model.robot_radius)
+        drawn_point[outside] += CHORD_SAG * model.robot_radius * normal[outside]
+        point[drawn] = drawn_point
         order = np.argsort(pool_state, kind="stable")
         first = np.searchsorted(pool_state[order], state, side="left")
         count = np.searchsorted(pool_state[order], state, side="right") - first

@@ -45,7 +45,7 @@ from bounce_gym.files import atomic_file
 from bounce_gym.trust import home
 
 #: the version of the stored layout and of the construction; a change invalidates old files
-FORMAT = 3
+FORMAT = 4
 #: default sample points per decision state and angle
 DEFAULT_SAMPLES = 200
 #: the header's key inside the .npz

@@ -149,3 +149,13 @@ def test_first_states_follow_the_reset_drive():
     expected = BumpStates(sm.model).of(state.position, state.heading, state.contact_normal)
     assert np.all(z == expected[0])
     assert np.all(clock == state.clock[0])
+
+
+def test_disk_robot_poses_on_the_arcs_around_corners_are_usable():
+    world = get("lab_navigation")
+    model = CellModel(world, 1.0, 8, robot_radius=0.17)
+    sm = sampled_model(model, _dynamics(world, "kinematic", radius=0.17), ANGLES, samples=4,
+                       cache=False)
+    out = sm.outcomes
+    assert len(out.states) > 0 and (out.next_state >= 0).all()
+    assert world.contains(out.start, 0.17).all()
