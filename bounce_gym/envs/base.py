@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 from gymnasium import logger
 
 from bounce_gym.cells import CellModel
+from bounce_gym.dynamics.sampled_model import SampledModel
 from bounce_gym.envs.core import BounceCore
 from bounce_gym.envs.options import parse_options
 from bounce_gym.envs.render.owner import RendererOwner
@@ -54,11 +55,22 @@ class EnvBase(RendererOwner):
         not write it."""
         return self.core.state
 
-    def cell_model(self, n_bins: int | None = None, corner_rule: str | None = None) -> CellModel:
+    def cell_model(self, n_bins: int | None = None, corner_rule: str | None = None,
+                   kind: str = "exact", **sampling) -> CellModel | SampledModel:
         """The discrete cell-to-cell model of this env, for planners (see
         `BounceCore.cell_model`): the cell backend's own model, else one built once at cell
         size = ``step_length`` for the robot radius with ``n_bins`` orientation bins and
-        ``corner_rule`` (default: the env's ``cell_bins`` and ``corner_rule``)."""
+        ``corner_rule`` (default: the env's ``cell_bins`` and ``corner_rule``).
+
+        ``kind="sampled"`` returns instead the generalized cell mapping estimated from this
+        env's own dynamics over that model's states (`BounceCore.sampled_model`; ``sampling``:
+        ``samples``, ``seed``, ``heading_offset``, ``cache``)."""
+        if kind == "sampled":
+            return self.core.sampled_model(n_bins=n_bins, corner_rule=corner_rule, **sampling)
+        if kind != "exact":
+            raise ConfigError(f"kind: expected 'exact' or 'sampled', got {kind!r}")
+        if sampling:
+            raise ConfigError(f"cell_model: {sorted(sampling)} are options of kind='sampled'")
         return self.core.cell_model(n_bins, corner_rule)
 
     def render(self):
