@@ -10,10 +10,9 @@ and largest over the (state, angle) pairs (`SampledModel.convergence`).
 geometry, the cell grid, the dynamics — backend, physics and its parameters, rule, noise, radius,
 step length —, Φ, the samples, the seed, the heading offset, the re-sampling rounds and
 `FORMAT`); it is stored as
-``<fingerprint>.npz`` (NumPy arrays, read with ``allow_pickle=False``) holding the sample arrays
-and a JSON header (read through `bounce_gym.documents.parse_document`), written atomically
-(`bounce_gym.files.atomic_file`). A file that cannot be read, is inconsistent or whose header
-names another fingerprint is rebuilt and replaced. The folder is ``cache`` when given, else
+``<fingerprint>.npz`` holding the sample arrays and a JSON header, by `bounce_gym.model_cache` (data only, written
+atomically). A file that cannot be read, is inconsistent or whose header names another
+fingerprint is rebuilt and replaced, with a warning. The folder is ``cache`` when given, else
 ``<home>/cache/sampled_models`` (`bounce_gym.trust.home`: ``$BOUNCE_GYM_HOME`` or the user's
 config folder); ``cache=False`` keeps the model in memory only.
 """
@@ -21,18 +20,16 @@ config folder); ``cache=False`` keeps the model in memory only.
 from __future__ import annotations
 
 import hashlib
-import io
 import json
 import math
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from bounce_gym import model_cache
 from bounce_gym.cells.model import CellModel
 from bounce_gym.cells.outcomes import BumpOutcomes
-from bounce_gym.documents import parse_document
 from bounce_gym.dynamics.bump_sampler import (
     EXPLORE,
     ROUNDS,
@@ -40,16 +37,12 @@ from bounce_gym.dynamics.bump_sampler import (
     sample_outcomes,
     simulate_bumps,
 )
-from bounce_gym.errors import BounceGymError, ConfigError
-from bounce_gym.files import atomic_file
-from bounce_gym.trust import home
+from bounce_gym.errors import ConfigError
 
 #: the version of the stored layout and of the construction; a change invalidates old files
 FORMAT = 4
 #: default sample points per decision state and angle
 DEFAULT_SAMPLES = 200
-#: the header's key inside the .npz
-_HEADER = "header"
 
 
 @dataclass(frozen=True)
@@ -115,7 +108,7 @@ def fingerprint(model: CellModel, dynamics: dict, angles: np.ndarray, samples: i
 
 def default_cache() -> Path:
     """``<home>/cache/sampled_models`` (module docstring)."""
-    return home() / "cache" / "sampled_models"
+    return model_cache.cache_folder("sampled_models")
 
 
 def sampled_model(model: CellModel, dynamics: dict, angles: np.ndarray,
@@ -154,31 +147,23 @@ def sampled_model(model: CellModel, dynamics: dict, angles: np.ndarray,
 
 
 def _store(path: Path, outcomes: BumpOutcomes, key: str, convergence: dict) -> None:
-    header = json.dumps({"format": FORMAT, "fingerprint": key, "n_cells": outcomes.n_cells,
-                         "convergence": convergence}).encode()
-    arrays = outcomes.arrays()
-    arrays[_HEADER] = np.frombuffer(header, dtype=np.uint8)
-    with atomic_file(path) as fh:
-        np.savez(fh, **arrays)
+    header = {"format": FORMAT, "fingerprint": key, "n_cells": outcomes.n_cells,
+              "convergence": convergence}
+    model_cache.store(path, header, outcomes.arrays())
 
 
 def _load(path: Path, model: CellModel, key: str) -> tuple[BumpOutcomes, dict] | None:
     """The stored outcomes and convergence at ``path``, or None when it is missing, unreadable,
-    inconsistent or stale."""
-    if not path.is_file():
+    inconsistent or stale (`bounce_gym.model_cache`)."""
+    stored = model_cache.load(path, FORMAT, key)
+    if stored is None:
         return None
+    header, arrays = stored
     try:
-        data = path.read_bytes()
-        with np.load(io.BytesIO(data), allow_pickle=False) as npz:
-            arrays = {name: npz[name] for name in npz.files}
-        header = parse_document(str(path), arrays.pop(_HEADER).astype(np.uint8).tobytes(),
-                                fmt="json")
-        if not isinstance(header, dict) or header.get("format") != FORMAT \
-                or header.get("fingerprint") != key or header.get("n_cells") != model.n_cells:
-            return None
         convergence = header.get("convergence")
-        if not isinstance(convergence, dict):
-            return None
+        if header.get("n_cells") != model.n_cells or not isinstance(convergence, dict):
+            raise ValueError("its header does not match the cell model")
         return BumpOutcomes.from_arrays(model.n_cells, arrays), convergence
-    except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, BounceGymError):
+    except (ValueError, KeyError, TypeError) as exc:
+        model_cache.warn_unusable(path, exc)
         return None

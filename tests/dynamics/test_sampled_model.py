@@ -108,7 +108,8 @@ def test_seeded_and_cached_and_rebuilt_when_corrupt(tmp_path):
     other = sampled_model(model, dyn, ANGLES, samples=8, seed=4, cache=tmp_path)
     assert other.fingerprint != first.fingerprint
     files[0].write_bytes(b"not a zip file")
-    rebuilt = sampled_model(model, dyn, ANGLES, samples=8, seed=3, cache=tmp_path)
+    with pytest.warns(UserWarning, match="unusable"):
+        rebuilt = sampled_model(model, dyn, ANGLES, samples=8, seed=3, cache=tmp_path)
     assert np.array_equal(rebuilt.outcomes.next_state, first.outcomes.next_state)
     assert files[0].read_bytes()[:2] == b"PK"  # replaced by a readable file
 
@@ -121,7 +122,8 @@ def test_stale_header_is_rebuilt(tmp_path):
     b = sampled_model(model, dyn, ANGLES, samples=4, seed=1, cache=tmp_path)
     # put b's file under a's name: the header names another fingerprint
     (tmp_path / f"{a.fingerprint}.npz").write_bytes((tmp_path / f"{b.fingerprint}.npz").read_bytes())
-    again = sampled_model(model, dyn, ANGLES, samples=4, seed=0, cache=tmp_path)
+    with pytest.warns(UserWarning, match="does not match"):
+        again = sampled_model(model, dyn, ANGLES, samples=4, seed=0, cache=tmp_path)
     assert np.array_equal(again.outcomes.start, a.outcomes.start)
 
 
