@@ -193,11 +193,30 @@ def regions_of(env, model: CellModel) -> list[np.ndarray]:
     return out
 
 
+def in_region_share(result: MonitoringResult, g: int, regions, samples: int = 16) -> float:
+    """The cell model's prediction of the monitoring task's ``in_region`` on accepted cycle
+    ``g``: both robots move from cell centre to cell centre, one step per tick, around the
+    cycle; the share of each tick a robot spends in (or on the boundary of) its region polygon
+    — measured like the task, along the path, here at ``samples`` midpoints per tick —
+    averaged over the ticks of the cycle and the two robots."""
+    import shapely
+
+    t = (np.arange(samples) + 0.5) / samples
+    shares = []
+    for z, poly in zip(result.split(result.cycles[g]), regions, strict=True):
+        centre, _ = result.model.configuration(z)
+        step = np.roll(centre, -1, axis=0) - centre
+        points = (centre[:, None, :] + t[None, :, None] * step[:, None, :]).reshape(-1, 2)
+        shares.append(shapely.intersects_xy(poly, points[:, 0], points[:, 1]).mean())
+    return float(np.mean(shares))
+
+
 class MonitoringPlanPolicy(MultiPolicy):
     """Start two robots on an accepted cycle of Algorithm 2 and let them bounce (module docstring).
 
     ``result`` is the `MonitoringResult`; ``r`` the number of accepted groups. After
-    `start_options`: ``group`` (index into ``result.cycles``), ``period`` and ``start_cell``.
+    `start_options`: ``group`` (index into ``result.cycles``), ``period``, ``start_cell`` and
+    ``predicted_in_region`` (the cell model's time in own region on that cycle, `in_region_share`).
     With r = 0 there is nothing to follow: the env draws its own start and the robots bounce.
     """
 
@@ -206,7 +225,7 @@ class MonitoringPlanPolicy(MultiPolicy):
     def __init__(self, result: MonitoringResult, phi_index: list[int]) -> None:
         self.result = result
         self.phi_index = list(phi_index)
-        self.group = self.period = self.start_cell = None
+        self.group = self.period = self.start_cell = self.predicted_in_region = None
 
     @property
     def r(self) -> int:
@@ -246,11 +265,13 @@ class MonitoringPlanPolicy(MultiPolicy):
     def start_options(self, env, seed: int) -> dict | None:
         """Accepted group ``seed mod r``, entered at cycle cell ``(seed div r) mod period``."""
         if self.r == 0:
-            self.group = self.period = self.start_cell = None
+            self.group = self.period = self.start_cell = self.predicted_in_region = None
             return None
         self.group = seed % self.r
         cycle = self.result.cycles[self.group]
         self.period = len(cycle)
+        self.predicted_in_region = in_region_share(self.result, self.group,
+                                                   getattr(env, "unwrapped", env).task.regions)
         self.start_cell = int(cycle[(seed // self.r) % self.period])
         return self.result.start_options(self.start_cell)
 

@@ -3,7 +3,9 @@ on an accepted collision-free periodic group (`baselines.multirobot.policies.Mon
 
 Per episode, besides the team columns: ``in_region`` (``info["in_region_fraction"]`` averaged
 over robots and steps) and ``encounters`` (robot pairs together at the end of a step, summed);
-the planner also reports ``r`` (accepted periodic groups) and ``period`` (of the group it runs).
+the planner also reports ``r`` (accepted periodic groups), ``period`` (of the group it runs) and
+``predicted_in_region`` (the cell model's time in own region on that group), beside the measured
+``in_region`` on every backend.
 """
 
 from __future__ import annotations
@@ -34,11 +36,11 @@ class MultiRobotMonitoring(MultiRobot):
     name = "multirobot monitoring"
     task = "monitoring"
     table = "multi-robot monitoring"
-    columns = ("experiment", "policy", "robots", "episodes", "seeds", "in_region", "encounters",
-               "robot_contacts", "r", "period", "ticks")
+    columns = ("experiment", "policy", "robots", "episodes", "seeds", "in_region",
+               "predicted_in_region", "encounters", "robot_contacts", "r", "period", "ticks")
     labels = frozenset({"robots", "r"})
     score = "in_region"
-    planner_attributes = ("r", "period")
+    planner_attributes = ("r", "period", "predicted_in_region")
     planner_class = "MonitoringPlanPolicy"
 
     def episode(self, env, policy, setup):

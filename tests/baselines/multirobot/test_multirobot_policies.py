@@ -146,6 +146,22 @@ def test_monitoring_cycle_replays_collision_free_and_visits_regions(phi):
         assert cells[0].tolist() == [int(z) for z in policy.result.split(policy.start_cell)]
 
 
+def test_monitoring_prediction_is_the_time_measured_on_the_cycle():
+    """On the cell backend the robots run the cycle exactly: over whole periods the task's
+    ``in_region_fraction`` is the planner's ``predicted_in_region``."""
+    env = MultiBounceEnv(**MONITOR)
+    policy = MonitoringPlanPolicy.for_env(env, phi=90)
+    for seed in range(3):
+        obs, infos = env.reset(seed=seed, options=policy.start_options(env, seed))
+        policy.reset(env)
+        measured = []
+        for _ in range(2 * policy.period):
+            obs, _, _, _, infos = env.step(policy.act(obs, infos))
+            measured.append(np.mean(infos["robot_0"]["in_region_fraction"]))
+        assert 0.0 < policy.predicted_in_region < 1.0
+        assert np.mean(measured) == pytest.approx(policy.predicted_in_region, abs=1e-9)
+
+
 def test_monitoring_contacts_are_zero_on_the_cycle_and_groups_match_algorithm_2():
     env = MultiBounceEnv(**{**MONITOR, "robot_collisions": "bounce"})
     policy = MonitoringPlanPolicy.for_env(env, phi=90)
