@@ -103,6 +103,7 @@ class Navigation(SingleRobotFamily):
     planner_attributes = ("predicted_success", "predicted_ticks", "predicted_weight")
 
     def prepare(self, env, experiment):
+        planners(experiment)  # planner_kwargs checked whichever policies run
         options = env.unwrapped.options
         if options.action_type != "discrete" or options.step_mode != "bounce":
             return None
