@@ -50,8 +50,9 @@ or a list of them; an entry may be ``{folder: <name>, env_kwargs: {privileged: t
 models trained with another observation (only ``privileged`` and ``history`` may differ, so the
 episodes stay the same); ``visibility`` makes a single-robot experiment a safe-plan scenario
 (`experiments.families.visibility`); ``planner_kwargs`` are keyword arguments
-of the planner's ``for_env`` (e.g. ``{phi: 135}``), and for ``bounce_gym/Drifter-v0`` the
-planners to run (`experiments.families.drifters.planners`); ``difficulty`` (``easy``, ``medium`` or
+of the planner's ``for_env`` (e.g. ``{phi: 135}``), and for ``bounce_gym/Drifter-v0`` and the
+navigation experiments the planners to run and their options
+(`experiments.families.drifters.planners`, `experiments.families.navigation.planners`); ``difficulty`` (``easy``, ``medium`` or
 ``hard``) labels the experiment in a leaderboard. A top-level ``leaderboard: true`` makes the
 evaluation write ``leaderboard.md`` and ``leaderboard.csv`` (`experiments.leaderboard`). A
 top-level ``executor: {kind: local|ray, workers: N, address: ..., retries: 2}`` says where the
@@ -82,6 +83,7 @@ from baselines.seeds import EVALUATION_SEEDS_START
 from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
+    GYM_ENVS,
     GYMNASIUM_IDS,
     PETTINGZOO_ENVS,
     is_drifter_id,
@@ -190,9 +192,11 @@ def validate_config(config: object) -> dict:
         elif exp["env"] not in GYMNASIUM_IDS:
             raise ConfigError(f"{where}.env: unknown environment id {exp['env']!r}; registered: "
                               f"{[*GYMNASIUM_IDS, *_PARALLEL_IDS]}")
-        elif "planner_kwargs" in exp and not is_drifter_id(exp["env"]):
+        elif "planner_kwargs" in exp and not (is_drifter_id(exp["env"])
+                                              or _task(exp) == "navigation"):
             raise ConfigError(f"{where}.planner_kwargs: only for multi-robot experiments "
-                              f"(env one of {_PARALLEL_IDS}) and bounce_gym/Drifter-v0")
+                              f"(env one of {_PARALLEL_IDS}), bounce_gym/Drifter-v0 and "
+                              "navigation (task 'navigation')")
         if "max_episode_steps" in exp["env_kwargs"]:
             raise ConfigError(f"{where}.env_kwargs.max_episode_steps: not allowed; the "
                               "experiment's horizon is max_steps (see horizon_reason)")
@@ -238,6 +242,13 @@ def world_name(experiment: Mapping) -> str:
                 if is_pettingzoo_id(experiment["env"]) else gym.spec(experiment["env"]))
         world = spec.kwargs.get("world", "?")
     return Path(world).name if isinstance(world, str) else getattr(world, "name", str(world))
+
+
+def _task(experiment: Mapping) -> object:
+    """The task of a single-robot bouncing experiment: its ``env_kwargs.task`` or the one its
+    env id registers."""
+    return experiment["env_kwargs"].get("task", GYM_ENVS.get(experiment["env"], ({}, 0))[0]
+                                        .get("task"))
 
 
 def _seeds(where: str, seeds: object) -> list[int]:

@@ -1,5 +1,13 @@
 """Navigation: reach the goal pose; the roadmap planner over (cell, bounce angle) and its
-predicted cost (`baselines.navigation.NavigationPlanner`).
+predicted cost (`baselines.navigation.NavigationPlanner`), and the stochastic shortest path on
+the GCM sampled from the env's own dynamics (`baselines.navigation.sampled`).
+
+Planners (``planner_kwargs``, all optional): ``models`` lists which of `PLANNER_MODELS` run —
+``roadmap``, the papers' plan on the env's cell model run open loop (row "roadmap planner"), and
+``sampled``, `SampledNavigationPlanner` closed loop on its particle belief (row "sampled-gcm");
+default ``[roadmap]``. The sampled planner's options `SAMPLED_OPTIONS` (``samples``, ``seed``,
+``particles``, ``depth``, ``reach``, ``cell_size``) are passed to it; its horizon is the
+experiment's ``max_steps``.
 
 Per episode:
 
@@ -11,7 +19,10 @@ Per episode:
   episodes only (absent on the others), so its count is the number of feasible episodes;
 * ``plan_cost`` — the papers' cost of the executed episode, w1 per tick plus w2 per change of
   bounce angle, as the env reports it (``info["plan_cost"]``, absent from envs that do not);
-* for the planner, ``predicted_ticks`` and ``predicted_weight`` of its plan.
+* for the roadmap planner, ``predicted_ticks`` and ``predicted_weight`` of its plan; for the
+  sampled planner ``predicted_success``, its model's probability of reaching the goal within the
+  horizon from its first belief (its mean over the episodes is the model's prediction of
+  ``success``).
 
 Feasibility needs the roadmap, so it is measured where the planner can run (discrete actions,
 bounce steps); the first policy to meet a start/goal pair asks the roadmap, the others reuse the
@@ -20,9 +31,23 @@ answer.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
+from baselines.policy import Policy
+from bounce_gym import validate
+from bounce_gym.errors import ConfigError
 from experiments.families.base import Episode, SingleRobotFamily
+
+#: the planners ``planner_kwargs.models`` may name
+PLANNER_MODELS = ("roadmap", "sampled")
+#: the options of the sampled planner ``planner_kwargs`` may set
+SAMPLED_OPTIONS = ("samples", "seed", "particles", "depth", "reach", "cell_size")
+#: the least value of the sampled planner's counts (the others: 1)
+MINIMUM = {"samples": 2, "seed": 0}
+#: the sampled planner's row
+SAMPLED_NAME = "sampled-gcm"
 
 
 class Feasibility:
@@ -72,23 +97,70 @@ class NavigationEpisode(Episode):
 class Navigation(SingleRobotFamily):
     name = task = "navigation"
     columns = (*SingleRobotFamily.columns, "success", "feasible", "success_feasible",
-               "ticks_to_goal", "plan_cost", "predicted_ticks", "predicted_weight")
+               "predicted_success", "ticks_to_goal", "plan_cost", "predicted_ticks",
+               "predicted_weight")
     score = "success"
-    planner_attributes = ("predicted_ticks", "predicted_weight")
+    planner_attributes = ("predicted_success", "predicted_ticks", "predicted_weight")
 
     def prepare(self, env, experiment):
+        planners(experiment)  # planner_kwargs checked whichever policies run
         options = env.unwrapped.options
         if options.action_type != "discrete" or options.step_mode != "bounce":
             return None
         return Feasibility()
 
-    def make_planner(self, env):
-        from baselines.navigation import NavigationPlanner
-
-        return NavigationPlanner()
+    def policies(self, kind, env, experiment, setup):
+        if kind != "planner":
+            return super().policies(kind, env, experiment, setup)
+        if env.unwrapped.options.action_type != "discrete":
+            return []
+        return planners(experiment)
 
     def episode(self, env, policy, setup):
         return NavigationEpisode(env, setup)
+
+
+def planners(experiment: Mapping) -> list[Policy]:
+    """The planner rows of a navigation experiment (module docstring), checked before any
+    episode runs."""
+    from baselines.navigation import NavigationPlanner
+    from baselines.navigation.sampled import SampledNavigationPlanner
+
+    kwargs = dict(experiment.get("planner_kwargs", {}))
+    models = kwargs.pop("models", ["roadmap"])
+    unknown = sorted(key for key in kwargs if key not in SAMPLED_OPTIONS)
+    if unknown:
+        raise ConfigError(f"planner_kwargs: unknown {unknown}; allowed are models, "
+                          f"{', '.join(SAMPLED_OPTIONS)}")
+    if not isinstance(models, list) or not models or len(set(map(str, models))) != len(models) \
+            or any(m not in PLANNER_MODELS for m in models):
+        raise ConfigError(f"planner_kwargs.models: expected a non-empty list of distinct "
+                          f"{list(PLANNER_MODELS)}, got {models!r}")
+    if kwargs and "sampled" not in models:
+        raise ConfigError(f"planner_kwargs: {sorted(kwargs)} are options of the sampled planner; "
+                          "add 'sampled' to planner_kwargs.models")
+    out: list[Policy] = []
+    if "roadmap" in models:
+        out.append(NavigationPlanner())
+    if "sampled" in models:
+        sampled = SampledNavigationPlanner(horizon=experiment["max_steps"],
+                                           **_sampled_options(kwargs))
+        sampled.name = SAMPLED_NAME
+        out.append(sampled)
+    return out
+
+
+def _sampled_options(kwargs: Mapping) -> dict:
+    """The sampled planner's options, checked: whole counts (``samples`` at least 2, ``seed`` at
+    least 0, the others at least 1), ``cell_size`` a positive number."""
+    out = {}
+    for key, value in kwargs.items():
+        where = f"planner_kwargs.{key}"
+        if key == "cell_size":
+            out[key] = validate.number(where, value, minimum=0, strict=True)
+        else:
+            out[key] = validate.integer(where, value, minimum=MINIMUM.get(key, 1))
+    return out
 
 
 FAMILY = Navigation()

@@ -422,8 +422,11 @@ def _config_content() -> list[Case]:
          f"{x}.adversaries: each adversary once"),
         ("difficulty unknown", evaluation(experiment(difficulty="nightmare")),
          f"{x}.difficulty: expected one of ('easy', 'medium', 'hard')"),
-        ("planner_kwargs on one robot", evaluation(experiment(planner_kwargs={"phi": 1})),
+        ("planner_kwargs on one robot", evaluation(experiment(
+            env="bounce_gym/Bounce-v0", env_kwargs={}, planner_kwargs={"phi": 1})),
          f"{x}.planner_kwargs: only for multi-robot experiments"),
+        ("navigation planner_kwargs unknown", evaluation(experiment(planner_kwargs={"phi": 1})),
+         "planner_kwargs: unknown ['phi']"),
         ("visibility on several robots", evaluation(experiment(
             env="bounce_gym/MultiBounce-v0", env_kwargs={}, visibility={})),
          f"{x}.visibility: only for single-robot experiments"),
