@@ -49,8 +49,9 @@ Optional keys: ``rl_models`` — the folder of ``models/`` to load instead of th
 or a list of them; an entry may be ``{folder: <name>, env_kwargs: {privileged: true}}`` to run
 models trained with another observation (only ``privileged`` and ``history`` may differ, so the
 episodes stay the same); ``visibility`` makes a single-robot experiment a safe-plan scenario
-(`experiments.families.visibility`); ``planner_kwargs`` (multi-robot only) are keyword arguments
-of the planner's ``for_env`` (e.g. ``{phi: 135}``); ``difficulty`` (``easy``, ``medium`` or
+(`experiments.families.visibility`); ``planner_kwargs`` are keyword arguments
+of the planner's ``for_env`` (e.g. ``{phi: 135}``), and for ``bounce_gym/Drifter-v0`` the
+planners to run (`experiments.families.drifters.planners`); ``difficulty`` (``easy``, ``medium`` or
 ``hard``) labels the experiment in a leaderboard. A top-level ``leaderboard: true`` makes the
 evaluation write ``leaderboard.md`` and ``leaderboard.csv`` (`experiments.leaderboard`). A
 top-level ``executor: {kind: local|ray, workers: N, address: ..., retries: 2}`` says where the
@@ -189,9 +190,9 @@ def validate_config(config: object) -> dict:
         elif exp["env"] not in GYMNASIUM_IDS:
             raise ConfigError(f"{where}.env: unknown environment id {exp['env']!r}; registered: "
                               f"{[*GYMNASIUM_IDS, *_PARALLEL_IDS]}")
-        elif "planner_kwargs" in exp:
+        elif "planner_kwargs" in exp and not is_drifter_id(exp["env"]):
             raise ConfigError(f"{where}.planner_kwargs: only for multi-robot experiments "
-                              f"(env one of {_PARALLEL_IDS})")
+                              f"(env one of {_PARALLEL_IDS}) and bounce_gym/Drifter-v0")
         if "max_episode_steps" in exp["env_kwargs"]:
             raise ConfigError(f"{where}.env_kwargs.max_episode_steps: not allowed; the "
                               "experiment's horizon is max_steps (see horizon_reason)")

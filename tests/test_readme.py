@@ -1,28 +1,47 @@
-"""The README's code runs, and prints what the README says it prints."""
+"""The README's code — and that of the docs pages — runs, and prints what the page says it
+prints."""
 
 import contextlib
 import io
 import os
 import re
+from collections import Counter
 from pathlib import Path
 
 import pytest
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
-README = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
-BLOCKS = re.findall(r"```python\n(.*?)```(?:\n\nprints\n\n```\n(.*?)```)?", README, re.S)
+ROOT = Path(__file__).parents[1]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+PATTERN = r"```python\n(.*?)```(?:\n\nprints\n\n```\n(.*?)```)?"
+#: (page, code, expected output) of every python block, in page order
+BLOCKS = [(page.relative_to(ROOT).as_posix(), code, expected) for page in PAGES
+          for code, expected in re.findall(PATTERN, page.read_text(encoding="utf-8"), re.S)]
 
 
-@pytest.mark.parametrize(("code", "expected"), BLOCKS, ids=[f"block{i}" for i in range(len(BLOCKS))])
-def test_readme_block_runs(code, expected, tmp_path, monkeypatch):
+def _ids() -> list[str]:
+    """``block<i>`` for the README's blocks, ``<page>-block<i>`` for the docs pages'."""
+    seen: Counter = Counter()
+    ids = []
+    for page, _, _ in BLOCKS:
+        prefix = "" if page == "README.md" else f"{Path(page).stem}-"
+        ids.append(f"{prefix}block{seen[page]}")
+        seen[page] += 1
+    return ids
+
+
+@pytest.mark.parametrize(("page", "code", "expected"), BLOCKS, ids=_ids())
+def test_readme_block_runs(page, code, expected, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        exec(compile(code, "README.md", "exec"), {"__name__": "readme"})
+        exec(compile(code, page, "exec"), {"__name__": "readme"})
     if expected:
         assert out.getvalue() == expected
 
 
 def test_readme_has_code_and_outputs():
-    assert len(BLOCKS) >= 4 and any(expected for _, expected in BLOCKS)
+    readme = [expected for page, _, expected in BLOCKS if page == "README.md"]
+    assert len(readme) >= 4 and any(readme)
+    assert any(page == "docs/continuous_models.md" and expected for page, _, expected in BLOCKS)

@@ -9,7 +9,10 @@
   and `ValueIterationPolicy`, which runs it in ``bounce_gym/Drifter-v0`` (with the
   `AlwaysDriftPolicy` and `RandomLayerPolicy` baselines); `deploy_cells` turns a deployment
   into the ``deploy`` argument of ``bounce_gym/MultiDrifter-v0``, and `DeploymentPolicy`
-  releases that env's fleet at a deployment and lets it drift.
+  releases that env's fleet at a deployment and lets it drift;
+* `horizon_plan` — finite-horizon value iteration for reaching a goal on a sampled GCM of the
+  env's own dynamics (`bounce_gym.cells.SampledDrifterCells`), and `HorizonReachPolicy`, which
+  acts on it from the drifter's observation.
 
 Every planner returns plain data (numpy arrays of model states in small frozen dataclasses).
 """
@@ -28,6 +31,7 @@ from baselines.drifters.deployment_baselines import (
     visit_probabilities,
 )
 from baselines.drifters.fleet import DEPLOYMENT_METHODS, DeploymentPolicy
+from baselines.drifters.horizon_plan import HorizonPlan, HorizonReachPolicy, horizon_plan
 from baselines.drifters.policy import AlwaysDriftPolicy, RandomLayerPolicy, ValueIterationPolicy
 from baselines.drifters.reachability import Reachability, persistent_reachability, three_d_graph
 from baselines.drifters.value_iteration import (
@@ -44,6 +48,7 @@ from baselines.drifters.visibility import (
 )
 
 __all__ = ["DEPLOYMENT_METHODS", "AlwaysDriftPolicy", "Deployment", "DeploymentPolicy",
+           "HorizonPlan", "HorizonReachPolicy", "horizon_plan",
            "PersistentBehavior", "RandomLayerPolicy", "Reachability", "ValueIterationPolicy",
            "ValueIterationResult", "VisibilityDeployment", "deploy_cells",
            "deployment_locations", "expected_coverage", "goal_states", "greedy_deployment",

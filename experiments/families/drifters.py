@@ -4,7 +4,10 @@ thesis ch. 5, problem 4): the value-iteration policy of Alg. 5.5
 agents, on the cell and the continuous backend — and what every drifter family shares.
 
 Policy kinds: ``planner`` Alg. 5.5 (planned on the env's cell model, acting on the drifter's
-model state), ``random`` a uniformly random legal action every step
+model state) and, with ``planner_kwargs: {models: [cell, sampled], samples: n, refine: r}``,
+finite-horizon value iteration on the sampled GCM of the env's own dynamics
+(`baselines.drifters.HorizonReachPolicy`, acting on the observed pose; the env needs
+``observe_pose: true``), ``random`` a uniformly random legal action every step
 (`baselines.drifters.RandomLayerPolicy`), ``fixed`` always drift
 (`baselines.drifters.AlwaysDriftPolicy`), ``rl`` the trained models.
 
@@ -12,7 +15,7 @@ Per episode: ``success`` (the goal was reached within the horizon), ``steps_to_g
 (successful episodes only) and, for the policies that are one fixed action per model state (the
 planner, always drift), ``predicted_success``: the cell model's probability that the policy
 reaches the goal within the horizon from the episode's start state
-(`baselines.drifters.reach_probability`). On the cell backend the env is that model, so the
+(`baselines.drifters.reach_probability`); for the sampled planner its own model's. On the cell backend the env is that model, so the
 measured success rate estimates the mean prediction; on the continuous backend the gap between
 them is how far the model is from the currents. The clock of a drifter env is its steps.
 """
@@ -25,6 +28,7 @@ import numpy as np
 
 from baselines.drifters import (
     AlwaysDriftPolicy,
+    HorizonReachPolicy,
     RandomLayerPolicy,
     ValueIterationPolicy,
     reach_probability,
@@ -32,6 +36,7 @@ from baselines.drifters import (
 from baselines.policy import Policy, is_parallel_env
 from bounce_gym.cells import DRIFT, DrifterCells
 from bounce_gym.envs.drifters.base import DrifterEnvBase
+from bounce_gym.errors import ConfigError
 from experiments.families.base import Episode, Family
 
 
@@ -83,6 +88,8 @@ class ReachPrediction:
         self._known: dict[tuple, np.ndarray] = {}
 
     def __call__(self, env, policy: Policy, state: int) -> float | None:
+        if isinstance(policy, HorizonReachPolicy):
+            return policy.predicted_success(state)
         model = env.unwrapped.cell_model()
         actions = stationary_actions(policy, model)
         if actions is None:
@@ -125,7 +132,7 @@ class DrifterReach(DrifterFamily):
 
     def policies(self, kind, env, experiment, setup):
         if kind == "planner":
-            return [ValueIterationPolicy()]
+            return planners(experiment)
         if kind == "random":
             return [RandomLayerPolicy()]
         return [AlwaysDriftPolicy()]  # fixed: the one fixed action that is always legal
@@ -151,6 +158,31 @@ class DrifterReach(DrifterFamily):
             written.append(plot_policy(data["model"], data["plan"],
                                        folder / f"{name}-policy.png"))
         return written
+
+
+#: the planners ``planner_kwargs.models`` may name
+PLANNER_MODELS = ("cell", "sampled")
+
+
+def planners(experiment: Mapping) -> list[Policy]:
+    """The planner rows of a reach experiment (module docstring): Alg. 5.5 on the cell model
+    and/or the finite-horizon plan on the sampled GCM."""
+    kwargs = dict(experiment.get("planner_kwargs", {}))
+    models = kwargs.pop("models", ["cell"])
+    sampled = {key: kwargs.pop(key) for key in ("samples", "seed", "refine") if key in kwargs}
+    if kwargs:
+        raise ConfigError(f"planner_kwargs: unknown {sorted(kwargs)}; allowed are models, "
+                          "samples, seed, refine")
+    if not isinstance(models, list) or not models or any(m not in PLANNER_MODELS
+                                                         for m in models):
+        raise ConfigError(f"planner_kwargs.models: expected a non-empty list of "
+                          f"{list(PLANNER_MODELS)}, got {models!r}")
+    out: list[Policy] = []
+    if "cell" in models:
+        out.append(ValueIterationPolicy())
+    if "sampled" in models:
+        out.append(HorizonReachPolicy(experiment["max_steps"], **sampled))
+    return out
 
 
 FAMILY = DrifterReach()

@@ -179,15 +179,16 @@ def _finite(state) -> bool:
 
 def run_checked(kind: str, world: World, backend: str, rule: str, noise: str, radius: float,
                 n_bounces: int, seed: int, n_robots: int = 1,
-                robot_collisions: str = "ignore", physics: dict | None = None) -> dict:
+                robot_collisions: str = "ignore", physics: dict | None = None,
+                depth: float | None = None) -> dict:
     """Bounce ``n_bounces`` times in ``world`` (built as ``kind``) and check every invariant
     after each bounce (see `checked_loop`). The cell backend steps cells of `grid_cell`; the
     continuous ones drive 1/40 of the map per tick. ``physics``: more physical parameters of
-    "dynamic"."""
+    "dynamic"; ``depth``: see `checked_loop`."""
     step = grid_cell(kind, world) if backend == "cell" else world.diameter / 40
     dyn = make_dynamics(world, backend, rule, noise, radius, step, n_robots, robot_collisions,
                         physics)
-    return checked_loop(dyn, n_bounces, seed)
+    return checked_loop(dyn, n_bounces, seed, depth)
 
 
 def make_dynamics(world: World, backend: str, rule: str, noise: str, radius: float,
@@ -219,21 +220,26 @@ def angles_for(rule: str, backend: str, rng: np.random.Generator, shape) -> np.n
     return rng.uniform(0.05, np.pi - 0.05, shape)
 
 
-def checked_loop(dyn: BounceDynamics, n_bounces: int, seed: int) -> dict:
+def checked_loop(dyn: BounceDynamics, n_bounces: int, seed: int,
+                 depth: float | None = None) -> dict:
     """Reset ``dyn`` with ``seed``, drive to the first contact and bounce ``n_bounces`` times,
     checking after every bounce that every robot stays in the free space (``World.contains``
     with the robot radius; the world's tolerance is relative to its size), the state is finite,
     ``ticks`` rises by exactly what `bounce` returns, bump counts and odometers never fall,
     clocks restart at a bump and otherwise grow by at most the elapsed ticks, headings lie in
     [0, 2π), a blocked robot touches the wall or robot it faces, and colliding disks never
-    overlap. Returns counters (bounces, escapes = 0, non-finite = 0) or raises `InvariantError`."""
+    overlap. ``depth``: how far (in radii) a rigid body of ``physics="dynamic"`` may overlap a
+    wall or robot (default: what a contact reaches, below). Returns counters (bounces, escapes = 0,
+    non-finite = 0) or raises `InvariantError`."""
     world, backend = dyn.world, dyn.backend
     radius, m = backend.radius, dyn.n_robots
     tol = slack(world)
     touch = 2 * backend.contact_tol + tol
     #: physics="dynamic": rigid bodies in contact overlap by a hair — new contacts by ``DEPTH``
     #: radii, touching ones by ``TOUCH`` times that, a stack's solver residuals a little more
-    depth = 2 * TOUCH * DEPTH * radius if backend.turns_take_time else 0.0
+    if not backend.turns_take_time:
+        depth = 0.0
+    depth = radius * (2 * TOUCH * DEPTH if depth is None else depth)
     state = dyn.reset(np.random.default_rng(seed))
     rng = np.random.default_rng(seed + 1)
     dyn.drive_to_contact()

@@ -247,3 +247,22 @@ def test_a_relative_flow_file_is_read_next_to_the_config(tmp_path):
     rows, _ = run(loaded, progress=False)
     assert len(rows) == 1 and "predicted_success" in rows[0].metrics
     assert world_name(loaded["experiments"][0]) == "basin.nc"
+
+
+def test_the_sampled_planner_rows_beside_the_old_one(tmp_path):
+    """planner_kwargs.models runs Alg. 5.5 on the cell model and the plan on the sampled GCM
+    on the same episodes; the sampled one's predicted_success is its own model's."""
+    exp = {**reach("reach-sampled", 2, backend="continuous", observe_pose=True),
+           "policies": ["planner"], "max_steps": 20, "horizon_reason": "a quick test",
+           "planner_kwargs": {"models": ["cell", "sampled"], "samples": 4}}
+    rows, _ = run(config(tmp_path, exp), progress=False)
+    assert {r.policy for r in rows} == {"value iteration", "value iteration (sampled GCM)"}
+    assert all(0 <= r.metrics["predicted_success"] <= 1 for r in rows)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"models": ["learned"]}, "planner_kwargs.models"), ({"colour": 1}, "planner_kwargs: unknown")])
+def test_bad_drifter_planner_kwargs_raise(tmp_path, kwargs, message):
+    exp = {**reach(count=1), "policies": ["planner"], "planner_kwargs": kwargs}
+    with pytest.raises(ConfigError, match=message):
+        run(config(tmp_path, exp), progress=False)

@@ -52,6 +52,9 @@ class MotionBackend(ABC):
     #: whether rotations take time (``physics="dynamic"``): then `BounceDynamics` hands them to
     #: `begin_turns` and `command_turns` instead of setting headings
     turns_take_time: bool = False
+    #: degrees: the front arc, centred on the heading, whose contacts stop a robot (its bumper).
+    #: The ideal robots are blocked by whatever they face into: the front half
+    bumper_arc: float = 180.0
 
     def __init__(
         self,
@@ -129,6 +132,19 @@ class MotionBackend(ABC):
         """Run a turn command of ``robots`` by ``rotations``; returns its ticks (see
         `turns_take_time`)."""
         raise ConfigError(f"backend {self.name!r} rotates robots instantly")
+
+    def bumpers(self, state: RobotState) -> tuple[np.ndarray, np.ndarray]:
+        """For drawings: (m,) whether each robot's bumper is pressed, and (m, 2) the unit normal
+        (pointing at the robot) of the contact its bumper latched, NaN where none. An ideal
+        robot's bumper is pressed while it is blocked, by the contact that blocks it."""
+        blocked = state.blocked.copy()
+        return blocked, np.where(blocked[:, None], state.contact_normal, np.nan)
+
+    def phase_names(self) -> list[str] | None:
+        """For drawings: each robot's motion phase by name, or None where motion has no phases
+        beyond driving and being blocked (the ideal backends; `RobotState.blocked` says
+        which)."""
+        return None
 
     def check_start(self, state: RobotState) -> None:
         """Raise `ConfigError` unless every robot starts in the free space (``radius`` from the

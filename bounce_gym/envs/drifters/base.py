@@ -9,13 +9,18 @@ from gymnasium import logger
 
 from bounce_gym.cells.drifter import DrifterCells
 from bounce_gym.envs.drifters.core import DrifterCore
+from bounce_gym.envs.drifters.model_cache import sampled_model
 from bounce_gym.envs.drifters.options import parse_options
+from bounce_gym.envs.drifters.sampled import DEFAULT_SAMPLES, MAX_PARTICLES, MAX_REFINE
 from bounce_gym.envs.render.owner import RendererOwner
 from bounce_gym.errors import ConfigError
 from bounce_gym.flows import FlowField
+from bounce_gym.validate import integer
 
 RENDER_MODES = ["human", "rgb_array"]
 FIELD_STYLES = ("arrows", "streamlines")
+#: The cell models `DrifterEnvBase.cell_model` hands planners.
+MODEL_KINDS = ("exact", "sampled")
 
 
 class DrifterEnvBase(RendererOwner):
@@ -43,6 +48,7 @@ class DrifterEnvBase(RendererOwner):
         self.render_mode = render_mode
         self.field_style = field_style
         self._renderer = None
+        self._sampled: dict[tuple[int, int, int, int], DrifterCells] = {}
 
     @property
     def flow(self) -> FlowField:
@@ -54,11 +60,40 @@ class DrifterEnvBase(RendererOwner):
         """The task that owns rewards and termination."""
         return self.core.task
 
-    def cell_model(self) -> DrifterCells:
-        """The discrete model of this env (thesis ch. 5 GCM, ``rho``, ``cell_map``, the
-        snapshot at ``start_time``): the model the cell backend steps, for planners on every
-        backend."""
-        return self.core.model
+    def cell_model(self, kind: str = "exact", samples: int | None = None, seed: int | None = None,
+                   horizon: int | None = None, refine: int | None = None) -> DrifterCells:
+        """A discrete model of this env for planners.
+
+        ``kind="exact"`` (default): the thesis' model (ch. 5 GCM, ``rho``, ``cell_map``, the
+        snapshot at ``start_time``), the one the cell backend steps. ``kind="sampled"``: a
+        `SampledDrifterCells` whose drift is estimated from ``samples`` points per cell
+        (default `DEFAULT_SAMPLES`, seed ``seed``, default 0) stepped by this env's own backend
+        for one decision step, one matrix per step of a time-dependent field up to ``horizon``
+        steps (default ``clock_steps``), its states the ``refine`` x ``refine`` sub-cells of
+        every cell (default 1: the cells) (`bounce_gym.envs.drifters.sampled`); kept in memory
+        and on disk (`bounce_gym.envs.drifters.model_cache`)."""
+        if kind not in MODEL_KINDS:
+            raise ConfigError(f"kind: expected one of {list(MODEL_KINDS)}, got {kind!r}")
+        if kind == "exact":
+            given = [name for name, value in (("samples", samples), ("seed", seed),
+                                              ("horizon", horizon), ("refine", refine))
+                     if value is not None]
+            if given:
+                raise ConfigError(f"{given[0]}: only a sampled cell model takes it")
+            return self.core.model
+        samples = integer("samples", DEFAULT_SAMPLES if samples is None else samples, 2,
+                          MAX_PARTICLES)
+        if samples % 2:
+            raise ConfigError(f"samples: expected an even number (two halves for the "
+                              f"convergence check), got {samples}")
+        seed = integer("seed", 0 if seed is None else seed, 0)
+        horizon = integer("horizon", self.core.clock_steps if horizon is None else horizon, 1)
+        refine = integer("refine", 1 if refine is None else refine, 1, MAX_REFINE)
+        key = (samples, seed, horizon, refine)
+        if key not in self._sampled:
+            self._sampled[key] = sampled_model(self.core.model, self.options, samples, seed,
+                                               horizon, refine)
+        return self._sampled[key]
 
     def _render_layer(self) -> int:
         """The layer whose current is drawn."""

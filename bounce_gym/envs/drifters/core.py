@@ -7,7 +7,8 @@ Per drifter the observation is (float32, every value in [0, 1]):
 * with ``observe_fix``: ``fix_x, fix_y`` — where it last was at the surface (a GPS fix is only
   had there; at reset, where it was deployed), and ``fresh`` — 1 if it is at the surface now
   (the fix is its current position), else 0;
-* with ``observe_pose``: ``x, y`` — its true position (privileged);
+* with ``observe_pose``: ``x, y`` — its true position (privileged); `DrifterCore.observed_pose`
+  reads the position, layer and step back from an observation;
 * the task's features (reach and stay: the region's mean x, y and layer).
 
 Positions are normalised over the grid's cells: 0 and 1 are the outer edges of the outer cells.
@@ -197,6 +198,22 @@ class DrifterCore:
         obs = np.concatenate(parts, axis=1, dtype=np.float32)
         # a drifter on the outer edge of the grid can round a hair outside [0, 1]
         return np.clip(obs, 0.0, 1.0, out=obs)
+
+    def observed_pose(self, observations: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """What drifters know from their own (n, d) ``observations`` alone (with
+        ``observe_pose``): their positions x, y (field coordinates), layers, and steps since
+        reset (from the clock, exact below ``clock_steps``)."""
+        if not self.options.observe_pose:
+            raise ConfigError("observe_pose: the observation carries no position; build the env "
+                              "with observe_pose=True")
+        obs = np.asarray(observations, dtype=np.float64)
+        layer = np.rint(obs[:, 0] * self._top).astype(np.int64)
+        steps = np.rint(obs[:, 1] * self.clock_steps).astype(np.int64)
+        k = 2 + 3 * self.options.observe_fix
+        x = self._lo[0] + obs[:, k] * self._span[0]
+        y = self._lo[1] + obs[:, k + 1] * self._span[1]
+        return x, y, layer, steps
 
     def _info(self, states, positions, layers, illegal, task_info: dict) -> dict:
         info = {

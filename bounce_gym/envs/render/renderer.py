@@ -10,6 +10,11 @@ mixer: it initialises ``pygame.font`` for labels (text is skipped if that fails)
 ``pygame.display`` only when a window is requested (the Gymnasium ``test_pygame_selective_init``
 convention).
 
+Each robot is a disk in its colour with a heading line from the centre past the rim; given
+`Bumpers`, also its bumper (a band along the rim over the front arc, `BUMPER_PRESSED` while
+pressed, else `BUMPER`), a `CONTACT` dot at the contact the bumper latched, and a centre dot (plus
+a label) in the colour of its motion phase (`PHASE_COLOURS`).
+
 World coordinates have y pointing up; pixel rows grow downwards. The world's bounding box is
 scaled uniformly (aspect ratio kept) to fit ``width - 2 * margin`` pixels; the frame's height
 follows from the world's aspect ratio.
@@ -39,6 +44,18 @@ BLOCKED_RING = (20, 20, 24)
 GOAL = (46, 158, 72)
 GOAL_DARK = (22, 110, 44)
 LABEL_BOX = (255, 255, 255, 200)
+BUMPER = (236, 236, 236)
+BUMPER_PRESSED = (255, 214, 0)
+CONTACT = (232, 0, 140)
+#: The centre dot of each motion phase of ``physics="dynamic"`` (see `Bumpers.phases`).
+PHASE_COLOURS = {
+    "drive": (255, 255, 255),
+    "brake": (255, 150, 0),
+    "blocked": (20, 20, 24),
+    "turn": (0, 190, 255),
+    "wait": (170, 170, 170),
+    "hold": (150, 90, 220),
+}
 
 #: Distinct robot colours (a colour-blind friendly qualitative set); more robots cycle hues.
 ROBOT_COLOURS = (
@@ -60,6 +77,10 @@ _HEAT_STOPS = np.array([[255, 237, 160], [253, 141, 60], [189, 0, 38]], dtype=np
 _PIXEL_LIMIT = 16000
 #: Minimum on-screen radius of a robot, so point robots stay visible.
 MIN_ROBOT_PX = 3
+#: Robots drawn smaller than this (radius, pixels) get no bumper arc nor phase dot.
+MIN_DETAIL_PX = 6
+#: Frames with more robots than this colour their phases without naming them.
+MAX_PHASE_LABELS = 12
 
 
 def robot_colour(index: int) -> tuple[int, int, int]:
@@ -110,6 +131,43 @@ class RenderLayers:
     regions: list[np.ndarray] = field(default_factory=list)
     heatmap: tuple | None = None
     labels: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Bumpers:
+    """Each robot's bumper and motion phase, for `Renderer.draw`.
+
+    Attributes:
+        arc: degrees, the front arc the bumper covers, centred on the heading; drawn on the
+            rim in `BUMPER_PRESSED` where ``pressed``, else in `BUMPER`.
+        pressed: (m,) bool.
+        contacts: (m, 2) world points of the contacts the bumpers latched, NaN rows where none;
+            each is marked by a `CONTACT` dot.
+        phases: None, or each robot's motion phase by name: a centre dot of its
+            `PHASE_COLOURS` colour and, with at most `MAX_PHASE_LABELS` robots (and fonts),
+            the name beside the robot.
+    """
+
+    arc: float
+    pressed: np.ndarray
+    contacts: np.ndarray
+    phases: list[str] | None = None
+
+    def check(self, m: int) -> None:
+        """Raise `ConfigError` unless every field fits ``m`` robots."""
+        if not 0.0 < float(self.arc) <= 360.0:
+            raise ConfigError(f"bumpers.arc must be degrees in (0, 360], got {self.arc!r}")
+        if np.shape(self.pressed) != (m,):
+            raise ConfigError(f"bumpers.pressed must have shape ({m},), "
+                              f"got {np.shape(self.pressed)}")
+        if np.shape(self.contacts) != (m, 2):
+            raise ConfigError(f"bumpers.contacts must have shape ({m}, 2), "
+                              f"got {np.shape(self.contacts)}")
+        if self.phases is not None:
+            unknown = sorted({str(p) for p in self.phases} - set(PHASE_COLOURS))
+            if len(self.phases) != m or unknown:
+                raise ConfigError(f"bumpers.phases must name {m} phases of "
+                                  f"{sorted(PHASE_COLOURS)}, got {self.phases!r}")
 
 
 class Renderer:
@@ -247,6 +305,7 @@ class Renderer:
         radius: float | np.ndarray,
         layers: RenderLayers | None = None,
         blocked: np.ndarray | None = None,
+        bumpers: Bumpers | None = None,
     ) -> np.ndarray:
         """Render one frame.
 
@@ -258,6 +317,8 @@ class Renderer:
                 at least `MIN_ROBOT_PX` pixels wide so point robots stay visible.
             layers: optional overlays (heatmap, regions, goal, trails, labels).
             blocked: (m,) bool; blocked robots get a dark ring.
+            bumpers: optional bumper arcs (drawn where ``headings`` are given), latched
+                contacts and motion phases (`Bumpers`).
 
         Returns:
             A new (height, width, 3) ``uint8`` RGB array.
@@ -286,6 +347,10 @@ class Renderer:
             blk = np.asarray(blocked, dtype=bool).reshape(-1)
             if len(blk) != m:
                 raise ConfigError(f"blocked must have shape ({m},), got {np.shape(blocked)}")
+        if bumpers is not None:
+            if not isinstance(bumpers, Bumpers):
+                raise ConfigError(f"bumpers must be a Bumpers, got {type(bumpers).__name__}")
+            bumpers.check(m)
         layers = layers if layers is not None else RenderLayers()
         if not isinstance(layers, RenderLayers):
             raise ConfigError(f"layers must be a RenderLayers, got {type(layers).__name__}")
@@ -306,7 +371,7 @@ class Renderer:
             self._draw_goal(pg, frame, layers.goal)
         if layers.trails:
             self._draw_trails(pg, frame, layers.trails)
-        self._draw_robots(pg, frame, pos, head, rad, blk)
+        self._draw_robots(pg, frame, pos, head, rad, blk, bumpers)
         if layers.labels:
             self._draw_labels(pg, frame, layers.labels)
         return np.ascontiguousarray(pg.surfarray.array3d(frame).transpose(1, 0, 2))
@@ -427,7 +492,7 @@ class Renderer:
                 pg.draw.line(overlay, (*colour, alpha), px[k], px[k + 1], width)
         frame.blit(overlay, (0, 0))
 
-    def _draw_robots(self, pg, frame, pos, head, rad, blocked) -> None:
+    def _draw_robots(self, pg, frame, pos, head, rad, blocked, bumpers=None) -> None:
         gfx = pg.gfxdraw
         for i in range(len(pos)):
             if not np.all(np.isfinite(pos[i])):
@@ -441,13 +506,67 @@ class Renderer:
                 pg.draw.circle(frame, BLOCKED_RING, (cx, cy), r_px + ring + 1)
             gfx.filled_circle(frame, cx, cy, r_px, colour)
             gfx.aacircle(frame, cx, cy, r_px, dark)
-            if head is not None and np.isfinite(head[i]):
+            heading = head[i] if head is not None and np.isfinite(head[i]) else None
+            detail = bumpers is not None and r_px >= MIN_DETAIL_PX
+            if detail and bumpers.phases is not None:
+                dot = max(2, r_px // 3)
+                pg.draw.circle(frame, PHASE_COLOURS[bumpers.phases[i]], (cx, cy), dot)
+                pg.draw.circle(frame, INK, (cx, cy), dot, 1)
+            if detail and heading is not None:
+                self._draw_bumper(pg, frame, (cx, cy), r_px, heading, float(bumpers.arc),
+                                  bool(bumpers.pressed[i]))
+            if heading is not None:
                 length = r_px + max(5, 0.6 * r_px)
                 tip = (
-                    round(cx + length * math.cos(head[i])),
-                    round(cy - length * math.sin(head[i])),
+                    round(cx + length * math.cos(heading)),
+                    round(cy - length * math.sin(heading)),
                 )
                 pg.draw.line(frame, INK, (cx, cy), tip, 2 if r_px >= 5 else 1)
+        if bumpers is None:
+            return
+        for point in np.asarray(bumpers.contacts, dtype=np.float64):
+            if np.all(np.isfinite(point)):
+                (px, py), = self._ipx(point[None])
+                size = max(3, self._line + 1)
+                pg.draw.circle(frame, CONTACT, (px, py), size)
+                pg.draw.circle(frame, INK, (px, py), size + 1, 1)
+        if bumpers.phases is not None and len(pos) <= MAX_PHASE_LABELS:
+            self._draw_phase_labels(pg, frame, pos, rad, bumpers.phases)
+
+    def _draw_bumper(self, pg, frame, centre, r_px, heading, arc, pressed) -> None:
+        """The bumper: a band along the rim, ``arc`` degrees centred on ``heading``."""
+        width = max(2, r_px // 4)
+        colour = BUMPER_PRESSED if pressed else BUMPER
+        if arc >= 360.0:
+            pg.draw.circle(frame, colour, centre, r_px, width)
+            return
+        half = math.radians(arc) / 2
+        angles = np.linspace(heading - half, heading + half, max(3, int(arc / 6) + 1))
+        cx, cy = centre
+        outer = [(round(cx + r_px * math.cos(a)), round(cy - r_px * math.sin(a)))
+                 for a in angles]
+        inner = [(round(cx + (r_px - width) * math.cos(a)), round(cy - (r_px - width) * math.sin(a)))
+                 for a in angles[::-1]]
+        pg.draw.polygon(frame, colour, outer + inner)
+
+    def _draw_phase_labels(self, pg, frame, pos, rad, phases) -> None:
+        font = self._get_font(pg)
+        if font is None:
+            return
+        for i, name in enumerate(phases):
+            if not np.all(np.isfinite(pos[i])):
+                continue
+            (cx, cy), = self._ipx(pos[i : i + 1])
+            r_px = max(MIN_ROBOT_PX, round(rad[i] * self.scale))
+            text = font.render(name, True, INK)
+            box = pg.Surface((text.get_width() + 4, text.get_height()), pg.SRCALPHA)
+            box.fill(LABEL_BOX)
+            box.blit(text, (2, 0))
+            w, h = box.get_size()
+            x = cx + r_px + 3  # to the right, or to the left where the frame ends
+            x = x if x + w <= self.width else cx - r_px - 3 - w
+            y = min(cy + r_px // 2, self.height - h)
+            frame.blit(box, (x, y))
 
     def _draw_labels(self, pg, frame, labels) -> None:
         font = self._get_font(pg)

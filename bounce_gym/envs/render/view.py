@@ -1,4 +1,5 @@
-"""What the environments draw: robots, their recent trails, and the task's layers."""
+"""What the environments draw: robots with their headings, bumpers, latched contacts and (under
+``physics="dynamic"``) motion phases, their recent trails, and the task's layers."""
 
 from __future__ import annotations
 
@@ -18,4 +19,16 @@ def draw_core(renderer, core: BounceCore) -> np.ndarray:
         **core.task.render_layers(),
     )
     return renderer.draw(state.position, state.heading, core.options.robot_radius, layers,
-                         blocked=state.blocked)
+                         blocked=state.blocked, bumpers=bumpers(core))
+
+
+def bumpers(core: BounceCore):
+    """The core's robots' `Bumpers`, as its motion backend reports them: each latched contact
+    lies on the robot's rim, one radius from its centre against the contact normal."""
+    from bounce_gym.envs.render.renderer import Bumpers
+
+    backend, state = core.dynamics.backend, core.state
+    pressed, normal = backend.bumpers(state)
+    contacts = state.position - core.options.robot_radius * normal
+    return Bumpers(arc=backend.bumper_arc, pressed=pressed, contacts=contacts,
+                   phases=backend.phase_names())
