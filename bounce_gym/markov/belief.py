@@ -40,7 +40,7 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from bounce_gym.cells.outcomes import BumpOutcomes
+from bounce_gym.cells.outcomes import SAMPLE_FIELDS, BumpOutcomes
 from bounce_gym.errors import ConfigError
 
 #: default weight η of the tick-tolerant likelihood (module docstring)
@@ -192,6 +192,33 @@ class BeliefFilter:
             posterior = joint[seen] / mass[seen, None]
             out[a] = float(mass[seen] @ _entropy(posterior) / mass[seen].sum())
         return out
+
+
+def with_heading_offsets(parts: Sequence[BumpOutcomes], offsets: Sequence[float],
+                         bin_width: float) -> BumpOutcomes:
+    """One GCM over (offset class j, decision state z), numbered ``j·N + z``, from K sampled
+    GCMs whose headings sit at bin centre + ``offsets[j]`` (radians, ascending within one bin).
+
+    A robot that bounces by whole bins keeps its heading modulo the bin width, so that offset
+    is a hidden variable the decision state does not hold; lumping all offsets together makes
+    the bump-to-bump process far from Markov, and a filter on it confident and wrong. Each
+    sample's next class is the offset nearest to the heading it drove with at its next bump
+    (with bounce noise, the offset wanders between classes as the simulator says)."""
+    n, k = parts[0].n_cells, len(parts)
+    offsets = np.asarray(offsets, dtype=np.float64)
+    fields: dict[str, list] = {f: [] for f in SAMPLE_FIELDS}
+    for j, part in enumerate(parts):
+        rest = np.mod(part.heading + bin_width / 2, bin_width) - bin_width / 2
+        gap = np.abs(np.mod(rest[:, None] - offsets[None, :] + bin_width / 2, bin_width)
+                     - bin_width / 2)
+        nxt_class = np.argmin(gap, axis=1)
+        fields["state"].append(j * n + part.state)
+        fields["next_state"].append(np.where(part.next_state >= 0,
+                                             nxt_class * n + part.next_state, -1))
+        for f in ("action", "ticks", "start", "end", "heading"):
+            fields[f].append(getattr(part, f))
+    return BumpOutcomes(k * n, parts[0].angles,
+                        *(np.concatenate(fields[f]) for f in SAMPLE_FIELDS))
 
 
 def _entropy(rows: np.ndarray) -> np.ndarray:
