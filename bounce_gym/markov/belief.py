@@ -44,11 +44,11 @@ from bounce_gym.cells.outcomes import SAMPLE_FIELDS, BumpOutcomes
 from bounce_gym.errors import ConfigError
 
 #: default weight η of the tick-tolerant likelihood (module docstring)
-DEFAULT_SLACK = 0.05
+DEFAULT_SLACK = 0.3
 #: default ticks τ either side that the tolerant likelihood accepts
 DEFAULT_TOLERANCE = 1
 #: default restart probability ρ per bump
-DEFAULT_RESTART = 1e-3
+DEFAULT_RESTART = 1e-2
 
 
 class BeliefFilter:

@@ -8,10 +8,10 @@ from collections.abc import Callable
 import numpy as np
 
 from bounce_gym.cells.bump_states import BumpStates
+from bounce_gym.cells.outcomes import BumpOutcomes
 from bounce_gym.dynamics.sampled_model import DEFAULT_SAMPLES
 from bounce_gym.envs.tasks.base import Task
 from bounce_gym.errors import ConfigError
-from bounce_gym.cells.outcomes import BumpOutcomes
 from bounce_gym.markov.belief import BeliefFilter, with_heading_offsets
 from bounce_gym.markov.filters import ActiveLocalizationFilter, LocalizationFilter
 from bounce_gym.validate import flag, integer, number
@@ -51,7 +51,8 @@ class LocalizationTask(Task):
     decision state at that bump (`bounce_gym.cells.bump_states`: the cell of the env's cell model
     holding the contact point, and the bin of the heading it drove with). ``info`` carries
     ``correct`` (the claim is exactly the true state) and ``wrong_claim`` (the true state is not
-    in the claim), both False until a claim is made and fixed from then on. The combinatorial
+    in the claim), both False until a claim is made and fixed from then on (and always False
+    for a user's filter without ``candidates``). The combinatorial
     filter claims its candidate set once in a knowledge cycle (a set of several states — the
     world's symmetry — is neither). The belief filter (`bounce_gym.markov.belief`, bounce steps
     and discrete actions only) is updated at every bump with the index of the angle commanded
@@ -189,7 +190,8 @@ class LocalizationTask(Task):
             reward = (math.log2(before) - math.log2(max(self.filter.size, 1))
                       - self.tick_cost * charged)
             done = self.terminate_when_localized and bool(self.filter.localized)
-        if self.filter is not None and self.judged is None and self.filter.localized:
+        if self.filter is not None and self.judged is None and self.filter.localized \
+                and hasattr(self.filter, "candidates"):  # a user's filter may not name its claim
             self._judge(state)
         return np.array([reward]), np.array([done]), self._info()
 
