@@ -8,13 +8,16 @@ backend the cell's own centre and bin heading, elsewhere the bump sections of
 simulated as the env does) and records where and after how many ticks of its clock each one
 bumps next (`bounce_gym.cells.outcomes.BumpOutcomes`). The kinematic backend drives all robots
 to their own contacts in one vectorised call; the others are stepped tick by tick, and a robot
-is done at the end of the first tick in which it is blocked again.
+is done at the end of the first tick in which it is blocked again. The poses are then redrawn
+from where the robots arrived (`ROUNDS`).
 
 `first_bumps` simulates the drive of a bounce-mode reset from a known start pose the same way:
 the initial distribution of the decision state.
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 
@@ -23,6 +26,16 @@ from bounce_gym.cells.model import CellModel
 from bounce_gym.cells.outcomes import BumpOutcomes
 from bounce_gym.cells.sections import BumpSections
 from bounce_gym.dynamics.simulator import BounceDynamics
+
+#: Rounds of re-sampling. The sections' measure spreads the poses of a state along its walls,
+#: while robots arrive at some poses far more often (a robot driving along a wall ends in the
+#: corner; without noise, robots started at cell centres meet the walls only at a lattice of
+#: points). So the poses of a state are drawn from a pool of poses where robots actually
+#: arrived in it — first the reset drives from every cell centre and bin, then the arrivals of
+#: every round — and a share `EXPLORE` (all, for a state no robot arrived in yet) from the
+#: sections. The outcomes are those of the last round.
+ROUNDS = 6
+EXPLORE = 0.0
 
 
 def bump_cells(model: CellModel, sections: BumpSections | None,
@@ -38,7 +51,8 @@ def bump_cells(model: CellModel, sections: BumpSections | None,
 
 def sample_outcomes(model: CellModel, angles: np.ndarray, samples: int,
                     rng: np.random.Generator, dynamics: dict, max_ticks: int,
-                    offset: float | None = None) -> BumpOutcomes:
+                    offset: float | None = None, rounds: int = ROUNDS,
+                    explore: float = EXPLORE) -> BumpOutcomes:
     """``samples`` sample points of every decision state and angle, simulated (module docstring).
 
     Args:
@@ -51,20 +65,106 @@ def sample_outcomes(model: CellModel, angles: np.ndarray, samples: int,
         max_ticks: a sample not bumping again within this many ticks is lost (next state −1).
         offset: headings exactly at bin + ``offset`` (radians; see `BumpSections`); None
             spreads them over the bin.
+        rounds: rounds of re-sampling from the arrivals (see `ROUNDS`); the outcomes are
+            those of the last round.
+        explore: the share of each round's poses still drawn from the sections.
     """
     angles = np.asarray(angles, dtype=np.float64).reshape(-1)
     on_grid = dynamics.get("backend") == "cell"
     sections = None if on_grid else BumpSections(model)
-    cells = bump_cells(model, sections, offset)
-    per_state = samples * len(angles)
+    measured = bump_cells(model, sections, offset)
     if on_grid:
-        point, heading = model.configuration(np.repeat(cells, per_state))
-    elif offset is None:
-        point, heading, _ = sections.sample(cells, per_state, rng)
-    else:
-        point, heading, _ = sections.sample_heading(cells, per_state, rng, offset)
-    state = np.repeat(cells, per_state)
-    action = np.tile(np.repeat(np.arange(len(angles)), samples), len(cells))
+        state, action = _units(measured, samples, len(angles))
+        point, heading = model.configuration(state)
+        return _simulate(model, angles, state, action, point, heading, rng, dynamics, max_ticks)
+    # the pool of arrivals: first the reset drives from the centre of every free cell of the
+    # robot's step (where the cell-backend starts of the tasks lie) with every bin's heading
+    centre, start_heading = _step_grid_starts(model, dynamics.get("step_length", 1.0))
+    start_heading = start_heading + (offset if offset is not None else rng.uniform(
+        -0.5 * model.bin_width, 0.5 * model.bin_width, len(start_heading)))
+    pool = _reset_drives(model, dynamics, centre, start_heading, rng, max_ticks)[:3]
+    for _ in range(rounds + 1):
+        pool_state, pool_end, pool_heading = pool
+        # the states of positive measure, and those robots arrived in (a corner's vertex)
+        cells = np.union1d(measured, pool_state[pool_state >= 0])
+        state, action = _units(cells, samples, len(angles))
+        point, heading = np.zeros((len(state), 2)), np.zeros(len(state))
+        drawn = np.isin(state, measured)
+        sampler = sections.sample if offset is None else functools.partial(
+            sections.sample_heading, offset=offset)
+        point[drawn], heading[drawn], _ = sampler(cells[np.isin(cells, measured)],
+                                                  samples * len(angles), rng)
+        order = np.argsort(pool_state, kind="stable")
+        first = np.searchsorted(pool_state[order], state, side="left")
+        count = np.searchsorted(pool_state[order], state, side="right") - first
+        reuse = (count > 0) & ((rng.random(len(state)) >= explore) | ~drawn)
+        pick = order[first[reuse] + (rng.random(int(reuse.sum())) * count[reuse]).astype(
+            np.int64)]
+        point[reuse], heading[reuse] = pool_end[pick], pool_heading[pick]
+        out = _simulate(model, angles, state, action, point, heading, rng, dynamics,
+                        max_ticks)
+        arrived = out.next_state >= 0
+        pool = (np.concatenate((pool_state, out.next_state[arrived])),
+                np.concatenate((pool_end, out.end[arrived])),
+                np.concatenate((pool_heading, out.heading[arrived])))
+    return out
+
+
+def _units(cells: np.ndarray, samples: int, n_angles: int) -> tuple[np.ndarray, np.ndarray]:
+    """The state and angle of every sample point: ``samples`` per state and angle."""
+    per_state = samples * n_angles
+    return (np.repeat(cells, per_state),
+            np.tile(np.repeat(np.arange(n_angles), samples), len(cells)))
+
+
+def _step_grid_starts(model: CellModel, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """The centres of the free cells of side ``step`` × every bin's heading."""
+    world = model.world
+    free = world.occupancy(step, model.robot_radius)
+    rc = np.argwhere(free)
+    xmin, ymin = world.bounds[:2]
+    centre = np.column_stack((xmin + (rc[:, 1] + 0.5) * step, ymin + (rc[:, 0] + 0.5) * step))
+    heading = np.arange(model.n_bins) * model.bin_width
+    return np.repeat(centre, model.n_bins, axis=0), np.tile(heading, len(centre))
+
+
+def _reset_drives(model: CellModel, dynamics: dict, point: np.ndarray, heading: np.ndarray,
+                  rng: np.random.Generator, max_ticks: int
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Robots placed at poses in the free space drive straight to their first contact, as a
+    bounce-mode reset does: their decision states (−1: none within ``max_ticks``), contact
+    points, headings and clocks."""
+    params = dict(dynamics)
+    world = params.pop("world")
+    sim = BounceDynamics(world, len(point), robot_collisions="ignore", **params)
+    state = sim.reset(rng, np.asarray(point, dtype=np.float64), heading)
+    if sim.backend.drives_independently:
+        sim.backend.drive_each(state)
+    for _ in range(max_ticks):
+        if state.blocked.all():
+            break
+        sim.backend.drive(state, 1, until_first_block=False)
+    z = BumpStates(model).of(state.position, state.heading, state.contact_normal)
+    return (np.where(state.blocked, z, -1), state.position.copy(), state.heading.copy(),
+            state.clock.copy())
+
+
+def simulate_bumps(model: CellModel, angles: np.ndarray, action: np.ndarray, point: np.ndarray,
+                   heading: np.ndarray, rng: np.random.Generator, dynamics: dict,
+                   max_ticks: int) -> BumpOutcomes:
+    """Robots at bump poses (``point``, ``heading``) bump with ``angles[action]`` and drive to
+    their next bump: one outcome per robot, in order (a pose that is not in contact keeps its
+    place: next state −1, no ticks, its end its start)."""
+    state = BumpStates(model).of(point, heading, np.zeros_like(point))
+    return _simulate(model, angles, np.maximum(state, 0), action, point, heading, rng, dynamics,
+                     max_ticks, keep_all=True)
+
+
+def _simulate(model: CellModel, angles: np.ndarray, state: np.ndarray, action: np.ndarray,
+              point: np.ndarray, heading: np.ndarray, rng: np.random.Generator,
+              dynamics: dict, max_ticks: int, keep_all: bool = False) -> BumpOutcomes:
+    """One robot per (state, action, pose): bump with the angle, drive to the next bump;
+    poses not in contact are dropped (``keep_all``: kept, with next state −1)."""
     params = dict(dynamics)
     world = params.pop("world")
     sim = BounceDynamics(world, len(state), robot_collisions="ignore", **params)
@@ -74,8 +174,11 @@ def sample_outcomes(model: CellModel, angles: np.ndarray, samples: int,
     # grazing angle) are no sample points of a bump
     ok = sim.state.blocked.copy()
     end, final, ticks, done = _drive(sim, angles[action], max_ticks)
-    states = BumpStates(model)
-    nxt = np.where(done, states.of(end, final, sim.state.contact_normal), -1)
+    nxt = np.where(done, BumpStates(model).of(end, final, sim.state.contact_normal), -1)
+    if keep_all:
+        nxt = np.where(ok, nxt, -1)
+        end, ticks = np.where(ok[:, None], end, start), np.where(ok, ticks, 0)
+        ok = np.ones(len(ok), dtype=bool)
     return BumpOutcomes(model.n_cells, angles, state[ok], action[ok], nxt[ok], ticks[ok],
                         start[ok], end[ok], final[ok])
 
@@ -105,20 +208,9 @@ def _drive(sim: BounceDynamics, params: np.ndarray, max_ticks: int
 
 
 def first_bumps(model: CellModel, position: np.ndarray, heading: float, n: int,
-                rng: np.random.Generator, dynamics: dict) -> tuple[np.ndarray, np.ndarray]:
-    """The decision states and clocks of ``n`` simulated robots after the drive of a
-    bounce-mode reset from the pose (``position``, ``heading``)."""
-    params = dict(dynamics)
-    world = params.pop("world")
-    sim = BounceDynamics(world, n, robot_collisions="ignore", **params)
-    sim.reset(rng, np.repeat(np.asarray(position, dtype=np.float64).reshape(1, 2), n, axis=0),
-              np.full(n, float(heading)))
-    sim.drive_to_contact()
-    if not sim.state.blocked.all():  # robots in step: drive the rest to their contacts
-        for _ in range(model.n_cells * 4):
-            if sim.state.blocked.all():
-                break
-            sim.backend.drive(sim.state, 1, until_first_block=False)
-    state = sim.state
-    return BumpStates(model).of(state.position, state.heading, state.contact_normal), \
-        state.clock.copy()
+                rng: np.random.Generator, dynamics: dict, max_ticks: int
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The decision states, contact points, headings and clocks of ``n`` simulated robots
+    after the drive of a bounce-mode reset from the pose (``position``, ``heading``)."""
+    point = np.repeat(np.asarray(position, dtype=np.float64).reshape(1, 2), n, axis=0)
+    return _reset_drives(model, dynamics, point, np.full(n, float(heading)), rng, max_ticks)

@@ -8,7 +8,8 @@ and largest over the (state, angle) pairs (`SampledModel.convergence`).
 
 **Cache.** The result depends only on what is fingerprinted (`fingerprint`: the world's
 geometry, the cell grid, the dynamics — backend, physics and its parameters, rule, noise, radius,
-step length —, Φ, the samples, the seed, the heading offset and `FORMAT`); it is stored as
+step length —, Φ, the samples, the seed, the heading offset, the re-sampling rounds and
+`FORMAT`); it is stored as
 ``<fingerprint>.npz`` (NumPy arrays, read with ``allow_pickle=False``) holding the sample arrays
 and a JSON header (read through `bounce_gym.documents.parse_document`), written atomically
 (`bounce_gym.files.atomic_file`). A file that cannot be read, is inconsistent or whose header
@@ -32,13 +33,19 @@ import numpy as np
 from bounce_gym.cells.model import CellModel
 from bounce_gym.cells.outcomes import BumpOutcomes
 from bounce_gym.documents import parse_document
-from bounce_gym.dynamics.bump_sampler import first_bumps, sample_outcomes
+from bounce_gym.dynamics.bump_sampler import (
+    EXPLORE,
+    ROUNDS,
+    first_bumps,
+    sample_outcomes,
+    simulate_bumps,
+)
 from bounce_gym.errors import BounceGymError, ConfigError
 from bounce_gym.files import atomic_file
 from bounce_gym.trust import home
 
 #: the version of the stored layout and of the construction; a change invalidates old files
-FORMAT = 1
+FORMAT = 3
 #: default sample points per decision state and angle
 DEFAULT_SAMPLES = 200
 #: the header's key inside the .npz
@@ -57,6 +64,7 @@ class SampledModel:
         samples, seed, offset: sample points per state and angle, the generator's seed, the
             heading offset (radians, None: spread over the bin).
         fingerprint: the cache key.
+        max_ticks: the longest simulated drive.
         convergence: ``tv_halves_mean`` and ``tv_halves_max``: total-variation distance between
             the estimates of two independent halves of the samples.
     """
@@ -69,12 +77,23 @@ class SampledModel:
     offset: float | None
     fingerprint: str
     convergence: dict
+    max_ticks: int
 
     def first_states(self, position: np.ndarray, heading: float, n: int,
-                     rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-        """Decision states and clocks of ``n`` simulated robots after a bounce-mode reset drive
-        from a known start pose (`bounce_gym.dynamics.bump_sampler.first_bumps`)."""
-        return first_bumps(self.model, position, heading, n, rng, self.dynamics)
+                     rng: np.random.Generator
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Decision states, contact points, headings and clocks of ``n`` simulated robots after
+        a bounce-mode reset drive from a known start pose
+        (`bounce_gym.dynamics.bump_sampler.first_bumps`)."""
+        return first_bumps(self.model, position, heading, n, rng, self.dynamics, self.max_ticks)
+
+    def step(self, action: np.ndarray, point: np.ndarray, heading: np.ndarray,
+             rng: np.random.Generator) -> BumpOutcomes:
+        """Robots at bump poses bump with the angles ``action`` (indices into Φ) and drive to
+        their next bump under the same dynamics (`bounce_gym.dynamics.bump_sampler.simulate_bumps`):
+        one outcome per robot."""
+        return simulate_bumps(self.model, self.outcomes.angles, action, point, heading, rng,
+                              self.dynamics, self.max_ticks)
 
 
 def fingerprint(model: CellModel, dynamics: dict, angles: np.ndarray, samples: int, seed: int,
@@ -87,6 +106,7 @@ def fingerprint(model: CellModel, dynamics: dict, angles: np.ndarray, samples: i
         "dynamics": {k: repr(v) for k, v in sorted(dynamics.items()) if k != "world"},
         "angles": [float.hex(float(a)) for a in np.asarray(angles, dtype=np.float64)],
         "samples": samples, "seed": seed, "max_ticks": max_ticks,
+        "rounds": ROUNDS, "explore": EXPLORE,
         "offset": None if offset is None else float.hex(float(offset)),
     }
     text = json.dumps(described, sort_keys=True, default=repr)
@@ -122,14 +142,15 @@ def sampled_model(model: CellModel, dynamics: dict, angles: np.ndarray,
         if stored is not None:
             outcomes, convergence = stored
             return SampledModel(model, outcomes, dict(dynamics), samples, seed, offset, key,
-                                convergence)
+                                convergence, max_ticks)
     outcomes = sample_outcomes(model, angles, samples, np.random.default_rng(seed), dynamics,
                                max_ticks, offset)
     tv = outcomes.split(0).total_variation(outcomes.split(1))
     convergence = {"tv_halves_mean": float(np.nanmean(tv)), "tv_halves_max": float(np.nanmax(tv))}
     if path is not None:
         _store(path, outcomes, key, convergence)
-    return SampledModel(model, outcomes, dict(dynamics), samples, seed, offset, key, convergence)
+    return SampledModel(model, outcomes, dict(dynamics), samples, seed, offset, key, convergence,
+                        max_ticks)
 
 
 def _store(path: Path, outcomes: BumpOutcomes, key: str, convergence: dict) -> None:

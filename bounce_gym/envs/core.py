@@ -103,23 +103,29 @@ class BounceCore:
 
     def sampled_model(self, samples: int = DEFAULT_SAMPLES, seed: int = 0,
                       heading_offset: float | None = None, n_bins: int | None = None,
-                      corner_rule: str | None = None, cache=None) -> SampledModel:
+                      corner_rule: str | None = None, cell_size: float | None = None,
+                      cache=None) -> SampledModel:
         """The generalized cell mapping of this env estimated from its own dynamics
         (`bounce_gym.dynamics.sampled_model`): over the decision states of `cell_model`
         (``n_bins``, ``corner_rule``) at bumps and robot 0's angles Φ, ``samples`` sample points
         per state and angle from generator ``seed``; ``heading_offset`` (radians) fixes every
-        sampled heading at a bin's centre plus it; ``cache``: a folder, None (the default
-        folder) or False. Built once per argument set and kept."""
-        key = ("sampled", samples, seed, heading_offset, n_bins, corner_rule, cache)
+        sampled heading at a bin's centre plus it; ``cell_size`` (default ``step_length``) the
+        side of the decision states' cells, finer than the robot's step to tell apart where on a
+        wall it bumped; ``cache``: a folder, None (the default folder) or False. Built once per
+        argument set and kept."""
+        key = ("sampled", samples, seed, heading_offset, n_bins, corner_rule, cell_size, cache)
         if key not in self._cell_models:
             options = self.options
+            model = self.cell_model(n_bins, corner_rule)
+            if cell_size is not None and options.backend != "cell":
+                model = CellModel(options.world, cell_size, model.n_bins, options.robot_radius,
+                                  model.corner_rule)
             dynamics = {"world": options.world, "backend": options.backend,
                         "rule": options.bounce_rule, "noise": options.noise,
                         "radius": options.robot_radius, "step_length": options.step_length,
                         "backend_options": options.backend_options}
-            self._cell_models[key] = sampled_model(
-                self.cell_model(n_bins, corner_rule), dynamics, options.angles[0], samples,
-                seed, heading_offset, cache=cache)
+            self._cell_models[key] = sampled_model(model, dynamics, options.angles[0], samples,
+                                                   seed, heading_offset, cache=cache)
         return self._cell_models[key]
 
     # -- episode ----------------------------------------------------------------------------

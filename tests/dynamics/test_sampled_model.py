@@ -145,7 +145,7 @@ def test_first_states_follow_the_reset_drive():
     start = {"position": centre.tolist(), "heading": math.pi / 2}
     _, _ = env.reset(seed=10_000, options={"start": start})
     state = env.unwrapped.robot_state
-    z, clock = sm.first_states(centre, math.pi / 2, 3, np.random.default_rng(0))
+    z, _, _, clock = sm.first_states(centre, math.pi / 2, 3, np.random.default_rng(0))
     expected = BumpStates(sm.model).of(state.position, state.heading, state.contact_normal)
     assert np.all(z == expected[0])
     assert np.all(clock == state.clock[0])

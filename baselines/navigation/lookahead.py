@@ -1,0 +1,127 @@
+"""Limited look-ahead over a particle belief, with the sampled GCM's values beyond it.
+
+From a belief of weighted pose particles, every particle is simulated under every angle of Φ
+to its next bump (`SampledModel.step`), then again from where it arrived, ``depth`` bumps deep.
+The tree alternates the robot's choice of angle and what it then observes: after angle a the
+particles that did not reach the goal split by the clock they read at the next bump, each group
+a child belief (an observation node). Backwards, a particle's step is worth 1 if it reaches the
+goal, else the value of its observation node — or, below the last level, whether it reaches the
+goal when it follows the value iteration's policy on the GCM (`bounce_gym.markov.ssp.ReachPlan`)
+for a few more bumps, simulated (`rollout`); a node takes the best
+angle (most likely success, then least plan cost, `ReachPlan.choose`). This is the limited
+look-ahead policy of dynamic programming with a rollout of the GCM's policy as the cost-to-go
+approximation (Bertsekas, *Dynamic Programming and Optimal Control*, vol. 1, §6.3–6.4), on the
+belief tree of a POMDP with the simulator as the model (cf. Thrun, Burgard & Fox, 2005, ch. 15).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from bounce_gym.cells.outcomes import BumpOutcomes
+from bounce_gym.markov.ssp import ReachPlan
+
+#: the weight of the GCM's success value of a leaf's state beside its rollout's outcome: small,
+#: so that it only breaks ties between leaves whose rollouts agree (e.g. all fail)
+MODEL_WEIGHT = 1e-3
+
+#: simulate(action, point, heading) -> outcomes, one per robot, and whether each reached the goal
+Simulate = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[BumpOutcomes, np.ndarray]]
+
+
+def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: np.ndarray,
+              weight: np.ndarray, depth: int, steps_left: int, last: int | None,
+              rollout_steps: int) -> tuple[int, float, BumpOutcomes, np.ndarray]:
+    """The best angle from the belief (``point``, ``heading``, ``weight`` summing to 1) with
+    ``steps_left`` steps left and ``last`` the angle used last (None: none yet), its success
+    value, and the first level's simulation (outcomes of particle i under angle a at row
+    i·|Φ| + a, and their goal hits) so that the filter can reuse it. Below the tree each
+    particle is played out for ``rollout_steps`` more bumps (`rollout`)."""
+    a_n = plan.n_actions
+    depth = max(1, min(int(depth), int(steps_left)))
+    node = np.zeros(len(point), dtype=np.int64)
+    node_last = np.array([a_n if last is None else int(last)])
+    levels = []
+    for _ in range(depth):
+        n = len(point)
+        action = np.tile(np.arange(a_n), n)
+        out, hit = simulate(action, np.repeat(point, a_n, axis=0), np.repeat(heading, a_n))
+        parent = np.repeat(node, a_n)
+        alive = ~hit & (out.next_state >= 0)
+        key = np.column_stack((parent, action, out.ticks))[alive]
+        unique, child = np.unique(key, axis=0, return_inverse=True)
+        child_of = np.full(n * a_n, -1, dtype=np.int64)
+        child_of[alive] = child.ravel()
+        levels.append({"out": out, "hit": hit, "parent": parent, "action": action,
+                       "weight": np.repeat(weight, a_n), "child": child_of,
+                       "n_parents": len(node_last), "parent_last": node_last})
+        point, heading = out.end[alive], out.heading[alive]
+        weight, node, node_last = np.repeat(weight, a_n)[alive], child.ravel(), unique[:, 1]
+        if len(point) == 0:
+            break
+    value_s = value_c = value_p = None  # value_p: the success alone, without the tie-breaker
+    change = (plan.w2 - plan.w1)
+    for d in range(len(levels) - 1, -1, -1):
+        lv = levels[d]
+        out, hit, act = lv["out"], lv["hit"], lv["action"]
+        h = steps_left - d  # steps left at this level's decision
+        if value_s is None:  # below the tree: the GCM's values
+            later_s, later_c = rollout(simulate, plan, out.end, out.heading, out.next_state,
+                                       act, min(h - 1, rollout_steps))
+            # where rollouts tie (all fail), the model's own value of the state decides
+            later_p = later_s
+            later_s = later_s + MODEL_WEIGHT * plan.success[h - 1][np.maximum(out.next_state, 0)]
+        else:
+            safe = np.maximum(lv["child"], 0)
+            later_s, later_c, later_p = value_s[safe], value_c[safe], value_p[safe]
+        ok = lv["child"] >= 0
+        reach = ok | (value_s is None) & (out.next_state >= 0)
+        q_s = np.where(hit, 1.0, np.where(reach, later_s, 0.0))
+        q_p = np.where(hit, 1.0, np.where(reach, later_p, 0.0))
+        q_c = plan.w1 * (1.0 + out.ticks) + np.where(hit | (out.next_state < 0), 0.0, later_c)
+        parent_last = lv["parent_last"][lv["parent"]]
+        q_c = q_c + change * ((parent_last != act) & (parent_last < a_n))
+        flat = lv["parent"] * a_n + act
+        size = lv["n_parents"] * a_n
+        mass = np.bincount(flat, weights=lv["weight"], minlength=size)
+        mass = np.where(mass > 0, mass, 1.0)
+        node_s = (np.bincount(flat, weights=lv["weight"] * q_s, minlength=size) / mass).reshape(
+            -1, a_n)
+        node_c = (np.bincount(flat, weights=lv["weight"] * q_c, minlength=size) / mass).reshape(
+            -1, 1, a_n)
+        node_p = (np.bincount(flat, weights=lv["weight"] * q_p, minlength=size) / mass).reshape(
+            -1, a_n)
+        best = plan.choose(node_s, node_c)[:, 0]
+        rows = np.arange(len(best))
+        value_s, value_c, value_p = node_s[rows, best], node_c[rows, 0, best], node_p[rows, best]
+    first = levels[0]
+    return int(best[0]), float(value_p[0]), first["out"], first["hit"]
+
+
+def rollout(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: np.ndarray,
+            state: np.ndarray, last: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """Robots at bump poses (in decision ``state``, −1: none, after angle ``last``) follow the
+    value iteration's policy of their state for up to ``steps`` bumps, simulated: whether each
+    reaches the goal, and its plan cost on the way (the rollout algorithm, Bertsekas, Tsitsiklis
+    & Wu, J. Heuristics 3, 1997: the base policy's value, exact for the particle in a
+    deterministic world, rather than the model's estimate of its state's)."""
+    n = len(point)
+    success, cost = np.zeros(n), np.zeros(n)
+    alive = state >= 0
+    last = np.asarray(last, dtype=np.int64).copy()
+    state = np.asarray(state).copy()
+    for k in range(steps):
+        idx = np.flatnonzero(alive)
+        if len(idx) == 0:
+            break
+        act = plan.policy[steps - k, state[idx], last[idx]].astype(np.int64)
+        out, hit = simulate(act, point[idx], heading[idx])
+        cost[idx] += plan.w1 * (1.0 + out.ticks) + (plan.w2 - plan.w1) * (act != last[idx])
+        success[idx[hit]] = 1.0
+        alive[idx] = ~hit & (out.next_state >= 0)
+        point, heading = point.copy(), heading.copy()
+        point[idx], heading[idx], state[idx], last[idx] = out.end, out.heading, \
+            out.next_state, act
+    return success, cost

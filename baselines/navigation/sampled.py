@@ -1,0 +1,161 @@
+"""Navigation on the GCM learned from the simulator, closed loop from contact and clock.
+
+`SampledNavigationPlanner` plans on the env's sampled generalized cell mapping
+(``env.cell_model(kind="sampled")``, `bounce_gym.dynamics.sampled_model`) instead of the exact
+cell model:
+
+* at reset, it reads the episode's start and goal poses (what the task appends to the
+  observation), tests every sample point's path against the goal region (the task's goal test,
+  `BumpOutcomes.goal_hits`) and solves the finite-horizon stochastic shortest path — most likely
+  to reach the goal within the episode's steps, then least expected plan cost
+  (`bounce_gym.markov.ssp.ReachPlan`);
+* its belief is a set of weighted pose particles (a particle filter, Thrun, Burgard & Fox,
+  *Probabilistic Robotics*, 2005, §4.3, with the env's own dynamics as the motion model): first
+  the poses after the reset drive from the start pose (simulated), kept where their clock is
+  the one it reads;
+* at every bump it looks ``depth`` bumps ahead: every particle simulated under every sequence of
+  angles, branching on the clocks it would read, scored by the goal test on the simulated paths
+  and beyond them by the GCM's values (`baselines.navigation.lookahead`); it acts, and keeps the
+  particles of the angle it used whose clock equals the clock it then reads (the tick
+  likelihood; identical poses merged, resampled to at most ``particles``). When no particle
+  explains the clock, it keeps those of the nearest clock (`surprises` counts it).
+
+It reads only its observation (the clock) in `act`, never ``info``. ``predicted_success`` is
+the model's probability of reaching the goal within the horizon from the first belief.
+
+Without rotation noise a relative bounce adds whole bins to the heading, so the heading modulo
+the bin width stays that of the start; the model is then sampled at exactly those headings
+(``heading_offset``), one model per offset (cached). With noise the headings are spread over
+their bins.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from baselines.navigation.lookahead import lookahead
+from baselines.navigation.policy import _env_angles_deg
+from baselines.policy import Policy
+from bounce_gym.dynamics.noise import Exact
+from bounce_gym.dynamics.sampled_model import DEFAULT_SAMPLES
+from bounce_gym.errors import ConfigError
+from bounce_gym.markov.ssp import ReachPlan
+
+#: the horizon (steps) when the env has no registered one: BounceNavigation-v0's
+DEFAULT_HORIZON = 200
+
+
+class SampledNavigationPlanner(Policy):
+    """Stochastic-shortest-path navigation on the sampled GCM (module docstring).
+
+    Args:
+        samples, seed: sample points per state and angle of the model, and its seed.
+        horizon: steps to plan for (None: the env's registered episode length).
+        particles: at most this many pose particles in the belief.
+        depth: bumps of look-ahead (`baselines.navigation.lookahead`).
+        reach: the receding horizon of each decision: the angle that most likely reaches the
+            goal within this many bumps (or the steps left, if fewer) is chosen.
+        cell_size: side of the model's decision cells (None: the env's step length).
+        w1, w2: plan-cost weights (None: the task's).
+        cache: the model cache folder (None: the default; False: none).
+    """
+
+    name = "sampled ssp planner"
+
+    def __init__(self, samples: int = DEFAULT_SAMPLES, seed: int = 0, horizon: int | None = None,
+                 particles: int = 32, depth: int = 3, reach: int = 20, cell_size: float | None = None,
+                 w1: float | None = None, w2: float | None = None, cache=None) -> None:
+        self.samples, self.seed, self.horizon = samples, seed, horizon
+        self.particles, self.depth, self.cell_size = int(particles), int(depth), cell_size
+        self.reach = int(reach)
+        self.w1, self.w2, self.cache = w1, w2, cache
+        self.predicted_success: float | None = None
+
+    def _offset(self, env, heading: float) -> float | None:
+        options = env.options
+        if options.backend == "cell" or options.bounce_rule != "relative" \
+                or not isinstance(options.noise, Exact):
+            return None
+        width = 2 * math.pi / env.cell_model().n_bins
+        offset = (heading + 0.5 * width) % width - 0.5 * width
+        return round(offset, 12)
+
+    def reset(self, env) -> None:
+        env = getattr(env, "unwrapped", env)
+        task = env.task
+        if getattr(task, "name", None) != "navigation":
+            raise ConfigError("SampledNavigationPlanner needs an env with task='navigation'")
+        _env_angles_deg(env)  # bounce mode, discrete actions
+        start_pos, start_head = task.start[0][0], float(task.start[1][0])
+        self._goal = (task.goal[0][0], float(task.goal[1][0]), task.goal_radius,
+                      task.heading_tolerance)
+        self.model = env.cell_model(kind="sampled", samples=self.samples, seed=self.seed,
+                                    heading_offset=self._offset(env, start_head),
+                                    cell_size=self.cell_size, cache=self.cache)
+        out = self.model.outcomes
+        reached = out.goal_hits(*self._goal)
+        spec_steps = getattr(getattr(env, "spec", None), "max_episode_steps", None)
+        self.steps_total = int(self.horizon or spec_steps or DEFAULT_HORIZON)
+        self.plan = ReachPlan(out.per_action(reached.astype(np.float64)),
+                              out.matrices(~reached),
+                              out.per_action(1.0 + out.ticks), self.steps_total,
+                              task.w1 if self.w1 is None else self.w1,
+                              task.w2 if self.w2 is None else self.w2)
+        self.rng = np.random.default_rng(self.seed)
+        _, point, heading, clocks = self.model.first_states(start_pos, start_head,
+                                                            self.particles, self.rng)
+        self._next = {"ticks": clocks, "end": point, "heading": heading,
+                      "weight": np.ones(len(clocks))}
+        self._clock_index = 1 if env.core.observes_contact else 0
+        self._max_clock = env.options.max_clock
+        self.predicted_success = None
+        self.surprises = 0
+        self.steps = 0
+        self.last: int | None = None
+
+    def _clock(self, observation) -> int:
+        return int(round(float(np.asarray(observation).reshape(-1)[self._clock_index])
+                         * self._max_clock))
+
+    def _condition(self, clock: int) -> None:
+        """The belief: the predicted particles whose clock is the one read (or the nearest),
+        identical poses merged, at most `particles` of them (resampled by weight)."""
+        nxt = self._next
+        gap = np.abs(nxt["ticks"] - clock)
+        keep = gap == gap.min()
+        if gap.min() > 0:
+            self.surprises += 1
+        point, heading, weight = nxt["end"][keep], nxt["heading"][keep], nxt["weight"][keep]
+        if len(point) > self.particles:
+            pick = self.rng.choice(len(point), self.particles, p=weight / weight.sum())
+            point, heading, weight = point[pick], heading[pick], np.ones(len(pick))
+        key = np.round(np.column_stack((point, heading)), 9)  # the poses themselves stay exact
+        _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        weight = np.bincount(inverse.ravel(), weights=weight)
+        self.point, self.heading = point[first], heading[first]
+        self.weight = weight / weight.sum()
+
+    def _simulate(self, action, point, heading):
+        out = self.model.step(action, point, heading, self.rng)
+        return out, out.goal_hits(*self._goal)
+
+    def act(self, observation, info):
+        del info  # the robot's own observation only
+        self._condition(self._clock(observation))
+        steps_left = min(self.steps_total - self.steps, self.reach)
+        best, success, out, hit = lookahead(self._simulate, self.plan, self.point, self.heading,
+                                            self.weight, self.depth, steps_left, self.last,
+                                            self.reach)
+        if self.predicted_success is None:
+            self.predicted_success = success
+        a_n = self.plan.n_actions
+        mine = np.tile(np.arange(a_n), len(self.point)) == best
+        mine &= ~hit | ~(mine & ~hit).any()  # the goal ends the episode: track the others
+        self._next = {"ticks": out.ticks[mine], "end": out.end[mine],
+                      "heading": out.heading[mine],
+                      "weight": np.repeat(self.weight, a_n)[mine]}
+        self.steps += 1
+        self.last = best
+        return best
