@@ -41,10 +41,10 @@ def scaled_grid(m: int):
 
 
 def multi_env(m: int, backend: str, n_steps: int, step_mode: str = "bounce",
-              world=None) -> Callable[[], int]:
+              world=None, physics: str = "ideal") -> Callable[[], int]:
     """A reset env and a function that runs ``n_steps`` parallel steps, returning agent-steps."""
     env = MultiBounceEnv(world=scaled_grid(m) if world is None else world, n_robots=m,
-                         backend=backend, physics="ideal", step_mode=step_mode,
+                         backend=backend, physics=physics, step_mode=step_mode,
                          max_cycles=10**9)
     env.reset(seed=0)
     rng = np.random.default_rng(0)

@@ -21,7 +21,9 @@ m = 2..10, the m = 2 monitoring joint map); issue #15: `benchmarks.drifters` (th
 `benchmarks.patrolling` (MAECT on 188 and 1,025 vertices against Table 4.5, the Alg. 4.3 covers
 against Table 4.4, ``Patrol-v0`` agent-steps/s against pistonball_v6 in the same run); issue #17:
 `benchmarks.executors` (the multi-robot study and the benchmark configuration with one worker,
-the local pool and Ray: wall times and the checksums of their files).
+the local pool and Ray: wall times and the checksums of their files); issue #23:
+`benchmarks.dynamic_physics` (``physics="dynamic"`` against the kinematic backend, CartPole-v1
+and pistonball_v6 in the same run, median and min–max over rounds, load average).
 """
 
 from __future__ import annotations
@@ -191,6 +193,12 @@ def main(argv: list[str] | None = None) -> None:
     vector_env.main(quick=args.quick, repeats=args.repeats)
     print()
     multirobot_scaling.main(["--steps", "4000"] if args.quick else [])
+    # the pymunk backend's dynamic physics (issue #23)
+    from benchmarks import dynamic_physics
+
+    print()
+    dynamic_physics.main(["--steps", "2000", "--agent-steps", "2000", "--rounds", "3"]
+                         if args.quick else [])
     print()
     planners.main(quick=args.quick, repeats=args.repeats)
     # drifters (issue #15): GCM of a 10^6-cell layer, advection vs Parcels, Drifter-v0 steps/s
