@@ -9,6 +9,7 @@ import numpy as np
 
 from bounce_gym.cells.bump_states import BumpStates
 from bounce_gym.cells.outcomes import BumpOutcomes
+from bounce_gym.dynamics.particles import DEFAULT_PARTICLES, ParticleBelief
 from bounce_gym.dynamics.sampled_model import DEFAULT_SAMPLES
 from bounce_gym.envs.tasks.base import Task
 from bounce_gym.errors import ConfigError
@@ -20,6 +21,8 @@ from bounce_gym.validate import flag, integer, number
 COMBINATORIAL = "combinatorial"
 #: The ``filter_factory`` that selects the belief filter on the env's sampled GCM.
 BELIEF = "belief"
+#: The ``filter_factory`` that selects the particle belief moved by the env's own dynamics.
+PARTICLES = "particles"
 #: default posterior mass of one decision state at which the belief filter claims it
 DEFAULT_CLAIM_THRESHOLD = 0.99
 #: The methods a filter must have (``size`` and ``localized`` may appear only after ``reset``).
@@ -31,7 +34,9 @@ class LocalizationTask(Task):
 
     Args:
         filter_factory: ``"combinatorial"`` for the built-in filter (`combinatorial_filter`),
-            ``"belief"`` for the histogram filter on the env's sampled GCM (below), or, from Python, a callable ``f(options) -> filter`` building a localization filter
+            ``"belief"`` for the histogram filter on the env's sampled GCM (below),
+            ``"particles"`` for Monte Carlo localization with the env's own dynamics (below),
+            or, from Python, a callable ``f(options) -> filter`` building a localization filter
             for the env's validated `EnvOptions`; None runs without one. No other string is
             accepted: an env's arguments often come from a configuration file, which is data
             and may not name code to import and run. A filter has ``reset()``,
@@ -42,10 +47,11 @@ class LocalizationTask(Task):
         terminate_when_localized: end the episode once the filter reports ``localized``.
         tick_cost: cost per tick until the filter first reports ``localized`` (default 0.1,
             in the reward's unit, bits; must be > 0).
-        claim_threshold: with ``"belief"``, the posterior mass one decision state needs for the
+        claim_threshold: with ``"belief"`` or ``"particles"``, the posterior mass one decision state needs for the
             filter to claim it (default 0.99).
         model_samples: with ``"belief"``, sample points per decision state and angle of the
             sampled GCM (`BounceCore.sampled_model`, default 200).
+        particles: with ``"particles"``, the number of particles (default 5000).
 
     **Claims.** Every filter's ``localized`` is a claim, judged against the robot's true
     decision state at that bump (`bounce_gym.cells.bump_states`: the cell of the env's cell model
@@ -61,6 +67,13 @@ class LocalizationTask(Task):
     claims its most likely state once that state's mass reaches ``claim_threshold``; ``info``
     then also carries ``claim``, and always ``belief_mass`` (the largest mass). Its reward is
     the drop in the belief's entropy (bits) minus ``tick_cost`` per tick until the claim.
+    The particle filter (`ParticleClaims`, `bounce_gym.dynamics.particles`, kinematic backend,
+    bounce steps and discrete actions) starts from the global prior conditioned on the clock of
+    the reset's drive, is updated with the angle commanded and the clock at each bump, and
+    claims, with the same rule and ``info``, the decision state holding at least
+    ``claim_threshold`` of its particles. Its generator is spawned from the env's
+    (`numpy.random.Generator.spawn`: the env's own draws are not changed), so a seed fixes
+    its claims.
 
     The task feeds the filter the tick stream: the forward ticks of the drive that ``reset`` made
     (bounce mode), then per step its bump tick first and its forward ticks after. Without a
@@ -87,10 +100,12 @@ class LocalizationTask(Task):
     def __init__(self, filter_factory: Callable | str | None = None,
                  terminate_when_localized: bool = True, tick_cost: float = 0.1,
                  claim_threshold: float = DEFAULT_CLAIM_THRESHOLD,
-                 model_samples: int = DEFAULT_SAMPLES) -> None:
-        if filter_factory not in (None, COMBINATORIAL, BELIEF) \
+                 model_samples: int = DEFAULT_SAMPLES,
+                 particles: int = DEFAULT_PARTICLES) -> None:
+        if filter_factory not in (None, COMBINATORIAL, BELIEF, PARTICLES) \
                 and (isinstance(filter_factory, str) or not callable(filter_factory)):
-            raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, {BELIEF!r}, None or "
+            raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, {BELIEF!r}, "
+                              f"{PARTICLES!r}, None or "
                               f"(from Python) a callable, got {filter_factory!r}")
         self.filter_factory = filter_factory
         self.terminate_when_localized = flag("terminate_when_localized", terminate_when_localized)
@@ -98,12 +113,15 @@ class LocalizationTask(Task):
         self.claim_threshold = number("claim_threshold", claim_threshold, minimum=0.0,
                                       maximum=1.0, strict=True)
         self.model_samples = integer("model_samples", model_samples, minimum=2)
+        self.particles = integer("particles", particles, minimum=1)
 
     def configure(self, core) -> None:
         super().configure(core)
         self.states = BumpStates(core.cell_model())
         if self.filter_factory == BELIEF:
             self.filter = BeliefClaims(core, self.claim_threshold, self.model_samples)
+        elif self.filter_factory == PARTICLES:
+            self.filter = ParticleClaims(core, self.claim_threshold, self.particles)
         elif self.filter_factory == COMBINATORIAL:
             self.filter = combinatorial_filter(core)
         elif self.filter_factory is None:
@@ -123,6 +141,8 @@ class LocalizationTask(Task):
         self.judged: tuple[bool, bool] | None = None
         if isinstance(self.filter, BeliefClaims):
             self.filter.reset()
+        elif isinstance(self.filter, ParticleClaims):
+            self.filter.reset(rng.spawn(1)[0], int(state.clock[0]))
         elif self.filter is not None:
             self.filter.reset()
             for tick in range(int(state.clock[0])):  # the drive to the first contact (bounce)
@@ -146,7 +166,7 @@ class LocalizationTask(Task):
                 info["ticks_to_localize"] = self.ticks_to_localize
             correct, wrong = self.judged if self.judged is not None else (False, False)
             info.update(correct=correct, wrong_claim=wrong)
-            if isinstance(self.filter, BeliefClaims):
+            if isinstance(self.filter, BeliefClaims | ParticleClaims):
                 info["belief_mass"] = self.filter.max_mass
                 if self.filter.claim is not None:
                     info["claim"] = self.filter.claim
@@ -166,7 +186,7 @@ class LocalizationTask(Task):
         self.observation = (bumps, int(state.clock[0]), angle)
         self.observation_count += 1
         reward, done = 0.0, False
-        if isinstance(self.filter, BeliefClaims):
+        if isinstance(self.filter, BeliefClaims | ParticleClaims):
             before = self.filter.entropy
             self.filter.update(angle, int(state.clock[0]))
             charged = events.ticks if self.ticks_to_localize is None else 0
@@ -250,6 +270,65 @@ class BeliefClaims:
     @property
     def max_mass(self) -> float:
         return float(self.marginal.max())
+
+
+class ParticleClaims:
+    """The particle filter of the task (`LocalizationTask`, "Claims"): Monte Carlo localization
+    moved by the env's own dynamics (`bounce_gym.dynamics.particles.ParticleBelief`), claiming
+    the decision state that holds ``threshold`` of the particles, never earlier."""
+
+    def __init__(self, core, threshold: float, particles: int) -> None:
+        options = core.options
+        if options.action_type != "discrete" or options.step_mode != "bounce":
+            raise ConfigError("localization filter 'particles': needs discrete actions and "
+                              "step_mode='bounce' (it is updated once per bump)")
+        self.belief = ParticleBelief(core.cell_model(), env_dynamics(options), particles)
+        self.threshold = threshold
+        self.claim: int | None = None
+
+    def reset(self, rng: np.random.Generator, clock: int) -> None:
+        self.belief.reset(rng, clock)
+        self.claim = None  # a claim is judged at a bump after a step: none at the reset
+
+    def update(self, angle: float | None, ticks: int) -> None:
+        if angle is None:  # no bump in this step: nothing to update
+            return
+        self.belief.update(angle, ticks)
+        self._check()
+
+    def _check(self) -> None:
+        if self.claim is None and self.belief.max_mass >= self.threshold:
+            self.claim = self.belief.most_likely
+
+    @property
+    def localized(self) -> bool:
+        return self.claim is not None
+
+    @property
+    def candidates(self) -> np.ndarray:
+        """The claimed state (empty before the claim)."""
+        return np.array([] if self.claim is None else [self.claim], dtype=np.int64)
+
+    @property
+    def size(self) -> int:
+        """Decision states holding particles (the reported ``candidates`` count)."""
+        return int((self.belief.mass()[0] >= 0).sum())
+
+    @property
+    def entropy(self) -> float:
+        return self.belief.entropy
+
+    @property
+    def max_mass(self) -> float:
+        return self.belief.max_mass
+
+
+def env_dynamics(options) -> dict:
+    """The `BounceDynamics` arguments (with ``world``) of an env's robot, from its
+    `EnvOptions`: the motion model of a particle belief."""
+    return {"world": options.world, "backend": options.backend, "rule": options.bounce_rule,
+            "noise": options.noise, "radius": options.robot_radius,
+            "step_length": options.step_length, "backend_options": options.backend_options}
 
 
 #: heading-offset classes of the belief model: offsets within a bin, in bin widths
