@@ -10,10 +10,17 @@ from bounce_gym.envs.tasks.localization import env_dynamics
 from bounce_gym.errors import ConfigError
 
 
+#: expected information (bits) below which an angle counts as telling nothing
+NO_GAIN = 1e-3
+
+
 class ParticleLocalizationPolicy(Policy):
     """Information gathering on a particle belief (`bounce_gym.dynamics.particles`): at every
     bump, the angle of Φ whose next bump leaves the smallest expected entropy of the belief over
-    decision states (`ParticleBelief.expected_entropy`; ties: the first angle).
+    decision states (`ParticleBelief.expected_entropy`; ties: the first angle). When no angle
+    is expected to tell anything at the next bump (a gain below `NO_GAIN` bits: the robot runs
+    a limit cycle whose clocks every candidate shares, and a myopic rule would keep it there)
+    it picks a uniformly random angle, which takes it out of the cycle.
 
     The policy keeps its own particles, moved by the env's dynamics (its configuration: world,
     backend, noise, radius, step length — not its state), and feeds them what the robot senses:
@@ -63,5 +70,9 @@ class ParticleLocalizationPolicy(Policy):
             self.belief.reset(self.rng, clock)
         else:
             self.belief.update(float(self.angles[self.last_action]), clock)
-        self.last_action = int(np.argmin(self.belief.expected_entropy(self.angles)))
+        expected = self.belief.expected_entropy(self.angles)
+        if expected.min() < self.belief.entropy - NO_GAIN:
+            self.last_action = int(np.argmin(expected))
+        else:  # no angle tells anything at the next bump (a limit cycle): leave it at random
+            self.last_action = int(self.rng.integers(len(self.angles)))
         return self.last_action

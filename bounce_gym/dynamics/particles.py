@@ -12,8 +12,12 @@ each a robot of one `BounceDynamics` of many robots that ignore each other
 * **Measurement model.** The clock at the bump (ticks since the last one, read as the robot reads
   it: capped at ``max_clock``). A particle whose clock equals the robot's has likelihood 1, one
   within ``tolerance`` ticks ``slack``, any other 0.
-* **Resampling** after every update (low-variance resampling, §4.3.4), then, without rotation
-  noise, a small heading perturbation ``jitter`` of the duplicated particles (radians, normal):
+* **Resampling** (low-variance resampling, §4.3.4) only when the effective sample size
+  1 / Σ w² falls below half the particle count: while every particle explains the clocks the
+  weights stay as they are, so resampling noise cannot drift the mass of two equally consistent
+  groups of poses onto one of them (a drift that would end in a confident wrong claim). After
+  resampling, without rotation noise, a small heading perturbation ``jitter`` of the duplicated
+  particles (radians, normal):
   a noise-free billiard separates nearby poses quickly, so exact copies would soon all disagree
   with the robot; the perturbation keeps the set covering the poses that still agree.
 * **Depletion.** When no particle explains the clock the belief restarts from the global prior
@@ -154,6 +158,7 @@ class ParticleBelief:
         self._place(position, np.asarray(heading, dtype=np.float64).reshape(-1))
 
     def _place(self, position: np.ndarray, heading: np.ndarray) -> None:
+        self.weight = np.full(len(position), 1.0 / len(position))
         self.sim = self._simulator(len(position))
         state = self.sim.reset(self.rng, position, heading)
         self.sim.backend.drive_each(state)
@@ -179,11 +184,14 @@ class ParticleBelief:
         gap = np.abs(ticks - self._read(clock))
         weight = np.where(gap == 0, 1.0, np.where(gap <= self.tolerance, self.slack, 0.0))
         weight[~self.sim.state.blocked] = 0.0
+        weight *= self.weight
         if weight.sum() <= 0:
             self.restarts += 1
             self._place(*self._prior_starts(self.rng, None, self.n))
             return
-        self._resample(weight)
+        self.weight = weight / weight.sum()
+        if 1.0 / np.square(self.weight).sum() < 0.5 * self.n:
+            self._resample(self.weight)
         self._refresh()
 
     def _redraw(self, which: np.ndarray) -> None:
@@ -197,6 +205,8 @@ class ParticleBelief:
         mine = self.sim.state
         for name in _per_robot(mine):
             getattr(mine, name)[which] = getattr(state, name)
+        self.weight[which] = self.weight[~which].mean() if (~which).any() else 1.0
+        self.weight /= self.weight.sum()
 
     def _resample(self, weight: np.ndarray) -> None:
         """Low-variance resampling (Thrun et al. 2005, Table 4.4) by permuting the robots of
@@ -209,6 +219,7 @@ class ParticleBelief:
         for name in _per_robot(state):
             values = getattr(state, name)
             values[...] = values[pick]
+        self.weight = np.full(self.n, 1.0 / self.n)
         if self.jitter > 0:
             copies = np.ones(self.n, dtype=bool)
             copies[np.unique(pick, return_index=True)[1]] = False
@@ -219,8 +230,8 @@ class ParticleBelief:
     def mass(self) -> tuple[np.ndarray, np.ndarray]:
         """The decision states holding particles and their mass (summing to 1 over the
         particles at a contact)."""
-        states, count = np.unique(self.states, return_counts=True)
-        return states, count / self.n
+        states, inverse = np.unique(self.states, return_inverse=True)
+        return states, np.bincount(inverse.ravel(), weights=self.weight)
 
     @property
     def max_mass(self) -> float:
@@ -236,7 +247,7 @@ class ParticleBelief:
     @property
     def entropy(self) -> float:
         """Entropy (bits) of the mass over decision states."""
-        return _entropy(self.states)
+        return _entropy(self.states, self.weight)
 
     def expected_entropy(self, angles: np.ndarray) -> np.ndarray:
         """For every angle: the expected entropy (bits) of the belief over decision states
@@ -250,7 +261,7 @@ class ParticleBelief:
                                       sim.state.contact_normal)
             for t in np.unique(ticks):
                 seen = ticks == t
-                out[i] += seen.mean() * _entropy(state[seen])
+                out[i] += self.weight[seen].sum() * _entropy(state[seen], self.weight[seen])
         return out
 
 
@@ -259,7 +270,9 @@ def _per_robot(state) -> list[str]:
     return [f.name for f in fields(state) if isinstance(getattr(state, f.name), np.ndarray)]
 
 
-def _entropy(values: np.ndarray) -> float:
-    _, count = np.unique(values, return_counts=True)
-    p = count / count.sum()
+def _entropy(values: np.ndarray, weight: np.ndarray) -> float:
+    """Entropy (bits) of the weighted values."""
+    _, inverse = np.unique(values, return_inverse=True)
+    p = np.bincount(inverse.ravel(), weights=weight)
+    p = p[p > 0] / p.sum()
     return float(-(p * np.log2(p)).sum())
