@@ -9,7 +9,6 @@ from bounce_gym.dynamics.particles import DEFAULT_PARTICLES, ParticleBelief
 from bounce_gym.envs.tasks.localization import env_dynamics
 from bounce_gym.errors import ConfigError
 
-
 #: expected information (bits) below which an angle counts as telling nothing
 NO_GAIN = 1e-3
 

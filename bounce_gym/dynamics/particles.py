@@ -32,7 +32,9 @@ The belief is read as mass per decision state (cell × heading bin of a `CellMod
 `bounce_gym.cells.bump_states`). Particles are kept in the simulator between updates (their
 poses stay exactly at the contacts the simulator computed); resampling permutes the simulator's
 robot state. Only backends that drive robots independently with instantaneous turns (the
-kinematic backend) are supported: `supported` tells.
+kinematic backend) are supported: `supported` tells. (The pymunk backend keeps its bodies in
+a physics space that a permutation of the state does not move, and 2,000 bodies of its dynamic
+physics take minutes per bump.)
 """
 
 from __future__ import annotations
@@ -44,7 +46,6 @@ import numpy as np
 
 from bounce_gym.cells.bump_states import BumpStates
 from bounce_gym.cells.model import CellModel
-from bounce_gym.dynamics.noise import Exact
 from bounce_gym.dynamics.simulator import BounceDynamics
 from bounce_gym.errors import ConfigError
 
@@ -52,17 +53,22 @@ from bounce_gym.errors import ConfigError
 DEFAULT_PARTICLES = 5000
 #: default heading perturbation (radians, standard deviation) of resampled copies without noise
 DEFAULT_JITTER = float(np.radians(0.5))
+#: default ticks either side of the clock read that a particle may be off by
+DEFAULT_TOLERANCE = 1
+#: default likelihood of a particle off by 1 … ``tolerance`` ticks (one off by 0 has 1)
+DEFAULT_SLACK = 0.05
 #: prior poses drawn per batch (times the particle count) while filling the prior
 _PRIOR_BATCH = 4
 #: batches tried before the prior gives up on the clock read at reset
 _PRIOR_TRIES = 50
 
 
-def supported(backend: str, dynamics: BounceDynamics | None = None) -> bool:
-    """Whether the particle belief can run on ``backend`` (see the module docstring)."""
-    if dynamics is not None:
-        return dynamics.backend.drives_independently and not dynamics.backend.turns_take_time
-    return backend == "kinematic"
+def supported(dynamics: BounceDynamics) -> bool:
+    """Whether the particle belief can move particles with ``dynamics``: continuous headings,
+    robots driven independently, turns without duration (the kinematic backend)."""
+    backend = dynamics.backend
+    return backend.bin_width is None and backend.drives_independently \
+        and not backend.turns_take_time
 
 
 class ParticleBelief:
@@ -86,7 +92,8 @@ class ParticleBelief:
     """
 
     def __init__(self, model: CellModel, dynamics: dict, n_particles: int = DEFAULT_PARTICLES,
-                 max_clock: int | None = None, tolerance: int = 0, slack: float = 0.0,
+                 max_clock: int | None = None, tolerance: int = DEFAULT_TOLERANCE,
+                 slack: float = DEFAULT_SLACK,
                  jitter: float | None = None, restart: float = 0.0) -> None:
         if isinstance(n_particles, bool) or not isinstance(n_particles, int | np.integer) \
                 or n_particles < 1:
@@ -98,12 +105,11 @@ class ParticleBelief:
         self.states_of = BumpStates(model)
         self._params = {k: v for k, v in dynamics.items() if k != "world"}
         self.world = dynamics["world"]
-        noisy = not isinstance(self._params.get("noise") or Exact(), Exact)
-        self.jitter = (0.0 if noisy else DEFAULT_JITTER) if jitter is None else float(jitter)
+        self.jitter = DEFAULT_JITTER if jitter is None else float(jitter)
         self.max_clock = max_clock
         self.tolerance, self.slack, self.restart = int(tolerance), float(slack), float(restart)
         probe = self._simulator(1)
-        if not supported(self._params.get("backend", "kinematic"), probe):
+        if not supported(probe):
             raise ConfigError(f"particle belief: backend {self._params.get('backend')!r} is not "
                               "supported (it needs independent drives and instant turns)")
         self.restarts = 0
@@ -180,6 +186,10 @@ class ParticleBelief:
         bump."""
         if self.restart > 0:
             self._redraw(self.rng.random(self.n) < self.restart)
+        if self.jitter > 0:  # roughening: every particle's heading, before its bump
+            heading = self.sim.state.heading
+            heading += self.rng.normal(0.0, self.jitter, self.n)
+            heading %= 2 * np.pi
         ticks = self._predict(self.sim, angle)
         gap = np.abs(ticks - self._read(clock))
         weight = np.where(gap == 0, 1.0, np.where(gap <= self.tolerance, self.slack, 0.0))
@@ -220,11 +230,6 @@ class ParticleBelief:
             values = getattr(state, name)
             values[...] = values[pick]
         self.weight = np.full(self.n, 1.0 / self.n)
-        if self.jitter > 0:
-            copies = np.ones(self.n, dtype=bool)
-            copies[np.unique(pick, return_index=True)[1]] = False
-            state.heading[copies] += self.rng.normal(0.0, self.jitter, int(copies.sum()))
-            state.heading[copies] %= 2 * np.pi
 
     # -- reading the belief -------------------------------------------------------------------
     def mass(self) -> tuple[np.ndarray, np.ndarray]:
