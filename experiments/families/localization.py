@@ -3,7 +3,8 @@
 
 Per episode: ``success`` (localized), ``candidates`` (left at the end), ``correct`` (the claim is
 the true decision state) and ``wrong_claim`` (it is not among the claim). With the task's
-``filter_factory: belief`` the planner is `baselines.localization.BeliefLocalizationPolicy`.
+``filter_factory: belief`` the planner is `baselines.localization.BeliefLocalizationPolicy`,
+with ``filter_factory: particles`` `baselines.localization.ParticleLocalizationPolicy`.
 """
 
 from __future__ import annotations
@@ -17,11 +18,17 @@ class Localization(SingleRobotFamily):
     score = "success"
 
     def make_planner(self, env):
-        from baselines.localization import AngleSwitchPolicy, BeliefLocalizationPolicy
-        from bounce_gym.envs.tasks.localization import BELIEF
+        from baselines.localization import (
+            AngleSwitchPolicy,
+            BeliefLocalizationPolicy,
+            ParticleLocalizationPolicy,
+        )
+        from bounce_gym.envs.tasks.localization import BELIEF, PARTICLES
 
         if env.unwrapped.task.filter_factory == BELIEF:
             return BeliefLocalizationPolicy.for_env(env)
+        if env.unwrapped.task.filter_factory == PARTICLES:
+            return ParticleLocalizationPolicy.for_env(env)
         return AngleSwitchPolicy.for_env(env)
 
     def metrics(self, info):
