@@ -43,7 +43,7 @@ def test_the_particles_concentrate_on_the_true_pose(noise, seeds):
     for seed in seeds:  # random angles, 40 bumps
         belief, state, truth = track("lab_localization_a", seed, 40, noise)
         assert belief.most_likely == truth
-        assert belief.max_mass >= 0.9
+        assert belief.max_mass >= 0.8  # from about 0.03 for the prior
         distance = np.hypot(*(belief.sim.state.position - state.position[0]).T)
         assert np.median(distance) < 0.3
 
