@@ -11,15 +11,20 @@ each a robot of one `BounceDynamics` of many robots that ignore each other
   of an odometry formula).
 * **Measurement model.** The clock at the bump (ticks since the last one, read as the robot reads
   it: capped at ``max_clock``). A particle whose clock equals the robot's has likelihood 1, one
-  within ``tolerance`` ticks ``slack``, any other 0.
+  within ``tolerance`` ticks ``slack`` (defaults 1 tick, 0.05), any other 0. The tolerance
+  keeps a group of particles around the true pose alive through one bump that none of them
+  reproduces exactly (finitely many particles only approximate the set of consistent poses).
+* **Roughening.** Before every bump each particle's heading is perturbed by a normal error of
+  standard deviation ``jitter`` (default 0.5°): artificial process noise against particle
+  deprivation (§4.3.4). A billiard separates nearby poses quickly, and the set of poses that
+  agree with a long clock history is thin; without the perturbation the particles near the
+  true pose all disagree with the robot after some bumps while a group elsewhere that happens
+  to agree takes the whole mass — a confident wrong claim (measured: 3 of 50 episodes without
+  it, none of 200 with it, below).
 * **Resampling** (low-variance resampling, §4.3.4) only when the effective sample size
   1 / Σ w² falls below half the particle count: while every particle explains the clocks the
-  weights stay as they are, so resampling noise cannot drift the mass of two equally consistent
-  groups of poses onto one of them (a drift that would end in a confident wrong claim). After
-  resampling, without rotation noise, a small heading perturbation ``jitter`` of the duplicated
-  particles (radians, normal):
-  a noise-free billiard separates nearby poses quickly, so exact copies would soon all disagree
-  with the robot; the perturbation keeps the set covering the poses that still agree.
+  weights stay as they are, so resampling noise cannot drift the mass of two equally
+  consistent groups of poses onto one of them.
 * **Depletion.** When no particle explains the clock the belief restarts from the global prior
   (the sensor-reset idea of augmented MCL, §8.3.5, taken to its end: everything is forgotten);
   `restarts` counts it. A share ``restart`` of the particles may also be redrawn from the prior
@@ -50,8 +55,8 @@ from bounce_gym.dynamics.simulator import BounceDynamics
 from bounce_gym.errors import ConfigError
 
 #: default number of particles
-DEFAULT_PARTICLES = 5000
-#: default heading perturbation (radians, standard deviation) of resampled copies without noise
+DEFAULT_PARTICLES = 10_000
+#: default roughening (radians, standard deviation) of every particle's heading before a bump
 DEFAULT_JITTER = float(np.radians(0.5))
 #: default ticks either side of the clock read that a particle may be off by
 DEFAULT_TOLERANCE = 1
@@ -82,8 +87,8 @@ class ParticleBelief:
         max_clock: the largest clock the robot reads (clocks are capped there).
         tolerance, slack: ticks either side of the clock read that still count, with weight
             ``slack`` (module docstring).
-        jitter: heading perturbation of resampled copies without noise (radians); None: the
-            default for noise-free dynamics, 0 with noise.
+        jitter: standard deviation of the roughening of every heading before a bump
+            (radians; None: `DEFAULT_JITTER`).
         restart: share of particles redrawn from the prior at every update.
 
     ``reset(rng, clock)`` or ``reset_at(rng, position, heading)``; ``update(angle, clock)``;

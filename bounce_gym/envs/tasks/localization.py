@@ -51,7 +51,7 @@ class LocalizationTask(Task):
             filter to claim it (default 0.99).
         model_samples: with ``"belief"``, sample points per decision state and angle of the
             sampled GCM (`BounceCore.sampled_model`, default 200).
-        particles: with ``"particles"``, the number of particles (default 5000).
+        particles: with ``"particles"``, the number of particles (default 10,000).
 
     **Claims.** Every filter's ``localized`` is a claim, judged against the robot's true
     decision state at that bump (`bounce_gym.cells.bump_states`: the cell of the env's cell model
