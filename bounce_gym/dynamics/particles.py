@@ -19,8 +19,8 @@ each a robot of one `BounceDynamics` of many robots that ignore each other
   deprivation (§4.3.4). A billiard separates nearby poses quickly, and the set of poses that
   agree with a long clock history is thin; without the perturbation the particles near the
   true pose all disagree with the robot after some bumps while a group elsewhere that happens
-  to agree takes the whole mass — a confident wrong claim (measured: 3 of 50 episodes without
-  it, none of 200 with it, below).
+  to agree takes the whole mass — a confident wrong claim (measured on lab_localization_a
+  without noise: 3 wrong claims in 50 episodes without it, 1 in 200 with it).
 * **Resampling** (low-variance resampling, §4.3.4) only when the effective sample size
   1 / Σ w² falls below half the particle count: while every particle explains the clocks the
   weights stay as they are, so resampling noise cannot drift the mass of two equally
