@@ -42,6 +42,12 @@ Beyond the paper (its Sec. VI future work: switching φ to shrink the uncertaint
 * `AngleSwitchPlanner` — a reference policy choosing the angle at a bump that minimises the
   worst-case candidate-set size after the next segment(s) (minimax over the observation outcomes,
   a segment = rotate, then drive until the next bump; the outcome is the number of 0s).
+* `BeliefLocalizationPolicy` — on the sampled GCM of a continuous env (issue 24): a histogram
+  filter over decision states (`bounce_gym.markov.belief`) and, at every bump, the angle of least
+  expected posterior entropy; the claim is the task's ("belief" filter).
+* `ParticleLocalizationPolicy` — on a particle belief moved by the env's own dynamics
+  (`bounce_gym.dynamics.particles`, Monte Carlo localization): the angle of least expected
+  posterior entropy; the claim is the task's ("particles" filter).
 * `build_policy_dfa` — the closed-loop subset automaton of a planner, so the planner's localization
   limits can be compared exactly with the fixed-angle DFAs (`final_uncertainties`).
 
@@ -54,6 +60,8 @@ radians, as everywhere inside the package.
 """
 
 
+from baselines.localization.belief_policy import BeliefLocalizationPolicy
+from baselines.localization.particle_policy import ParticleLocalizationPolicy
 from baselines.localization.planner import (
     AngleSwitchPlanner,
     build_policy_dfa,
@@ -61,4 +69,5 @@ from baselines.localization.planner import (
 )
 from baselines.localization.policy import AngleSwitchPolicy
 
-__all__ = ["AngleSwitchPlanner", "AngleSwitchPolicy", "build_policy_dfa", "final_uncertainties"]
+__all__ = ["AngleSwitchPlanner", "BeliefLocalizationPolicy", "AngleSwitchPolicy",
+           "ParticleLocalizationPolicy", "build_policy_dfa", "final_uncertainties"]

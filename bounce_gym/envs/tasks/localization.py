@@ -7,13 +7,24 @@ from collections.abc import Callable
 
 import numpy as np
 
+from bounce_gym.cells.bump_states import BumpStates
+from bounce_gym.cells.outcomes import BumpOutcomes
+from bounce_gym.dynamics.particles import DEFAULT_PARTICLES, ParticleBelief
+from bounce_gym.dynamics.sampled_model import DEFAULT_SAMPLES
 from bounce_gym.envs.tasks.base import Task
 from bounce_gym.errors import ConfigError
+from bounce_gym.markov.belief import BeliefFilter, with_heading_offsets
 from bounce_gym.markov.filters import ActiveLocalizationFilter, LocalizationFilter
-from bounce_gym.validate import flag, number
+from bounce_gym.validate import flag, integer, number
 
 #: The ``filter_factory`` that selects the built-in filter (`combinatorial_filter`).
 COMBINATORIAL = "combinatorial"
+#: The ``filter_factory`` that selects the belief filter on the env's sampled GCM.
+BELIEF = "belief"
+#: The ``filter_factory`` that selects the particle belief moved by the env's own dynamics.
+PARTICLES = "particles"
+#: default posterior mass of one decision state at which the belief filter claims it
+DEFAULT_CLAIM_THRESHOLD = 0.99
 #: The methods a filter must have (``size`` and ``localized`` may appear only after ``reset``).
 _FILTER_METHODS = ("reset", "update")
 
@@ -23,6 +34,8 @@ class LocalizationTask(Task):
 
     Args:
         filter_factory: ``"combinatorial"`` for the built-in filter (`combinatorial_filter`),
+            ``"belief"`` for the histogram filter on the env's sampled GCM (below),
+            ``"particles"`` for Monte Carlo localization with the env's own dynamics (below),
             or, from Python, a callable ``f(options) -> filter`` building a localization filter
             for the env's validated `EnvOptions`; None runs without one. No other string is
             accepted: an env's arguments often come from a configuration file, which is data
@@ -34,6 +47,33 @@ class LocalizationTask(Task):
         terminate_when_localized: end the episode once the filter reports ``localized``.
         tick_cost: cost per tick until the filter first reports ``localized`` (default 0.1,
             in the reward's unit, bits; must be > 0).
+        claim_threshold: with ``"belief"`` or ``"particles"``, the posterior mass one decision state needs for the
+            filter to claim it (default 0.99).
+        model_samples: with ``"belief"``, sample points per decision state and angle of the
+            sampled GCM (`BounceCore.sampled_model`, default 200).
+        particles: with ``"particles"``, the number of particles (default 10,000).
+
+    **Claims.** Every filter's ``localized`` is a claim, judged against the robot's true
+    decision state at that bump (`bounce_gym.cells.bump_states`: the cell of the env's cell model
+    holding the contact point, and the bin of the heading it drove with). ``info`` carries
+    ``correct`` (the claim is exactly the true state) and ``wrong_claim`` (the true state is not
+    in the claim), both False until a claim is made and fixed from then on (and always False
+    for a user's filter without ``candidates``). The combinatorial
+    filter claims its candidate set once in a knowledge cycle (a set of several states — the
+    world's symmetry — is neither). The belief filter (`bounce_gym.markov.belief`, bounce steps
+    and discrete actions only) is updated at every bump with the index of the angle commanded
+    and the clock the robot reads there; the clock of the reset's drive is not used (the start
+    pose is unknown, so the prior is uniform over the states the model has samples of). It
+    claims its most likely state once that state's mass reaches ``claim_threshold``; ``info``
+    then also carries ``claim``, and always ``belief_mass`` (the largest mass). Its reward is
+    the drop in the belief's entropy (bits) minus ``tick_cost`` per tick until the claim.
+    The particle filter (`ParticleClaims`, `bounce_gym.dynamics.particles`, kinematic backend,
+    bounce steps and discrete actions) starts from the global prior conditioned on the clock of
+    the reset's drive, is updated with the angle commanded and the clock at each bump, and
+    claims, with the same rule and ``info``, the decision state holding at least
+    ``claim_threshold`` of its particles. Its generator is spawned from the env's
+    (`numpy.random.Generator.spawn`: the env's own draws are not changed), so a seed fixes
+    its claims.
 
     The task feeds the filter the tick stream: the forward ticks of the drive that ``reset`` made
     (bounce mode), then per step its bump tick first and its forward ticks after. Without a
@@ -58,18 +98,31 @@ class LocalizationTask(Task):
     name = "localization"
 
     def __init__(self, filter_factory: Callable | str | None = None,
-                 terminate_when_localized: bool = True, tick_cost: float = 0.1) -> None:
-        if filter_factory is not None and filter_factory != COMBINATORIAL \
+                 terminate_when_localized: bool = True, tick_cost: float = 0.1,
+                 claim_threshold: float = DEFAULT_CLAIM_THRESHOLD,
+                 model_samples: int = DEFAULT_SAMPLES,
+                 particles: int = DEFAULT_PARTICLES) -> None:
+        if filter_factory not in (None, COMBINATORIAL, BELIEF, PARTICLES) \
                 and (isinstance(filter_factory, str) or not callable(filter_factory)):
-            raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, None or (from "
-                              f"Python) a callable, got {filter_factory!r}")
+            raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, {BELIEF!r}, "
+                              f"{PARTICLES!r}, None or "
+                              f"(from Python) a callable, got {filter_factory!r}")
         self.filter_factory = filter_factory
         self.terminate_when_localized = flag("terminate_when_localized", terminate_when_localized)
         self.tick_cost = number("tick_cost", tick_cost, minimum=0.0, strict=True)
+        self.claim_threshold = number("claim_threshold", claim_threshold, minimum=0.0,
+                                      maximum=1.0, strict=True)
+        self.model_samples = integer("model_samples", model_samples, minimum=2)
+        self.particles = integer("particles", particles, minimum=1)
 
     def configure(self, core) -> None:
         super().configure(core)
-        if self.filter_factory == COMBINATORIAL:
+        self.states = BumpStates(core.cell_model())
+        if self.filter_factory == BELIEF:
+            self.filter = BeliefClaims(core, self.claim_threshold, self.model_samples)
+        elif self.filter_factory == PARTICLES:
+            self.filter = ParticleClaims(core, self.claim_threshold, self.particles)
+        elif self.filter_factory == COMBINATORIAL:
             self.filter = combinatorial_filter(core)
         elif self.filter_factory is None:
             self.filter = None
@@ -85,7 +138,12 @@ class LocalizationTask(Task):
         self.observation: tuple[int, int, float | None] | None = None
         self.observation_count = 0
         self.ticks_to_localize: int | None = None
-        if self.filter is not None:
+        self.judged: tuple[bool, bool] | None = None
+        if isinstance(self.filter, BeliefClaims):
+            self.filter.reset()
+        elif isinstance(self.filter, ParticleClaims):
+            self.filter.reset(rng.spawn(1)[0], int(state.clock[0]))
+        elif self.filter is not None:
             self.filter.reset()
             for tick in range(int(state.clock[0])):  # the drive to the first contact (bounce)
                 self._feed(0, None, tick + 1)
@@ -106,7 +164,21 @@ class LocalizationTask(Task):
                     info[extra] = getattr(self.filter, extra)
             if self.ticks_to_localize is not None:
                 info["ticks_to_localize"] = self.ticks_to_localize
+            correct, wrong = self.judged if self.judged is not None else (False, False)
+            info.update(correct=correct, wrong_claim=wrong)
+            if isinstance(self.filter, BeliefClaims | ParticleClaims):
+                info["belief_mass"] = self.filter.max_mass
+                if self.filter.claim is not None:
+                    info["claim"] = self.filter.claim
         return info
+
+    def _judge(self, state) -> None:
+        """Fix ``correct`` and ``wrong_claim`` at the bump of the first claim."""
+        truth = int(self.states.of(state.position[:1], state.heading[:1],
+                                   np.nan_to_num(state.contact_normal[:1]))[0])
+        claimed = np.asarray(self.filter.candidates)
+        self.judged = (claimed.size == 1 and int(claimed[0]) == truth,
+                       not bool(np.isin(truth, claimed)))
 
     def step(self, state, events):
         bumps = int(events.bumps[0])
@@ -114,7 +186,15 @@ class LocalizationTask(Task):
         self.observation = (bumps, int(state.clock[0]), angle)
         self.observation_count += 1
         reward, done = 0.0, False
-        if self.filter is not None:
+        if isinstance(self.filter, BeliefClaims | ParticleClaims):
+            before = self.filter.entropy
+            self.filter.update(angle, int(state.clock[0]))
+            charged = events.ticks if self.ticks_to_localize is None else 0
+            if self.ticks_to_localize is None and self.filter.localized:
+                self.ticks_to_localize = int(state.ticks)
+            reward = before - self.filter.entropy - self.tick_cost * charged
+            done = self.terminate_when_localized and self.filter.localized
+        elif self.filter is not None:
             before = max(self.filter.size, 1)
             first = int(state.ticks) - events.ticks  # the episode's ticks before this step
             localized_before = self.ticks_to_localize is not None
@@ -130,7 +210,141 @@ class LocalizationTask(Task):
             reward = (math.log2(before) - math.log2(max(self.filter.size, 1))
                       - self.tick_cost * charged)
             done = self.terminate_when_localized and bool(self.filter.localized)
+        if self.filter is not None and self.judged is None and self.filter.localized \
+                and hasattr(self.filter, "candidates"):  # a user's filter may not name its claim
+            self._judge(state)
         return np.array([reward]), np.array([done]), self._info()
+
+
+class BeliefClaims:
+    """The belief filter of the task (`LocalizationTask`, "Claims") on the env's sampled GCM:
+    updated with the angle commanded and the clock at each bump, claiming its most likely
+    decision state once that state's mass reaches ``threshold``."""
+
+    def __init__(self, core, threshold: float, samples: int) -> None:
+        options = core.options
+        if options.action_type != "discrete" or options.step_mode != "bounce":
+            raise ConfigError("localization filter 'belief': needs discrete actions and "
+                              "step_mode='bounce' (it is updated once per bump, by angle index)")
+        self.angles = np.asarray(options.angles[0], dtype=np.float64)
+        self.filter = BeliefFilter(belief_outcomes(core, samples))
+        self.n_states = core.cell_model().n_cells
+        self.threshold = threshold
+        self.reset()
+
+    def reset(self) -> None:
+        self.filter.reset()
+        self.claim: int | None = None
+
+    def update(self, angle: float | None, ticks: int) -> None:
+        if angle is None:  # no bump in this step (not a bounce step): nothing to update
+            return
+        turn = np.mod(self.angles - angle + math.pi, 2 * math.pi) - math.pi
+        self.filter.update(int(np.argmin(np.abs(turn))), ticks)
+        if self.claim is None and self.max_mass >= self.threshold:
+            self.claim = int(np.argmax(self.marginal))
+
+    @property
+    def marginal(self) -> np.ndarray:
+        """(N,) the belief of each decision state, summed over the heading-offset classes."""
+        return self.filter.belief.reshape(-1, self.n_states).sum(axis=0)
+
+    @property
+    def localized(self) -> bool:
+        return self.claim is not None
+
+    @property
+    def candidates(self) -> np.ndarray:
+        """The claimed state (empty before the claim)."""
+        return np.array([] if self.claim is None else [self.claim], dtype=np.int64)
+
+    @property
+    def size(self) -> int:
+        """Decision states with belief above 1e-6 (the reported ``candidates`` count)."""
+        return int((self.marginal > 1e-6).sum())
+
+    @property
+    def entropy(self) -> float:
+        return self.filter.entropy
+
+    @property
+    def max_mass(self) -> float:
+        return float(self.marginal.max())
+
+
+class ParticleClaims:
+    """The particle filter of the task (`LocalizationTask`, "Claims"): Monte Carlo localization
+    moved by the env's own dynamics (`bounce_gym.dynamics.particles.ParticleBelief`), claiming
+    the decision state that holds ``threshold`` of the particles, never earlier."""
+
+    def __init__(self, core, threshold: float, particles: int) -> None:
+        options = core.options
+        if options.action_type != "discrete" or options.step_mode != "bounce":
+            raise ConfigError("localization filter 'particles': needs discrete actions and "
+                              "step_mode='bounce' (it is updated once per bump)")
+        self.belief = ParticleBelief(core.cell_model(), env_dynamics(options), particles)
+        self.threshold = threshold
+        self.claim: int | None = None
+
+    def reset(self, rng: np.random.Generator, clock: int) -> None:
+        self.belief.reset(rng, clock)
+        self.claim = None  # a claim is judged at a bump after a step: none at the reset
+
+    def update(self, angle: float | None, ticks: int) -> None:
+        if angle is None:  # no bump in this step: nothing to update
+            return
+        self.belief.update(angle, ticks)
+        self._check()
+
+    def _check(self) -> None:
+        if self.claim is None and self.belief.max_mass >= self.threshold:
+            self.claim = self.belief.most_likely
+
+    @property
+    def localized(self) -> bool:
+        return self.claim is not None
+
+    @property
+    def candidates(self) -> np.ndarray:
+        """The claimed state (empty before the claim)."""
+        return np.array([] if self.claim is None else [self.claim], dtype=np.int64)
+
+    @property
+    def size(self) -> int:
+        """Decision states holding particles (the reported ``candidates`` count)."""
+        return int((self.belief.mass()[0] >= 0).sum())
+
+    @property
+    def entropy(self) -> float:
+        return self.belief.entropy
+
+    @property
+    def max_mass(self) -> float:
+        return self.belief.max_mass
+
+
+def env_dynamics(options) -> dict:
+    """The `BounceDynamics` arguments (with ``world``) of an env's robot, from its
+    `EnvOptions`: the motion model of a particle belief."""
+    return {"world": options.world, "backend": options.backend, "rule": options.bounce_rule,
+            "noise": options.noise, "radius": options.robot_radius,
+            "step_length": options.step_length, "backend_options": options.backend_options}
+
+
+#: heading-offset classes of the belief model: offsets within a bin, in bin widths
+OFFSET_CLASSES = 9
+
+
+def belief_outcomes(core, samples: int) -> BumpOutcomes:
+    """The GCM the belief filter runs on: `OFFSET_CLASSES` sampled GCMs of the env, headings at
+    evenly spaced offsets within the bins, joined over (offset class, decision state)
+    (`bounce_gym.markov.belief.with_heading_offsets`: the offset is a hidden variable the
+    bounces by whole bins keep)."""
+    width = core.cell_model().bin_width
+    offsets = (np.arange(OFFSET_CLASSES) + 0.5) / OFFSET_CLASSES * width - width / 2
+    parts = [core.sampled_model(samples=samples, heading_offset=float(o)).outcomes
+             for o in offsets]
+    return with_heading_offsets(parts, offsets, width)
 
 
 def combinatorial_filter(core) -> LocalizationFilter | ActiveLocalizationFilter:
