@@ -23,7 +23,9 @@ against Table 4.4, ``Patrol-v0`` agent-steps/s against pistonball_v6 in the same
 `benchmarks.executors` (the multi-robot study and the benchmark configuration with one worker,
 the local pool and Ray: wall times and the checksums of their files); issue #23:
 `benchmarks.dynamic_physics` (``physics="dynamic"`` against the kinematic backend, CartPole-v1
-and pistonball_v6 in the same run, median and min–max over rounds, load average).
+and pistonball_v6 in the same run, median and min–max over rounds, load average); issue #24:
+`benchmarks.sampled_model` (building the sampled GCM of the lab map and of a 10⁴-cell map,
+against the raw kinematic simulator in the same run).
 """
 
 from __future__ import annotations
@@ -199,6 +201,10 @@ def main(argv: list[str] | None = None) -> None:
     print()
     dynamic_physics.main(["--steps", "2000", "--agent-steps", "2000", "--rounds", "3"]
                          if args.quick else [])
+    from benchmarks import sampled_model
+
+    print()
+    sampled_model.main(["--quick"] if args.quick else [])
     print()
     planners.main(quick=args.quick, repeats=args.repeats)
     # drifters (issue #15): GCM of a 10^6-cell layer, advection vs Parcels, Drifter-v0 steps/s
