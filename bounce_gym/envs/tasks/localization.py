@@ -216,7 +216,22 @@ class LocalizationTask(Task):
         return np.array([reward]), np.array([done]), self._info()
 
 
-class BeliefClaims:
+class _Claim:
+    """A filter that claims one decision state, ``claim`` (None until it claims)."""
+
+    claim: int | None = None
+
+    @property
+    def localized(self) -> bool:
+        return self.claim is not None
+
+    @property
+    def candidates(self) -> np.ndarray:
+        """The claimed state (empty before the claim)."""
+        return np.array([] if self.claim is None else [self.claim], dtype=np.int64)
+
+
+class BeliefClaims(_Claim):
     """The belief filter of the task (`LocalizationTask`, "Claims") on the env's sampled GCM:
     updated with the angle commanded and the clock at each bump, claiming its most likely
     decision state once that state's mass reaches ``threshold``."""
@@ -234,7 +249,7 @@ class BeliefClaims:
 
     def reset(self) -> None:
         self.filter.reset()
-        self.claim: int | None = None
+        self.claim = None
 
     def update(self, angle: float | None, ticks: int) -> None:
         if angle is None:  # no bump in this step (not a bounce step): nothing to update
@@ -250,15 +265,6 @@ class BeliefClaims:
         return self.filter.belief.reshape(-1, self.n_states).sum(axis=0)
 
     @property
-    def localized(self) -> bool:
-        return self.claim is not None
-
-    @property
-    def candidates(self) -> np.ndarray:
-        """The claimed state (empty before the claim)."""
-        return np.array([] if self.claim is None else [self.claim], dtype=np.int64)
-
-    @property
     def size(self) -> int:
         """Decision states with belief above 1e-6 (the reported ``candidates`` count)."""
         return int((self.marginal > 1e-6).sum())
@@ -272,7 +278,7 @@ class BeliefClaims:
         return float(self.marginal.max())
 
 
-class ParticleClaims:
+class ParticleClaims(_Claim):
     """The particle filter of the task (`LocalizationTask`, "Claims"): Monte Carlo localization
     moved by the env's own dynamics (`bounce_gym.dynamics.particles.ParticleBelief`), claiming
     the decision state that holds ``threshold`` of the particles, never earlier."""
@@ -299,15 +305,6 @@ class ParticleClaims:
     def _check(self) -> None:
         if self.claim is None and self.belief.max_mass >= self.threshold:
             self.claim = self.belief.most_likely
-
-    @property
-    def localized(self) -> bool:
-        return self.claim is not None
-
-    @property
-    def candidates(self) -> np.ndarray:
-        """The claimed state (empty before the claim)."""
-        return np.array([] if self.claim is None else [self.claim], dtype=np.int64)
 
     @property
     def size(self) -> int:
