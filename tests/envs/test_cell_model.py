@@ -145,8 +145,9 @@ def test_a_bad_filter_factory_names_the_argument():
 
 def test_a_filter_factory_string_never_imports_or_calls_code(capsys):
     """A configuration file is data: ``"module:function"`` strings are refused, not run."""
-    with pytest.raises(ConfigError, match="filter_factory: expected 'combinatorial', None or "
-                                          r"\(from Python\) a callable, got 'builtins:print'"):
+    with pytest.raises(ConfigError, match="filter_factory: expected 'combinatorial', 'belief', "
+                                          r"'particles', None or \(from Python\) a callable, "
+                                          "got 'builtins:print'"):
         BounceEnv(task="localization", task_kwargs={"filter_factory": "builtins:print"})
     assert capsys.readouterr().out == ""
 
