@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from baselines.drifters.policy import reach_env
 from baselines.drifters.value_iteration import goal_states
 from baselines.policy import Policy
 from bounce_gym import validate
@@ -119,11 +120,8 @@ class HorizonReachPolicy(Policy):
         self._decode = None
 
     def reset(self, env) -> None:
-        inner = env.unwrapped
-        task = getattr(inner, "task", None)
-        if getattr(task, "name", None) != "reach" or not hasattr(inner, "cell_model"):
-            raise ConfigError("env: the sampled value iteration policy runs in "
-                              "bounce_gym/Drifter-v0 with task='reach'")
+        inner = reach_env(env, "the sampled value iteration policy")
+        task = inner.task
         if not inner.options.observe_pose:
             raise ConfigError("env_kwargs.observe_pose: the sampled value iteration policy "
                               "acts on the observed position; set observe_pose=True")

@@ -34,6 +34,16 @@ def state_from_info(info) -> int:
     return int(info["state"])
 
 
+def reach_env(env, who: str):
+    """The unwrapped ``Drifter-v0`` env with task "reach" that ``who`` plans for; `ConfigError`
+    for any other env."""
+    inner = env.unwrapped
+    if getattr(getattr(inner, "task", None), "name", None) != "reach" \
+            or not hasattr(inner, "cell_model"):
+        raise ConfigError(f"env: {who} runs in bounce_gym/Drifter-v0 with task='reach'")
+    return inner
+
+
 class ValueIterationPolicy(Policy):
     """Alg. 5.5 executed in ``Drifter-v0``: π(state) of the value iteration for the episode's goal
     (module docstring).
@@ -69,12 +79,8 @@ class ValueIterationPolicy(Policy):
         return self.result
 
     def reset(self, env) -> None:
-        inner = env.unwrapped
-        task = getattr(inner, "task", None)
-        if getattr(task, "name", None) != "reach" or not hasattr(inner, "cell_model"):
-            raise ConfigError("env: the value iteration policy runs in bounce_gym/Drifter-v0 "
-                              "with task='reach'")
-        self.plan(inner.cell_model(), task.region.states)
+        inner = reach_env(env, "the value iteration policy")
+        self.plan(inner.cell_model(), inner.task.region.states)
 
     def act(self, observation, info) -> int:
         if self.result is None:

@@ -6,7 +6,6 @@ import numpy as np
 
 from baselines.policy import Policy, episode_rng
 from bounce_gym.dynamics.particles import DEFAULT_PARTICLES, ParticleBelief
-from bounce_gym.envs.tasks.localization import env_dynamics
 from bounce_gym.errors import ConfigError
 
 #: expected information (bits) below which an angle counts as telling nothing
@@ -54,7 +53,7 @@ class ParticleLocalizationPolicy(Policy):
         self.angles = np.asarray(options.angles[0], dtype=np.float64)
         self.max_clock = int(options.max_clock)
         self._clock_index = 1 if base.core.observes_contact else 0
-        self.belief = ParticleBelief(base.cell_model(), env_dynamics(options), self.particles,
+        self.belief = ParticleBelief(base.cell_model(), options.robot_dynamics, self.particles,
                                      max_clock=self.max_clock)
         self.last_action: int | None = None
 

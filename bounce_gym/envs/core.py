@@ -120,11 +120,8 @@ class BounceCore:
             if cell_size is not None and options.backend != "cell":
                 model = CellModel(options.world, cell_size, model.n_bins, options.robot_radius,
                                   model.corner_rule)
-            dynamics = {"world": options.world, "backend": options.backend,
-                        "rule": options.bounce_rule, "noise": options.noise,
-                        "radius": options.robot_radius, "step_length": options.step_length,
-                        "backend_options": options.backend_options}
-            self._cell_models[key] = sampled_model(model, dynamics, options.angles[0], samples,
+            self._cell_models[key] = sampled_model(model, options.robot_dynamics,
+                                                   options.angles[0], samples,
                                                    seed, heading_offset, cache=cache)
         return self._cell_models[key]
 

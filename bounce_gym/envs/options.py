@@ -163,6 +163,14 @@ class EnvOptions:
         extra = {"min_sep_cells": self.min_sep_cells} if self.min_sep_cells else {}
         return {"n_bins": self.cell_bins, "corner_rule": self.corner_rule, **extra}
 
+    @property
+    def robot_dynamics(self) -> dict:
+        """The `BounceDynamics` arguments (with ``world``) of one of the env's robots: the
+        motion model that sampled models and particle beliefs simulate."""
+        return {"world": self.world, "backend": self.backend, "rule": self.bounce_rule,
+                "noise": self.noise, "radius": self.robot_radius,
+                "step_length": self.step_length, "backend_options": self.backend_options}
+
 
 def resolve_world(world: object) -> World:
     """A `World`, a zoo name (see `bounce_gym.worlds.names`) or a path to a map file."""

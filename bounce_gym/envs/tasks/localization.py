@@ -288,7 +288,7 @@ class ParticleClaims(_Claim):
         if options.action_type != "discrete" or options.step_mode != "bounce":
             raise ConfigError("localization filter 'particles': needs discrete actions and "
                               "step_mode='bounce' (it is updated once per bump)")
-        self.belief = ParticleBelief(core.cell_model(), env_dynamics(options), particles)
+        self.belief = ParticleBelief(core.cell_model(), options.robot_dynamics, particles)
         self.threshold = threshold
         self.claim: int | None = None
 
@@ -318,14 +318,6 @@ class ParticleClaims(_Claim):
     @property
     def max_mass(self) -> float:
         return self.belief.max_mass
-
-
-def env_dynamics(options) -> dict:
-    """The `BounceDynamics` arguments (with ``world``) of an env's robot, from its
-    `EnvOptions`: the motion model of a particle belief."""
-    return {"world": options.world, "backend": options.backend, "rule": options.bounce_rule,
-            "noise": options.noise, "radius": options.robot_radius,
-            "step_length": options.step_length, "backend_options": options.backend_options}
 
 
 #: heading-offset classes of the belief model: offsets within a bin, in bin widths
