@@ -6,7 +6,9 @@ goal radius 0.3, heading tolerance 10°, 200 steps), start and goal drawn as on 
 (cell centres and bin headings) from held-out seeds 10,000 + i, then run in the chosen backend.
 Feasible = the exact cell model's roadmap has a plan. Prints success on the feasible episodes
 with 95 % Wilson intervals, the sampled planner's mean predicted success (mean ± 95 % t-interval)
-and the model's build time (docs/sampled_models.md); asserts nothing.
+and the model's build time (docs/sampled_models.md); without noise also the upper bound of any
+planner: the episodes whose goal some sequence of angles reaches at all, found by expanding
+every bump pose reachable from the first bump (`baselines.navigation.search`). Asserts nothing.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import bounce_gym  # noqa: F401  (registers the envs)
 from baselines.navigation import NavigationPlanner
 from baselines.navigation.roadmap import goal_cells
 from baselines.navigation.sampled import SampledNavigationPlanner
+from baselines.navigation.search import shortest_plan
 from experiments.stats import wilson_interval
 
 ENV_ID = "bounce_gym/BounceNavigation-v0"
@@ -36,6 +39,17 @@ def _episode(env, policy, seed: int, options: dict) -> bool:
         obs, _, terminated, truncated, info = env.step(policy.act(obs, info))
         if terminated or truncated:
             return bool(info["is_success"])
+
+
+def _reachable(env, planner: SampledNavigationPlanner, seed: int, options: dict) -> bool | None:
+    """Whether any sequence of angles takes the robot from its first bump to the goal within
+    the horizon (None: the search hit its node limit before deciding)."""
+    obs, _ = env.reset(seed=seed, options=options)
+    planner.reset(env)
+    planner.act(obs, {})  # conditions the belief on the first clock: one exact pose
+    found = shortest_plan(planner.simulate, planner.point[0], float(planner.heading[0]),
+                          planner.plan.n_actions, None, planner.steps_total, 10**6, 1.0, 1.0)
+    return True if found.found else (False if found.exhausted else None)
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -77,7 +91,8 @@ def main(argv: list[str] | None = None) -> dict:
         feasible = roadmap_planner.plan is not None and len(goals) > 0
         old = _episode(env, roadmap_planner, seed, options)
         new = _episode(env, planner, seed, options)
-        rows.append((feasible, old, new, planner.predicted_success))
+        rows.append((feasible, old, new, planner.predicted_success,
+                     None if args.noise else _reachable(env, planner, seed, options)))
     feasible = np.array([r[0] for r in rows])
     print(f"{ENV_ID} backend={args.backend} {extra} {len(rows)} episodes, "
           f"{int(feasible.sum())} feasible; samples/state/angle = {args.samples}; "
@@ -92,6 +107,12 @@ def main(argv: list[str] | None = None) -> dict:
             lo, hi = wilson_interval(wins, n)
             print(f"  {name:<22} success on {label:<8} {wins / max(n, 1):.3f} [{lo:.3f}, {hi:.3f}]"
                   f"  n = {n}")
+    if not args.noise:
+        for label, mask in (("feasible", feasible), ("all", np.ones(len(rows), bool))):
+            known = [r[4] for r, m in zip(rows, mask, strict=True) if m]
+            print(f"  upper bound (goal reachable at all) on {label:<8} "
+                  f"{sum(k is True for k in known)} of {len(known)}"
+                  f" ({sum(k is None for k in known)} undecided)")
     pred = np.array([r[3] for r in rows], dtype=np.float64)
     for label, mask in (("feasible", feasible), ("all", np.ones(len(rows), bool))):
         p = pred[mask]

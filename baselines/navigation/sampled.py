@@ -37,6 +37,7 @@ import numpy as np
 
 from baselines.navigation.lookahead import lookahead
 from baselines.navigation.policy import _env_angles_deg
+from baselines.navigation.search import shortest_plan
 from baselines.policy import Policy
 from bounce_gym.dynamics.noise import Exact
 from bounce_gym.dynamics.sampled_model import DEFAULT_SAMPLES
@@ -60,16 +61,20 @@ class SampledNavigationPlanner(Policy):
         cell_size: side of the model's decision cells (None: the env's step length).
         w1, w2: plan-cost weights (None: the task's).
         cache: the model cache folder (None: the default; False: none).
+        search_nodes: at most this many poses expanded by the breadth-first search over the
+            simulator used while the belief is one exact pose in a deterministic world, over
+            the steps left (0: never search).
     """
 
     name = "sampled ssp planner"
 
     def __init__(self, samples: int = DEFAULT_SAMPLES, seed: int = 0, horizon: int | None = None,
                  particles: int = 32, depth: int = 3, reach: int = 20, cell_size: float | None = None,
-                 w1: float | None = None, w2: float | None = None, cache=None) -> None:
+                 w1: float | None = None, w2: float | None = None, cache=None,
+                 search_nodes: int = 20_000) -> None:
         self.samples, self.seed, self.horizon = samples, seed, horizon
         self.particles, self.depth, self.cell_size = int(particles), int(depth), cell_size
-        self.reach = int(reach)
+        self.reach, self.search_nodes = int(reach), int(search_nodes)
         self.w1, self.w2, self.cache = w1, w2, cache
         self.predicted_success: float | None = None
 
@@ -108,6 +113,8 @@ class SampledNavigationPlanner(Policy):
                                                             self.particles, self.rng)
         self._next = {"ticks": clocks, "end": point, "heading": heading,
                       "weight": np.ones(len(clocks))}
+        self._deterministic = isinstance(env.options.noise, Exact)
+        self._route = None if self.search_nodes > 0 else False
         self._clock_index = 1 if env.core.observes_contact else 0
         self._max_clock = env.options.max_clock
         self.predicted_success = None
@@ -137,25 +144,59 @@ class SampledNavigationPlanner(Policy):
         self.point, self.heading = point[first], heading[first]
         self.weight = weight / weight.sum()
 
-    def _simulate(self, action, point, heading):
+    def simulate(self, action, point, heading):
+        """Robots at bump poses bump with angles ``action`` and drive on, in this episode's
+        model: their outcomes and which of them pass through the goal."""
         out = self.model.step(action, point, heading, self.rng)
         return out, out.goal_hits(*self._goal)
+
+    def _searched(self) -> tuple[int, float] | None:
+        """The next angle and its success probability from the breadth-first search of the
+        simulator from the one exact pose of the belief (`baselines.navigation.search`): the
+        next angle of a shortest plan (success 1), or, when the search expanded every reachable
+        pose without meeting the goal, the angle in use (success 0: nothing reaches it). None
+        where the world is noisy, the belief holds several poses or a search of this episode
+        hit its limits (the look-ahead decides from then on). A plan is kept while the robot is
+        where it predicts and searched again otherwise."""
+        if not self._deterministic or len(self.point) != 1 or self._route is False:
+            return None
+        point, heading = self.point[0], float(self.heading[0])
+        route, k = self._route or (None, 0)
+        if route is None or (route.found and (k >= len(route.actions) or not (
+                np.allclose(route.points[k], point, rtol=0, atol=1e-9)
+                and math.isclose(route.headings[k], heading, abs_tol=1e-9)))):
+            route = shortest_plan(self.simulate, point, heading, self.plan.n_actions, self.last,
+                                  self.steps_total - self.steps,
+                                  self.search_nodes, self.plan.w1, self.plan.w2)
+            k = 0
+        self._route = (route, k + 1) if route.found or route.exhausted else False
+        if route.found:
+            return route.actions[k], 1.0
+        if route.exhausted:  # every successor pose is in the same reachable set: keep going
+            return (0 if self.last is None else self.last), 0.0
+        return None
 
     def act(self, observation, info):
         del info  # the robot's own observation only
         self._condition(self._clock(observation))
-        steps_left = min(self.steps_total - self.steps, self.reach)
-        best, success, out, hit = lookahead(self._simulate, self.plan, self.point, self.heading,
-                                            self.weight, self.depth, steps_left, self.last,
-                                            self.reach)
+        a_n = self.plan.n_actions
+        searched = self._searched()
+        if searched is None:
+            steps_left = min(self.steps_total - self.steps, self.reach)
+            best, success, out, hit = lookahead(self.simulate, self.plan, self.point,
+                                                self.heading, self.weight, self.depth,
+                                                steps_left, self.last, self.reach)
+            mine = np.tile(np.arange(a_n), len(self.point)) == best
+            weight = np.repeat(self.weight, a_n)
+        else:  # the one exact pose: the search's answer is exact
+            best, success = searched
+            out, hit = self.simulate(np.full(len(self.point), best), self.point, self.heading)
+            mine, weight = np.ones(len(self.point), dtype=bool), self.weight
         if self.predicted_success is None:
             self.predicted_success = success
-        a_n = self.plan.n_actions
-        mine = np.tile(np.arange(a_n), len(self.point)) == best
         mine &= ~hit | ~(mine & ~hit).any()  # the goal ends the episode: track the others
         self._next = {"ticks": out.ticks[mine], "end": out.end[mine],
-                      "heading": out.heading[mine],
-                      "weight": np.repeat(self.weight, a_n)[mine]}
+                      "heading": out.heading[mine], "weight": weight[mine]}
         self.steps += 1
         self.last = best
         return best

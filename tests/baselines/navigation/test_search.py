@@ -1,0 +1,73 @@
+"""The breadth-first search over the simulator: shortest plans, proofs of unreachability, and
+exact predictions of the sampled navigation planner in a deterministic world."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import bounce_gym  # noqa: F401  (registers the envs)
+from baselines.navigation.sampled import SampledNavigationPlanner
+from baselines.navigation.search import shortest_plan
+from bounce_gym.cells.outcomes import BumpOutcomes
+
+ENV_ID = "bounce_gym/BounceNavigation-v0"
+KWARGS = {"angles": [45, 90, 135], "task_kwargs": {"goal_radius": 0.3, "heading_tolerance_deg": 10}}
+
+
+def _line(goal: int, size: int = 6):
+    """A toy world: poses at x = 0 … size − 1 on a line; angle 0 steps right, angle 1 steps
+    left (walls at both ends), angle 2 stays; the goal is met on the step into x = goal."""
+
+    def simulate(action, point, heading):
+        x = point[:, 0]
+        nxt = np.clip(x + np.select([action == 0, action == 1], [1.0, -1.0], 0.0), 0, size - 1)
+        end = np.column_stack((nxt, np.zeros(len(nxt))))
+        out = BumpOutcomes(size, np.zeros(3), x.astype(np.int64), action, nxt.astype(np.int64),
+                           np.ones(len(x), dtype=np.int64), point, end, heading)
+        return out, (nxt == goal) & (x != goal)
+
+    return simulate
+
+
+def test_the_shortest_plan_and_the_poses_on_the_way():
+    found = shortest_plan(_line(goal=5), np.array([1.0, 0.0]), 0.0, 3, None, 50, 1_000, 1.0, 1.0)
+    assert found.found and found.actions == (0, 0, 0, 0)
+    np.testing.assert_array_equal(found.points[:, 0], [1, 2, 3, 4])
+    back = shortest_plan(_line(goal=0), np.array([3.0, 0.0]), 0.0, 3, None, 50, 1_000, 1.0, 1.0)
+    assert back.actions == (1, 1, 1)
+
+
+def test_limits_and_exhaustion_are_told_apart():
+    unreachable = shortest_plan(_line(goal=9), np.array([1.0, 0.0]), 0.0, 3, None, 50, 1_000,
+                                1.0, 1.0)
+    assert not unreachable.found and unreachable.exhausted
+    too_short = shortest_plan(_line(goal=5), np.array([1.0, 0.0]), 0.0, 3, None, 2, 1_000,
+                              1.0, 1.0)
+    assert not too_short.found and not too_short.exhausted
+    too_small = shortest_plan(_line(goal=5), np.array([1.0, 0.0]), 0.0, 3, None, 50, 2, 1.0, 1.0)
+    assert not too_small.found and not too_small.exhausted
+
+
+@pytest.mark.parametrize("seed", range(10_000, 10_006))
+def test_predictions_are_exact_in_a_deterministic_world(seed):
+    """Without noise the belief is one exact pose and the search decides: the planner predicts
+    1 exactly where it then reaches the goal, 0 where no sequence of angles can. Start and goal
+    are drawn as on the cell backend (cell centres, bin headings), where the poses reachable
+    at bumps are few enough for the search to expand all of them."""
+    cell = gym.make(ENV_ID, backend="cell", **KWARGS)
+    cell.reset(seed=seed)
+    task = cell.unwrapped.task
+    options = {k: {"position": pose[0][0].tolist(), "heading": float(pose[1][0])}
+               for k, pose in (("start", task.start), ("goal", task.goal))}
+    env = gym.make(ENV_ID, backend="kinematic", **KWARGS)
+    planner = SampledNavigationPlanner(samples=4, cell_size=0.5, depth=1, reach=3, cache=False)
+    obs, info = env.reset(seed=seed, options=options)
+    planner.reset(env)
+    while True:
+        obs, _, terminated, truncated, info = env.step(planner.act(obs, {}))
+        if terminated or truncated:
+            break
+    assert planner.predicted_success in (0.0, 1.0)
+    assert info["is_success"] == (planner.predicted_success == 1.0)
