@@ -159,6 +159,7 @@ class MotionBackend(ABC):
             raise ConfigError(
                 f"start position of robot {bad} {state.position[bad].tolist()} is not in the free "
                 f"space at distance >= robot_radius={self.radius} from the walls"
+                + (f" (less {self.start_depth:.3g} of contact depth)" if self.start_depth else "")
             )
         if self.collide:
             diff = state.position[:, None, :] - state.position[None, :, :]
