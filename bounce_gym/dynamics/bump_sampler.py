@@ -7,8 +7,12 @@ backend the cell's own centre and bin heading, elsewhere the bump sections of
 (the rule, the noise and the backend of the env, so rotations that take time or slip are
 simulated as the env does) and records where and after how many ticks of its clock each one
 bumps next (`bounce_gym.cells.outcomes.BumpOutcomes`). The kinematic backend drives all robots
-to their own contacts in one vectorised call; the others are stepped tick by tick, and a robot
-is done at the end of the first tick in which it is blocked again. The poses are then redrawn
+to their own contacts in one vectorised call; the others (pymunk) are stepped tick by tick in
+batches of `BATCH` robots, and a robot is done at the end of the first tick in which it is
+blocked again (it then stays where it stopped while the rest of its batch drives on). A pose
+that does not read as a contact when placed is no sample point; on the dynamic physics those
+are the few bump poses where a robot braked off its contact (sliding past a corner) and came
+to rest clear of it. The poses are then redrawn
 from where the robots arrived (`ROUNDS`).
 
 `first_bumps` simulates the drive of a bounce-mode reset from a known start pose the same way:

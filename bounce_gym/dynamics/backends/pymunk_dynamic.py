@@ -101,6 +101,14 @@ contacts, until the robots stall — because the solver has no position correcti
 overlap measured over the adversarial suite's crowds is 2.7e-3 radii (0.5 mm on a Create 2),
 three orders of magnitude short of a passage.
 
+**Starts.** A robot is placed at rest. One placed with a wall (or, when robots collide, a
+robot) within the contact tolerance in its bumper arc reads its bumper as at a tick boundary and
+starts blocked, the most frontal such contact latched — as the ideal backends read a contact
+ahead at reset. A robot rests in its contacts up to ``TOUCH`` × ``DEPTH`` deep (the solver
+corrects no overlap, so the overlap is part of the state), and a start may overlap walls and
+robots that deep (`MotionBackend.start_depth`): a bump pose the simulator produced is a valid
+start, reads as the same contact and continues as the robot that stopped there would.
+
 **Determinism, pickling.** Randomness enters only through the angles given. The engine keeps no
 state between steps but the bodies (`DynamicEngine`); pickling drops the pymunk space, and the
 next drive rebuilds it from the robots' positions, angles, velocities and turn rates, stored
