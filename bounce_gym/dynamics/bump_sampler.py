@@ -7,8 +7,12 @@ backend the cell's own centre and bin heading, elsewhere the bump sections of
 (the rule, the noise and the backend of the env, so rotations that take time or slip are
 simulated as the env does) and records where and after how many ticks of its clock each one
 bumps next (`bounce_gym.cells.outcomes.BumpOutcomes`). The kinematic backend drives all robots
-to their own contacts in one vectorised call; the others are stepped tick by tick, and a robot
-is done at the end of the first tick in which it is blocked again. The poses are then redrawn
+to their own contacts in one vectorised call; the others (pymunk) are stepped tick by tick in
+batches of `BATCH` robots, and a robot is done at the end of the first tick in which it is
+blocked again (it then stays where it stopped while the rest of its batch drives on). A pose
+that does not read as a contact when placed is no sample point; on the dynamic physics those
+are the few bump poses where a robot braked off its contact (sliding past a corner) and came
+to rest clear of it. The poses are then redrawn
 from where the robots arrived (`ROUNDS`).
 
 `first_bumps` simulates the drive of a bounce-mode reset from a known start pose the same way:
@@ -41,6 +45,10 @@ INSET = 2.0
 #: the largest distance between `World.eroded`'s chords and the arcs they approximate, in R
 CHORD_SAG = 1.5e-3
 EXPLORE = 0.0
+#: Robots simulated in one physics space where the backend steps them together (pymunk): a
+#: space steps at every event of every robot in it, so the work per robot grows with the
+#: batch; robots ignore each other, so a batch changes no sample point's physics
+BATCH = 8
 
 
 def bump_cells(model: CellModel, sections: BumpSections | None,
@@ -142,25 +150,44 @@ def _step_grid_starts(model: CellModel, step: float) -> tuple[np.ndarray, np.nda
     return np.repeat(centre, model.n_bins, axis=0), np.tile(heading, len(centre))
 
 
+def _parts(dynamics: dict, n: int) -> list[slice]:
+    """The batches of ``n`` robots simulated together: all at once where the backend drives
+    robots independently (one vectorised call), else `BATCH` at a time."""
+    params = dict(dynamics)
+    probe = BounceDynamics(params.pop("world"), 1, robot_collisions="ignore", **params)
+    size = max(n, 1) if probe.backend.drives_independently else BATCH
+    return [slice(lo, min(lo + size, n)) for lo in range(0, n, size)]
+
+
+def _simulator(dynamics: dict, n: int) -> BounceDynamics:
+    params = dict(dynamics)
+    return BounceDynamics(params.pop("world"), n, robot_collisions="ignore", **params)
+
+
 def _reset_drives(model: CellModel, dynamics: dict, point: np.ndarray, heading: np.ndarray,
                   rng: np.random.Generator, max_ticks: int
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Robots placed at poses in the free space drive straight to their first contact, as a
     bounce-mode reset does: their decision states (−1: none within ``max_ticks``), contact
     points, headings and clocks."""
-    params = dict(dynamics)
-    world = params.pop("world")
-    sim = BounceDynamics(world, len(point), robot_collisions="ignore", **params)
-    state = sim.reset(rng, np.asarray(point, dtype=np.float64), heading)
-    if sim.backend.drives_independently:
-        sim.backend.drive_each(state)
-    for _ in range(max_ticks):
-        if state.blocked.all():
-            break
-        sim.backend.drive(state, 1, until_first_block=False)
-    z = BumpStates(model).of(state.position, state.heading, state.contact_normal)
-    return (np.where(state.blocked, z, -1), state.position.copy(), state.heading.copy(),
-            state.clock.copy())
+    point = np.asarray(point, dtype=np.float64)
+    heading = np.asarray(heading, dtype=np.float64)
+    n = len(point)
+    blocked, end, final = np.zeros(n, dtype=bool), np.zeros((n, 2)), np.zeros(n)
+    normal, clock = np.zeros((n, 2)), np.zeros(n, dtype=np.int64)
+    for part in _parts(dynamics, n):
+        sim = _simulator(dynamics, part.stop - part.start)
+        state = sim.reset(rng, point[part], heading[part])
+        if sim.backend.drives_independently:
+            sim.backend.drive_each(state)
+        for _ in range(max_ticks):
+            if state.blocked.all():
+                break
+            sim.backend.drive(state, 1, until_first_block=False)
+        blocked[part], end[part], final[part] = state.blocked, state.position, state.heading
+        normal[part], clock[part] = state.contact_normal, state.clock
+    z = BumpStates(model).of(end, final, normal)
+    return np.where(blocked, z, -1), end, final, clock
 
 
 def simulate_bumps(model: CellModel, angles: np.ndarray, action: np.ndarray, point: np.ndarray,
@@ -179,16 +206,21 @@ def _simulate(model: CellModel, angles: np.ndarray, state: np.ndarray, action: n
               dynamics: dict, max_ticks: int, keep_all: bool = False) -> BumpOutcomes:
     """One robot per (state, action, pose): bump with the angle, drive to the next bump;
     poses not in contact are dropped (``keep_all``: kept, with next state −1)."""
-    params = dict(dynamics)
-    world = params.pop("world")
-    sim = BounceDynamics(world, len(state), robot_collisions="ignore", **params)
     start = np.array(point, dtype=np.float64)
-    sim.reset(rng, start, heading)
-    # poses on the boundary of the free space that do not read as contacts (round-off at a
-    # grazing angle) are no sample points of a bump
-    ok = sim.state.blocked.copy()
-    end, final, ticks, done = _drive(sim, angles[action], max_ticks)
-    nxt = np.where(done, BumpStates(model).of(end, final, sim.state.contact_normal), -1)
+    heading = np.asarray(heading, dtype=np.float64)
+    n = len(state)
+    ok, done = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+    end, final, normal = np.zeros((n, 2)), np.zeros(n), np.zeros((n, 2))
+    ticks = np.zeros(n, dtype=np.int64)
+    for part in _parts(dynamics, n):
+        sim = _simulator(dynamics, part.stop - part.start)
+        sim.reset(rng, start[part], heading[part])
+        # poses on the boundary of the free space that do not read as contacts (round-off at
+        # a grazing angle) are no sample points of a bump
+        ok[part] = sim.state.blocked
+        end[part], final[part], ticks[part], done[part], normal[part] = _drive(
+            sim, angles[action[part]], max_ticks)
+    nxt = np.where(done, BumpStates(model).of(end, final, normal), -1)
     if keep_all:
         nxt = np.where(ok, nxt, -1)
         end, ticks = np.where(ok[:, None], end, start), np.where(ok, ticks, 0)
@@ -198,27 +230,33 @@ def _simulate(model: CellModel, angles: np.ndarray, state: np.ndarray, action: n
 
 
 def _drive(sim: BounceDynamics, params: np.ndarray, max_ticks: int
-           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Every robot bumps with its angle and drives to its next contact: end points, headings,
-    clocks and whether it got there within ``max_ticks``."""
+    clocks, whether it got there within ``max_ticks``, and the contact normals there.
+
+    Robots that drive one at a time (the kinematic backend) do so in one call. Elsewhere the
+    bump tick is one `BounceDynamics.tick` and the drive goes on tick by tick through the
+    backend alone, so a robot that has bumped again stays blocked where it stopped (no further
+    bump of it is simulated) while the others drive on."""
     state = sim.state
     if sim.backend.drives_independently and not sim.backend.turns_take_time:
         ticks = sim.bounce_each(params)
-        return state.position.copy(), state.heading.copy(), ticks, np.ones(len(ticks), bool)
+        return (state.position.copy(), state.heading.copy(), ticks,
+                np.ones(len(ticks), dtype=bool), state.contact_normal.copy())
     m = sim.n_robots
     end, heading = np.zeros((m, 2)), np.zeros(m)
     ticks, done = np.zeros(m, dtype=np.int64), np.zeros(m, dtype=bool)
     normal = np.zeros((m, 2))
-    for _ in range(max_ticks):
-        sim.tick(params)
+    sim.tick(params)
+    for tick in range(max_ticks):
         new = state.blocked & ~done
         end[new], heading[new] = state.position[new], state.heading[new]
         ticks[new], normal[new] = state.clock[new], state.contact_normal[new]
         done |= new
-        if done.all():
+        if done.all() or tick == max_ticks - 1:
             break
-    state.contact_normal[:] = normal  # the contacts at the recorded bumps
-    return end, heading, ticks, done
+        sim.backend.drive(state, 1, until_first_block=False)
+    return end, heading, ticks, done, normal
 
 
 def first_bumps(model: CellModel, position: np.ndarray, heading: float, n: int,

@@ -55,6 +55,10 @@ class MotionBackend(ABC):
     #: degrees: the front arc, centred on the heading, whose contacts stop a robot (its bumper).
     #: The ideal robots are blocked by whatever they face into: the front half
     bumper_arc: float = 180.0
+    #: how deep (world units) a start pose may overlap a wall or another robot: the ideal robots
+    #: never overlap anything; a backend whose robots rest in contacts a hair deep (the dynamic
+    #: physics) accepts its own states as starts
+    start_depth: float = 0.0
 
     def __init__(
         self,
@@ -148,19 +152,20 @@ class MotionBackend(ABC):
 
     def check_start(self, state: RobotState) -> None:
         """Raise `ConfigError` unless every robot starts in the free space (``radius`` from the
-        walls) and, when robots collide, no two overlap."""
-        inside = self.world.contains(state.position, self.radius)
+        walls) and, when robots collide, no two overlap (both up to `start_depth`)."""
+        inside = self.world.contains(state.position, self.radius - self.start_depth)
         if not inside.all():
             bad = int(np.flatnonzero(~inside)[0])
             raise ConfigError(
                 f"start position of robot {bad} {state.position[bad].tolist()} is not in the free "
                 f"space at distance >= robot_radius={self.radius} from the walls"
+                + (f" (less {self.start_depth:.3g} of contact depth)" if self.start_depth else "")
             )
         if self.collide:
             diff = state.position[:, None, :] - state.position[None, :, :]
             dist = np.hypot(diff[..., 0], diff[..., 1])
             np.fill_diagonal(dist, np.inf)
-            if np.any(dist < 2 * self.radius - self.world.tol):
+            if np.any(dist < 2 * (self.radius - self.start_depth) - self.world.tol):
                 i, j = np.unravel_index(np.argmin(dist), dist.shape)
                 raise ConfigError(f"start positions of robots {i} and {j} overlap")
 

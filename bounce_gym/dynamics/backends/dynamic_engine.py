@@ -81,6 +81,8 @@ class DynamicEngine:
         self._space: pymunk.Space | None = None
         #: contacts of the last step: (robot, WALL or ROBOT, edge or robot, nx, ny)
         self.contacts: list[tuple[int, int, int, float, float]] = []
+        #: `contacts` and its entries by robot (`contacts_of`)
+        self._grouped: tuple[list, dict[int, list]] = (self.contacts, {})
 
     # -- the space ----------------------------------------------------------------------------
     @property
@@ -187,6 +189,15 @@ class DynamicEngine:
         self.contacts = []
         self.space.step(dt)
         return self.contacts
+
+    def contacts_of(self, robot: int) -> list[tuple[int, int, int, float, float]]:
+        """The entries of `contacts` of one robot, in their order (grouped once per step)."""
+        if self._grouped[0] is not self.contacts:
+            groups: dict[int, list] = {}
+            for contact in self.contacts:
+                groups.setdefault(contact[0], []).append(contact)
+            self._grouped = (self.contacts, groups)
+        return self._grouped[1].get(robot, [])
 
     # -- the contact handler ------------------------------------------------------------------
     def _on_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:

@@ -101,6 +101,14 @@ contacts, until the robots stall — because the solver has no position correcti
 overlap measured over the adversarial suite's crowds is 2.7e-3 radii (0.5 mm on a Create 2),
 three orders of magnitude short of a passage.
 
+**Starts.** A robot is placed at rest. One placed with a wall (or, when robots collide, a
+robot) within the contact tolerance in its bumper arc reads its bumper as at a tick boundary and
+starts blocked, the most frontal such contact latched — as the ideal backends read a contact
+ahead at reset. A robot rests in its contacts up to ``TOUCH`` × ``DEPTH`` deep (the solver
+corrects no overlap, so the overlap is part of the state), and a start may overlap walls and
+robots that deep (`MotionBackend.start_depth`): a bump pose the simulator produced is a valid
+start, reads as the same contact and continues as the robot that stopped there would.
+
 **Determinism, pickling.** Randomness enters only through the angles given. The engine keeps no
 state between steps but the bodies (`DynamicEngine`); pickling drops the pymunk space, and the
 next drive rebuilds it from the robots' positions, angles, velocities and turn rates, stored
@@ -219,6 +227,9 @@ class DynamicBackend(MotionBackend):
         self.cos_arc = math.cos(math.radians(params.bumper_arc) / 2) + ARC_MARGIN
         self.stall_fraction, self.stall_time = params.stall_fraction, params.stall_time
         self.depth = DEPTH * self.radius
+        #: a robot rests in its contacts up to this deep (the stepping rule's bound; the solver
+        #: corrects no overlap), so its own bump poses are valid starts (module docstring)
+        self.start_depth = TOUCH * self.depth
         self._rest_v = REST * self.cruise
         self._rest_w = REST * self.cruise / self.radius
         self.engine = DynamicEngine(world, self.n_robots, self.radius, params.mass,
@@ -272,7 +283,52 @@ class DynamicBackend(MotionBackend):
         self._now, self._tick, self._commanding = 0.0, 0, False
         self.engine.contacts = []
         self._placed = False
+        for i, latch in self._start_contacts(state):  # at rest with the bumper pressed
+            r = self._robots[i]
+            r.phase, r.latch, r.next = BLOCKED, latch, math.inf
         self.update_contacts(state, np.arange(self.n_robots))
+
+    def _start_contacts(self, state: RobotState) -> list[tuple[int, tuple[int, int, float, float]]]:
+        """The robots placed with their bumper pressed — a wall or (when robots collide) a robot
+        within the contact tolerance in the bumper arc — and the most frontal such contact of
+        each, as a latch: what a robot at rest reads at a tick boundary, from the geometry
+        (the engine has not stepped yet)."""
+        pos, heading = state.position, state.heading
+        direction = np.column_stack((np.cos(heading), np.sin(heading)))
+        reach = self.radius + self.contact_tol
+        best = np.full(len(pos), self.cos_arc)
+        latch: dict[int, tuple[int, int, float, float]] = {}
+        start, vec = self.world.edge_start, self.world.edge_end - self.world.edge_start
+        length2 = np.einsum("ij,ij->i", vec, vec)
+        chunk = max(1, 2**20 // max(len(vec), 1))
+        for lo in range(0, len(pos), chunk):
+            rel = pos[lo:lo + chunk, None, :] - start[None, :, :]  # (robots, walls, 2)
+            u = np.clip(np.einsum("rwk,wk->rw", rel, vec) / length2, 0.0, 1.0)
+            away = rel - u[..., None] * vec  # from the nearest wall point to the centre
+            dist = np.hypot(away[..., 0], away[..., 1])
+            ahead = -np.einsum("rwk,rk->rw", away, direction[lo:lo + chunk]) \
+                / np.maximum(dist, 1e-300)
+            ahead = np.where(dist <= reach, ahead, -np.inf)
+            k = np.argmax(ahead, axis=1)
+            rows = np.arange(len(k))
+            front = ahead[rows, k]
+            for j in np.flatnonzero(front > best[lo:lo + chunk]).tolist():
+                i = lo + j
+                n = away[j, k[j]] / dist[j, k[j]]
+                best[i] = front[j]
+                latch[i] = (WALL, int(k[j]), float(n[0]), float(n[1]))
+        if self.collide:
+            for i, j in zip(*close_pairs(pos, 2 * self.radius + self.contact_tol), strict=True):
+                gap = pos[j] - pos[i]
+                dist = float(np.hypot(*gap))
+                if dist > 2 * self.radius + self.contact_tol or dist == 0.0:
+                    continue
+                for a, b, sign in ((int(i), int(j), 1.0), (int(j), int(i), -1.0)):
+                    front = sign * float(gap @ direction[a]) / dist
+                    if front > best[a]:
+                        best[a] = front
+                        latch[a] = (ROBOT, b, -sign * gap[0] / dist, -sign * gap[1] / dist)
+        return sorted(latch.items())
 
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
         """Blocked robots are those whose controller is in BLOCKED; write their contacts."""
@@ -495,9 +551,9 @@ class DynamicBackend(MotionBackend):
         ny) with the normal pointing at the robot; None if none."""
         dx, dy = math.cos(r.angle), math.sin(r.angle)
         best, front = None, self.cos_arc if front is None else front
-        for robot, kind, k, nx, ny in self.engine.contacts:
+        for _, kind, k, nx, ny in self.engine.contacts_of(i):
             ahead = nx * dx + ny * dy
-            if robot == i and ahead > front:
+            if ahead > front:
                 best, front = (kind, k, -nx, -ny), ahead
         return best
 
