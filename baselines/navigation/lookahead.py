@@ -7,7 +7,9 @@ particles that did not reach the goal split by the clock they read at the next b
 a child belief (an observation node). Backwards, a particle's step is worth 1 if it reaches the
 goal, else the value of its observation node — or, below the last level, whether it reaches the
 goal when it follows the value iteration's policy on the GCM (`bounce_gym.markov.ssp.ReachPlan`)
-for a few more bumps, simulated (`rollout`); a node takes the best
+for a few more bumps, simulated (`rollout`) — or, with no rollout bumps, the GCM's success value
+of the state it arrived in (with one level, this is the QMDP rule: Littman, Cassandra & Kaelbling,
+ICML 1995, on the particle belief); a node takes the best
 angle (most likely success, then least plan cost, `ReachPlan.choose`). This is the limited
 look-ahead policy of dynamic programming with a rollout of the GCM's policy as the cost-to-go
 approximation (Bertsekas, *Dynamic Programming and Optimal Control*, vol. 1, §6.3–6.4), on the
@@ -67,7 +69,11 @@ def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: n
         lv = levels[d]
         out, hit, act = lv["out"], lv["hit"], lv["action"]
         h = steps_left - d  # steps left at this level's decision
-        if value_s is None:  # below the tree: the GCM's values
+        if value_s is None and rollout_steps <= 0:  # below the tree: the GCM's own values
+            z = np.maximum(out.next_state, 0)
+            later_s = later_p = plan.success[h - 1][z]
+            later_c = plan.costs[h - 1][z, act]
+        elif value_s is None:  # below the tree: rollouts, the GCM's values as tie-breakers
             later_s, later_c = rollout(simulate, plan, out.end, out.heading, out.next_state,
                                        act, min(h - 1, rollout_steps))
             # where rollouts tie (all fail), the model's own value of the state decides

@@ -57,7 +57,9 @@ class SampledNavigationPlanner(Policy):
         particles: at most this many pose particles in the belief.
         depth: bumps of look-ahead (`baselines.navigation.lookahead`).
         reach: the receding horizon of each decision: the angle that most likely reaches the
-            goal within this many bumps (or the steps left, if fewer) is chosen.
+            goal within this many bumps (or the steps left, if fewer) is chosen, leaves valued
+            by simulated rollouts of that many bumps; 0: no rollouts, leaves valued by the
+            GCM's success over all the steps left (with ``depth`` 1, the QMDP rule).
         cell_size: side of the model's decision cells (None: the env's step length).
         w1, w2: plan-cost weights (None: the task's).
         cache: the model cache folder (None: the default; False: none).
@@ -182,7 +184,9 @@ class SampledNavigationPlanner(Policy):
         a_n = self.plan.n_actions
         searched = self._searched()
         if searched is None:
-            steps_left = min(self.steps_total - self.steps, self.reach)
+            steps_left = self.steps_total - self.steps
+            if self.reach > 0:
+                steps_left = min(steps_left, self.reach)
             best, success, out, hit = lookahead(self.simulate, self.plan, self.point,
                                                 self.heading, self.weight, self.depth,
                                                 steps_left, self.last, self.reach)
