@@ -61,6 +61,9 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--depth", type=int, default=3)
     parser.add_argument("--reach", type=int, default=30)
     parser.add_argument("--cell-size", type=float, default=0.25)
+    parser.add_argument("--particles", type=int, default=32)
+    parser.add_argument("--no-rollouts", action="store_true",
+                        help="value the look-ahead's leaves by the model (QMDP with --depth 1)")
     parser.add_argument("--noise", action="store_true",
                         help="rotation noise: reliable, r = 0.9, eps = 5 degrees")
     args = parser.parse_args(argv)
@@ -70,7 +73,8 @@ def main(argv: list[str] | None = None) -> dict:
     cell = gym.make(ENV_ID, backend="cell", **KWARGS)
     env = gym.make(ENV_ID, backend=args.backend, **extra, **KWARGS)
     roadmap_planner, planner = NavigationPlanner(), SampledNavigationPlanner(
-        samples=args.samples, depth=args.depth, reach=args.reach, cell_size=args.cell_size)
+        samples=args.samples, depth=args.depth, reach=args.reach, cell_size=args.cell_size,
+        particles=args.particles, rollouts=not args.no_rollouts)
     t0 = time.perf_counter()
     env.reset(seed=0)
     env.unwrapped.cell_model(kind="sampled", samples=args.samples, seed=0, cache=False,

@@ -57,9 +57,10 @@ class SampledNavigationPlanner(Policy):
         particles: at most this many pose particles in the belief.
         depth: bumps of look-ahead (`baselines.navigation.lookahead`).
         reach: the receding horizon of each decision: the angle that most likely reaches the
-            goal within this many bumps (or the steps left, if fewer) is chosen, leaves valued
-            by simulated rollouts of that many bumps; 0: no rollouts, leaves valued by the
-            GCM's success over all the steps left (with ``depth`` 1, the QMDP rule).
+            goal within this many bumps (or the steps left, if fewer) is chosen.
+        rollouts: value the look-ahead's leaves by simulated rollouts of base policies (True)
+            or by the GCM's success values (False: with ``depth`` 1, the QMDP rule; cheap
+            enough for dynamic physics).
         cell_size: side of the model's decision cells (None: the env's step length).
         w1, w2: plan-cost weights (None: the task's).
         cache: the model cache folder (None: the default; False: none).
@@ -73,10 +74,13 @@ class SampledNavigationPlanner(Policy):
     def __init__(self, samples: int = DEFAULT_SAMPLES, seed: int = 0, horizon: int | None = None,
                  particles: int = 32, depth: int = 3, reach: int = 20, cell_size: float | None = None,
                  w1: float | None = None, w2: float | None = None, cache=None,
-                 search_nodes: int = 20_000) -> None:
+                 search_nodes: int = 20_000, rollouts: bool = True) -> None:
         self.samples, self.seed, self.horizon = samples, seed, horizon
         self.particles, self.depth, self.cell_size = int(particles), int(depth), cell_size
         self.reach, self.search_nodes = int(reach), int(search_nodes)
+        self.rollouts = bool(rollouts)
+        if self.reach < 1:
+            raise ConfigError(f"reach: expected an integer >= 1, got {reach!r}")
         self.w1, self.w2, self.cache = w1, w2, cache
         self.predicted_success: float | None = None
 
@@ -111,9 +115,9 @@ class SampledNavigationPlanner(Policy):
                               task.w1 if self.w1 is None else self.w1,
                               task.w2 if self.w2 is None else self.w2)
         self.rng = np.random.default_rng(self.seed)
-        _, point, heading, clocks = self.model.first_states(start_pos, start_head,
-                                                            self.particles, self.rng)
-        self._next = {"ticks": clocks, "end": point, "heading": heading,
+        state, point, heading, clocks = self.model.first_states(start_pos, start_head,
+                                                                self.particles, self.rng)
+        self._next = {"ticks": clocks, "end": point, "heading": heading, "state": state,
                       "weight": np.ones(len(clocks))}
         self._deterministic = isinstance(env.options.noise, Exact)
         self._route = None if self.search_nodes > 0 else False
@@ -137,14 +141,37 @@ class SampledNavigationPlanner(Policy):
         if gap.min() > 0:
             self.surprises += 1
         point, heading, weight = nxt["end"][keep], nxt["heading"][keep], nxt["weight"][keep]
+        state = nxt["state"][keep]
         if len(point) > self.particles:
             pick = self.rng.choice(len(point), self.particles, p=weight / weight.sum())
             point, heading, weight = point[pick], heading[pick], np.ones(len(pick))
+            state = state[pick]
         key = np.round(np.column_stack((point, heading)), 9)  # the poses themselves stay exact
         _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
         weight = np.bincount(inverse.ravel(), weights=weight)
-        self.point, self.heading = point[first], heading[first]
+        self.point, self.heading, self.state = point[first], heading[first], state[first]
         self.weight = weight / weight.sum()
+
+    def _spread(self) -> None:
+        """In a noisy world, ``particles`` draws from the belief (by weight), so that each
+        draws its own executed rotation at the next bump: the set of predicted poses then
+        spreads as the robot's pose may (the sampling motion model, Thrun et al. 2005, §4.3);
+        without it the set could only shrink and lose the robot."""
+        pick = self.rng.choice(len(self.point), self.particles, p=self.weight)
+        self.point, self.heading, self.state = self.point[pick], self.heading[pick], \
+            self.state[pick]
+        self.weight = np.full(self.particles, 1.0 / self.particles)
+
+    def _followed(self) -> float:
+        """The model's success of this planner over the steps left, from the belief: each
+        particle's state under the policy that takes, at every bump, the angle best within
+        `reach` bumps (`ReachPlan.follow`); QMDP acts on the belief rather than on one state,
+        so this is the prediction of a concentrated belief."""
+        value = self.plan.follow(self.reach, self.steps_total - self.steps)
+        last = self.plan.n_actions if self.last is None else self.last
+        inside = self.state >= 0
+        return float((self.weight * np.where(inside, value[np.maximum(self.state, 0), last], 0.0)
+                      ).sum())
 
     def simulate(self, action, point, heading):
         """Robots at bump poses bump with angles ``action`` and drive on, in this episode's
@@ -181,15 +208,16 @@ class SampledNavigationPlanner(Policy):
     def act(self, observation, info):
         del info  # the robot's own observation only
         self._condition(self._clock(observation))
+        if not self._deterministic:
+            self._spread()
         a_n = self.plan.n_actions
         searched = self._searched()
         if searched is None:
-            steps_left = self.steps_total - self.steps
-            if self.reach > 0:
-                steps_left = min(steps_left, self.reach)
+            steps_left = min(self.steps_total - self.steps, self.reach)
             best, success, out, hit = lookahead(self.simulate, self.plan, self.point,
                                                 self.heading, self.weight, self.depth,
-                                                steps_left, self.last, self.reach)
+                                                steps_left, self.last,
+                                                self.reach if self.rollouts else 0)
             mine = np.tile(np.arange(a_n), len(self.point)) == best
             weight = np.repeat(self.weight, a_n)
         else:  # the one exact pose: the search's answer is exact
@@ -197,10 +225,12 @@ class SampledNavigationPlanner(Policy):
             out, hit = self.simulate(np.full(len(self.point), best), self.point, self.heading)
             mine, weight = np.ones(len(self.point), dtype=bool), self.weight
         if self.predicted_success is None:
-            self.predicted_success = success
+            self.predicted_success = success if searched is not None or self.rollouts \
+                else self._followed()
         mine &= ~hit | ~(mine & ~hit).any()  # the goal ends the episode: track the others
         self._next = {"ticks": out.ticks[mine], "end": out.end[mine],
-                      "heading": out.heading[mine], "weight": weight[mine]}
+                      "heading": out.heading[mine], "state": out.next_state[mine],
+                      "weight": weight[mine]}
         self.steps += 1
         self.last = best
         return best

@@ -73,6 +73,19 @@ class ReachPlan:
             + (self.w2 - self.w1) * change[None, :, :]
         return q_s, q_c
 
+    def follow(self, h: int, steps: int) -> np.ndarray:
+        """The probability of reaching the goal within ``steps`` steps when every decision takes
+        the angle that is best with ``h`` steps left (``policy[h]``: a receding horizon of h
+        bumps), by policy evaluation on the chain: (N, |Φ| + 1), per state and last angle."""
+        a = self.n_actions
+        chosen = self.policy[min(int(h), self.horizon)].astype(np.int64)  # (N, |Φ| + 1)
+        value = np.zeros((self.hit.shape[0], a + 1))
+        for _ in range(int(steps)):
+            per_action = np.column_stack([self.hit[:, i] + self.miss[i] @ value[:, i]
+                                          for i in range(a)])
+            value = np.take_along_axis(per_action, chosen, axis=1)
+        return value
+
     def choose(self, q_s: np.ndarray, q_c: np.ndarray) -> np.ndarray:
         """The best angles for success values ``q_s`` (n, |Φ|) and cost values ``q_c``
         (n, m, |Φ|): most likely success (within `TIE`), then least cost; (n, m)."""

@@ -6,8 +6,8 @@ Planners (``planner_kwargs``, all optional): ``models`` lists which of `PLANNER_
 ``roadmap``, the papers' plan on the env's cell model run open loop (row "roadmap planner"), and
 ``sampled``, `SampledNavigationPlanner` closed loop on its particle belief (row "sampled-gcm");
 default ``[roadmap]``. The sampled planner's options `SAMPLED_OPTIONS` (``samples``, ``seed``,
-``particles``, ``depth``, ``reach``, ``cell_size``) are passed to it; its horizon is the
-experiment's ``max_steps``.
+``particles``, ``depth``, ``reach``, ``cell_size``, ``rollouts``) are passed to it; its horizon is
+the experiment's ``max_steps``.
 
 Per episode:
 
@@ -43,7 +43,7 @@ from experiments.families.base import Episode, SingleRobotFamily
 #: the planners ``planner_kwargs.models`` may name
 PLANNER_MODELS = ("roadmap", "sampled")
 #: the options of the sampled planner ``planner_kwargs`` may set
-SAMPLED_OPTIONS = ("samples", "seed", "particles", "depth", "reach", "cell_size")
+SAMPLED_OPTIONS = ("samples", "seed", "particles", "depth", "reach", "cell_size", "rollouts")
 #: the least value of the sampled planner's counts (the others: 1)
 MINIMUM = {"samples": 2, "seed": 0}
 #: the sampled planner's row
@@ -152,11 +152,13 @@ def planners(experiment: Mapping) -> list[Policy]:
 
 def _sampled_options(kwargs: Mapping) -> dict:
     """The sampled planner's options, checked: whole counts (``samples`` at least 2, ``seed`` at
-    least 0, the others at least 1), ``cell_size`` a positive number."""
+    least 0, the others at least 1), ``cell_size`` a positive number, ``rollouts`` a flag."""
     out = {}
     for key, value in kwargs.items():
         where = f"planner_kwargs.{key}"
-        if key == "cell_size":
+        if key == "rollouts":
+            out[key] = validate.flag(where, value)
+        elif key == "cell_size":
             out[key] = validate.number(where, value, minimum=0, strict=True)
         else:
             out[key] = validate.integer(where, value, minimum=MINIMUM.get(key, 1))

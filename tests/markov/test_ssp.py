@@ -62,3 +62,32 @@ def test_ties_in_success_are_broken_by_plan_cost_and_angle_changes():
     plan = ReachPlan(hit, miss, np.array([[5.0, 2.0]]), horizon=1, w1=1.0, w2=100.0)
     assert plan.policy[1, 0, 2] == 1  # no angle yet: the cheaper one
     assert plan.policy[1, 0, 0] == 0  # after angle 0: changing costs w2 - w1 more
+
+
+def test_following_a_receding_horizon_is_evaluated_by_simulating_the_chain():
+    """`follow(h, steps)`: the success of always taking the h-step-optimal angle, against a
+    Monte Carlo run of that policy on the chain; one step of the 1-step policy is optimal, and
+    no stationary policy beats the optimum."""
+    hit, miss, cost = _chain(2)
+    plan = ReachPlan(hit, miss, cost, horizon=12)
+    np.testing.assert_allclose(plan.follow(1, 1)[:, -1], plan.success[1], atol=1e-12)
+    assert np.all(plan.follow(12, 12)[:, -1] <= plan.success[12] + 1e-12)
+    value = plan.follow(2, 12)
+    assert np.all(value <= plan.success[12][:, None] + 1e-12)
+    rng = np.random.default_rng(0)
+    dense = [m.toarray() for m in miss]
+    z0, runs, wins = 1, 20_000, 0
+    for _ in range(runs):
+        z, last = z0, plan.n_actions
+        for _ in range(12):
+            a = int(plan.policy[2][z, last])
+            u = rng.random()
+            if u < hit[z, a]:
+                wins += 1
+                break
+            row = np.cumsum(dense[a][z])
+            z = int(np.searchsorted(row, u - hit[z, a], side="right"))
+            if z >= len(row):  # lost
+                break
+            last = a
+    assert abs(wins / runs - value[z0, -1]) < 4 * np.sqrt(0.25 / runs)
