@@ -11,17 +11,24 @@ cell model:
   (`bounce_gym.markov.ssp.ReachPlan`);
 * its belief is a set of weighted pose particles (a particle filter, Thrun, Burgard & Fox,
   *Probabilistic Robotics*, 2005, §4.3, with the env's own dynamics as the motion model): first
-  the poses after the reset drive from the start pose (simulated), kept where their clock is
-  the one it reads;
-* at every bump it looks ``depth`` bumps ahead: every particle simulated under every sequence of
-  angles, branching on the clocks it would read, scored by the goal test on the simulated paths
-  and beyond them by the GCM's values (`baselines.navigation.lookahead`); it acts, and keeps the
-  particles of the angle it used whose clock equals the clock it then reads (the tick
-  likelihood; identical poses merged, resampled to at most ``particles``). When no particle
-  explains the clock, it keeps those of the nearest clock (`surprises` counts it).
+  the poses after the reset drive from the start pose (simulated), then after every bump the
+  belief's poses moved by the angle it used — in a noisy world ``draws`` of them, each drawing
+  its own rotation error — kept where their clock equals the clock it reads (the tick
+  likelihood; identical poses merged). When no particle explains the clock, it keeps those of
+  the nearest clock (`surprises` counts it);
+* while the belief is one exact pose in a deterministic world, it searches the simulator
+  breadth-first for a shortest plan (`baselines.navigation.search`): the search either finds
+  one or proves that no sequence of angles reaches the goal;
+* otherwise, at every bump, it looks ``depth`` bumps ahead from ``particles`` poses of the
+  belief: every pose simulated under every sequence of angles, branching on the clocks it would
+  read, scored by the goal test on the simulated paths and beyond them by simulated rollouts of
+  base policies or, with ``rollouts=False``, by the GCM's values
+  (`baselines.navigation.lookahead`).
 
 It reads only its observation (the clock) in `act`, never ``info``. ``predicted_success`` is
-the model's probability of reaching the goal within the horizon from the first belief.
+the probability of reaching the goal that it computes at its first decision: exact after a
+search; with rollouts the look-ahead's value within ``reach`` bumps; without them the GCM's
+value of following its receding horizon for the whole episode (`ReachPlan.follow`).
 
 Without rotation noise a relative bounce adds whole bins to the heading, so the heading modulo
 the bin width stays that of the start; the model is then sampled at exactly those headings
@@ -54,7 +61,9 @@ class SampledNavigationPlanner(Policy):
     Args:
         samples, seed: sample points per state and angle of the model, and its seed.
         horizon: steps to plan for (None: the env's registered episode length).
-        particles: at most this many pose particles in the belief.
+        particles: the poses of the belief the look-ahead simulates (drawn by weight).
+        draws: in a noisy world, the poses of the belief simulated to predict every bump (drawn
+            by weight; each draws its own rotation error).
         depth: bumps of look-ahead (`baselines.navigation.lookahead`).
         reach: the receding horizon of each decision: the angle that most likely reaches the
             goal within this many bumps (or the steps left, if fewer) is chosen.
@@ -74,11 +83,11 @@ class SampledNavigationPlanner(Policy):
     def __init__(self, samples: int = DEFAULT_SAMPLES, seed: int = 0, horizon: int | None = None,
                  particles: int = 32, depth: int = 3, reach: int = 20, cell_size: float | None = None,
                  w1: float | None = None, w2: float | None = None, cache=None,
-                 search_nodes: int = 20_000, rollouts: bool = True) -> None:
+                 search_nodes: int = 20_000, rollouts: bool = True, draws: int = 512) -> None:
         self.samples, self.seed, self.horizon = samples, seed, horizon
         self.particles, self.depth, self.cell_size = int(particles), int(depth), cell_size
         self.reach, self.search_nodes = int(reach), int(search_nodes)
-        self.rollouts = bool(rollouts)
+        self.rollouts, self.draws = bool(rollouts), int(draws)
         if self.reach < 1:
             raise ConfigError(f"reach: expected an integer >= 1, got {reach!r}")
         self.w1, self.w2, self.cache = w1, w2, cache
@@ -115,11 +124,11 @@ class SampledNavigationPlanner(Policy):
                               task.w1 if self.w1 is None else self.w1,
                               task.w2 if self.w2 is None else self.w2)
         self.rng = np.random.default_rng(self.seed)
-        state, point, heading, clocks = self.model.first_states(start_pos, start_head,
-                                                                self.particles, self.rng)
+        self._deterministic = isinstance(env.options.noise, Exact)
+        state, point, heading, clocks = self.model.first_states(
+            start_pos, start_head, 1 if self._deterministic else self.draws, self.rng)
         self._next = {"ticks": clocks, "end": point, "heading": heading, "state": state,
                       "weight": np.ones(len(clocks))}
-        self._deterministic = isinstance(env.options.noise, Exact)
         self._route = None if self.search_nodes > 0 else False
         self._clock_index = 1 if env.core.observes_contact else 0
         self._max_clock = env.options.max_clock
@@ -134,7 +143,7 @@ class SampledNavigationPlanner(Policy):
 
     def _condition(self, clock: int) -> None:
         """The belief: the predicted particles whose clock is the one read (or the nearest),
-        identical poses merged, at most `particles` of them (resampled by weight)."""
+        identical poses merged."""
         nxt = self._next
         gap = np.abs(nxt["ticks"] - clock)
         keep = gap == gap.min()
@@ -142,25 +151,32 @@ class SampledNavigationPlanner(Policy):
             self.surprises += 1
         point, heading, weight = nxt["end"][keep], nxt["heading"][keep], nxt["weight"][keep]
         state = nxt["state"][keep]
-        if len(point) > self.particles:
-            pick = self.rng.choice(len(point), self.particles, p=weight / weight.sum())
-            point, heading, weight = point[pick], heading[pick], np.ones(len(pick))
-            state = state[pick]
         key = np.round(np.column_stack((point, heading)), 9)  # the poses themselves stay exact
         _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
         weight = np.bincount(inverse.ravel(), weights=weight)
         self.point, self.heading, self.state = point[first], heading[first], state[first]
         self.weight = weight / weight.sum()
 
-    def _spread(self) -> None:
-        """In a noisy world, ``particles`` draws from the belief (by weight), so that each
-        draws its own executed rotation at the next bump: the set of predicted poses then
-        spreads as the robot's pose may (the sampling motion model, Thrun et al. 2005, §4.3);
-        without it the set could only shrink and lose the robot."""
-        pick = self.rng.choice(len(self.point), self.particles, p=self.weight)
-        self.point, self.heading, self.state = self.point[pick], self.heading[pick], \
-            self.state[pick]
-        self.weight = np.full(self.particles, 1.0 / self.particles)
+    def _draw(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The belief as it is (one exact pose without noise), or in a noisy world ``n`` draws
+        from it by weight: points, headings and weights."""
+        if self._deterministic:
+            return self.point, self.heading, self.weight
+        pick = self.rng.choice(len(self.point), n, p=self.weight)
+        return self.point[pick], self.heading[pick], np.full(n, 1.0 / n)
+
+    def _predict(self, action: int) -> None:
+        """The prediction of the next bump: the belief's poses (in a noisy world ``draws`` of
+        them, each drawing its own executed rotation, so that the set spreads as the robot's
+        pose may: the sampling motion model, Thrun et al. 2005, §4.3) bump with ``action`` and
+        drive on; those that pass through the goal end the episode, so the others are kept
+        (all, if none do not)."""
+        point, heading, weight = self._draw(self.draws)
+        out, hit = self.simulate(np.full(len(point), action), point, heading)
+        keep = ~hit if (~hit).any() else np.ones(len(hit), dtype=bool)
+        self._next = {"ticks": out.ticks[keep], "end": out.end[keep],
+                      "heading": out.heading[keep], "state": out.next_state[keep],
+                      "weight": weight[keep]}
 
     def _followed(self) -> float:
         """The model's success of this planner over the steps left, from the belief: each
@@ -208,29 +224,18 @@ class SampledNavigationPlanner(Policy):
     def act(self, observation, info):
         del info  # the robot's own observation only
         self._condition(self._clock(observation))
-        if not self._deterministic:
-            self._spread()
-        a_n = self.plan.n_actions
         searched = self._searched()
         if searched is None:
             steps_left = min(self.steps_total - self.steps, self.reach)
-            best, success, out, hit = lookahead(self.simulate, self.plan, self.point,
-                                                self.heading, self.weight, self.depth,
-                                                steps_left, self.last,
-                                                self.reach if self.rollouts else 0)
-            mine = np.tile(np.arange(a_n), len(self.point)) == best
-            weight = np.repeat(self.weight, a_n)
+            best, success, _, _ = lookahead(self.simulate, self.plan, *self._draw(self.particles),
+                                            self.depth, steps_left, self.last,
+                                            self.reach if self.rollouts else 0)
         else:  # the one exact pose: the search's answer is exact
             best, success = searched
-            out, hit = self.simulate(np.full(len(self.point), best), self.point, self.heading)
-            mine, weight = np.ones(len(self.point), dtype=bool), self.weight
         if self.predicted_success is None:
             self.predicted_success = success if searched is not None or self.rollouts \
                 else self._followed()
-        mine &= ~hit | ~(mine & ~hit).any()  # the goal ends the episode: track the others
-        self._next = {"ticks": out.ticks[mine], "end": out.end[mine],
-                      "heading": out.heading[mine], "state": out.next_state[mine],
-                      "weight": weight[mine]}
+        self._predict(best)
         self.steps += 1
         self.last = best
         return best
