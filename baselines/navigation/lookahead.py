@@ -35,12 +35,11 @@ Simulate = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[BumpOutcomes, np
 
 def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: np.ndarray,
               weight: np.ndarray, depth: int, steps_left: int, last: int | None,
-              rollout_steps: int) -> tuple[int, float, BumpOutcomes, np.ndarray]:
+              rollout_steps: int) -> int:
     """The best angle from the belief (``point``, ``heading``, ``weight`` summing to 1) with
-    ``steps_left`` steps left and ``last`` the angle used last (None: none yet), its success
-    value, and the first level's simulation (outcomes of particle i under angle a at row
-    i·|Φ| + a, and their goal hits) so that the filter can reuse it. Below the tree each
-    particle is played out for ``rollout_steps`` more bumps (`rollout`)."""
+    ``steps_left`` steps left and ``last`` the angle used last (None: none yet). Below the tree
+    each particle is played out for ``rollout_steps`` more bumps (`rollout`; 0: the GCM's
+    values instead)."""
     a_n = plan.n_actions
     depth = max(1, min(int(depth), int(steps_left)))
     node = np.zeros(len(point), dtype=np.int64)
@@ -63,7 +62,7 @@ def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: n
         weight, node, node_last = np.repeat(weight, a_n)[alive], child.ravel(), unique[:, 1]
         if len(point) == 0:
             break
-    value_s = value_c = value_p = None  # value_p: the success alone, without the tie-breaker
+    value_s = value_c = None
     change = (plan.w2 - plan.w1)
     for d in range(len(levels) - 1, -1, -1):
         lv = levels[d]
@@ -71,21 +70,19 @@ def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: n
         h = steps_left - d  # steps left at this level's decision
         if value_s is None and rollout_steps <= 0:  # below the tree: the GCM's own values
             z = np.maximum(out.next_state, 0)
-            later_s = later_p = plan.success[h - 1][z]
+            later_s = plan.success[h - 1][z]
             later_c = plan.costs[h - 1][z, act]
         elif value_s is None:  # below the tree: rollouts, the GCM's values as tie-breakers
             later_s, later_c = rollout(simulate, plan, out.end, out.heading, out.next_state,
                                        act, min(h - 1, rollout_steps))
             # where rollouts tie (all fail), the model's own value of the state decides
-            later_p = later_s
             later_s = later_s + MODEL_WEIGHT * plan.success[h - 1][np.maximum(out.next_state, 0)]
         else:
             safe = np.maximum(lv["child"], 0)
-            later_s, later_c, later_p = value_s[safe], value_c[safe], value_p[safe]
+            later_s, later_c = value_s[safe], value_c[safe]
         ok = lv["child"] >= 0
         reach = ok | (value_s is None) & (out.next_state >= 0)
         q_s = np.where(hit, 1.0, np.where(reach, later_s, 0.0))
-        q_p = np.where(hit, 1.0, np.where(reach, later_p, 0.0))
         q_c = plan.w1 * (1.0 + out.ticks) + np.where(hit | (out.next_state < 0), 0.0, later_c)
         parent_last = lv["parent_last"][lv["parent"]]
         q_c = q_c + change * ((parent_last != act) & (parent_last < a_n))
@@ -97,13 +94,10 @@ def lookahead(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: n
             -1, a_n)
         node_c = (np.bincount(flat, weights=lv["weight"] * q_c, minlength=size) / mass).reshape(
             -1, 1, a_n)
-        node_p = (np.bincount(flat, weights=lv["weight"] * q_p, minlength=size) / mass).reshape(
-            -1, a_n)
         best = plan.choose(node_s, node_c)[:, 0]
         rows = np.arange(len(best))
-        value_s, value_c, value_p = node_s[rows, best], node_c[rows, 0, best], node_p[rows, best]
-    first = levels[0]
-    return int(best[0]), float(value_p[0]), first["out"], first["hit"]
+        value_s, value_c = node_s[rows, best], node_c[rows, 0, best]
+    return int(best[0])
 
 
 def rollout(simulate: Simulate, plan: ReachPlan, point: np.ndarray, heading: np.ndarray,

@@ -26,9 +26,10 @@ cell model:
   (`baselines.navigation.lookahead`).
 
 It reads only its observation (the clock) in `act`, never ``info``. ``predicted_success`` is
-the probability of reaching the goal that it computes at its first decision: exact after a
-search; with rollouts the look-ahead's value within ``reach`` bumps; without them the GCM's
-value of following its receding horizon for the whole episode (`ReachPlan.follow`).
+its probability of reaching the goal within the episode, computed at its first decision: exact
+after a search; otherwise the GCM's value, from the belief, of deciding at every bump by a
+receding horizon of ``reach`` bumps for the whole episode (`ReachPlan.follow`) — the look-ahead's
+own value covers only ``reach`` bumps.
 
 Without rotation noise a relative bounce adds whole bins to the heading, so the heading modulo
 the bin width stays that of the start; the model is then sampled at exactly those headings
@@ -181,8 +182,8 @@ class SampledNavigationPlanner(Policy):
     def _followed(self) -> float:
         """The model's success of this planner over the steps left, from the belief: each
         particle's state under the policy that takes, at every bump, the angle best within
-        `reach` bumps (`ReachPlan.follow`); QMDP acts on the belief rather than on one state,
-        so this is the prediction of a concentrated belief."""
+        `reach` bumps on the GCM (`ReachPlan.follow`) — the planner's decisions on a belief
+        concentrated in one state."""
         value = self.plan.follow(self.reach, self.steps_total - self.steps)
         last = self.plan.n_actions if self.last is None else self.last
         inside = self.state >= 0
@@ -227,14 +228,12 @@ class SampledNavigationPlanner(Policy):
         searched = self._searched()
         if searched is None:
             steps_left = min(self.steps_total - self.steps, self.reach)
-            best, success, _, _ = lookahead(self.simulate, self.plan, *self._draw(self.particles),
-                                            self.depth, steps_left, self.last,
-                                            self.reach if self.rollouts else 0)
+            best = lookahead(self.simulate, self.plan, *self._draw(self.particles), self.depth,
+                             steps_left, self.last, self.reach if self.rollouts else 0)
         else:  # the one exact pose: the search's answer is exact
             best, success = searched
         if self.predicted_success is None:
-            self.predicted_success = success if searched is not None or self.rollouts \
-                else self._followed()
+            self.predicted_success = success if searched is not None else self._followed()
         self._predict(best)
         self.steps += 1
         self.last = best
