@@ -6,8 +6,8 @@ Planners (``planner_kwargs``, all optional): ``models`` lists which of `PLANNER_
 ``roadmap``, the papers' plan on the env's cell model run open loop (row "roadmap planner"), and
 ``sampled``, `SampledNavigationPlanner` closed loop on its particle belief (row "sampled-gcm");
 default ``[roadmap]``. The sampled planner's options `SAMPLED_OPTIONS` (``samples``, ``seed``,
-``particles``, ``depth``, ``reach``, ``cell_size``, ``rollouts``) are passed to it; its horizon is
-the experiment's ``max_steps``.
+``particles``, ``draws``, ``depth``, ``reach``, ``cell_size``, ``rollouts``) are passed to it; its
+horizon is the experiment's ``max_steps``.
 
 Per episode:
 
@@ -43,7 +43,8 @@ from experiments.families.base import Episode, SingleRobotFamily
 #: the planners ``planner_kwargs.models`` may name
 PLANNER_MODELS = ("roadmap", "sampled")
 #: the options of the sampled planner ``planner_kwargs`` may set
-SAMPLED_OPTIONS = ("samples", "seed", "particles", "depth", "reach", "cell_size", "rollouts")
+SAMPLED_OPTIONS = ("samples", "seed", "particles", "draws", "depth", "reach", "cell_size",
+                   "rollouts")
 #: the least value of the sampled planner's counts (the others: 1)
 MINIMUM = {"samples": 2, "seed": 0}
 #: the sampled planner's row
