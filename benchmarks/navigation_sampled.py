@@ -62,6 +62,7 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--reach", type=int, default=30)
     parser.add_argument("--cell-size", type=float, default=0.25)
     parser.add_argument("--particles", type=int, default=32)
+    parser.add_argument("--draws", type=int, default=512)
     parser.add_argument("--no-rollouts", action="store_true",
                         help="value the look-ahead's leaves by the model (QMDP with --depth 1)")
     parser.add_argument("--noise", action="store_true",
@@ -74,7 +75,7 @@ def main(argv: list[str] | None = None) -> dict:
     env = gym.make(ENV_ID, backend=args.backend, **extra, **KWARGS)
     roadmap_planner, planner = NavigationPlanner(), SampledNavigationPlanner(
         samples=args.samples, depth=args.depth, reach=args.reach, cell_size=args.cell_size,
-        particles=args.particles, rollouts=not args.no_rollouts)
+        particles=args.particles, draws=args.draws, rollouts=not args.no_rollouts)
     t0 = time.perf_counter()
     env.reset(seed=0)
     env.unwrapped.cell_model(kind="sampled", samples=args.samples, seed=0, cache=False,
