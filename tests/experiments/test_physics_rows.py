@@ -25,8 +25,9 @@ DYNAMIC = {"backend": "pymunk", "physics": "dynamic"}
 #: what may differ between a row and its dynamic sibling: the motion model, the cell model's
 #: diagonal rule (cell rows) and the disk radius (point robots exist only on the exact models)
 MODEL_KEYS = {"backend", "physics", "corner_rule", "robot_radius"}
-#: the sampled planner's rows (issue 24): kinematic without noise
-SAMPLED_ROWS = ("navigation-lab-sampled-kinematic",)
+#: the sampled planner's rows (issue 24): kinematic without noise, kinematic and dynamic with
+SAMPLED_ROWS = ("navigation-lab-sampled-kinematic", "navigation-lab-sampled-noise-kinematic",
+                "navigation-lab-sampled-noise-pymunk-dynamic")
 #: the sampled planner's options in the quick runs: a coarse model of few samples, a short
 #: look-ahead
 TINY = {"samples": 2, "cell_size": 1.0, "depth": 1, "reach": 3}
@@ -73,8 +74,8 @@ def test_every_dynamic_row_has_a_kinematic_or_cell_sibling(name):
 def test_the_physics_comparison_has_every_backend_per_task():
     experiments = _experiments("eval_physics.yaml")
     assert [e["name"] for e in experiments if _sampled(e)] == list(SAMPLED_ROWS)
-    (kinematic,) = (e for e in experiments if _sampled(e))
-    assert "noise" not in kinematic["env_kwargs"]
+    noisy = {e["name"]: "noise" in e["env_kwargs"] for e in experiments if _sampled(e)}
+    assert noisy == {name: "noise" in name for name in SAMPLED_ROWS}
     names = {e["name"] for e in experiments if not _sampled(e)}
     stems = {n.rsplit("-", 1)[0].removesuffix("-pymunk") for n in names}
     for stem in stems:
