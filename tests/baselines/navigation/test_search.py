@@ -50,6 +50,21 @@ def test_limits_and_exhaustion_are_told_apart():
     assert not too_small.found and not too_small.exhausted
 
 
+def _episode(cell, env, planner, seed: int) -> bool:
+    """One episode of ``env`` with start and goal drawn as on the ``cell`` env (cell centres,
+    bin headings), the planner handed no ``info``: whether it reached the goal."""
+    cell.reset(seed=seed)
+    task = cell.unwrapped.task
+    options = {k: {"position": pose[0][0].tolist(), "heading": float(pose[1][0])}
+               for k, pose in (("start", task.start), ("goal", task.goal))}
+    obs, info = env.reset(seed=seed, options=options)
+    planner.reset(env)
+    while True:
+        obs, _, terminated, truncated, info = env.step(planner.act(obs, {}))
+        if terminated or truncated:
+            return bool(info["is_success"])
+
+
 @pytest.mark.parametrize("seed", range(10_000, 10_006))
 def test_predictions_are_exact_in_a_deterministic_world(seed):
     """Without noise the belief is one exact pose and the search decides: the planner predicts
@@ -57,20 +72,11 @@ def test_predictions_are_exact_in_a_deterministic_world(seed):
     are drawn as on the cell backend (cell centres, bin headings), where the poses reachable
     at bumps are few enough for the search to expand all of them."""
     cell = gym.make(ENV_ID, backend="cell", **KWARGS)
-    cell.reset(seed=seed)
-    task = cell.unwrapped.task
-    options = {k: {"position": pose[0][0].tolist(), "heading": float(pose[1][0])}
-               for k, pose in (("start", task.start), ("goal", task.goal))}
     env = gym.make(ENV_ID, backend="kinematic", **KWARGS)
     planner = SampledNavigationPlanner(samples=4, cell_size=0.5, depth=1, reach=3, cache=False)
-    obs, info = env.reset(seed=seed, options=options)
-    planner.reset(env)
-    while True:
-        obs, _, terminated, truncated, info = env.step(planner.act(obs, {}))
-        if terminated or truncated:
-            break
+    success = _episode(cell, env, planner, seed)
     assert planner.predicted_success in (0.0, 1.0)
-    assert info["is_success"] == (planner.predicted_success == 1.0)
+    assert success == (planner.predicted_success == 1.0)
 
 
 @pytest.mark.parametrize("map_seed", [1, 2])
@@ -88,18 +94,8 @@ def test_predicted_equals_measured_on_generated_maps(map_seed):
     planner = SampledNavigationPlanner(samples=4, cell_size=0.5, depth=1, reach=3, cache=False)
     predicted, measured = [], []
     for seed in range(10_000, 10_010):
-        cell.reset(seed=seed)
-        task = cell.unwrapped.task
-        options = {k: {"position": pose[0][0].tolist(), "heading": float(pose[1][0])}
-                   for k, pose in (("start", task.start), ("goal", task.goal))}
-        obs, info = env.reset(seed=seed, options=options)
-        planner.reset(env)
-        while True:
-            obs, _, terminated, truncated, info = env.step(planner.act(obs, {}))
-            if terminated or truncated:
-                break
+        measured.append(_episode(cell, env, planner, seed))
         predicted.append(planner.predicted_success)
-        measured.append(bool(info["is_success"]))
     assert predicted == [float(m) for m in measured]
     low, high = wilson_interval(sum(measured), len(measured))
     assert low <= np.mean(predicted) <= high
