@@ -15,13 +15,15 @@ are the few bump poses where a robot braked off its contact (sliding past a corn
 to rest clear of it. The poses are then redrawn
 from where the robots arrived (`ROUNDS`).
 
-`first_bumps` simulates the drive of a bounce-mode reset from a known start pose the same way:
-the initial distribution of the decision state.
+`reset_drives` simulates the drive of a bounce-mode reset from start poses in the free space the
+same way (`first_bumps`: from one known start pose, the initial distribution of the decision
+state).
 """
 
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 
@@ -49,6 +51,12 @@ EXPLORE = 0.0
 #: space steps at every event of every robot in it, so the work per robot grows with the
 #: batch; robots ignore each other, so a batch changes no sample point's physics
 BATCH = 8
+
+
+def default_max_ticks(dynamics: dict) -> int:
+    """The default bound on a simulated drive: four drives across the world's diameter."""
+    step = dynamics.get("step_length", 1.0)
+    return 4 * (math.ceil(dynamics["world"].diameter / step) + 1)
 
 
 def bump_cells(model: CellModel, sections: BumpSections | None,
@@ -95,7 +103,7 @@ def sample_outcomes(model: CellModel, angles: np.ndarray, samples: int,
     centre, start_heading = _step_grid_starts(model, dynamics.get("step_length", 1.0))
     start_heading = start_heading + (offset if offset is not None else rng.uniform(
         -0.5 * model.bin_width, 0.5 * model.bin_width, len(start_heading)))
-    pool = _reset_drives(model, dynamics, centre, start_heading, rng, max_ticks)[:3]
+    pool = reset_drives(model, dynamics, centre, start_heading, rng, max_ticks)[:3]
     for _ in range(rounds + 1):
         pool_state, pool_end, pool_heading = pool
         # the states of positive measure, and those robots arrived in (a corner's vertex)
@@ -164,7 +172,7 @@ def _simulator(dynamics: dict, n: int) -> BounceDynamics:
     return BounceDynamics(params.pop("world"), n, robot_collisions="ignore", **params)
 
 
-def _reset_drives(model: CellModel, dynamics: dict, point: np.ndarray, heading: np.ndarray,
+def reset_drives(model: CellModel, dynamics: dict, point: np.ndarray, heading: np.ndarray,
                   rng: np.random.Generator, max_ticks: int
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Robots placed at poses in the free space drive straight to their first contact, as a
@@ -265,4 +273,4 @@ def first_bumps(model: CellModel, position: np.ndarray, heading: float, n: int,
     """The decision states, contact points, headings and clocks of ``n`` simulated robots
     after the drive of a bounce-mode reset from the pose (``position``, ``heading``)."""
     point = np.repeat(np.asarray(position, dtype=np.float64).reshape(1, 2), n, axis=0)
-    return _reset_drives(model, dynamics, point, np.full(n, float(heading)), rng, max_ticks)
+    return reset_drives(model, dynamics, point, np.full(n, float(heading)), rng, max_ticks)

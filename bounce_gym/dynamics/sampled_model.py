@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,6 +32,7 @@ from bounce_gym.cells.outcomes import BumpOutcomes
 from bounce_gym.dynamics.bump_sampler import (
     EXPLORE,
     ROUNDS,
+    default_max_ticks,
     first_bumps,
     sample_outcomes,
     simulate_bumps,
@@ -124,9 +124,8 @@ def sampled_model(model: CellModel, dynamics: dict, angles: np.ndarray,
         raise ConfigError(f"samples: expected an integer >= 2, got {samples!r}")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ConfigError(f"seed: expected an integer >= 0, got {seed!r}")
-    world = dynamics["world"]
     if max_ticks is None:
-        max_ticks = 4 * (math.ceil(world.diameter / dynamics.get("step_length", 1.0)) + 1)
+        max_ticks = default_max_ticks(dynamics)
     key = fingerprint(model, dynamics, angles, samples, seed, offset, max_ticks)
     path = None
     if cache is not False:

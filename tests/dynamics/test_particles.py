@@ -44,7 +44,7 @@ def test_the_particles_concentrate_on_the_true_pose(noise, seeds):
         belief, state, truth = track("lab_localization_a", seed, 40, noise)
         assert belief.most_likely == truth
         assert belief.max_mass >= 0.8  # from about 0.03 for the prior
-        distance = np.hypot(*(belief.sim.state.position - state.position[0]).T)
+        distance = np.hypot(*(belief.position - state.position[0]).T)
         assert np.median(distance) < 0.3
 
 
@@ -52,7 +52,7 @@ def test_the_belief_is_deterministic_given_its_generator():
     one, _, _ = track("lab_localization_a", 7, 10, particles=500)
     two, _, _ = track("lab_localization_a", 7, 10, particles=500)
     np.testing.assert_array_equal(one.states, two.states)
-    np.testing.assert_array_equal(one.sim.state.position, two.sim.state.position)
+    np.testing.assert_array_equal(one.position, two.position)
 
 
 def test_the_mass_sums_to_one_and_an_impossible_clock_restarts_the_belief():

@@ -67,8 +67,9 @@ class LocalizationTask(Task):
     claims its most likely state once that state's mass reaches ``claim_threshold``; ``info``
     then also carries ``claim``, and always ``belief_mass`` (the largest mass). Its reward is
     the drop in the belief's entropy (bits) minus ``tick_cost`` per tick until the claim.
-    The particle filter (`ParticleClaims`, `bounce_gym.dynamics.particles`, kinematic backend,
-    bounce steps and discrete actions) starts from the global prior conditioned on the clock of
+    The particle filter (`ParticleClaims`, `bounce_gym.dynamics.particles`, backends with
+    continuous headings — kinematic, pymunk ideal or dynamic physics —, bounce steps and
+    discrete actions) starts from the global prior conditioned on the clock of
     the reset's drive, is updated with the angle commanded and the clock at each bump, and
     claims, with the same rule and ``info``, the decision state holding at least
     ``claim_threshold`` of its particles. Its generator is spawned from the env's
