@@ -40,7 +40,7 @@ from bounce_gym.dynamics.bump_sampler import (
 from bounce_gym.errors import ConfigError
 
 #: the version of the stored layout and of the construction; a change invalidates old files
-FORMAT = 5
+FORMAT = 6
 #: default sample points per decision state and angle
 DEFAULT_SAMPLES = 200
 

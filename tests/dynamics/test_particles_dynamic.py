@@ -97,9 +97,6 @@ def test_the_localization_task_builds_with_particles_on_dynamic_physics():
     assert 0.0 < info["belief_mass"] <= 1.0 and info["candidates"] >= 1
 
 
-@pytest.mark.xfail(strict=True, reason="known seam mismatch (issue 24): the robot's 4th bump "
-                   "pose rests 1.2e-5 m clear of the wall with its contact latched; placed again "
-                   "it reads as no contact, and `simulate_bumps` gives it no outcome (clock 0)")
 def test_a_placed_bump_pose_continues_as_the_robot_on_the_lab_map():
     """The particle motion model is exact only if a robot re-placed at its bump pose continues
     as the robot does; on lab_localization_a, noise-free, the 4th bump of this robot differs."""

@@ -102,7 +102,7 @@ overlap measured over the adversarial suite's crowds is 2.7e-3 radii (0.5 mm on 
 three orders of magnitude short of a passage.
 
 **Starts.** A robot is placed at rest. One placed with a wall (or, when robots collide, a
-robot) within the contact tolerance in its bumper arc reads its bumper as at a tick boundary and
+robot) within ``TRAVEL`` radii in its bumper arc reads its bumper as at a tick boundary and
 starts blocked, the most frontal such contact latched — as the ideal backends read a contact
 ahead at reset. A robot rests in its contacts up to ``TOUCH`` × ``DEPTH`` deep (the solver
 corrects no overlap, so the overlap is part of the state), and a start may overlap walls and
@@ -143,6 +143,12 @@ DEPTH = 2e-7
 #: a contact by at most 1 % of that. The solver stops every approach, so only kicks of the
 #: motors and the residuals of a stack of contacts ever approach a touched wall or robot.
 TOUCH = 50.0
+#: A robot placed at rest reads its bumper pressed by a wall (or robot) this many radii away in
+#: its bumper arc (8.5 mm on a Create 2, about a bumper's travel): a robot that glanced off a
+#: wall corner and braked may stop a little clear of the contact it latched (measured up to
+#: 7.9 mm in the tests' room with a pillar), and placed again at that pose it must read the
+#: same contact, or a particle at the true pose would find no next bump.
+TRAVEL = 0.05
 #: A robot touching something moves at most this many radii per step.
 CONTACT_REACH = 0.5
 #: Speeds below this fraction of the cruise speed (turn rates below this fraction of
@@ -290,12 +296,13 @@ class DynamicBackend(MotionBackend):
 
     def _start_contacts(self, state: RobotState) -> list[tuple[int, tuple[int, int, float, float]]]:
         """The robots placed with their bumper pressed — a wall or (when robots collide) a robot
-        within the contact tolerance in the bumper arc — and the most frontal such contact of
+        within ``TRAVEL`` radii in the bumper arc — and the most frontal such contact of
         each, as a latch: what a robot at rest reads at a tick boundary, from the geometry
         (the engine has not stepped yet)."""
         pos, heading = state.position, state.heading
         direction = np.column_stack((np.cos(heading), np.sin(heading)))
-        reach = self.radius + self.contact_tol
+        travel = max(self.contact_tol, TRAVEL * self.radius)
+        reach = self.radius + travel
         best = np.full(len(pos), self.cos_arc)
         latch: dict[int, tuple[int, int, float, float]] = {}
         start, vec = self.world.edge_start, self.world.edge_end - self.world.edge_start
@@ -318,10 +325,10 @@ class DynamicBackend(MotionBackend):
                 best[i] = front[j]
                 latch[i] = (WALL, int(k[j]), float(n[0]), float(n[1]))
         if self.collide:
-            for i, j in zip(*close_pairs(pos, 2 * self.radius + self.contact_tol), strict=True):
+            for i, j in zip(*close_pairs(pos, 2 * self.radius + travel), strict=True):
                 gap = pos[j] - pos[i]
                 dist = float(np.hypot(*gap))
-                if dist > 2 * self.radius + self.contact_tol or dist == 0.0:
+                if dist > 2 * self.radius + travel or dist == 0.0:
                     continue
                 for a, b, sign in ((int(i), int(j), 1.0), (int(j), int(i), -1.0)):
                     front = sign * float(gap @ direction[a]) / dist
