@@ -35,8 +35,11 @@ def test_the_docs_give_the_noise_free_noisy_and_dynamic_commands():
     assert any("--physics dynamic" in c and "--noise" in c for c in commands)
 
 
-@pytest.mark.parametrize("command", _documented())
+@pytest.mark.parametrize("command", [
+    pytest.param(c, marks=pytest.mark.slow) if "pymunk" in c else c for c in _documented()])
 def test_documented_command_runs(command, capsys):
+    """(The dynamic-physics command builds its model on pymunk: about half a minute, so it runs
+    with the slow tests.)"""
     argv = shlex.split(command.removeprefix(PROGRAM)) + BUDGET
     out = navigation_sampled.main(argv)
     assert len(out["sampled"]) == 2 and len(out["roadmap"]) == 2
