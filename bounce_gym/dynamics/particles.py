@@ -146,23 +146,26 @@ class ParticleBelief:
 
     def _prior(self, clock: int | None, n: int) -> tuple[np.ndarray, ...]:
         """``n`` uniform start poses driven to their first contact, where the drive reads
-        ``clock`` (None: any): start points and headings, bump points, headings and states."""
+        ``clock`` (None: any) — or, if no drawn pose reads it, the nearest clock any does:
+        start points and headings, bump points, headings and states."""
         kept: list[tuple[np.ndarray, ...]] = []
         have = 0
         for _ in range(_PRIOR_TRIES):
             state = self._simulator(_PRIOR_BATCH * n).reset(self.rng)
             z, point, heading, ticks = self._drives(state.position, state.heading)
             keep = z >= 0
-            if clock is not None:
-                keep &= self._read(ticks) == self._read(clock)
             kept.append((state.position[keep], state.heading[keep], point[keep], heading[keep],
-                         z[keep]))
-            have += int(keep.sum())
+                         z[keep], self._read(ticks[keep])))
+            have += int(keep.sum()) if clock is None \
+                else int((kept[-1][-1] == self._read(clock)).sum())
             if have >= n:
                 break
-        if have == 0:
-            raise ConfigError(f"particle belief: no start pose drives {clock} ticks to a contact")
-        poses = [np.concatenate(part) for part in zip(*kept, strict=True)]
+        *poses, ticks = [np.concatenate(part) for part in zip(*kept, strict=True)]
+        if len(ticks) == 0:
+            raise ConfigError("particle belief: no start pose drives to a contact")
+        if clock is not None:
+            gap = np.abs(ticks - self._read(clock))
+            poses = [part[gap == gap.min()] for part in poses]
         pick = self.rng.choice(len(poses[0]), n, replace=len(poses[0]) < n)
         return tuple(part[pick] for part in poses)
 

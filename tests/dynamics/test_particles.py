@@ -69,3 +69,14 @@ def test_backends_without_continuous_independent_drives_are_refused():
     world = get("lab_localization_a")
     with pytest.raises(ConfigError, match="not supported"):
         ParticleBelief(CellModel(world, 1.0, 8, 0.0), {"world": world, "backend": "cell"}, 10)
+
+
+def test_a_reset_clock_no_prior_pose_reads_keeps_the_nearest_clock():
+    """A clock after reset that no drawn start pose reproduces gives the prior of the nearest
+    clock that any does (here the longest drive in the world), not an error."""
+    world = get("lab_localization_a")
+    model = CellModel(world, 1.0, 8, 0.0)
+    belief = ParticleBelief(model, {"world": world, "backend": "kinematic"}, 200)
+    belief.reset(np.random.default_rng(0), 10_000)
+    assert len(belief.states) == 200 and (belief.states >= 0).all()
+    assert belief.max_mass > 0
