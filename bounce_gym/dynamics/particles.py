@@ -149,23 +149,25 @@ class ParticleBelief:
         ``clock`` (None: any) — or, if no drawn pose reads it, the nearest clock any does:
         start points and headings, bump points, headings and states."""
         kept: list[tuple[np.ndarray, ...]] = []
-        have = 0
+        best = np.inf  # the least clock gap of the poses kept so far
         for _ in range(_PRIOR_TRIES):
             state = self._simulator(_PRIOR_BATCH * n).reset(self.rng)
             z, point, heading, ticks = self._drives(state.position, state.heading)
-            keep = z >= 0
-            kept.append((state.position[keep], state.heading[keep], point[keep], heading[keep],
-                         z[keep], self._read(ticks[keep])))
-            have += int(keep.sum()) if clock is None \
-                else int((kept[-1][-1] == self._read(clock)).sum())
-            if have >= n:
+            gap = np.zeros(len(z)) if clock is None \
+                else np.abs(self._read(ticks) - self._read(clock)).astype(np.float64)
+            gap[z < 0] = np.inf
+            least = gap.min(initial=np.inf)
+            if least < best:  # only the nearest clock is kept: memory stays bounded
+                kept, best = [], least
+            if least == best and np.isfinite(least):
+                keep = gap == least
+                kept.append((state.position[keep], state.heading[keep], point[keep],
+                             heading[keep], z[keep]))
+            if best == 0 and sum(len(part[-1]) for part in kept) >= n:
                 break
-        *poses, ticks = [np.concatenate(part) for part in zip(*kept, strict=True)]
-        if len(ticks) == 0:
+        if not kept:
             raise ConfigError("particle belief: no start pose drives to a contact")
-        if clock is not None:
-            gap = np.abs(ticks - self._read(clock))
-            poses = [part[gap == gap.min()] for part in poses]
+        poses = [np.concatenate(part) for part in zip(*kept, strict=True)]
         pick = self.rng.choice(len(poses[0]), n, replace=len(poses[0]) < n)
         return tuple(part[pick] for part in poses)
 
