@@ -30,10 +30,10 @@ from collections.abc import Iterator
 
 from baselines.rl.model_files import DATA_ENTRY, METADATA_ENTRY, ZIP_ERRORS, ModelFile
 from baselines.rl.train_config import (
-    POLICIES,
     algo_class,
     algo_kwargs,
     check_hyperparams,
+    policy_name,
     validate_train_config,
 )
 from baselines.rl.wrappers import Feed
@@ -65,6 +65,10 @@ def load_model_file(trained: ModelFile, observation_space, action_space, **load_
     _check_spaces(trained, saved)
     _check_weights(trained, weights)
     custom_objects = _custom_objects(trained, template, saved)
+    if load_kwargs.get("env") is None and "replay_buffer_class" in custom_objects:
+        # hindsight relabelling needs the env it relabels with; a model loaded to act has none
+        # and fills no buffer, so it gets SB3's plain one
+        custom_objects.update(replay_buffer_class=None, replay_buffer_kwargs={})
     try:
         with _torch_quiet():
             return type(template).load(io.BytesIO(trained.data), device="cpu",
@@ -104,7 +108,7 @@ def _template(trained: ModelFile, observation_space, action_space):
         with warnings.catch_warnings():  # e.g. a mini-batch that does not divide one env's steps
             warnings.simplefilter("ignore")
             return algo_class(trained.algo)(
-                POLICIES[trained.algo], env, seed=config["seeds"][0], device="cpu", verbose=0,
+                policy_name(trained.algo, observation_space), env, seed=config["seeds"][0], device="cpu", verbose=0,
                 **algo_kwargs(config["hyperparams"]))
     except (AssertionError, TypeError, ValueError, KeyError) as exc:
         raise ConfigError(f"model {trained.path}: no {trained.algo} model for observations "

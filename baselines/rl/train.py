@@ -92,10 +92,10 @@ import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.model_files import read_model, run_name, save_model
 from baselines.rl.monitor import SUFFIX
 from baselines.rl.train_config import (
-    POLICIES,
     algo_class,
     algo_kwargs,
     check_hyperparams,
+    policy_name,
     validate_train_config,
 )
 from baselines.rl.train_env import attach_monitor_file, make_train_env
@@ -292,7 +292,7 @@ def _fresh(run: Run, env, log):
     kwargs = algo_kwargs(config["hyperparams"])
     try:
         model = algo_class(config["algo"])(
-            POLICIES[config["algo"]], env, seed=run.seed, device="cpu", verbose=0,
+            policy_name(config["algo"], env.observation_space), env, seed=run.seed, device="cpu", verbose=0,
             tensorboard_log=_log_dir(run), **kwargs)
     except (AssertionError, TypeError, ValueError) as exc:  # SB3's checks of the values
         raise ConfigError(f"config.hyperparams: {exc}") from None

@@ -63,8 +63,16 @@ from bounce_gym.validate import integer, number
 
 MULTI_ALGOS = ("ppo",)
 VEC_ENVS = ("native", "sync", "subproc")
-#: The SB3 policy each algorithm trains (a hyperparameter file's ``policy`` must say the same).
+#: The SB3 policy each algorithm trains on a flat observation, and on a ``Dict`` one (the
+#: goal-conditioned envs); a hyperparameter file's ``policy`` must be one of the two.
 POLICIES = {"ppo": "MlpPolicy", "dqn": "MlpPolicy", "recurrentppo": "MlpLstmPolicy"}
+DICT_POLICIES = {"ppo": "MultiInputPolicy", "dqn": "MultiInputPolicy",
+                 "recurrentppo": "MultiInputLstmPolicy"}
+#: ``replay_buffer_class`` names a hyperparameter may give (off-policy algorithms), and the
+#: ``replay_buffer_kwargs`` each takes with their checks: (kind, least, most) or the choices.
+REPLAY_BUFFERS = {"HerReplayBuffer": {"n_sampled_goal": (int, 1, 64),
+                                      "goal_selection_strategy": ("future", "final", "episode"),
+                                      "copy_info_dict": (bool,)}}
 #: Hyperparameters that may be ``lin_<x>`` (linear decay from x to 0 over the run).
 SCHEDULED = ("learning_rate", "clip_range", "clip_range_vf")
 #: ``policy_kwargs.activation_fn`` names and the torch.nn classes they stand for.
@@ -199,7 +207,45 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
         raise ConfigError(f"config.hyperparams.n_steps: n_steps x n_envs is a rollout of "
                           f"{rollout} transitions; at most {MAX_ROLLOUT} are allowed")
     _check_policy_kwargs(config["hyperparams"])
+    _check_replay_buffer(config["hyperparams"])
     return config
+
+
+def policy_name(algo: str, observation_space) -> str:
+    """The SB3 policy ``algo`` trains on ``observation_space`` (`POLICIES`, `DICT_POLICIES`)."""
+    return (DICT_POLICIES if isinstance(observation_space, gym.spaces.Dict) else POLICIES)[algo]
+
+
+def _check_replay_buffer(hyperparams: dict) -> None:
+    """``replay_buffer_class`` is a name of `REPLAY_BUFFERS`; ``replay_buffer_kwargs`` only
+    with it, each key of its table in range."""
+    field = "config.hyperparams"
+    name = hyperparams.get("replay_buffer_class")
+    kwargs = hyperparams.get("replay_buffer_kwargs")
+    if name is None:
+        if kwargs is not None:
+            raise ConfigError(f"{field}.replay_buffer_kwargs: only with replay_buffer_class")
+        return
+    if name not in REPLAY_BUFFERS:
+        raise ConfigError(f"{field}.replay_buffer_class: expected one of "
+                          f"{sorted(REPLAY_BUFFERS)}, got {name!r}")
+    if kwargs is None:
+        return
+    if not isinstance(kwargs, dict):
+        raise ConfigError(f"{field}.replay_buffer_kwargs: expected a mapping, got {kwargs!r}")
+    table = REPLAY_BUFFERS[name]
+    for key, value in kwargs.items():
+        check = table.get(key)
+        where = f"{field}.replay_buffer_kwargs.{key}"
+        if check is None:
+            raise ConfigError(f"{where}: not an argument of {name}; allowed are {sorted(table)}")
+        if check[0] is int:
+            integer(where, value, check[1], check[2])
+        elif check[0] is bool:
+            if not isinstance(value, bool):
+                raise ConfigError(f"{where}: expected true or false, got {value!r}")
+        elif value not in check:
+            raise ConfigError(f"{where}: expected one of {list(check)}, got {value!r}")
 
 
 def is_multi(config: Mapping) -> bool:
@@ -385,9 +431,10 @@ def _merge_file(config: dict, folder: Path | None) -> None:
         raise ConfigError(f"{field}: the entry {key} of {path} is not a mapping")
     entry = dict(entry)
     policy = entry.pop("policy", POLICIES[config["algo"]])
-    if policy != POLICIES[config["algo"]]:
+    if policy not in (POLICIES[config["algo"]], DICT_POLICIES[config["algo"]]):
         raise ConfigError(f"{field}: {key} names policy {policy!r}, but "
-                          f"{config['algo']} trains {POLICIES[config['algo']]!r}")
+                          f"{config['algo']} trains {POLICIES[config['algo']]!r} (or "
+                          f"{DICT_POLICIES[config['algo']]!r} on a Dict observation)")
     timesteps = entry.get("n_timesteps")
     if isinstance(timesteps, float) and timesteps.is_integer():  # rl-zoo writes !!float 1e5
         entry["n_timesteps"] = int(timesteps)
@@ -427,7 +474,8 @@ def check_hyperparams(algo_class, hyperparams: Mapping) -> None:
 
 def algo_kwargs(hyperparams: Mapping) -> dict:
     """The SB3 keyword arguments of the validated ``hyperparams``: ``lin_<x>`` becomes a linear
-    schedule, ``policy_kwargs.activation_fn`` the torch.nn class it names."""
+    schedule, ``policy_kwargs.activation_fn`` and ``replay_buffer_class`` the classes they
+    name."""
     from stable_baselines3.common.utils import LinearSchedule
     from torch import nn
 
@@ -439,4 +487,8 @@ def algo_kwargs(hyperparams: Mapping) -> dict:
     policy_kwargs = kwargs.get("policy_kwargs")
     if policy_kwargs and "activation_fn" in policy_kwargs:
         policy_kwargs["activation_fn"] = getattr(nn, ACTIVATIONS[policy_kwargs["activation_fn"]])
+    if "replay_buffer_class" in kwargs:
+        import stable_baselines3
+
+        kwargs["replay_buffer_class"] = getattr(stable_baselines3, kwargs["replay_buffer_class"])
     return kwargs

@@ -56,13 +56,19 @@ class Feed(VecEnv):
         self.observation = None
 
     def reset(self):
-        return self.observation[None]
+        return self._batch()
 
     def step_async(self, actions) -> None:
         pass
 
     def step_wait(self):
-        return self.observation[None], np.zeros(1, np.float32), np.zeros(1, bool), [{}]
+        return self._batch(), np.zeros(1, np.float32), np.zeros(1, bool), [{}]
+
+    def _batch(self):
+        """The observation as a batch of one (a dict of batches for a ``Dict`` space)."""
+        if isinstance(self.observation, Mapping):
+            return {key: np.asarray(value)[None] for key, value in self.observation.items()}
+        return np.asarray(self.observation)[None]
 
     def close(self) -> None:
         pass
@@ -102,12 +108,12 @@ class ObservationPipeline:
         self.observation_space = venv.observation_space
         self._action = np.zeros((1, *(action_space.shape or ())), dtype=action_space.dtype)
 
-    def first(self, observation) -> np.ndarray:
-        self.feed.observation = np.asarray(observation)
+    def first(self, observation) -> np.ndarray | dict:
+        self.feed.observation = observation
         return self.venv.reset()
 
-    def next(self, observation) -> np.ndarray:
-        self.feed.observation = np.asarray(observation)
+    def next(self, observation) -> np.ndarray | dict:
+        self.feed.observation = observation
         return self.venv.step(self._action)[0]
 
 

@@ -76,8 +76,11 @@ class BounceEnv(EnvBase, gym.Env):
     * v0: initial release.
     """
 
+    #: the task names this env accepts
+    tasks = SINGLE_ROBOT_TASKS
+
     def __init__(self, render_mode: str | None = None, **options: object) -> None:
-        self._build(options, render_mode, SINGLE_ROBOT_TASKS, fixed=MULTI_ROBOT_ONLY)
+        self._build(options, render_mode, self.tasks, fixed=MULTI_ROBOT_ONLY)
         self.action_space = action_space(self.options.action_type, len(self.options.angles[0]))
         self.observation_space = spaces.Box(self.core.obs_low, self.core.obs_high, dtype=np.float32)
 

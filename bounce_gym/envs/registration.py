@@ -26,6 +26,15 @@ Gymnasium ids (``gym.make(id, **overrides)``):
   ``reward="sparse"`` and the papers' ``reward="plan_cost"`` are options
   (`bounce_gym.envs.tasks.navigation`). ``info["plan_cost"]`` is the papers' w1/w2 cost so far,
   whatever the reward.
+* ``bounce_gym/BounceNavigation-v1`` — lab_navigation, cell backend, task ``goal_navigation``:
+  the navigation of v0 as a goal-conditioned task for learners
+  (`bounce_gym.envs.goal_navigation_env.GoalNavigationEnv`); horizon 42 bounces, three times
+  the longest optimal plan of the map (14 bounces; mean 4.8). Start and goal poses only where
+  the cell model joins them (``info["optimal_bounces"]``: the fewest bounces). Observation: a
+  ``Dict`` of ``observation`` (clock and the one-hot cell pose), ``achieved_goal`` (the poses
+  the step passed) and ``desired_goal`` (the goal pose); reward 1 on reaching the goal, else 0,
+  equal to ``env.compute_reward(achieved_goal, desired_goal, info)`` as SB3's
+  ``HerReplayBuffer`` needs.
 * ``bounce_gym/BounceCoverage-v0`` — lab_fig1, task ``coverage`` (uniform target); horizon
   500 steps. Observation: clock. Reward: newly covered cells plus the decrease of the L2
   distance between the visit histogram and the target; the (undiscounted) return is the final
@@ -77,6 +86,8 @@ GYM_ENVS = {
     "bounce_gym/Bounce-v0": ({"world": "two_rooms", "task": "free"}, 500),
     "bounce_gym/BounceNavigation-v0": (
         {"world": "lab_navigation", "task": "navigation", "history": 4}, 200),
+    "bounce_gym/BounceNavigation-v1": (
+        {"world": "lab_navigation", "task": "goal_navigation", "backend": "cell"}, 42),
     "bounce_gym/BounceCoverage-v0": ({"world": "lab_fig1", "task": "coverage"}, 500),
     "bounce_gym/BounceLocalization-v0": (
         {"world": "lab_localization_a", "task": "localization", "angles": (45.0, 135.0),
@@ -84,6 +95,10 @@ GYM_ENVS = {
          "task_kwargs": {"filter_factory": "combinatorial"}}, 200),
 }
 
+#: Gymnasium ids whose env is not `BounceEnv` itself, and their entry points
+ENTRY_POINTS = {
+    "bounce_gym/BounceNavigation-v1": "bounce_gym.envs.goal_navigation_env:GoalNavigationEnv",
+}
 #: the ids whose envs `BounceVectorEnv` batches (localization's filter is not batched)
 VECTOR_ENTRY_POINT = "bounce_gym.envs.vector_env:BounceVectorEnv"
 VECTOR_IDS = ("bounce_gym/Bounce-v0", "bounce_gym/BounceNavigation-v0",
@@ -136,7 +151,8 @@ def register_envs() -> None:
     """Register every environment id (idempotent)."""
     for env_id, (kwargs, steps) in GYM_ENVS.items():
         if env_id not in gym.registry:
-            gym.register(env_id, entry_point="bounce_gym.envs.bounce_env:BounceEnv",
+            gym.register(env_id, entry_point=ENTRY_POINTS.get(
+                             env_id, "bounce_gym.envs.bounce_env:BounceEnv"),
                          vector_entry_point=VECTOR_ENTRY_POINT if env_id in VECTOR_IDS else None,
                          kwargs=kwargs, max_episode_steps=steps)
     for env_id, (entry_point, steps) in DRIFTER_GYM_ENVS.items():

@@ -20,6 +20,13 @@ from bounce_gym.envs.registration import GYM_ENVS
 from bounce_gym.errors import ActionError, ConfigError
 
 IDS = list(GYM_ENVS)
+#: the goal-conditioned id: discrete actions only, a Dict observation
+GOAL_ID = "bounce_gym/BounceNavigation-v1"
+#: (id, action type) pairs every id takes
+ID_ACTIONS = [(env_id, action) for env_id in IDS for action in ("discrete", "continuous")
+              if not (env_id == GOAL_ID and action == "continuous")]
+#: the ids with a flat observation that starts with what the robot senses
+FLAT_IDS = [env_id for env_id in IDS if env_id != GOAL_ID]
 #: the continuous models: exact (kinematic, pymunk ideal) and physical (pymunk dynamic)
 BACKENDS = [pytest.param({"backend": "kinematic"}, id="kinematic"),
             pytest.param({"backend": "pymunk", "physics": "ideal"}, id="pymunk-ideal"),
@@ -39,7 +46,10 @@ def no_warnings():
         warnings.simplefilter("always")
         messages = []
         yield messages
-    messages.extend(f"{w.category.__name__}: {w.message}" for w in caught)
+    # Gymnasium's own notice on making an id that has a newer version (v0 beside v1) is the
+    # convention for a changed task, not a defect of the env
+    messages.extend(f"{w.category.__name__}: {w.message}" for w in caught
+                    if "is out of date" not in str(w.message))
 
 
 def make(env_id, **kwargs):
@@ -75,9 +85,8 @@ def test_localization_filter_needs_discrete_actions():
 
 
 @pytest.mark.parametrize("step_mode", STEP_MODES)
-@pytest.mark.parametrize("action_type", ACTION_TYPES)
 @pytest.mark.parametrize("backend", BACKENDS)
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize(("env_id", "action_type"), ID_ACTIONS)
 def test_gymnasium_check_env(env_id, backend, action_type, step_mode):
     env = make(env_id, **backend, action_type=action_type, step_mode=step_mode)
     with no_warnings() as rec:
@@ -87,9 +96,8 @@ def test_gymnasium_check_env(env_id, backend, action_type, step_mode):
 
 
 @pytest.mark.parametrize("step_mode", STEP_MODES)
-@pytest.mark.parametrize("action_type", ACTION_TYPES)
 @pytest.mark.parametrize("backend", BACKENDS)
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize(("env_id", "action_type"), ID_ACTIONS)
 def test_passive_env_checker(env_id, backend, action_type, step_mode):
     with no_warnings() as rec:
         env = make(env_id, **backend, action_type=action_type, step_mode=step_mode)
@@ -104,8 +112,7 @@ def test_passive_env_checker(env_id, backend, action_type, step_mode):
 
 
 @pytest.mark.parametrize("step_mode", STEP_MODES)
-@pytest.mark.parametrize("action_type", ACTION_TYPES)
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize(("env_id", "action_type"), ID_ACTIONS)
 def test_sb3_check_env(env_id, action_type, step_mode):
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
@@ -384,7 +391,7 @@ def test_step_before_reset_raises():
 # -- behaviour: sensing -------------------------------------------------------------------------
 
 @pytest.mark.parametrize("backend", BACKENDS)
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("env_id", FLAT_IDS)
 def test_bounce_mode_every_step_ends_in_contact(env_id, backend):
     """Every bounce-mode step ends against a wall — so a lone robot's observation leaves out
     ``contact`` (it would always read 1) and starts with the clock."""

@@ -10,6 +10,8 @@ drives straight, so its path is the segment ``start → end``; tasks integrate o
   (−w1 per tick, −(w2 − w1) per change of bounce angle, a bonus at the goal: the weights of the
   roadmap of Alam, Bobadilla & Shell 2017, Alg. 1, w1 = 1, w2 = 100); ``info["plan_cost"]``
   reports the papers' cost whatever the reward.
+* `GoalNavigationTask` — navigation between poses of the cell model that the model joins, with
+  the sparse reward and the poses each step passes (the goal-conditioned ``-v1`` task).
 * `CoverageTask` — match a target distribution over cells (uniform by default): reward for newly
   covered cells and for reducing the L2 distance between the visit histogram (time spent per cell)
   and the target (thesis §3.4.3, Eq. 3.8's objective; Alam, Bobadilla & Shell 2017, Eq. 5).
@@ -26,6 +28,7 @@ from collections.abc import Mapping
 
 from bounce_gym.envs.tasks.base import FreeTask, StepEvents, Task
 from bounce_gym.envs.tasks.coverage import CoverageTask
+from bounce_gym.envs.tasks.goal_navigation import GoalNavigationTask
 from bounce_gym.envs.tasks.localization import LocalizationTask
 from bounce_gym.envs.tasks.monitoring import MonitoringTask
 from bounce_gym.envs.tasks.navigation import NavigationTask
@@ -34,13 +37,14 @@ from bounce_gym.errors import ConfigError
 TASKS: dict[str, type[Task]] = {
     "free": FreeTask,
     "navigation": NavigationTask,
+    "goal_navigation": GoalNavigationTask,
     "coverage": CoverageTask,
     "localization": LocalizationTask,
     "monitoring": MonitoringTask,
 }
 
-__all__ = ["TASKS", "CoverageTask", "FreeTask", "LocalizationTask", "MonitoringTask",
-           "NavigationTask", "StepEvents", "Task", "make_task"]
+__all__ = ["TASKS", "CoverageTask", "FreeTask", "GoalNavigationTask", "LocalizationTask",
+           "MonitoringTask", "NavigationTask", "StepEvents", "Task", "make_task"]
 
 
 def make_task(task: object, task_kwargs: Mapping | None, allowed: tuple[str, ...]) -> Task:

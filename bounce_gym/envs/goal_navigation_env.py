@@ -1,0 +1,120 @@
+"""`GoalNavigationEnv`: ``bounce_gym/BounceNavigation-v1``, navigation as a goal-conditioned task.
+
+The goal-conditioned convention of Gymnasium-Robotics (its ``GoalEnv``), which Stable-Baselines3's
+``HerReplayBuffer`` relabels with (Andrychowicz et al., "Hindsight Experience Replay", NeurIPS
+2017): a ``Dict`` observation of ``observation``, ``achieved_goal`` and ``desired_goal``, and a
+vectorised ``compute_reward(achieved_goal, desired_goal, info)`` equal to the step's reward.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from gymnasium import spaces
+
+from bounce_gym.envs.bounce_env import BounceEnv
+from bounce_gym.errors import ConfigError
+
+
+class GoalNavigationEnv(BounceEnv):
+    """Reach a goal pose of the cell model; observations and goals as one-hot poses.
+
+    ## Description
+
+    The task of `bounce_gym.envs.tasks.goal_navigation.GoalNavigationTask`: the robot must end
+    a drive against the wall in a goal pose of the env's cell model (a cell and a heading bin)
+    that the model says it can reach — after ``info["optimal_bounces"]`` bounces at the
+    fewest. It is v0's navigation with the changes that let a learner learn it
+    (docs/learning.md): goals where a contact-sensing robot can know it has arrived, only
+    joined start/goal pairs, a horizon a few times the longest optimal plan, the sparse
+    reward, and the goal-conditioned observation below.
+
+    ## Observation Space
+
+    ``Dict`` of three float32 ``Box`` es:
+
+    * ``observation`` — what the v0 robot senses: ``clock`` (ticks since the last bump /
+      max_clock), then the optional ``history`` and ``privileged`` pose;
+    * ``achieved_goal`` — the robot's pose on the cell model after the step: a one-hot of its
+      position cell (``n_positions`` entries) then a one-hot of its heading bin (``n_bins``);
+      zeros where it is outside the model's free cells or its heading is not within tolerance
+      of a bin. On the noise-free cell backend this pose follows from the start pose and the
+      clock readings and angles since (what the roadmap planner tracks), so it tells the
+      robot nothing it could not know; on noisy or continuous worlds it is the true cell, an
+      oracle, and rows that use it there say so ("pose observed");
+    * ``desired_goal`` — the goal pose, encoded the same way.
+
+    ## Rewards
+
+    ``goal_bonus`` (1) on the step that ends in the goal pose, else 0; `compute_reward` gives
+    the same from ``achieved_goal`` and ``desired_goal``.
+
+    ## Starting State
+
+    A pose of the cell model (cell centre, bin heading) from which the goal can be reached;
+    in bounce mode the robot then drives on to its first bump, where the first action turns it.
+
+    ## Episode End
+
+    Terminated on reaching the goal. Truncated by the registered horizon, 42 bounces: three
+    times the longest optimal plan of the lab map (14 bounces; the mean is 4.7).
+
+    ## Arguments
+
+    Those of `BounceEnv`, with ``task_kwargs`` for `GoalNavigationTask` (``draw``,
+    ``heading_tolerance_deg``, ``start``, ``goal``, ``goal_bonus``, ``w1``, ``w2``); the task is always ``goal_navigation``. Discrete actions only (the bounce angle is
+    an index into Φ, whose angles must be whole bins of the cell model).
+
+    ## Version History
+
+    * v1: goal-conditioned navigation (this env). v0 (`BounceEnv` with ``task="navigation"``)
+      is unchanged, for reproducibility.
+    """
+
+    tasks = ("goal_navigation",)
+
+    def __init__(self, render_mode: str | None = None, **options: object) -> None:
+        options.setdefault("task", "goal_navigation")
+        super().__init__(render_mode, **options)
+        if self.options.action_type != "discrete":
+            raise ConfigError("action_type: BounceNavigation-v1 takes discrete actions (an "
+                              "index into the angles)")
+        model = self.task.model
+        self.n_positions, self.n_bins = model.n_positions, model.n_bins
+        size = self.n_positions + self.n_bins
+        self.observation_space = spaces.Dict({
+            "observation": self.observation_space,
+            "achieved_goal": spaces.Box(0.0, 1.0, (size,), dtype=np.float32),
+            "desired_goal": spaces.Box(0.0, 1.0, (size,), dtype=np.float32),
+        })
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        sensed, info = super().reset(seed=seed, options=options)
+        return self._observe(sensed), info
+
+    def step(self, action):
+        sensed, reward, terminated, truncated, info = super().step(action)
+        return self._observe(sensed), reward, terminated, truncated, info
+
+    def compute_reward(self, achieved_goal, desired_goal, info) -> np.ndarray:
+        """The step reward of every (achieved, desired) pair (leading dimensions broadcast):
+        ``goal_bonus`` where they share a position cell and a heading bin, else 0."""
+        achieved = np.asarray(achieved_goal, dtype=np.float32)
+        desired = np.asarray(desired_goal, dtype=np.float32)
+        n = self.n_positions
+        cell = (achieved[..., :n] * desired[..., :n]).sum(axis=-1) > 0
+        heading = (achieved[..., n:] * desired[..., n:]).sum(axis=-1) > 0
+        return np.where(cell & heading, self.task.goal_bonus, 0.0)
+
+    def _observe(self, sensed: np.ndarray) -> dict:
+        task = self.task
+        return {"observation": sensed, "achieved_goal": self._one_hot(task.achieved),
+                "desired_goal": self._one_hot(task.goal_pose)}
+
+    def _one_hot(self, z: int) -> np.ndarray:
+        """A pose as a one-hot of its position cell followed by a one-hot of its bin (zeros
+        for −1)."""
+        out = np.zeros(self.n_positions + self.n_bins, dtype=np.float32)
+        if z >= 0:
+            position, heading = self.task.model.decode(z)
+            out[position] = out[self.n_positions + heading] = 1.0
+        return out
