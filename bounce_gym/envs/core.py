@@ -135,9 +135,7 @@ class BounceCore:
         """
         options = checked_reset_options(options, self.option_keys, strict)
         m = self.options.n_robots
-        poses = self.task.start_poses(rng, options) or pose_option(options, "start", m)
-        position, heading = poses if poses is not None else (None, None)
-        state = self.dynamics.reset(rng, position, heading)
+        state = self.dynamics.reset(rng, *self.draw_start(rng, options))
         if self.options.step_mode == "bounce":
             self.dynamics.drive_to_contact()
         self.history = np.zeros((m, self.options.history, 2), dtype=np.float32)
@@ -145,6 +143,15 @@ class BounceCore:
         self.trails = [deque([p.copy()], maxlen=TRAIL_LENGTH) for p in state.position]
         info = self.task.reset(state, rng, options)
         return self.observation(), self._info(info)
+
+    def draw_start(self, rng: np.random.Generator, options: Mapping
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """The start positions (m, 2) and headings (m,) of an episode with the (checked) reset
+        ``options``, drawn from ``rng`` exactly as `reset` draws them: the task's poses (the
+        task keeps what else it drew, e.g. a goal), else the ``start`` option, else random."""
+        poses = (self.task.start_poses(rng, options)
+                 or pose_option(options, "start", self.options.n_robots))
+        return self.dynamics.draw_poses(rng, *(poses if poses is not None else (None, None)))
 
     def step(self, angles: np.ndarray, turns: np.ndarray | None = None
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
