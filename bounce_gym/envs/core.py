@@ -71,10 +71,11 @@ class BounceCore:
         self._task_steps = type(task).step is not Task.step
         #: whether steps extend the trails (set by an env that renders; only drawings read them)
         self.keep_trails = True
-        # largest (col, row) of the step-length grid of `World.occupancy`: a robot touching the
-        # right or top wall (or a hair outside by rounding) still reports a cell of the grid
         xmin, ymin, xmax, ymax = options.world.bounds
-        self._cell_max = np.array([
+        #: largest (col, row) of the step-length grid of `World.occupancy` that ``info["cell"]``
+        #: reports: a robot touching the right or top wall (or a hair outside by rounding) still
+        #: reports a cell of the grid
+        self.cell_max = np.array([
             max(int(np.ceil((xmax - xmin) / options.step_length - 1e-9)) - 1, 0),
             max(int(np.ceil((ymax - ymin) / options.step_length - 1e-9)) - 1, 0),
         ])
@@ -286,7 +287,7 @@ class BounceCore:
         step = self.options.step_length
         position = state.position[0].copy()
         x, y = position.tolist()
-        col_max, row_max = self._cell_max.tolist()
+        col_max, row_max = self.cell_max.tolist()
         info = {
             "ticks": int(state.ticks),
             "position": position,
@@ -305,7 +306,7 @@ class BounceCore:
         state = self.dynamics.state
         xmin, ymin = self.options.world.bounds[:2]
         cells = np.floor((state.position - (xmin, ymin)) / self.options.step_length).astype(int)
-        cells = np.clip(cells, 0, self._cell_max)
+        cells = np.clip(cells, 0, self.cell_max)
         info = {
             "ticks": int(state.ticks),
             "position": state.position.copy(),

@@ -41,6 +41,8 @@ from bounce_gym.validate import integer
 #: the single-robot tasks this env batches
 VECTOR_TASKS = ("free", "navigation", "coverage")
 #: the fields of a `RobotState` row that a reset writes
+#: every env's rows of an array
+_EVERY = slice(None)
 _STATE_FIELDS = ("position", "heading", "blocked", "clock", "bumps", "contact_edge",
                  "contact_robot", "contact_normal", "odometer")
 
@@ -160,7 +162,7 @@ class BounceVectorEnv(VectorEnv):
         self._elapsed[rows] = 0
         self._history[rows] = 0.0
         self._last_angle[rows] = math.nan
-        return self._infos(infos, rows, self.task.info(state))
+        return self._reset_infos(infos, rows)
 
     def _drive_cells(self, robots: np.ndarray) -> np.ndarray:
         """Cell backend: robots ``robots`` each drive cell to cell until their own next contact,
@@ -295,14 +297,12 @@ class BounceVectorEnv(VectorEnv):
         zero-filled copy) and its mask the shared read-only all-True array.
         """
         state = self.dynamics.state
-        cells = (state.position - self._origin) / self.options.step_length
-        cells = np.floor(cells, out=cells).astype(np.int64)
-        np.minimum(np.maximum(cells, 0, out=cells), self.single.core._cell_max, out=cells)
         values = {"ticks": self._ticks.copy(),
                   "position": state.position.copy() if events is None else events.end,
                   "heading": state.heading.copy() if events is None else events.heading,
-                  "cell": cells[:, ::-1], "clock": state.clock.copy(), "bumps": state.bumps.copy(),
-                  "contact_edge": state.contact_edge.copy(), **task_info}
+                  "cell": self._cells(state.position), "clock": state.clock.copy(),
+                  "bumps": state.bumps.copy(), "contact_edge": state.contact_edge.copy(),
+                  **task_info}
         if step_ticks is not None:
             values["step_ticks"] = step_ticks
         n = self.num_envs
@@ -324,6 +324,35 @@ class BounceVectorEnv(VectorEnv):
             infos[key][chosen] = value[chosen]
             infos[f"_{key}"][chosen] = True
         return infos
+
+    def _reset_infos(self, infos: dict, rows: np.ndarray) -> dict:
+        """Write the reset info of envs ``rows`` into ``infos`` (`_infos`, computed for those
+        rows only)."""
+        state = self.dynamics.state
+        position = state.position[rows]
+        values = {"ticks": self._ticks[rows], "position": position,
+                  "heading": state.heading[rows], "cell": self._cells(position),
+                  "clock": state.clock[rows], "bumps": state.bumps[rows],
+                  "contact_edge": state.contact_edge[rows], **self.task.info(state, rows)}
+        n = self.num_envs
+        for key, value in values.items():
+            if key not in infos:
+                if len(rows) == n:
+                    infos[key] = value  # fresh arrays, in env order
+                    infos[f"_{key}"] = self._all_true
+                    continue
+                infos[key] = np.zeros((n, *value.shape[1:]), dtype=value.dtype)
+                infos[f"_{key}"] = np.zeros(n, dtype=bool)
+            infos[key][rows] = value
+            infos[f"_{key}"][rows] = True
+        return infos
+
+    def _cells(self, position: np.ndarray) -> np.ndarray:
+        """(n, 2) int (row, col) of ``info["cell"]`` at positions ``position`` (n, 2)."""
+        cells = (position - self._origin) / self.options.step_length
+        cells = np.floor(cells, out=cells).astype(np.int64)
+        np.minimum(np.maximum(cells, 0, out=cells), self.single.core.cell_max, out=cells)
+        return cells[:, ::-1]
 
     def close_extras(self, **kwargs) -> None:
         self.single.close()
@@ -371,8 +400,8 @@ class _FreeBatch:
         """Start the episodes of envs ``rows``, whose robots (``state``) were placed and drove
         ``ticks`` to their first contact, as the single-robot task's reset starts one."""
 
-    def info(self, state) -> dict:
-        """Task info of every env, for the robots' ``state``."""
+    def info(self, state, rows: np.ndarray | slice = _EVERY) -> dict:
+        """Task info of envs ``rows`` (default: every env), for the robots' ``state``."""
         return {}
 
     def observation(self) -> np.ndarray | None:
@@ -416,13 +445,14 @@ class _NavigationBatch(_FreeBatch):
             self.potential_now[rows] = self.potentials[
                 rows, single.geodesic.node_of(state.position[rows])]
 
-    def info(self, state):
-        gap = state.position - self.goal_position
-        return {"goal_position": self.goal_position.copy(),
-                "goal_heading": self.goal_heading.copy(),
+    def info(self, state, rows=_EVERY):
+        goal = self.goal_position[rows]  # a copy where ``rows`` is an array
+        gap = state.position[rows] - goal
+        return {"goal_position": goal.copy() if rows is _EVERY else goal,
+                "goal_heading": self.goal_heading[rows].copy(),
                 "distance_to_goal": np.hypot(gap[:, 0], gap[:, 1]),
-                "is_success": self.reached.copy(),
-                "plan_cost": self.plan_cost.copy()}
+                "is_success": self.reached[rows].copy(),
+                "plan_cost": self.plan_cost[rows].copy()}
 
     def observation(self):
         return self.features if self.single.observe_task else None
@@ -492,12 +522,12 @@ class _CoverageBatch(_FreeBatch):
         self.visited[rows, row, col] = True
         self.distance[rows] = self.single.initial_distance
 
-    def info(self, state):
-        flat = self.visits.reshape(self.n, -1)
+    def info(self, state, rows=_EVERY):
+        flat = self.visits[rows].reshape(-1, self.visits[0].size)
         total = flat.sum(axis=1)
         hist = np.where(total[:, None] > 0, flat / np.where(total > 0, total, 1.0)[:, None], flat)
         gap = hist - self.single.target.reshape(1, -1)
-        return {"coverage": self.visited[:, self.single.free].mean(axis=1),
+        return {"coverage": self.visited[rows][:, self.single.free].mean(axis=1),
                 "distance": np.hypot.reduce(gap, axis=1),
                 "tv_distance": 0.5 * np.abs(gap).sum(axis=1)}
 
