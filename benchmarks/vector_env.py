@@ -7,6 +7,10 @@ nothing. Rates are the best of ``repeats`` runs (time.perf_counter):
   with 1,024 robots in two_rooms (the dynamics alone; target ≥ 0.5);
 * env-steps/s of the native env at N = 64 ÷ ``vectorization_mode="sync"`` at N = 64
   (target ≥ 100);
+* env-steps/s of the native env on the cell backend at N = 1,024 (``BounceNavigation-v0``, angles
+  45°, 90°, 135°, goal radius 0.3, heading tolerance 10°, random actions, episodes ending by goal
+  and by time, so resets included) ÷ ``vectorization_mode="sync"`` of the same env at N = 64
+  (target ≥ 100);
 * PPO training env-steps/s on ``configs/train_navigation.yaml`` through the SB3 view of the
   native env ÷ through SB3's DummyVecEnv of ``gym.make`` copies (4,096 steps, torch on one
   thread; target ≥ 5). Both run as `baselines.rl.train.train` runs them (monitor file,
@@ -32,8 +36,15 @@ ID = "bounce_gym/Bounce-v0"
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "train_navigation.yaml"
 
 
-def vector_steps(n: int, steps: int, mode: str) -> Callable[[], int]:
-    env = gym.make_vec(ID, num_envs=n, vectorization_mode=mode)
+#: the cell-backend navigation configuration of the third row
+CELL_NAVIGATION = ("bounce_gym/BounceNavigation-v0",
+                   {"backend": "cell", "angles": [45, 90, 135],
+                    "task_kwargs": {"goal_radius": 0.3, "heading_tolerance_deg": 10}})
+
+
+def vector_steps(n: int, steps: int, mode: str, env_id: str = ID,
+                 kwargs: dict | None = None) -> Callable[[], int]:
+    env = gym.make_vec(env_id, num_envs=n, vectorization_mode=mode, **(kwargs or {}))
     env.reset(seed=0)
     actions = np.random.default_rng(1).integers(0, 3, (steps, n))
 
@@ -95,6 +106,13 @@ def main(quick: bool = False, repeats: int = 3) -> None:
     slow = _best_rate(lambda: vector_steps(64, max(steps // 5, 4), "sync"), repeats)
     print(f"N = 64 env-steps/s: native {fast:,.0f}, sync {slow:,.0f}")
     _row("vector env N=64 / make_vec sync N=64", fast / slow, 100)
+    cell_steps = 100 if quick else 600  # past the registered 200-step limit: truncations too
+    fast = _best_rate(lambda: vector_steps(1024, cell_steps, "vector_entry_point",
+                                           *CELL_NAVIGATION), repeats)
+    slow = _best_rate(lambda: vector_steps(64, max(cell_steps // 10, 10), "sync",
+                                           *CELL_NAVIGATION), repeats)
+    print(f"cell navigation env-steps/s: native N = 1,024 {fast:,.0f}, sync N = 64 {slow:,.0f}")
+    _row("vector env cell nav N=1024 / make_vec sync N=64", fast / slow, 100)
     ppo_steps = 1024 if quick else 4096
     ours, theirs = ppo_rate("native", ppo_steps), ppo_rate("sync", ppo_steps)
     print(f"PPO env-steps/s: native view {ours:,.0f}, DummyVecEnv {theirs:,.0f}")

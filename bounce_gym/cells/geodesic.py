@@ -84,5 +84,8 @@ class GridGeodesic:
     def distances_to(self, point: np.ndarray) -> np.ndarray:
         """(n_nodes,) geodesic distance from every node to the node of ``point`` (the graph is
         undirected); ``inf`` for nodes not connected to it."""
-        source = int(self.node_of(point)[0])
-        return csgraph.dijkstra(self.graph, directed=False, indices=source)
+        return self.distances_to_node(int(self.node_of(point)[0]))
+
+    def distances_to_node(self, node: int) -> np.ndarray:
+        """`distances_to` the point(s) of node ``node``."""
+        return csgraph.dijkstra(self.graph, directed=False, indices=node)

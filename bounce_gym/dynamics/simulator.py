@@ -153,9 +153,22 @@ class BounceDynamics:
         heading: np.ndarray | None = None,
     ) -> RobotState:
         """Place the robots (uniformly at random where not given) and return the state."""
+        position, heading = self.draw_poses(rng, position, heading)
+        self.rng = rng
+        self.state = RobotState.at(position, heading)
+        self.backend.reset(self.state)
+        return self.state
+
+    def draw_poses(
+        self,
+        rng: np.random.Generator,
+        position: np.ndarray | None = None,
+        heading: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The (m, 2) positions and (m,) headings `reset` places: those given (checked), the
+        others drawn from ``rng`` as `reset` draws them."""
         if not isinstance(rng, np.random.Generator):
             raise ConfigError(f"rng: expected a numpy Generator, got {type(rng).__name__}")
-        self.rng = rng
         m = self.n_robots
         if position is None:
             position = self.backend.random_positions(rng)
@@ -169,9 +182,7 @@ class BounceDynamics:
         heading = np.asarray(heading, dtype=np.float64).reshape(-1)
         if heading.shape != (m,) or not np.all(np.isfinite(heading)):
             raise ConfigError(f"start heading: expected {m} finite angles, got {heading.tolist()}")
-        self.state = RobotState.at(position, heading)
-        self.backend.reset(self.state)
-        return self.state
+        return position, heading
 
     # -- stepping ---------------------------------------------------------------------------
     def tick(self, params: np.ndarray) -> np.ndarray:
@@ -276,6 +287,14 @@ class BounceDynamics:
         state = self._require_state()
         self._rotate(np.flatnonzero(state.blocked), self._parameters(params))
         return self.backend.drive_each(state)
+
+    def rotate(self, robots: np.ndarray, params: np.ndarray) -> None:
+        """The bump ticks of ``robots`` alone: each rotates in place by the rule (and the
+        noise) with its entry of ``params`` (m,), as in `tick`, and their contacts are updated;
+        nobody drives and the global clock stays (`tick` is this plus one tick of driving the
+        others; the batched env drives each robot on by itself)."""
+        self._require_state()
+        self._rotate(np.asarray(robots, dtype=np.int64), self._parameters(params))
 
     def _rotate(self, idx: np.ndarray, params: np.ndarray) -> None:
         """Bump ticks of robots ``idx``: each rotates by the rule (and the noise) in place."""

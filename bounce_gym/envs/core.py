@@ -71,10 +71,11 @@ class BounceCore:
         self._task_steps = type(task).step is not Task.step
         #: whether steps extend the trails (set by an env that renders; only drawings read them)
         self.keep_trails = True
-        # largest (col, row) of the step-length grid of `World.occupancy`: a robot touching the
-        # right or top wall (or a hair outside by rounding) still reports a cell of the grid
         xmin, ymin, xmax, ymax = options.world.bounds
-        self._cell_max = np.array([
+        #: largest (col, row) of the step-length grid of `World.occupancy` that ``info["cell"]``
+        #: reports: a robot touching the right or top wall (or a hair outside by rounding) still
+        #: reports a cell of the grid
+        self.cell_max = np.array([
             max(int(np.ceil((xmax - xmin) / options.step_length - 1e-9)) - 1, 0),
             max(int(np.ceil((ymax - ymin) / options.step_length - 1e-9)) - 1, 0),
         ])
@@ -135,9 +136,7 @@ class BounceCore:
         """
         options = checked_reset_options(options, self.option_keys, strict)
         m = self.options.n_robots
-        poses = self.task.start_poses(rng, options) or pose_option(options, "start", m)
-        position, heading = poses if poses is not None else (None, None)
-        state = self.dynamics.reset(rng, position, heading)
+        state = self.dynamics.reset(rng, *self.draw_start(rng, options))
         if self.options.step_mode == "bounce":
             self.dynamics.drive_to_contact()
         self.history = np.zeros((m, self.options.history, 2), dtype=np.float32)
@@ -145,6 +144,15 @@ class BounceCore:
         self.trails = [deque([p.copy()], maxlen=TRAIL_LENGTH) for p in state.position]
         info = self.task.reset(state, rng, options)
         return self.observation(), self._info(info)
+
+    def draw_start(self, rng: np.random.Generator, options: Mapping
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """The start positions (m, 2) and headings (m,) of an episode with the (checked) reset
+        ``options``, drawn from ``rng`` exactly as `reset` draws them: the task's poses (the
+        task keeps what else it drew, e.g. a goal), else the ``start`` option, else random."""
+        poses = (self.task.start_poses(rng, options)
+                 or pose_option(options, "start", self.options.n_robots))
+        return self.dynamics.draw_poses(rng, *(poses if poses is not None else (None, None)))
 
     def step(self, angles: np.ndarray, turns: np.ndarray | None = None
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
@@ -279,7 +287,7 @@ class BounceCore:
         step = self.options.step_length
         position = state.position[0].copy()
         x, y = position.tolist()
-        col_max, row_max = self._cell_max.tolist()
+        col_max, row_max = self.cell_max.tolist()
         info = {
             "ticks": int(state.ticks),
             "position": position,
@@ -298,7 +306,7 @@ class BounceCore:
         state = self.dynamics.state
         xmin, ymin = self.options.world.bounds[:2]
         cells = np.floor((state.position - (xmin, ymin)) / self.options.step_length).astype(int)
-        cells = np.clip(cells, 0, self._cell_max)
+        cells = np.clip(cells, 0, self.cell_max)
         info = {
             "ticks": int(state.ticks),
             "position": state.position.copy(),

@@ -28,9 +28,11 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from bounce_gym.dynamics import BounceDynamics
+from bounce_gym.cells.drives import ContactDrives
+from bounce_gym.dynamics import BounceDynamics, RobotState
 from bounce_gym.dynamics.noise import Exact
 from bounce_gym.envs.bounce_env import BounceEnv
+from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.envs.tasks import CoverageTask, NavigationTask
 from bounce_gym.envs.tasks.base import StepEvents, path_samples, tick_length
 from bounce_gym.errors import ActionError, ConfigError
@@ -38,8 +40,9 @@ from bounce_gym.validate import integer
 
 #: the single-robot tasks this env batches
 VECTOR_TASKS = ("free", "navigation", "coverage")
-#: kinematic backend state that a reset copies from the single-robot core along with the pose
-_KINEMATIC_AHEAD = ("_ahead_distance", "_ahead_edge", "_ahead_normal")
+#: the fields of a `RobotState` row that a reset writes
+#: every env's rows of an array
+_EVERY = slice(None)
 _STATE_FIELDS = ("position", "heading", "blocked", "clock", "bumps", "contact_edge",
                  "contact_robot", "contact_normal", "odometer")
 
@@ -92,6 +95,9 @@ class BounceVectorEnv(VectorEnv):
         self._origin = np.array(opts.world.bounds[:2], dtype=np.float64)
         self._all_true = _read_only(np.ones(n, dtype=bool))
         self._no_contact = _read_only(np.zeros(n, dtype=bool))
+        #: the cell backend's drives to contact, tabulated
+        self._cell_drives = (ContactDrives(self.dynamics.backend.model)
+                             if opts.backend == "cell" else None)
 
     # -- episodes ---------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -129,36 +135,50 @@ class BounceVectorEnv(VectorEnv):
         return self._observation(), infos
 
     def _reset_envs(self, rows: np.ndarray, infos: dict, options: dict | None = None) -> dict:
-        """Start new episodes in ``rows``: each runs the single-robot reset with its own
-        generator and ``options`` (an autoreset passes none), and its state, task state and reset
-        info are copied into the batch."""
+        """Start new episodes in ``rows``: each draws its start (and task) poses from its own
+        generator with ``options`` (an autoreset passes none) as a single env's reset draws them;
+        then the rows are placed, driven to their first contact and handed to the task at once."""
         core = self.single.core
+        options = checked_reset_options(options, core.option_keys)
+        m = len(rows)
+        position, heading = np.empty((m, 2)), np.empty(m)
+        for j, i in enumerate(rows.tolist()):
+            position[j], heading[j] = (x[0] for x in core.draw_start(self._rngs[i], options))
+            self.task.drawn(i, core.task)
         state = self.dynamics.state
-        for i in rows:
-            core.reset(self._rngs[i], options)
-            if state is None:  # the first reset: a batch of copies to overwrite row by row
-                state = self._first_state(core)
-            one = core.state
+        if state is None:  # the first reset: every row
+            state = self.dynamics.reset(np.random.default_rng(0), position, heading)
+        else:
+            fresh = RobotState.at(position, heading)
             for name in _STATE_FIELDS:
-                getattr(state, name)[i] = getattr(one, name)[0]
-            if self.options.backend == "kinematic":
-                for name in _KINEMATIC_AHEAD:
-                    getattr(self.dynamics.backend, name)[i] = getattr(core.dynamics.backend,
-                                                                      name)[0]
-            self._ticks[i] = one.ticks
-            self.task.load(i, core.task)
+                getattr(state, name)[rows] = getattr(fresh, name)
+            self.dynamics.backend.place(state, rows)
+        # every robot not reset ended its last step in contact: only the rows drive
         if self.options.backend == "cell":
-            self.dynamics.backend.update_contacts(state, np.arange(self.num_envs))
+            self._ticks[rows] = self._drive_cells(rows)
+        else:  # every robot not reset ended its last step in contact: only the rows drive
+            self._ticks[rows] = self.dynamics.backend.drive_each(state)[rows]
+        self.task.start(rows, state, self._ticks)
         self._elapsed[rows] = 0
         self._history[rows] = 0.0
         self._last_angle[rows] = math.nan
-        return self._infos(infos, rows, self.task.info(self.dynamics.state))
+        return self._reset_infos(infos, rows)
 
-    def _first_state(self, core):
-        one = core.state
-        n = self.num_envs
-        return self.dynamics.reset(np.random.default_rng(0), np.repeat(one.position, n, axis=0),
-                                   np.repeat(one.heading, n))
+    def _drive_cells(self, robots: np.ndarray) -> np.ndarray:
+        """Cell backend: robots ``robots`` each drive cell to cell until their own next contact,
+        as a lone robot's drive does (same positions, clocks and odometer sums). Returns the
+        ticks each drove."""
+        state = self.dynamics.state
+        backend = self.dynamics.backend
+        model = backend.model
+        start = model.cell_of(state.position[robots], state.heading[robots])
+        drives = self._cell_drives
+        ticks = drives.ticks[start]
+        state.odometer[robots] = drives.add_hops(start, state.odometer[robots])
+        state.position[robots] = model.centres[model.decode(drives.end[start])[0]]
+        state.clock[robots] += ticks
+        backend.update_contacts(state, robots[ticks > 0])
+        return ticks
 
     def step(self, actions):
         state = self.dynamics.state
@@ -172,8 +192,10 @@ class BounceVectorEnv(VectorEnv):
             rows = np.flatnonzero(bumping)
             clock_before = state.clock[rows]
         if opts.backend == "cell":
-            self.dynamics.tick(angles)  # every robot is blocked: this tick is the rotation
-            driven = _drive_cells_each(self.dynamics.backend, state)
+            # every robot is blocked (each step and each reset ends in contact): the bump tick
+            # is the rotation, then each robot drives on by itself
+            self.dynamics.rotate(self._all_rows, angles)
+            driven = self._drive_cells(self._all_rows)
         else:
             driven = self.dynamics.bounce_each(angles)
         ticks = bumping + driven
@@ -275,14 +297,12 @@ class BounceVectorEnv(VectorEnv):
         zero-filled copy) and its mask the shared read-only all-True array.
         """
         state = self.dynamics.state
-        cells = (state.position - self._origin) / self.options.step_length
-        cells = np.floor(cells, out=cells).astype(np.int64)
-        np.minimum(np.maximum(cells, 0, out=cells), self.single.core._cell_max, out=cells)
         values = {"ticks": self._ticks.copy(),
                   "position": state.position.copy() if events is None else events.end,
                   "heading": state.heading.copy() if events is None else events.heading,
-                  "cell": cells[:, ::-1], "clock": state.clock.copy(), "bumps": state.bumps.copy(),
-                  "contact_edge": state.contact_edge.copy(), **task_info}
+                  "cell": self._cells(state.position), "clock": state.clock.copy(),
+                  "bumps": state.bumps.copy(), "contact_edge": state.contact_edge.copy(),
+                  **task_info}
         if step_ticks is not None:
             values["step_ticks"] = step_ticks
         n = self.num_envs
@@ -304,6 +324,35 @@ class BounceVectorEnv(VectorEnv):
             infos[key][chosen] = value[chosen]
             infos[f"_{key}"][chosen] = True
         return infos
+
+    def _reset_infos(self, infos: dict, rows: np.ndarray) -> dict:
+        """Write the reset info of envs ``rows`` into ``infos`` (`_infos`, computed for those
+        rows only)."""
+        state = self.dynamics.state
+        position = state.position[rows]
+        values = {"ticks": self._ticks[rows], "position": position,
+                  "heading": state.heading[rows], "cell": self._cells(position),
+                  "clock": state.clock[rows], "bumps": state.bumps[rows],
+                  "contact_edge": state.contact_edge[rows], **self.task.info(state, rows)}
+        n = self.num_envs
+        for key, value in values.items():
+            if key not in infos:
+                if len(rows) == n:
+                    infos[key] = value  # fresh arrays, in env order
+                    infos[f"_{key}"] = self._all_true
+                    continue
+                infos[key] = np.zeros((n, *value.shape[1:]), dtype=value.dtype)
+                infos[f"_{key}"] = np.zeros(n, dtype=bool)
+            infos[key][rows] = value
+            infos[f"_{key}"][rows] = True
+        return infos
+
+    def _cells(self, position: np.ndarray) -> np.ndarray:
+        """(n, 2) int (row, col) of ``info["cell"]`` at positions ``position`` (n, 2)."""
+        cells = (position - self._origin) / self.options.step_length
+        cells = np.floor(cells, out=cells).astype(np.int64)
+        np.minimum(np.maximum(cells, 0, out=cells), self.single.core.cell_max, out=cells)
+        return cells[:, ::-1]
 
     def close_extras(self, **kwargs) -> None:
         self.single.close()
@@ -336,27 +385,6 @@ def _unbatchable(opts, task) -> str | None:
     return None
 
 
-def _drive_cells_each(backend, state) -> np.ndarray:
-    """Cell backend: every robot moves cell to cell until its own next contact, as a lone
-    robot's drive does. Returns the ticks each robot drove."""
-    model = backend.model
-    p, k = model.decode(backend.cells(state))
-    ticks = np.zeros(state.n_robots, dtype=np.int64)
-    moving = np.flatnonzero(~state.blocked)
-    while len(moving):
-        target = model.targets[k[moving], p[moving]]
-        go = target >= 0
-        moving, target = moving[go], target[go]
-        new = model.centres[target]
-        state.odometer[moving] += np.hypot(*(new - state.position[moving]).T)
-        state.position[moving] = new
-        p[moving] = target
-        state.clock[moving] += 1
-        ticks[moving] += 1
-    backend.update_contacts(state, np.arange(state.n_robots))
-    return ticks
-
-
 # -- batched tasks ----------------------------------------------------------------------------
 
 class _FreeBatch:
@@ -365,11 +393,15 @@ class _FreeBatch:
     def __init__(self, task, n: int) -> None:
         self.n = n
 
-    def load(self, i: int, task) -> None:
-        """Take env ``i``'s episode state from the single-robot task just reset."""
+    def drawn(self, i: int, task) -> None:
+        """Take what the single-robot ``task`` drew for env ``i``'s new episode (its goal)."""
 
-    def info(self, state) -> dict:
-        """Task info of every env, for the robots' ``state``."""
+    def start(self, rows: np.ndarray, state, ticks: np.ndarray) -> None:
+        """Start the episodes of envs ``rows``, whose robots (``state``) were placed and drove
+        ``ticks`` to their first contact, as the single-robot task's reset starts one."""
+
+    def info(self, state, rows: np.ndarray | slice = _EVERY) -> dict:
+        """Task info of envs ``rows`` (default: every env), for the robots' ``state``."""
         return {}
 
     def observation(self) -> np.ndarray | None:
@@ -396,23 +428,31 @@ class _NavigationBatch(_FreeBatch):
             self.potentials = np.zeros((n, task.geodesic.n_nodes))
             self.potential_now = np.zeros(n)
 
-    def load(self, i, task):
+    def drawn(self, i, task):
         self.goal_position[i] = task.goal[0][0]
         self.goal_heading[i] = task.goal[1][0]
-        self.reached[i] = False
-        self.plan_cost[i] = task.plan_cost
-        self.features[i] = task.observation(None)[0] if task.observe_task else 0.0
-        if task.geodesic is not None:
-            self.potentials[i] = task.potentials
-            self.potential_now[i] = task.potential_now
+        if task.observe_task:
+            self.features[i] = task.observation(None)[0]
 
-    def info(self, state):
-        gap = state.position - self.goal_position
-        return {"goal_position": self.goal_position.copy(),
-                "goal_heading": self.goal_heading.copy(),
+    def start(self, rows, state, ticks):
+        single = self.single
+        self.reached[rows] = False
+        self.plan_cost[rows] = single.w1 * ticks[rows]  # the drive of a bounce-mode reset
+        if single.geodesic is not None:
+            goals = single.geodesic.node_of(self.goal_position[rows])
+            for goal in np.unique(goals).tolist():
+                self.potentials[rows[goals == goal]] = single.goal_potentials(goal)
+            self.potential_now[rows] = self.potentials[
+                rows, single.geodesic.node_of(state.position[rows])]
+
+    def info(self, state, rows=_EVERY):
+        goal = self.goal_position[rows]  # a copy where ``rows`` is an array
+        gap = state.position[rows] - goal
+        return {"goal_position": goal.copy() if rows is _EVERY else goal,
+                "goal_heading": self.goal_heading[rows].copy(),
                 "distance_to_goal": np.hypot(gap[:, 0], gap[:, 1]),
-                "is_success": self.reached.copy(),
-                "plan_cost": self.plan_cost.copy()}
+                "is_success": self.reached[rows].copy(),
+                "plan_cost": self.plan_cost[rows].copy()}
 
     def observation(self):
         return self.features if self.single.observe_task else None
@@ -475,17 +515,19 @@ class _CoverageBatch(_FreeBatch):
         self.distance = np.zeros(n)
         self.n_free = task.free.sum()
 
-    def load(self, i, task):
-        self.visits[i] = task.visits
-        self.visited[i] = task.visited
-        self.distance[i] = task.distance
+    def start(self, rows, state, ticks):
+        self.visits[rows] = 0.0
+        self.visited[rows] = False
+        row, col = self.single.cells(state.position[rows])
+        self.visited[rows, row, col] = True
+        self.distance[rows] = self.single.initial_distance
 
-    def info(self, state):
-        flat = self.visits.reshape(self.n, -1)
+    def info(self, state, rows=_EVERY):
+        flat = self.visits[rows].reshape(-1, self.visits[0].size)
         total = flat.sum(axis=1)
         hist = np.where(total[:, None] > 0, flat / np.where(total > 0, total, 1.0)[:, None], flat)
         gap = hist - self.single.target.reshape(1, -1)
-        return {"coverage": self.visited[:, self.single.free].mean(axis=1),
+        return {"coverage": self.visited[rows][:, self.single.free].mean(axis=1),
                 "distance": np.hypot.reduce(gap, axis=1),
                 "tv_distance": 0.5 * np.abs(gap).sum(axis=1)}
 
@@ -493,7 +535,7 @@ class _CoverageBatch(_FreeBatch):
         task = self.single
         robot, points, spent = path_samples(events, tick_length(task.options, events.heading),
                                             task.cell_size / 4)
-        row, col = task._cells(points)
+        row, col = task.cells(points)
         np.add.at(self.visits, (robot, row, col), spent)
         new = ~self.visited[robot, row, col] & task.free[row, col]
         self.visited[robot, row, col] = True

@@ -62,17 +62,23 @@ class CellBackend(MotionBackend):
         return self.model.cell_of(state.position, state.heading)
 
     def reset(self, state: RobotState) -> None:
-        z = self.cells(state)
+        self.place(state, np.arange(state.n_robots))
+
+    def place(self, state: RobotState, robots: np.ndarray) -> None:
+        """Take over robots ``robots`` of ``state``, just placed, while the others keep their
+        poses (`reset` places every robot): snap them to their cells' centres and bin headings
+        (`ConfigError` for a pose outside the model's free cells) and set every contact."""
+        z = self.model.cell_of(state.position[robots], state.heading[robots])
         if np.any(z < 0):
-            bad = int(np.flatnonzero(z < 0)[0])
+            bad = int(robots[np.flatnonzero(z < 0)[0]])
             raise ConfigError(f"start position of robot {bad} {state.position[bad].tolist()} is "
                               "not in a free cell of the cell model")
         p, k = self.model.decode(z)
-        if self.collide and crowded(p, self.close)[0]:
+        if self.collide and crowded(self.model.decode(self.cells(state))[0], self.close)[0]:
             raise ConfigError(f"start positions: two robots share a cell or are within "
                               f"min_sep_cells = {self.min_sep_cells} cells")
-        state.position[:] = self.model.centres[p]  # snap to cell centres and bin headings
-        state.heading[:] = k * self.bin_width
+        state.position[robots] = self.model.centres[p]  # snap to cell centres and bin headings
+        state.heading[robots] = k * self.bin_width
         self.update_contacts(state, np.arange(state.n_robots))
 
     # -- contacts ---------------------------------------------------------------------------
@@ -87,6 +93,9 @@ class CellBackend(MotionBackend):
         return p, np.where(stays[0], -1, target), blocker[0]
 
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
+        if not self.collide and len(robots) < state.n_robots:
+            self._update_independent(state, np.asarray(robots, dtype=np.int64))
+            return
         # blocking on the grid is a joint property of all robots: recompute for everyone
         state.heading[:] = self.model.bin_of(state.heading) * self.bin_width  # exact bins
         p, target, blocker = self._last_plan = self._plan(state)
@@ -95,6 +104,25 @@ class CellBackend(MotionBackend):
         state.contact_edge[:] = NO_CONTACT
         # no wall normals on the grid: the normal points back along the heading
         state.contact_normal[:] = -state.direction
+
+    def _update_independent(self, state: RobotState, robots: np.ndarray) -> None:
+        """`update_contacts` of robots that ignore each other: only ``robots`` changed, so only
+        their rows of the state and of the kept plan are recomputed (the same arithmetic)."""
+        model = self.model
+        heading = model.bin_of(state.heading[robots]) * self.bin_width
+        state.heading[robots] = heading
+        p, k = model.decode(model.cell_of(state.position[robots], heading))
+        target = model.targets[k, p]
+        plan_p, plan_target, _ = self._last_plan
+        plan_p[robots] = p
+        plan_target[robots] = target
+        state.blocked[robots] = target < 0
+        state.contact_robot[robots] = NO_CONTACT
+        state.contact_edge[robots] = NO_CONTACT
+        normal = np.empty((len(robots), 2))  # `RobotState.direction`'s arithmetic, reversed
+        np.cos(heading, out=normal[:, 0])
+        np.sin(heading, out=normal[:, 1])
+        state.contact_normal[robots] = -normal
 
     def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
         if until_first_block and state.blocked.any():

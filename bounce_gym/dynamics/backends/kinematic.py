@@ -37,6 +37,15 @@ class KinematicBackend(EventDrivenBackend):
         self._ahead_normal = np.zeros((m, 2))
         self.update_contacts(state, np.arange(m))
 
+    def place(self, state: RobotState, robots: np.ndarray) -> None:
+        """Take over robots ``robots`` of ``state``, just placed, while the others keep driving
+        (robots that ignore each other; `reset` places every robot): check their starts
+        (`ConfigError`) and cast their walls ahead."""
+        if self.collide:
+            raise ConfigError("placing some robots among others needs robot_collisions='ignore'")
+        self.check_start(RobotState.at(state.position[robots], state.heading[robots]))
+        self.update_contacts(state, robots)
+
     def update_contacts(self, state: RobotState, robots: np.ndarray) -> None:
         if state.n_robots == 1 and len(robots) == 1:
             self._update_one(state)

@@ -42,6 +42,8 @@ class CoverageTask(Task):
         if not self.free.any():
             raise ConfigError("coverage: the world has no free cell of this size for this robot")
         self.target = self._target(self.target_arg)
+        #: ``distance`` of an episode's start: no visit yet
+        self.initial_distance = float(np.hypot.reduce(self.target.ravel()))
 
     def _target(self, spec: object) -> np.ndarray:
         if spec is None:
@@ -64,18 +66,19 @@ class CoverageTask(Task):
     def reset(self, state, rng, options):
         self.visits = np.zeros(self.free.shape)
         self.visited = np.zeros(self.free.shape, dtype=bool)
-        self.distance = float(np.hypot.reduce(self.target.ravel()))
+        self.distance = self.initial_distance
         self._add(state.position, np.zeros(state.n_robots))
         return self._info()
 
-    def _cells(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def cells(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(row, col) of the coverage grid's cell of each point (n, 2), clipped to the grid."""
         xmin, ymin = self.options.world.bounds[:2]
         col = np.clip(((points[:, 0] - xmin) / self.cell_size).astype(int), 0, self.free.shape[1] - 1)
         row = np.clip(((points[:, 1] - ymin) / self.cell_size).astype(int), 0, self.free.shape[0] - 1)
         return row, col
 
     def _add(self, points: np.ndarray, ticks: np.ndarray) -> int:
-        row, col = self._cells(points)
+        row, col = self.cells(points)
         np.add.at(self.visits, (row, col), ticks)
         new = ~self.visited[row, col] & self.free[row, col]
         self.visited[row, col] = True

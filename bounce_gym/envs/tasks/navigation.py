@@ -16,6 +16,8 @@ from bounce_gym.validate import flag, number
 REWARDS = ("progress", "sparse", "plan_cost")
 #: the default discount of the ``progress`` shaping: none, as the episode return is reported
 DEFAULT_GAMMA = 1.0
+#: the most floats `NavigationTask.goal_potentials` keeps (2^24: 128 MiB)
+POTENTIAL_CACHE_FLOATS = 1 << 24
 
 
 class NavigationTask(Task):
@@ -133,6 +135,7 @@ class NavigationTask(Task):
                                       "not in the free space")
         #: the grid Φ is measured on (``progress`` only)
         self.geodesic = None
+        self._potentials_by_goal: dict[int, np.ndarray] = {}  # `goal_potentials`' cache
         if self.reward == "progress":
             free = options.world.occupancy(options.step_length, options.robot_radius)
             if not free.any():
@@ -166,15 +169,30 @@ class NavigationTask(Task):
         self.reached = False
         self.plan_cost = self.w1 * int(state.ticks)  # the drive of a bounce-mode reset
         if self.geodesic is not None:
-            distance = self.geodesic.distances_to(self.goal[0][0])
-            finite = np.isfinite(distance)
-            scale = float(distance[finite].max())
             #: Φ of every node of the grid for this episode's goal
-            self.potentials = np.full(len(distance), -1.0)
-            self.potentials[finite] = -distance[finite] / scale if scale > 0 else 0.0
+            self.potentials = self.goal_potentials(int(self.geodesic.node_of(self.goal[0][0])[0]))
             #: Φ(s) of the robot's current state
             self.potential_now = self.potential(state.position[0])
         return self._info(state)
+
+    def goal_potentials(self, goal_node: int) -> np.ndarray:
+        """Φ of every node of the grid (a read-only array) for a goal in node ``goal_node`` of
+        `geodesic` (``progress`` reward). Computed once per goal node and kept: the last
+        `POTENTIAL_CACHE_FLOATS` // n_nodes goal nodes seen (at most n_nodes)."""
+        cache = self._potentials_by_goal
+        if goal_node in cache:
+            return cache[goal_node]
+        distance = self.geodesic.distances_to_node(goal_node)
+        finite = np.isfinite(distance)
+        scale = float(distance[finite].max())
+        potentials = np.full(len(distance), -1.0)
+        potentials[finite] = -distance[finite] / scale if scale > 0 else 0.0
+        potentials.flags.writeable = False
+        n_nodes = self.geodesic.n_nodes
+        if len(cache) >= max(1, min(n_nodes, POTENTIAL_CACHE_FLOATS // n_nodes)):
+            del cache[next(iter(cache))]  # the goal first seen longest ago
+        cache[goal_node] = potentials
+        return potentials
 
     def potential(self, position: np.ndarray) -> float:
         """Φ of a robot at ``position`` that has not reached the goal, for this episode's goal

@@ -180,3 +180,19 @@ def test_defaults():
 def test_gymnasium_check_env_with_every_reward(kwargs, backend):
     env = gym.make(NAV, backend=backend, task_kwargs=kwargs)
     check_env(env.unwrapped, skip_render_check=True)
+
+
+def test_goal_potentials_are_kept_per_goal_node_and_equal_a_fresh_computation():
+    env = BounceEnv(task="navigation", backend="cell", angles=[45, 90, 135])
+    task = env.core.task
+    geodesic = task.geodesic
+    for node in (0, geodesic.n_nodes - 1, 0):
+        phi = task.goal_potentials(node)
+        distance = geodesic.distances_to_node(node)
+        finite = np.isfinite(distance)
+        expect = np.where(finite, -distance / distance[finite].max(), -1.0)
+        assert np.array_equal(phi, expect) and not phi.flags.writeable
+    assert task.goal_potentials(0) is task.goal_potentials(0)  # a lookup the second time
+    env.reset(seed=3)
+    goal = int(geodesic.node_of(task.goal[0][0])[0])
+    assert task.potentials is task.goal_potentials(goal)
