@@ -120,8 +120,9 @@ def test_a_listed_model_with_planted_pickles_loads_its_weights_and_runs_nothing(
     assert isinstance(model.policy.mlp_extractor.policy_net[1], torch.nn.ReLU)
     assert model.num_timesteps == 64  # a counter, kept from the file's JSON
     policy = SB3Policy(planted, env)
-    policy.reset(env)
+    policy.start_options(env, 10_000)
     observation, info = env.reset(seed=10_000)
+    policy.reset(env)
     assert policy.act(observation, info) in (0, 1)
     assert not marker.exists()
 
