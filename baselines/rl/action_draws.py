@@ -9,7 +9,10 @@ actor, whatever ran before.
 * Categorical distribution (``Discrete`` actions; PPO, RecurrentPPO): one uniform per row,
   inverted through the cumulative probabilities (`categorical`).
 * Diagonal Gaussian (``Box`` actions): mean + std · z with z standard normal, clipped to the
-  action space's bounds as Stable-Baselines3's ``predict`` clips its own samples.
+  action space's bounds as Stable-Baselines3's ``predict`` clips its own samples. A model
+  trained with generalized state-dependent exploration (``use_sde``) is drawn the same way from
+  the Gaussian its noise gives at the current state, with fresh noise every step (as
+  ``sde_sample_freq: 1``).
 * DQN has no action distribution: its "sampled" action is ε-greedy at the exploration rate it
   ended training with (``exploration_final_eps``) — with probability ε a uniformly random
   action, else the greedy one — both draws from the same generator (`epsilon_greedy`).
@@ -38,21 +41,22 @@ def categorical(probs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 def check_drawable(model, path) -> None:
     """Refuse, naming the model file at ``path``, a model whose actions `sampled_action` cannot
-    draw (a distribution other than categorical or an unsquashed diagonal Gaussian)."""
+    draw: a distribution other than categorical or Gaussian, or squashed actions."""
     from stable_baselines3.common.distributions import (
         CategoricalDistribution,
         DiagGaussianDistribution,
-        SquashedDiagGaussianDistribution,
+        StateDependentNoiseDistribution,
     )
 
     dist = getattr(model.policy, "action_dist", None)
     if dist is None:  # DQN: ε-greedy
         return
-    if isinstance(dist, SquashedDiagGaussianDistribution) or not isinstance(
-            dist, CategoricalDistribution | DiagGaussianDistribution):
-        raise ConfigError(f"model {path}: its actions follow a {type(dist).__name__}, which the "
+    drawable = CategoricalDistribution | DiagGaussianDistribution | StateDependentNoiseDistribution
+    if model.policy.squash_output or not isinstance(dist, drawable):
+        raise ConfigError(f"model {path}: its actions follow a {type(dist).__name__}"
+                          f"{' squashed' if model.policy.squash_output else ''}, which the "
                           "evaluation cannot sample from a seeded generator (categorical or "
-                          "diagonal Gaussian only)")
+                          "unsquashed Gaussian only)")
 
 
 def epsilon_greedy(model, seen: np.ndarray, rng: np.random.Generator) -> np.ndarray:

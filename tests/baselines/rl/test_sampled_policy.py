@@ -25,6 +25,8 @@ CONTINUOUS = {"world": "square", "backend": "kinematic", "action_type": "continu
 MODELS = {
     "ppo": ("ppo", NAV, {"n_steps": 64, "batch_size": 64, "n_epochs": 1}),
     "ppo-continuous": ("ppo", CONTINUOUS, {"n_steps": 64, "batch_size": 64, "n_epochs": 1}),
+    "ppo-sde": ("ppo", CONTINUOUS, {"n_steps": 64, "batch_size": 64, "n_epochs": 1,
+                                    "use_sde": True}),
     "recurrentppo": ("recurrentppo", NAV, {"n_steps": 64, "batch_size": 64, "n_epochs": 1}),
     "dqn": ("dqn", NAV, {"learning_starts": 32, "buffer_size": 256, "batch_size": 32,
                          "exploration_final_eps": 0.3}),
@@ -113,9 +115,10 @@ def test_categorical_draws_follow_the_models_probabilities(models, name):
     env.close()
 
 
-def test_gaussian_draws_follow_the_models_distribution_clipped_to_the_bounds(models):
-    env = _env("ppo-continuous")
-    policy = SB3Policy(models["ppo-continuous"], env)
+@pytest.mark.parametrize("name", ["ppo-continuous", "ppo-sde"])
+def test_gaussian_draws_follow_the_models_distribution_clipped_to_the_bounds(models, name):
+    env = _env(name)
+    policy = SB3Policy(models[name], env)
     obs, drawn = _first_actions(policy, env)
     normal = _distribution(policy, obs)
     mean, std = float(normal.mean[0, 0]), float(normal.stddev[0, 0])
@@ -181,3 +184,19 @@ def test_a_pool_of_two_plays_the_same_sampled_episodes_as_one_process(models):
     pooled, _ = run(config, progress=False, executor=make_executor(workers=2))
     assert [r.row() for r in pooled] == [r.row() for r in here]
     assert {r.policy for r in here} == {"rl ppo_seed0", "rl ppo_seed0 (greedy)"}
+
+
+def test_a_model_with_squashed_actions_is_refused_for_sampling():
+    from stable_baselines3 import PPO
+
+    from baselines.rl.action_draws import check_drawable
+    from bounce_gym.errors import ConfigError
+
+    env = gym.make(ENV, **CONTINUOUS)
+    model = PPO("MlpPolicy", env, use_sde=True, policy_kwargs={"squash_output": True},
+                device="cpu")
+    with pytest.raises(ConfigError, match=r"model m.zip: its actions follow a "
+                                          r"StateDependentNoiseDistribution squashed"):
+        check_drawable(model, "m.zip")
+    check_drawable(PPO("MlpPolicy", env, device="cpu"), "m.zip")  # a plain Gaussian: drawn
+    env.close()
