@@ -13,9 +13,11 @@ or more fixed angles, also the best of them per seed in hindsight (`experiments.
 
 Trained models are loaded from the experiment's ``rl_models`` folders; a folder with other
 observation options runs its models on its own copy of the env (same world, same seeds, same
-episodes). Each model is one policy (``rl <algo>_seed<N>``, ``rl <folder>/<algo>_seed<N>`` when
-there are several folders) whose rows carry the ``group`` they are aggregated into
-(``rl <algo>``: one row per algorithm over its training seeds, `experiments.aggregate`).
+episodes). Each model is two policies: its sampled actions (``rl <algo>_seed<N>``,
+``rl <folder>/<algo>_seed<N>`` when there are several folders) and its greedy ones (the same
+name and ``(greedy)``, `Family.trained_policies`), whose rows carry the ``group`` they are
+aggregated into (``rl <algo>`` and ``rl <algo> (greedy)``: one row each per algorithm over its
+training seeds, `experiments.aggregate`).
 """
 
 from __future__ import annotations

@@ -392,12 +392,15 @@ def action_probabilities(model, observations: np.ndarray) -> np.ndarray:
 
 
 class LearnedAdversary(MultiPolicy):
-    """An adversary of a trained model (`baselines.rl.policies.AdversarySB3Policy`, its greedy
-    action on its own observation)."""
+    """An adversary of a trained model (`baselines.rl.policies.AdversarySB3Policy`: its action
+    on its own observation, sampled from the stream of the seed it is given, or greedy)."""
 
     def __init__(self, policy) -> None:
         self.policy = policy
         self.name = policy.name
+
+    def start_options(self, env, seed: int):
+        return self.policy.start_options(env, seed)
 
     def reset(self, env) -> None:
         self.policy.reset(env)

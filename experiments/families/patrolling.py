@@ -10,7 +10,8 @@ parameter-shared PPO trained with ``role: patrollers`` (`baselines.rl.patrol`). 
 (the experiment's ``adversaries``): ``best_response`` — the Stackelberg follower told the
 strategy, ``best_response_positions`` — told the patrollers' positions at step 0 too
 (`baselines.patrolling.policies.BestResponseAdversary`); ``rl`` — PPO trained with ``role:
-adversary``. Every patroller meets every adversary, one row each (``<patrollers> vs
+adversary``, sampling its actions, and the same model greedy (``... (greedy)``). Trained
+patrollers sample. Every patroller meets every adversary, one row each (``<patrollers> vs
 <adversary>``). ``planner_kwargs`` set the equilibrium's strategy set (`PatrolSetup`). The
 choices are in docs/choices.md, "The patrol evaluation".
 
@@ -193,9 +194,10 @@ class Patrolling(Family):
         its trained adversaries against every patroller (`baselines.rl.policies.patrol_policy`
         tells which side a model learned). Models of both sides may come from different folders
         of ``rl_models``: each folder's models also meet those loaded before them (kept in the
-        setup)."""
+        setup). A trained adversary plays twice, sampling and greedy (its names and group with
+        `baselines.rl.policies.GREEDY_SUFFIX`); trained patrollers always sample."""
         from baselines.rl.model_files import MODEL_NAME, model_files, run_name
-        from baselines.rl.policies import PatrollerSB3Policy, patrol_policy
+        from baselines.rl.policies import GREEDY_SUFFIX, PatrollerSB3Policy, patrol_policy
 
         patrollers, adversaries = [], []
         for path in model_files(folder):
@@ -205,8 +207,11 @@ class Patrolling(Family):
             group = f"rl {label}{run_name(name['algo'], name['variant'])}"
             if isinstance(model, PatrollerSB3Policy):
                 patrollers.append((LearnedPatrollers(model), group))
-            else:
-                adversaries.append((LearnedAdversary(model), group))
+                continue
+            greedy = patrol_policy(path, env, deterministic=True)
+            greedy.name = model.name + GREEDY_SUFFIX
+            adversaries += [(LearnedAdversary(model), group),
+                            (LearnedAdversary(greedy), group + GREEDY_SUFFIX)]
         if "rl" not in experiment["policies"]:
             patrollers = []
         if "rl" not in experiment["adversaries"]:

@@ -229,7 +229,7 @@ def test_a_drifter_agent_trains_with_the_shipped_config_and_joins_the_table(tmp_
     assert train.main([str(path), "--no-progress"]) == 0
     exp = {**reach(count=2), "policies": ["rl"], "rl_models": "drifter-reach"}
     rows, _ = run(config(tmp_path, exp), progress=False)
-    assert [r.policy for r in rows] == ["rl ppo_seed0"] * 2
+    assert [r.policy for r in rows] == ["rl ppo_seed0", "rl ppo_seed0 (greedy)"] * 2
     assert all("success" in r.metrics and "predicted_success" not in r.metrics for r in rows)
 
 

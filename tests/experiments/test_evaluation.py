@@ -11,7 +11,7 @@ import yaml
 from baselines.rl.train import validate_train_config
 from bounce_gym.errors import ConfigError
 from experiments.config import load_config, validate_config
-from experiments.report import summarise
+from experiments.report import summarise, table_rows
 from experiments.runner import run
 
 ROOT = Path(__file__).parents[2]
@@ -110,10 +110,16 @@ def test_rl_smoke_train_then_evaluate_scores_the_model(tmp_path):
                                "policies": ["rl", "random"]}]}
     rows, _ = run(config, progress=False)
     scored = [r for r in rows if r.policy.startswith("rl ")]
-    assert [r.seed for r in scored] == [10_000, 10_001] and all(r.steps >= 1 for r in scored)
-    assert {r.group for r in scored} == {"rl ppo"}
-    summary = {s["policy"]: s for s in summarise(rows)}
-    assert "rl ppo_seed0" in summary and "success" in summary["rl ppo_seed0"]
+    # the model plays sampled and greedy, each seed (sweep order: by seed, then by policy)
+    assert [(r.seed, r.policy, r.group) for r in scored] == [
+        (seed, f"rl ppo_seed0{suffix}", f"rl ppo{suffix}")
+        for seed in (10_000, 10_001) for suffix in ("", " (greedy)")]
+    assert all(r.steps >= 1 for r in scored)
+    summary = summarise(rows)
+    assert all("success" in s for s in summary)
+    table, per_seed = table_rows(summary, rows)
+    assert [t["policy"] for t in table] == ["random", "rl ppo", "rl ppo (greedy)"]
+    assert [s["policy"] for s in per_seed] == ["rl ppo_seed0", "rl ppo_seed0 (greedy)"]
 
 
 def test_visibility_scenario_runs_the_safe_plan(tmp_path):

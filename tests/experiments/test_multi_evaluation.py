@@ -255,6 +255,8 @@ def test_shared_ppo_trained_by_train_py_is_scored_by_evaluate(tmp_path):
     ppo = summary[("m3", "rl ppo")]
     assert ppo["seeds"] == 1 and ppo["episodes"] == 2 and ppo["coverage_n"] == 1
     assert ("m3", "rl ppo_seed0") not in summary
+    # beside it the same model greedy: every robot its most likely action
+    assert summary[("m3", "rl ppo (greedy)")]["episodes"] == 2
     per_seed = {(s["experiment"], s["policy"]): s for s in results["per_seed"]}
     assert ppo["coverage"] == per_seed[("m3", "rl ppo_seed0")]["coverage"]
     assert all((summary[(m, "random")]["full"], summary[(m, "random")]["full_n"]) == (1.0, 2)

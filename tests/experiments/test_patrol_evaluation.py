@@ -213,12 +213,16 @@ def test_trained_patrollers_and_adversaries_meet_every_opponent(tmp_path):
            "rl_models": ["patrol-patrollers", "patrol-adversary"]}
     rows, plots = run(config(tmp_path, exp), progress=False)
     patrollers, adversary = "rl patrol-patrollers/ppo_seed7", "rl patrol-adversary/ppo_seed7"
+    greedy = adversary + " (greedy)"  # the trained adversary also plays its greedy action
     assert {r.policy for r in rows} == {
         "random walk vs best response (strategy)", "random walk vs " + adversary,
-        f"{patrollers} vs best response (strategy)", f"{patrollers} vs {adversary}"}
+        "random walk vs " + greedy, f"{patrollers} vs best response (strategy)",
+        f"{patrollers} vs {adversary}", f"{patrollers} vs {greedy}"}
     groups = {r.policy: r.group for r in rows}
     assert groups[f"{patrollers} vs {adversary}"] == \
         "rl patrol-patrollers/ppo vs rl patrol-adversary/ppo"
+    assert groups[f"{patrollers} vs {greedy}"] == \
+        "rl patrol-patrollers/ppo vs rl patrol-adversary/ppo (greedy)"
     assert all(r.metrics["outcome"] in ("capture", "success", "deterred") for r in rows)
     learned = next(e for e in plots["learned"]["setup"].learned_patrollers)[0]
     env = make_env(validate_config(config(tmp_path, exp))["experiments"][0])

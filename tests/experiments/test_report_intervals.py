@@ -188,5 +188,7 @@ def test_a_second_model_folder_with_the_privileged_observation(tmp_path):
     (folder,) = (tmp_path / "runs").iterdir()
     assert (folder / "nav-profile.png").stat().st_size > 1000
     results = json.loads((folder / "results.json").read_text())
-    assert [s["policy"] for s in results["per_seed"]] == ["rl nav-priv/ppo_seed0"]
-    assert "rl nav-priv/ppo" in [s["policy"] for s in results["summary"]]
+    assert [s["policy"] for s in results["per_seed"]] == ["rl nav-priv/ppo_seed0",
+                                                         "rl nav-priv/ppo_seed0 (greedy)"]
+    assert {"rl nav-priv/ppo", "rl nav-priv/ppo (greedy)"} <= \
+        {s["policy"] for s in results["summary"]}

@@ -36,4 +36,5 @@ def test_the_seeds_flag_trains_each_seed_and_the_evaluation_scores_them(tmp_path
         {"name": "nav", "env": "bounce_gym/BounceNavigation-v0", "env_kwargs": NAV,
          "seeds": [10_000], "max_steps": 10, "horizon_reason": "a short smoke run",
          "policies": ["rl"]}]}, progress=False)
-    assert sorted(r.policy for r in rows) == ["rl ppo_seed3", "rl ppo_seed7"]
+    assert sorted(r.policy for r in rows) == ["rl ppo_seed3", "rl ppo_seed3 (greedy)",
+                                              "rl ppo_seed7", "rl ppo_seed7 (greedy)"]

@@ -120,8 +120,9 @@ def test_a_listed_model_with_planted_pickles_loads_its_weights_and_runs_nothing(
     assert isinstance(model.policy.mlp_extractor.policy_net[1], torch.nn.ReLU)
     assert model.num_timesteps == 64  # a counter, kept from the file's JSON
     policy = SB3Policy(planted, env)
-    policy.reset(env)
+    policy.start_options(env, 10_000)
     observation, info = env.reset(seed=10_000)
+    policy.reset(env)
     assert policy.act(observation, info) in (0, 1)
     assert not marker.exists()
 
@@ -151,7 +152,8 @@ def test_bounce_gym_evaluate_runs_nothing_from_a_planted_model(tmp_path, trained
     _write(tmp_path / "models" / "nav" / "ppo_seed0.zip", _planted_data(trained, marker))
     config = _evaluate_config(tmp_path, tmp_path / "models")
     assert main(["evaluate", str(config), "--workers", "1", "--no-progress"]) == 0
-    assert "nav,rl ppo,1,1," in next((tmp_path / "runs").glob("*/summary.csv")).read_text()
+    summary = next((tmp_path / "runs").glob("*/summary.csv")).read_text()
+    assert "nav,rl ppo,1,1," in summary and "nav,rl ppo (greedy),1,1," in summary
     assert not marker.exists()
 
 

@@ -52,7 +52,7 @@ def test_a_stacked_normalised_model_acts_as_in_sb3s_pipeline(tmp_path):
     assert wrappers["n_stack"] == 3 and wrappers["normalize"]["norm_obs"]
     assert wrappers["normalize"]["obs_rms"]["count"] > 256  # statistics of the training run
     env = gym.make(ENV, **NAV)
-    policy = SB3Policy(path, env)
+    policy = SB3Policy(path, env, deterministic=True)
     pipeline = _sb3_pipeline(path, 3)
     for seed in (0, 1):
         pipeline.seed(seed)
@@ -106,5 +106,9 @@ def test_the_evaluation_scores_a_stacked_model_beside_a_plain_one(tmp_path):
         {"name": "n", "env": ENV, "env_kwargs": NAV, "seeds": [10_000, 10_001], "max_steps": 20,
          "horizon_reason": "a short check", "policies": ["rl"]}]}
     rows, _ = run(config, progress=False)
-    assert sorted({r.policy for r in rows}) == ["rl ppo-stack2_seed0", "rl ppo_seed0"]
-    assert sorted({r.group for r in rows}) == ["rl ppo", "rl ppo-stack2"]  # one row per variant
+    assert sorted({r.policy for r in rows}) == [
+        "rl ppo-stack2_seed0", "rl ppo-stack2_seed0 (greedy)", "rl ppo_seed0",
+        "rl ppo_seed0 (greedy)"]
+    # one row per variant, sampled and greedy
+    assert sorted({r.group for r in rows}) == ["rl ppo", "rl ppo (greedy)", "rl ppo-stack2",
+                                               "rl ppo-stack2 (greedy)"]
