@@ -102,8 +102,14 @@ class FixedAnglePolicy(Policy):
     def __init__(self, index: int, degrees: float) -> None:
         self.index = int(index)
         self.name = f"fixed {degrees:g}°"
+        self.parallel = False
+
+    def reset(self, env) -> None:
+        # a parallel env's observations are a dict per robot; a goal-conditioned Gymnasium
+        # env's observation is a dict too, of one robot
+        self.parallel = is_parallel_env(env)
 
     def act(self, observation, info):
-        if isinstance(observation, dict):
+        if self.parallel:
             return dict.fromkeys(observation, self.index)
         return self.index

@@ -12,6 +12,9 @@ horizon is the experiment's ``max_steps``.
 Per episode:
 
 * ``success`` — the goal was reached; ``ticks_to_goal`` — when (successful episodes only);
+* on the goal-conditioned ``BounceNavigation-v1``: ``optimal_bounces``, the fewest bounces the
+  env's cell model needs for the episode's start and goal, and ``bounce_ratio``, the bounces
+  the policy took over that (successful episodes only; 1 is optimal);
 * ``feasible`` — the planner's model says the episode can be solved at all: on the roadmap of
   the env's cell model (Alam, Bobadilla & Shell 2017, Sec. IV) some plan leads from the start
   cell to a goal cell. Random start/goal pairs are often not connected for a given Φ, and a
@@ -90,6 +93,10 @@ class NavigationEpisode(Episode):
                 out["success_feasible"] = out["success"]
         if "ticks_to_goal" in info:
             out["ticks_to_goal"] = info["ticks_to_goal"]
+        if info.get("optimal_bounces", -1) > 0:  # the goal-conditioned task (v1)
+            out["optimal_bounces"] = int(info["optimal_bounces"])
+            if out["success"]:
+                out["bounce_ratio"] = info["bumps"] / info["optimal_bounces"]
         if info.get("plan_cost") is not None:
             out["plan_cost"] = float(info["plan_cost"])
         return out
@@ -98,8 +105,8 @@ class NavigationEpisode(Episode):
 class Navigation(SingleRobotFamily):
     name = task = "navigation"
     columns = (*SingleRobotFamily.columns, "success", "feasible", "success_feasible",
-               "predicted_success", "ticks_to_goal", "plan_cost", "predicted_ticks",
-               "predicted_weight")
+               "predicted_success", "ticks_to_goal", "bounce_ratio", "optimal_bounces",
+               "plan_cost", "predicted_ticks", "predicted_weight")
     score = "success"
     planner_attributes = ("predicted_success", "predicted_ticks", "predicted_weight")
 

@@ -293,7 +293,13 @@ def test_evaluate_cli_prints_multi_tables_with_intervals(tmp_path, capsys):
 def test_fixed_policy_names_and_actions():
     policy = FixedAnglePolicy(2, 135.0)
     assert policy.name == "fixed 135°"
+    policy.reset(MultiBounceEnv(**GRID, n_robots=2))
     assert policy.act({"robot_0": None, "robot_1": None}, {}) == {"robot_0": 2, "robot_1": 2}
+    # a goal-conditioned Gymnasium env's observation is a dict too, of one robot
+    import gymnasium as gym
+
+    policy.reset(gym.make("bounce_gym/BounceNavigation-v1"))
+    assert policy.act({"observation": None, "achieved_goal": None, "desired_goal": None}, {}) == 2
 
 
 def test_an_episode_capped_before_full_coverage():
