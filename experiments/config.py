@@ -115,6 +115,8 @@ _MAP_SUFFIXES = (".yaml", ".yml", ".json")
 #: the PettingZoo ids (several robots or drifters)
 _PARALLEL_IDS = [*PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]
 
+#: the single-robot tasks whose experiments take ``planner_kwargs`` (the navigation planners)
+NAVIGATION_TASKS = ("navigation", "goal_navigation")
 _TOP_KEYS = {"name": str, "output": str, "models": str, "experiments": list, "leaderboard": bool,
              "executor": dict}
 _EXPERIMENT_KEYS = {"name": str, "env": str, "env_kwargs": dict, "seeds": list | dict,
@@ -193,10 +195,10 @@ def validate_config(config: object) -> dict:
             raise ConfigError(f"{where}.env: unknown environment id {exp['env']!r}; registered: "
                               f"{[*GYMNASIUM_IDS, *_PARALLEL_IDS]}")
         elif "planner_kwargs" in exp and not (is_drifter_id(exp["env"])
-                                              or _task(exp) == "navigation"):
+                                              or _task(exp) in NAVIGATION_TASKS):
             raise ConfigError(f"{where}.planner_kwargs: only for multi-robot experiments "
                               f"(env one of {_PARALLEL_IDS}), bounce_gym/Drifter-v0 and "
-                              "navigation (task 'navigation')")
+                              f"navigation (task one of {list(NAVIGATION_TASKS)})")
         if "max_episode_steps" in exp["env_kwargs"]:
             raise ConfigError(f"{where}.env_kwargs.max_episode_steps: not allowed; the "
                               "experiment's horizon is max_steps (see horizon_reason)")

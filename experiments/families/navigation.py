@@ -4,6 +4,9 @@ the GCM sampled from the env's own dynamics (`baselines.navigation.sampled`).
 
 Planners (``planner_kwargs``, all optional): ``models`` lists which of `PLANNER_MODELS` run —
 ``roadmap``, the papers' plan on the env's cell model run open loop (row "roadmap planner"), and
+``roadmap_pose``, the same plan replanned from the true pose in ``info`` whenever the clock
+departs from it (row "roadmap planner (pose observed)": privileged, the planner beside learners
+that observe their pose, as on ``BounceNavigation-v1`` off the cell backend), and
 ``sampled``, `SampledNavigationPlanner` closed loop on its particle belief (row "sampled-gcm");
 default ``[roadmap]``. The sampled planner's options `SAMPLED_OPTIONS` (``samples``, ``seed``,
 ``particles``, ``draws``, ``depth``, ``reach``, ``cell_size``, ``rollouts``) are passed to it; its
@@ -44,7 +47,9 @@ from bounce_gym.errors import ConfigError
 from experiments.families.base import Episode, SingleRobotFamily
 
 #: the planners ``planner_kwargs.models`` may name
-PLANNER_MODELS = ("roadmap", "sampled")
+PLANNER_MODELS = ("roadmap", "roadmap_pose", "sampled")
+#: the row of the roadmap planner that replans from the true pose (a privileged variant)
+POSE_NAME = "roadmap planner (pose observed)"
 #: the options of the sampled planner ``planner_kwargs`` may set
 SAMPLED_OPTIONS = ("samples", "seed", "particles", "draws", "depth", "reach", "cell_size",
                    "rollouts")
@@ -150,6 +155,10 @@ def planners(experiment: Mapping) -> list[Policy]:
     out: list[Policy] = []
     if "roadmap" in models:
         out.append(NavigationPlanner())
+    if "roadmap_pose" in models:
+        privileged = NavigationPlanner(replan_from_info=True)
+        privileged.name = POSE_NAME
+        out.append(privileged)
     if "sampled" in models:
         sampled = SampledNavigationPlanner(horizon=experiment["max_steps"],
                                            **_sampled_options(kwargs))

@@ -28,7 +28,8 @@ def test_the_benchmark_covers_every_task_with_200_held_out_episodes():
     experiments = config["experiments"]
     tasks = {(e["env"], e["env_kwargs"].get("world", "default")) for e in experiments}
     assert {env for env, _ in tasks} == {
-        "bounce_gym/BounceNavigation-v0", "bounce_gym/BounceLocalization-v0",
+        "bounce_gym/BounceNavigation-v0", "bounce_gym/BounceNavigation-v1",
+        "bounce_gym/BounceLocalization-v0",
         "bounce_gym/BounceCoverage-v0", "bounce_gym/MultiBounceCoverage-v0",
         "bounce_gym/MultiBounceMonitoring-v0", "bounce_gym/Drifter-v0",
         "bounce_gym/MultiDrifter-v0"}
@@ -56,7 +57,7 @@ def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
     config = yaml.safe_load(BENCHMARK.read_text(encoding="utf-8"))
     for exp in config["experiments"]:
         exp["seeds"] = {"start": 10_000, "count": 2}
-        world = exp["env_kwargs"].get("world", "")
+        world = exp.get("env_kwargs", {}).get("world", "")
         if world.endswith(".yaml"):  # the copy lives elsewhere: point at the shipped map
             exp["env_kwargs"]["world"] = str(BENCHMARK.parent / world)
     config.update(output=str(tmp_path / "runs"), models=str(tmp_path / "models"))

@@ -10,10 +10,10 @@ pytest.importorskip("stable_baselines3")
 
 from baselines.rl.model_files import ALGOS  # noqa: E402
 from baselines.rl.train_config import (  # noqa: E402
-    POLICIES,
     algo_class,
     algo_kwargs,
     check_hyperparams,
+    policy_name,
     validate_train_config,
 )
 from baselines.rl.train_env import make_train_env  # noqa: E402
@@ -34,7 +34,7 @@ def test_shipped_training_configs_build_their_model(path):
     env = make_train_env({**config, "n_envs": min(config["n_envs"], 2),
                           "vec_env": "sync" if config["vec_env"] == "subproc" else
                           config["vec_env"]})
-    model = cls(POLICIES[config["algo"]], env, device="cpu",
+    model = cls(policy_name(config["algo"], env.observation_space), env, device="cpu",
                 **algo_kwargs(config["hyperparams"]))
     assert model.policy is not None
     env.close()
