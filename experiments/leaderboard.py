@@ -2,8 +2,10 @@
 ``configs/benchmark.yaml``): per experiment, its policies ordered by the family's score, every
 measured cell with its 95% interval and count.
 
-Writes ``leaderboard.md`` (a section per experiment: env, difficulty, episodes per policy,
-horizon, then the table; notes such as model folders without models at the end),
+Writes ``leaderboard.md`` (first "Who wins": per experiment, the best planner against the best
+trained agent and against random bouncing, decided by their intervals (`verdicts`); then a
+section per experiment: env, difficulty, episodes per policy, horizon, then the table; notes such
+as model folders without models at the end),
 ``leaderboard.csv`` (one line per experiment and policy, every estimate with ``_lo``, ``_hi`` and
 ``_n``) and ``leaderboard.png`` (each experiment's score per policy with its interval).
 """
@@ -15,8 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from baselines.policy import RandomAnglePolicy
+from baselines.rl.policies import GREEDY_SUFFIX
 from bounce_gym.files import atomic_write
 from experiments.config import world_name
+from experiments.oracle import ORACLE_NAME
 from experiments.plots.figures import pyplot, save_figure
 from experiments.report import cell, csv_text, tables
 
@@ -32,6 +37,74 @@ def ordered(rows: list[dict], family) -> list[dict]:
     return sorted(rows, key=key)
 
 
+def kind(policy: str) -> str:
+    """``rl``, ``greedy`` (a trained agent's greedy twin), ``random``, ``fixed``, ``oracle`` or
+    ``planner`` (every other row: the family's reference planners)."""
+    if policy.startswith("rl "):
+        return "greedy" if policy.endswith(GREEDY_SUFFIX) else "rl"
+    if policy == RandomAnglePolicy.name:
+        return "random"
+    if policy.startswith("fixed ") or policy == ORACLE_NAME:
+        return "fixed" if policy.startswith("fixed ") else "oracle"
+    return "planner"
+
+
+def _best(rows: list[dict], family, which: str) -> dict | None:
+    mine = [r for r in ordered(rows, family) if kind(r["policy"]) == which
+            and r.get(family.score) is not None]
+    return mine[0] if mine else None
+
+
+def _versus(a: dict | None, b: dict | None, family) -> str:
+    """Which of two rows wins on the family's score: the one whose 95% interval lies wholly on
+    the better side of the other's; ``tie`` when the intervals overlap."""
+    if a is None or b is None:
+        return "-"
+    score = family.score
+    lo_a, hi_a = a.get(f"{score}_lo", a[score]), a.get(f"{score}_hi", a[score])
+    lo_b, hi_b = b.get(f"{score}_lo", b[score]), b.get(f"{score}_hi", b[score])
+    if None in (lo_a, hi_a, lo_b, hi_b):
+        return "undecided (no interval)"
+    better_a = lo_a > hi_b if family.higher_is_better else hi_a < lo_b
+    better_b = lo_b > hi_a if family.higher_is_better else hi_b < lo_a
+    return a["policy"] if better_a else b["policy"] if better_b else "tie (intervals overlap)"
+
+
+def verdicts(summary: list[dict], families: Mapping) -> list[dict]:
+    """Per experiment: its best planner, best trained agent (sampled actions), random's row,
+    and who wins between them on the family's score (`_versus`)."""
+    out = []
+    for name in dict.fromkeys(r["experiment"] for r in summary):
+        if name not in families:
+            continue
+        family = families[name]
+        rows = [r for r in summary if r["experiment"] == name]
+        planner, rl = _best(rows, family, "planner"), _best(rows, family, "rl")
+        random = _best(rows, family, "random")
+        out.append({"experiment": name, "score": family.score, "planner": planner, "rl": rl,
+                    "random": random, "rl_vs_planner": _versus(rl, planner, family),
+                    "rl_vs_random": _versus(rl, random, family)})
+    return out
+
+
+def _verdict_lines(summary: list[dict], families: Mapping) -> list[str]:
+    def shown(row, score):
+        return "-" if row is None else f"{row['policy']}: {cell(row, score)}"
+
+    lines = ["## Who wins", "",
+             "Per experiment, the best planner, the best trained agent (sampled actions; the "
+             "greedy rows are in the tables) and random bouncing on the task's score; a policy "
+             "wins when its 95% interval lies wholly on the better side of the other's.", "",
+             "| experiment | score | best planner | best trained agent | random | RL vs planner "
+             "| RL vs random |", "|---|---|---|---|---|---|---|"]
+    for v in verdicts(summary, families):
+        score = v["score"]
+        lines.append(f"| {v['experiment']} | {score} | {shown(v['planner'], score)} | "
+                     f"{shown(v['rl'], score)} | {shown(v['random'], score)} | "
+                     f"{v['rl_vs_planner']} | {v['rl_vs_random']} |")
+    return lines + [""]
+
+
 def markdown(config: Mapping, summary: list[dict], families: Mapping, notes: list[str],
              provenance: Mapping) -> str:
     """The leaderboard as Markdown (see the module)."""
@@ -43,7 +116,7 @@ def markdown(config: Mapping, summary: list[dict], families: Mapping, notes: lis
              "Wilson intervals, means bootstrap intervals; n counts the episodes that have the "
              "value (for a trained algorithm's row, the IQM over its training seeds: n counts "
              "seeds). Rows are ordered by each task's score; overlapping intervals do not rank.",
-             ""]
+             "", *_verdict_lines(summary, families)]
     for heading, columns, rows in tables(summary, families):
         for name in dict.fromkeys(r["experiment"] for r in rows):
             exp, family = experiments[name], families[name]

@@ -72,7 +72,12 @@ def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
     assert "on scb_like;" in board and "on two_sink;" in board
     for exp in config["experiments"]:
         assert f"## {exp['name']} ({exp['difficulty']})" in board
-    rows = [line for line in board.splitlines() if line.startswith("| ") and "policy" not in line]
+    head, tables = board.split("\n## Who wins\n")[1].split("\n## ", 1)
+    verdicts = [line for line in head.splitlines() if line.startswith("| ")][1:]
+    assert [line.split(" | ")[0][2:] for line in verdicts] == [
+        e["name"] for e in config["experiments"]]
+    rows = [line for line in tables.splitlines() if line.startswith("| ")
+            and "policy" not in line]
     assert len(rows) >= 6 * 3 and all(CELL.search(line) for line in rows)
     # no models in this run: every rl folder is named in the notes, no rl row is shown
     assert "## Notes" in board and "navigation-lab-privileged" in board
