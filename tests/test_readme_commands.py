@@ -16,12 +16,15 @@ tomllib = pytest.importorskip("tomllib", reason="reading pyproject.toml needs Py
 
 ROOT = Path(__file__).parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
+#: the README and the docs pages, where training commands are shown
+PAGES = "\n".join([README, *(page.read_text(encoding="utf-8")
+                              for page in sorted((ROOT / "docs").glob("*.md")))])
 #: training commands, in ```bash blocks or inline code: python train.py …, bounce-gym
 #: train|curves|tune …
 #: (not the templates, such as ``bounce-gym curves models/<name>``)
 COMMANDS = [c.strip() for c in re.findall(
     r"(?:^|`)((?:\.venv/bin/)?(?:python train\.py|bounce-gym (?:train|curves|tune)) [^#`\n]*)",
-    README, re.M) if "<" not in c]
+    PAGES, re.M) if "<" not in c]
 #: the extras `make install` installs besides the core dependencies (dev only adds test tools)
 EXTRAS = ("rl", "distributed")
 OURS = {"bounce_gym", "baselines", "experiments", "train", "evaluate"}
@@ -99,6 +102,7 @@ def test_readme_training_commands_run_as_written(tmp_path):
     assert (tmp_path / "models/navigation-lab/learning_curves.png").is_file()
     assert (tmp_path / "models/navigation-lab/ppo_seed0.monitor.csv").is_file()
     assert (tmp_path / "models/navigation-lab-tune/trials.csv").is_file()
+    assert (tmp_path / "models/navigation-lab-v1/dqn_seed40.zip").is_file()  # docs/learning.md
     distributions = importlib.metadata.packages_distributions()
     declared = _declared()
     undeclared = {}
