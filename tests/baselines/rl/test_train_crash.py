@@ -74,4 +74,4 @@ def test_sigkill_at_any_instant_leaves_only_complete_listed_models(tmp_path):
                                "horizon_reason": "a quick test",
                                "policies": ["rl"]}]}
     rows, _ = run(config, progress=False)
-    assert [r.policy for r in rows] == ["rl ppo_seed0"]
+    assert [r.policy for r in rows] == ["rl ppo_seed0", "rl ppo_seed0 (greedy)"]
