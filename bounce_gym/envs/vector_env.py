@@ -28,13 +28,13 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from bounce_gym.cells.drives import ContactDrives
 from bounce_gym.dynamics import BounceDynamics, RobotState
 from bounce_gym.dynamics.noise import Exact
 from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.envs.tasks import CoverageTask, NavigationTask
 from bounce_gym.envs.tasks.base import StepEvents, path_samples, tick_length
+from bounce_gym.envs.vector_cells import CellRobots
 from bounce_gym.errors import ActionError, ConfigError
 from bounce_gym.validate import integer
 
@@ -84,7 +84,10 @@ class BounceVectorEnv(VectorEnv):
             opts.world, n, backend=opts.backend, rule=opts.bounce_rule, noise=opts.noise,
             radius=opts.robot_radius, step_length=opts.step_length, robot_collisions="ignore",
             backend_options=opts.backend_options)
-        self.task = _BATCHED[task.name](task, n)
+        #: the cell backend's robots, kept as cells (None on the kinematic backend)
+        self.cell_robots = CellRobots(self.dynamics) if opts.backend == "cell" else None
+        model = self.cell_robots.model if self.cell_robots else None
+        self.task = _BATCHED[task.name](task, n, model)
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._ticks = np.zeros(n, dtype=np.int64)
         self._elapsed = np.zeros(n, dtype=np.int64)
@@ -95,9 +98,18 @@ class BounceVectorEnv(VectorEnv):
         self._origin = np.array(opts.world.bounds[:2], dtype=np.float64)
         self._all_true = _read_only(np.ones(n, dtype=bool))
         self._no_contact = _read_only(np.zeros(n, dtype=bool))
-        #: the cell backend's drives to contact, tabulated
-        self._cell_drives = (ContactDrives(self.dynamics.backend.model)
-                             if opts.backend == "cell" else None)
+        #: ``info["cell"]`` of each position index of the cell model
+        self._cell_rc = (np.ascontiguousarray(self._cells(model.centres)) if model is not None
+                         else None)
+
+    @property
+    def state(self) -> RobotState | None:
+        """The robots' state (None before the first reset)."""
+        return self.cell_robots.state if self.cell_robots else self.dynamics.state
+
+    def _positions(self) -> np.ndarray | None:
+        """(N,) each robot's position index on the cell backend; None on the kinematic one."""
+        return self.cell_robots.p if self.cell_robots else None
 
     # -- episodes ---------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -116,7 +128,7 @@ class BounceVectorEnv(VectorEnv):
             if mask.shape != (n,) or mask.dtype != np.bool_:
                 raise ConfigError(f"options['reset_mask']: expected {n} bools, got dtype "
                                   f"{mask.dtype}, shape {mask.shape}")
-            if self.dynamics.state is None and not mask.all():
+            if self.state is None and not mask.all():
                 raise ConfigError("options['reset_mask']: the first reset resets every env")
             rows = np.flatnonzero(mask)
         if seed is None:
@@ -140,11 +152,30 @@ class BounceVectorEnv(VectorEnv):
         then the rows are placed, driven to their first contact and handed to the task at once."""
         core = self.single.core
         options = checked_reset_options(options, core.option_keys)
-        m = len(rows)
-        position, heading = np.empty((m, 2)), np.empty(m)
-        for j, i in enumerate(rows.tolist()):
-            position[j], heading[j] = (x[0] for x in core.draw_start(self._rngs[i], options))
-            self.task.drawn(i, core.task)
+        robots = self.cell_robots
+        if robots is not None and not options and self.task.draws_cells:
+            cells = self.task.draw_cells([self._rngs[i] for i in rows.tolist()], rows)
+            self._ticks[rows] = robots.place(rows, *cells)
+        else:
+            m = len(rows)
+            position, heading = np.empty((m, 2)), np.empty(m)
+            for j, i in enumerate(rows.tolist()):
+                position[j], heading[j] = (x[0] for x in core.draw_start(self._rngs[i], options))
+                self.task.drawn(i, core.task)
+            if robots is not None:
+                self._ticks[rows] = robots.place(rows, *robots.cells_of(position, heading))
+            else:
+                self._ticks[rows] = self._place_kinematic(rows, position, heading)
+        self.task.start(rows, self.state, self._ticks, self._positions())
+        self._elapsed[rows] = 0
+        self._history[rows] = 0.0
+        self._last_angle[rows] = math.nan
+        return self._reset_infos(infos, rows)
+
+    def _place_kinematic(self, rows: np.ndarray, position: np.ndarray,
+                         heading: np.ndarray) -> np.ndarray:
+        """Kinematic backend: start robots ``rows`` at the poses and drive each to its first
+        contact. Returns the ticks each drove."""
         state = self.dynamics.state
         if state is None:  # the first reset: every row
             state = self.dynamics.reset(np.random.default_rng(0), position, heading)
@@ -154,34 +185,10 @@ class BounceVectorEnv(VectorEnv):
                 getattr(state, name)[rows] = getattr(fresh, name)
             self.dynamics.backend.place(state, rows)
         # every robot not reset ended its last step in contact: only the rows drive
-        if self.options.backend == "cell":
-            self._ticks[rows] = self._drive_cells(rows)
-        else:  # every robot not reset ended its last step in contact: only the rows drive
-            self._ticks[rows] = self.dynamics.backend.drive_each(state)[rows]
-        self.task.start(rows, state, self._ticks)
-        self._elapsed[rows] = 0
-        self._history[rows] = 0.0
-        self._last_angle[rows] = math.nan
-        return self._reset_infos(infos, rows)
-
-    def _drive_cells(self, robots: np.ndarray) -> np.ndarray:
-        """Cell backend: robots ``robots`` each drive cell to cell until their own next contact,
-        as a lone robot's drive does (same positions, clocks and odometer sums). Returns the
-        ticks each drove."""
-        state = self.dynamics.state
-        backend = self.dynamics.backend
-        model = backend.model
-        start = model.cell_of(state.position[robots], state.heading[robots])
-        drives = self._cell_drives
-        ticks = drives.ticks[start]
-        state.odometer[robots] = drives.add_hops(start, state.odometer[robots])
-        state.position[robots] = model.centres[model.decode(drives.end[start])[0]]
-        state.clock[robots] += ticks
-        backend.update_contacts(state, robots[ticks > 0])
-        return ticks
+        return self.dynamics.backend.drive_each(state)[rows]
 
     def step(self, actions):
-        state = self.dynamics.state
+        state = self.state
         if state is None:
             raise ConfigError("call reset() before step()")
         angles = self._angles(actions)
@@ -191,11 +198,10 @@ class BounceVectorEnv(VectorEnv):
         if opts.history:
             rows = np.flatnonzero(bumping)
             clock_before = state.clock[rows]
-        if opts.backend == "cell":
+        if self.cell_robots is not None:
             # every robot is blocked (each step and each reset ends in contact): the bump tick
             # is the rotation, then each robot drives on by itself
-            self.dynamics.rotate(self._all_rows, angles)
-            driven = self._drive_cells(self._all_rows)
+            driven = self.cell_robots.bounce(angles)
         else:
             driven = self.dynamics.bounce_each(angles)
         ticks = bumping + driven
@@ -216,7 +222,8 @@ class BounceVectorEnv(VectorEnv):
             ticks=ticks, start=start, end=state.position.copy(), heading=state.heading.copy(),
             bumps=bumping.astype(np.int64), angles=np.where(bumping, angles, math.nan),
             angle_changed=changed, robot_contact=self._no_contact)
-        rewards, terminated, task_info = self.task.step(state, events, self._ticks)
+        rewards, terminated, task_info = self.task.step(state, events, self._ticks,
+                                                        self._positions())
         self._elapsed += 1
         truncated = (np.zeros(self.num_envs, dtype=bool) if self.max_episode_steps is None
                      else self._elapsed >= self.max_episode_steps)
@@ -265,7 +272,7 @@ class BounceVectorEnv(VectorEnv):
     def _observation(self) -> np.ndarray:
         """(N, d) float32 observations, written column block by column block into one fresh
         array (the values `BounceCore.observation` concatenates, cast the same way)."""
-        state = self.dynamics.state
+        state = self.state
         opts = self.options
         n = self.num_envs
         core = self.single.core
@@ -296,11 +303,11 @@ class BounceVectorEnv(VectorEnv):
         and ``step_ticks``. When every env reports a key, its array is the value itself (no
         zero-filled copy) and its mask the shared read-only all-True array.
         """
-        state = self.dynamics.state
+        state = self.state
         values = {"ticks": self._ticks.copy(),
                   "position": state.position.copy() if events is None else events.end,
                   "heading": state.heading.copy() if events is None else events.heading,
-                  "cell": self._cells(state.position), "clock": state.clock.copy(),
+                  "cell": self._info_cells(state.position), "clock": state.clock.copy(),
                   "bumps": state.bumps.copy(), "contact_edge": state.contact_edge.copy(),
                   **task_info}
         if step_ticks is not None:
@@ -328,10 +335,10 @@ class BounceVectorEnv(VectorEnv):
     def _reset_infos(self, infos: dict, rows: np.ndarray) -> dict:
         """Write the reset info of envs ``rows`` into ``infos`` (`_infos`, computed for those
         rows only)."""
-        state = self.dynamics.state
+        state = self.state
         position = state.position[rows]
         values = {"ticks": self._ticks[rows], "position": position,
-                  "heading": state.heading[rows], "cell": self._cells(position),
+                  "heading": state.heading[rows], "cell": self._info_cells(position, rows),
                   "clock": state.clock[rows], "bumps": state.bumps[rows],
                   "contact_edge": state.contact_edge[rows], **self.task.info(state, rows)}
         n = self.num_envs
@@ -346,6 +353,13 @@ class BounceVectorEnv(VectorEnv):
             infos[key][rows] = value
             infos[f"_{key}"][rows] = True
         return infos
+
+    def _info_cells(self, position: np.ndarray, rows: np.ndarray | slice = _EVERY) -> np.ndarray:
+        """``info["cell"]`` of robots ``rows`` at positions ``position`` (their rows of the
+        state): on the cell backend looked up by position index."""
+        if self._cell_rc is not None:
+            return self._cell_rc[self.cell_robots.p[rows]]
+        return self._cells(position)
 
     def _cells(self, position: np.ndarray) -> np.ndarray:
         """(n, 2) int (row, col) of ``info["cell"]`` at positions ``position`` (n, 2)."""
@@ -388,15 +402,29 @@ def _unbatchable(opts, task) -> str | None:
 # -- batched tasks ----------------------------------------------------------------------------
 
 class _FreeBatch:
-    """No reward, never terminates."""
+    """No reward, never terminates.
 
-    def __init__(self, task, n: int) -> None:
+    ``model``: the `CellModel` of the cell backend, else None. ``positions`` (`start`, `step`):
+    each robot's position index in that model, else None.
+    """
+
+    #: whether `draw_cells` draws the episodes (without reset options)
+    draws_cells = False
+
+    def __init__(self, task, n: int, model=None) -> None:
         self.n = n
+
+    def draw_cells(self, rngs: list, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The start cells (position indices, bins) of envs ``rows``, each drawn from its
+        generator in ``rngs`` with what else the task draws, as the single-robot task draws
+        them (where `draws_cells`)."""
+        raise NotImplementedError
 
     def drawn(self, i: int, task) -> None:
         """Take what the single-robot ``task`` drew for env ``i``'s new episode (its goal)."""
 
-    def start(self, rows: np.ndarray, state, ticks: np.ndarray) -> None:
+    def start(self, rows: np.ndarray, state, ticks: np.ndarray,
+              positions: np.ndarray | None = None) -> None:
         """Start the episodes of envs ``rows``, whose robots (``state``) were placed and drove
         ``ticks`` to their first contact, as the single-robot task's reset starts one."""
 
@@ -407,7 +435,8 @@ class _FreeBatch:
     def observation(self) -> np.ndarray | None:
         return None
 
-    def step(self, state, events: StepEvents, ticks: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+    def step(self, state, events: StepEvents, ticks: np.ndarray,
+             positions: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
         return np.zeros(self.n), np.zeros(self.n, dtype=bool), {}
 
 
@@ -415,9 +444,14 @@ class _NavigationBatch(_FreeBatch):
     """`NavigationTask` for N robots: goals, arrival, the rewards (`NavigationTask.step_rewards`,
     every ``reward`` option) and the plan cost."""
 
-    def __init__(self, task: NavigationTask, n: int) -> None:
+    def __init__(self, task: NavigationTask, n: int, model=None) -> None:
         super().__init__(task, n)
         self.single = task
+        self.model = model
+        self.draws_cells = model is not None and task.random_cells
+        if self.draws_cells and task.observe_task:  # the features of every cell as a pose
+            p, k = model.decode(np.arange(model.n_cells))
+            self.cell_features = task.pose_features(model.centres[p], k * model.bin_width)
         self.goal_position = np.zeros((n, 2))
         self.goal_heading = np.zeros(n)
         self.reached = np.zeros(n, dtype=bool)
@@ -427,6 +461,29 @@ class _NavigationBatch(_FreeBatch):
         if task.geodesic is not None:  # the progress reward: Φ of every grid node, per env
             self.potentials = np.zeros((n, task.geodesic.n_nodes))
             self.potential_now = np.zeros(n)
+            #: the grid node of each position index of the cell model
+            self.node_of_position = (task.geodesic.node_of(model.centres)
+                                     if model is not None else None)
+
+    def draw_cells(self, rngs, rows):
+        single, model = self.single, self.model
+        # per env: the start's position index and bin, then the goal's
+        drawn = np.array([single.random_cell(rng) + single.random_cell(rng) for rng in rngs],
+                         dtype=np.int64).reshape(-1, 4)
+        p, k, goal_p, goal_k = drawn.T
+        self.goal_position[rows] = model.centres[goal_p]
+        self.goal_heading[rows] = goal_k * model.bin_width
+        if single.observe_task:
+            self.features[rows] = np.concatenate(
+                (self.cell_features[model.cell_id(p, k)],
+                 self.cell_features[model.cell_id(goal_p, goal_k)]), axis=1)
+        return p, k
+
+    def _nodes(self, position: np.ndarray, positions: np.ndarray | None) -> np.ndarray:
+        """The grid nodes of robots at ``position``, or at position indices ``positions``."""
+        if positions is None:
+            return self.single.geodesic.node_of(position)
+        return self.node_of_position[positions]
 
     def drawn(self, i, task):
         self.goal_position[i] = task.goal[0][0]
@@ -434,7 +491,7 @@ class _NavigationBatch(_FreeBatch):
         if task.observe_task:
             self.features[i] = task.observation(None)[0]
 
-    def start(self, rows, state, ticks):
+    def start(self, rows, state, ticks, positions=None):
         single = self.single
         self.reached[rows] = False
         self.plan_cost[rows] = single.w1 * ticks[rows]  # the drive of a bounce-mode reset
@@ -442,8 +499,8 @@ class _NavigationBatch(_FreeBatch):
             goals = single.geodesic.node_of(self.goal_position[rows])
             for goal in np.unique(goals).tolist():
                 self.potentials[rows[goals == goal]] = single.goal_potentials(goal)
-            self.potential_now[rows] = self.potentials[
-                rows, single.geodesic.node_of(state.position[rows])]
+            self.potential_now[rows] = self.potentials[rows, self._nodes(
+                state.position[rows], None if positions is None else positions[rows])]
 
     def info(self, state, rows=_EVERY):
         goal = self.goal_position[rows]  # a copy where ``rows`` is an array
@@ -457,21 +514,21 @@ class _NavigationBatch(_FreeBatch):
     def observation(self):
         return self.features if self.single.observe_task else None
 
-    def step(self, state, events, ticks):
+    def step(self, state, events, ticks, positions=None):
         single = self.single
         err = (events.heading - self.goal_heading + np.pi) % (2 * np.pi) - np.pi
         arrive = np.full(self.n, np.nan)
         # the disk test of a lone robot, run only where the heading is within tolerance and the
         # path passes near the goal
-        for i in np.flatnonzero((np.abs(err) <= single.heading_tolerance)
-                                & self._near_goal(events)):
+        aligned = np.flatnonzero(np.abs(err) <= single.heading_tolerance)
+        for i in aligned[self._near_goal(events, aligned)].tolist():
             single.goal = (self.goal_position[i:i + 1], self.goal_heading[i:i + 1])
             one = StepEvents(ticks=int(events.ticks[i]), start=events.start[i:i + 1],
                              end=events.end[i:i + 1], heading=events.heading[i:i + 1],
                              bumps=events.bumps[i:i + 1], angles=events.angles[i:i + 1],
                              angle_changed=events.angle_changed[i:i + 1],
                              robot_contact=events.robot_contact[i:i + 1])
-            found = single._ticks_to_goal(one)
+            found = single.ticks_to_goal(one)
             if found is not None:
                 arrive[i] = found
         hit = ~np.isnan(arrive)
@@ -480,7 +537,7 @@ class _NavigationBatch(_FreeBatch):
         before = after = None
         if single.geodesic is not None:
             before = self.potential_now
-            after = self.potentials[self.rows, single.geodesic.node_of(events.end)]
+            after = self.potentials[self.rows, self._nodes(events.end, positions)]
             self.potential_now = np.where(hit, 0.0, after)
         reward = single.step_rewards(spent, changed, hit, before, after)
         self.plan_cost = self.plan_cost + single.plan_cost_of(spent, changed)
@@ -492,11 +549,13 @@ class _NavigationBatch(_FreeBatch):
             info["ticks_to_goal"] = (to_goal.astype(np.int64), hit)
         return reward, self.reached.copy(), info
 
-    def _near_goal(self, events: StepEvents) -> np.ndarray:
-        """(N,) bool: the step's segment comes within the goal radius (plus a margin far above
-        rounding) of the goal — a superset of the robots the exact disk test can accept."""
-        seg = events.end - events.start
-        rel = self.goal_position - events.start
+    def _near_goal(self, events: StepEvents, rows: np.ndarray) -> np.ndarray:
+        """(len(rows),) bool: the step's segment of envs ``rows`` comes within the goal radius
+        (plus a margin far above rounding) of the goal — a superset of the robots the exact
+        disk test can accept."""
+        start = events.start[rows]
+        seg = events.end[rows] - start
+        rel = self.goal_position[rows] - start
         length2 = np.einsum("ij,ij->i", seg, seg)
         along = np.clip(np.einsum("ij,ij->i", rel, seg) / np.where(length2 > 0, length2, 1.0),
                         0.0, 1.0)
@@ -506,7 +565,7 @@ class _NavigationBatch(_FreeBatch):
 class _CoverageBatch(_FreeBatch):
     """`CoverageTask` for N robots: one visit histogram and visited grid per env."""
 
-    def __init__(self, task: CoverageTask, n: int) -> None:
+    def __init__(self, task: CoverageTask, n: int, model=None) -> None:
         super().__init__(task, n)
         self.single = task
         shape = (n, *task.free.shape)
@@ -515,7 +574,7 @@ class _CoverageBatch(_FreeBatch):
         self.distance = np.zeros(n)
         self.n_free = task.free.sum()
 
-    def start(self, rows, state, ticks):
+    def start(self, rows, state, ticks, positions=None):
         self.visits[rows] = 0.0
         self.visited[rows] = False
         row, col = self.single.cells(state.position[rows])
@@ -531,7 +590,7 @@ class _CoverageBatch(_FreeBatch):
                 "distance": np.hypot.reduce(gap, axis=1),
                 "tv_distance": 0.5 * np.abs(gap).sum(axis=1)}
 
-    def step(self, state, events, ticks):
+    def step(self, state, events, ticks, positions=None):
         task = self.single
         robot, points, spent = path_samples(events, tick_length(task.options, events.heading),
                                             task.cell_size / 4)
