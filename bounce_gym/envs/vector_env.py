@@ -94,7 +94,6 @@ class BounceVectorEnv(VectorEnv):
         self._autoreset = np.zeros(n, dtype=bool)
         self._history = np.zeros((n, opts.history, 2), dtype=np.float32)
         self._last_angle = np.full(n, math.nan)
-        self._all_rows = np.arange(n)
         self._origin = np.array(opts.world.bounds[:2], dtype=np.float64)
         self._all_true = _read_only(np.ones(n, dtype=bool))
         self._no_contact = _read_only(np.zeros(n, dtype=bool))
@@ -228,9 +227,7 @@ class BounceVectorEnv(VectorEnv):
         truncated = (np.zeros(self.num_envs, dtype=bool) if self.max_episode_steps is None
                      else self._elapsed >= self.max_episode_steps)
         resetting = np.flatnonzero(self._autoreset)
-        stepped = self._all_rows if not len(resetting) else np.flatnonzero(~self._autoreset)
-        # the step's position and heading are the fresh copies ``events`` holds
-        infos = self._infos({}, stepped, task_info, events, step_ticks=ticks)
+        infos = self._step_infos(resetting, task_info, events, ticks)
         if len(resetting):
             self._reset_envs(resetting, infos)
             rewards[resetting] = 0.0
@@ -295,41 +292,42 @@ class BounceVectorEnv(VectorEnv):
             np.minimum(np.maximum(obs, core.obs_low, out=obs), core.obs_high, out=obs)
         return obs
 
-    def _infos(self, infos: dict, rows: np.ndarray, task_info: dict,
-               events: StepEvents | None = None, step_ticks: np.ndarray | None = None) -> dict:
-        """Write the info of envs ``rows`` into ``infos`` (arrays with ``_key`` masks).
+    def _step_infos(self, resetting: np.ndarray, task_info: dict, events: StepEvents,
+                    step_ticks: np.ndarray) -> dict:
+        """The infos of a step (arrays with ``_key`` masks) for the robots' ``events`` (whose
+        end positions and headings are fresh copies) and ``step_ticks``; envs ``resetting``
+        report nothing here (their reset infos are written afterwards).
 
-        A step passes its ``events`` (whose end positions and headings are already fresh copies)
-        and ``step_ticks``. When every env reports a key, its array is the value itself (no
-        zero-filled copy) and its mask the shared read-only all-True array.
+        Every value is a fresh array handed out as it is, its ``resetting`` rows zeroed. A key
+        every env reports has the shared read-only all-True array as its mask.
         """
+        if len(resetting) == self.num_envs:
+            return {}
         state = self.state
-        values = {"ticks": self._ticks.copy(),
-                  "position": state.position.copy() if events is None else events.end,
-                  "heading": state.heading.copy() if events is None else events.heading,
+        values = {"ticks": self._ticks.copy(), "position": events.end, "heading": events.heading,
                   "cell": self._info_cells(state.position), "clock": state.clock.copy(),
                   "bumps": state.bumps.copy(), "contact_edge": state.contact_edge.copy(),
-                  **task_info}
-        if step_ticks is not None:
-            values["step_ticks"] = step_ticks
-        n = self.num_envs
-        every = len(rows) == n
+                  **task_info, "step_ticks": step_ticks}
+        stepped = None
+        if len(resetting):
+            stepped = np.ones(self.num_envs, dtype=bool)
+            stepped[resetting] = False
+        infos = {}
         for key, value in values.items():
-            present = None
             if isinstance(value, tuple):  # (values, mask): a key only some envs report
                 value, present = value
-            elif every and key not in infos:
-                infos[key] = value
-                infos[f"_{key}"] = self._all_true
-                continue
-            chosen = rows if present is None else rows[present[rows]]
-            if not len(chosen):
-                continue
-            if key not in infos:
-                infos[key] = np.zeros((n, *value.shape[1:]), dtype=value.dtype)
-                infos[f"_{key}"] = np.zeros(n, dtype=bool)
-            infos[key][chosen] = value[chosen]
-            infos[f"_{key}"][chosen] = True
+                if stepped is not None:
+                    present = present & stepped
+                if not present.any():
+                    continue
+            elif stepped is None:
+                present = self._all_true
+            else:
+                present = stepped.copy()
+            if stepped is not None:
+                value[resetting] = 0
+            infos[key] = value
+            infos[f"_{key}"] = present
         return infos
 
     def _reset_infos(self, infos: dict, rows: np.ndarray) -> dict:
