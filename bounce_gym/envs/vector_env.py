@@ -85,7 +85,9 @@ class BounceVectorEnv(VectorEnv):
             radius=opts.robot_radius, step_length=opts.step_length, robot_collisions="ignore",
             backend_options=opts.backend_options)
         #: the cell backend's robots, kept as cells (None on the kinematic backend)
-        self.cell_robots = CellRobots(self.dynamics) if opts.backend == "cell" else None
+        self.cell_robots = (CellRobots(self.dynamics, opts.angles[0]
+                                       if opts.action_type == "discrete" else None)
+                            if opts.backend == "cell" else None)
         model = self.cell_robots.model if self.cell_robots else None
         self.task = _BATCHED[task.name](task, n, model)
         self._rngs: list[np.random.Generator | None] = [None] * n
@@ -190,7 +192,7 @@ class BounceVectorEnv(VectorEnv):
         state = self.state
         if state is None:
             raise ConfigError("call reset() before step()")
-        angles = self._angles(actions)
+        angles, choices = self._angles(actions)
         opts = self.options
         start = state.position.copy()
         bumping = state.blocked.copy()
@@ -200,7 +202,7 @@ class BounceVectorEnv(VectorEnv):
         if self.cell_robots is not None:
             # every robot is blocked (each step and each reset ends in contact): the bump tick
             # is the rotation, then each robot drives on by itself
-            driven = self.cell_robots.bounce(angles)
+            driven = self.cell_robots.bounce(angles, choices)
         else:
             driven = self.dynamics.bounce_each(angles)
         ticks = bumping + driven
@@ -236,8 +238,9 @@ class BounceVectorEnv(VectorEnv):
         self._autoreset = terminated | truncated
         return self._observation(), rewards, terminated, truncated, infos
 
-    def _angles(self, actions) -> np.ndarray:
-        """(N,) bounce angles in radians; malformed actions raise `ActionError`."""
+    def _angles(self, actions) -> tuple[np.ndarray, np.ndarray | None]:
+        """(N,) bounce angles in radians, and the (N,) discrete actions (None for continuous
+        ones); malformed actions raise `ActionError`."""
         opts = self.options
         n = self.num_envs
         raw = np.asarray(actions)
@@ -251,7 +254,7 @@ class BounceVectorEnv(VectorEnv):
                 i = int(np.flatnonzero(bad)[0])
                 raise ActionError(f"actions[{i}]: index {int(raw[i])} is out of range "
                                   f"[0, {len(phi)})")
-            return phi[raw]
+            return phi[raw], raw
         if raw.dtype.kind not in "iuf":
             raise ActionError(f"actions: expected real numbers in [-1, 1], got dtype {raw.dtype}")
         if raw.shape not in ((n, 1), (n,)):
@@ -263,7 +266,7 @@ class BounceVectorEnv(VectorEnv):
             raise ActionError(f"actions[{i}]: {a[i]} is outside [-1, 1] (actions are not "
                               "clipped)")
         lo, hi = opts.angle_range[0]
-        return lo + (a + 1.0) / 2.0 * (hi - lo)
+        return lo + (a + 1.0) / 2.0 * (hi - lo), None
 
     # -- sensing ----------------------------------------------------------------------------
     def _observation(self) -> np.ndarray:
@@ -495,8 +498,7 @@ class _NavigationBatch(_FreeBatch):
         self.plan_cost[rows] = single.w1 * ticks[rows]  # the drive of a bounce-mode reset
         if single.geodesic is not None:
             goals = single.geodesic.node_of(self.goal_position[rows])
-            for goal in np.unique(goals).tolist():
-                self.potentials[rows[goals == goal]] = single.goal_potentials(goal)
+            self.potentials[rows] = [single.goal_potentials(goal) for goal in goals.tolist()]
             self.potential_now[rows] = self.potentials[rows, self._nodes(
                 state.position[rows], None if positions is None else positions[rows])]
 
