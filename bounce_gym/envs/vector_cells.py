@@ -3,8 +3,8 @@
 On the cell backend a robot that ignores the others is its cell: a position index ``p`` and an
 orientation bin ``k`` of the `CellModel`. Every env step of bounce mode starts and ends in
 contact, so a step is the rotation of the bounce rule (a new bin) followed by the drive to the
-next contact, which `ContactDrives` tabulates per cell; with discrete actions the rotations are
-tabulated too (bin x action): the whole step is a few array lookups.
+next contact, which `ContactDrives` tabulates per cell. The cell backend takes discrete actions
+only, so the rotations are tabulated too (bin x action): the whole step is a few array lookups.
 The float pose of each robot (the cell centre and the bin heading, the values the cell backend
 gives a lone robot) is written into a `RobotState` for the observations, infos and tasks.
 
@@ -25,8 +25,7 @@ from bounce_gym.errors import ConfigError
 class CellRobots:
     """N robots of ``dynamics`` (cell backend, robots ignoring each other) stepped as cells.
 
-    ``angles``: the bounce angles (radians) of discrete actions, whose rotations are tabulated;
-    None for continuous actions.
+    ``angles``: the bounce angles (radians) of the discrete actions.
 
     Attributes:
         model: the `CellModel`.
@@ -34,7 +33,7 @@ class CellRobots:
         p, k: (N,) each robot's position index and bin.
     """
 
-    def __init__(self, dynamics: BounceDynamics, angles: np.ndarray | None = None) -> None:
+    def __init__(self, dynamics: BounceDynamics, angles: np.ndarray) -> None:
         self.dynamics = dynamics
         model = self.model = dynamics.backend.model
         self.n = dynamics.n_robots
@@ -48,11 +47,13 @@ class CellRobots:
         np.sin(self.bin_heading, out=direction[:, 1])
         #: the contact normal of a blocked robot of each bin: back along its heading
         self.bin_normal = -direction
-        #: (n_bins, n_actions) the bin each bin turns to under each action's angle, or None
-        self.turns = None
-        if angles is not None:
-            self.turns = np.column_stack([self._turned(np.arange(model.n_bins), angle)
-                                          for angle in angles.tolist()])
+        #: (n_bins, n_actions) the bin a robot in each bin turns to under each action's angle:
+        #: the bounce rule (with the angle checked as `BounceDynamics.parameters` checks it)
+        self.turns = np.empty((model.n_bins, len(angles)), dtype=np.int64)
+        for action, angle in enumerate(angles.tolist()):
+            params = np.full(model.n_bins, dynamics.parameters(angle)[0])
+            self.turns[:, action] = model.bin_of(dynamics.rule(self.bin_heading, self.bin_normal,
+                                                               params))
         self.state: RobotState | None = None
         self.p = np.zeros(self.n, dtype=np.int64)
         self.k = np.zeros(self.n, dtype=np.int64)
@@ -90,26 +91,11 @@ class CellRobots:
         state.contact_normal[rows] = self.bin_normal[k]
         return ticks
 
-    def _turned(self, k: np.ndarray, angles: np.ndarray | float) -> np.ndarray:
-        """The bins robots in bins ``k`` (m,) turn to by the bounce rule with ``angles``
-        (radians, one or one per robot, checked as `BounceDynamics.parameters` checks them)."""
-        dynamics = self.dynamics
-        params = dynamics.parameters(angles)
-        if np.ndim(angles) == 0:
-            params = params[:1]
-        heading = dynamics.rule(self.bin_heading[k], self.bin_normal[k],
-                                np.broadcast_to(params, k.shape))
-        return self.model.bin_of(heading)
-
-    def bounce(self, angles: np.ndarray, actions: np.ndarray | None = None) -> np.ndarray:
-        """One bounce-mode step of every robot (all in contact): the bump tick rotates each by
-        the bounce rule with its angle (radians; with ``actions``, the discrete actions' indices,
-        their tabulated turns), then each drives to its next contact. Returns the ticks each
-        drove."""
-        if actions is not None:
-            k = self.k = self.turns[self.k, actions]
-        else:
-            k = self.k = self._turned(self.k, angles)
+    def bounce(self, actions: np.ndarray) -> np.ndarray:
+        """One bounce-mode step of every robot (all in contact): the bump tick turns each by
+        its action's angle (``actions``: (N,) indices into the angles), then each drives to its
+        next contact. Returns the ticks each drove."""
+        k = self.k = self.turns[self.k, actions]
         z = self.model.cell_id(self.p, k)
         ticks = self.drive_ticks[z]
         p = self.p = self.drive_end[z]

@@ -85,8 +85,7 @@ class BounceVectorEnv(VectorEnv):
             radius=opts.robot_radius, step_length=opts.step_length, robot_collisions="ignore",
             backend_options=opts.backend_options)
         #: the cell backend's robots, kept as cells (None on the kinematic backend)
-        self.cell_robots = (CellRobots(self.dynamics, opts.angles[0]
-                                       if opts.action_type == "discrete" else None)
+        self.cell_robots = (CellRobots(self.dynamics, opts.angles[0])
                             if opts.backend == "cell" else None)
         model = self.cell_robots.model if self.cell_robots else None
         self.task = _BATCHED[task.name](task, n, model)
@@ -202,7 +201,7 @@ class BounceVectorEnv(VectorEnv):
         if self.cell_robots is not None:
             # every robot is blocked (each step and each reset ends in contact): the bump tick
             # is the rotation, then each robot drives on by itself
-            driven = self.cell_robots.bounce(angles, choices)
+            driven = self.cell_robots.bounce(choices)  # discrete actions only (options)
         else:
             driven = self.dynamics.bounce_each(angles)
         ticks = bumping + driven
