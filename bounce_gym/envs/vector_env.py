@@ -195,9 +195,10 @@ class BounceVectorEnv(VectorEnv):
         opts = self.options
         start = state.position.copy()
         bumping = state.blocked.copy()
+        every = bumping.all()  # always on the cell backend: each step and reset ends in contact
         if opts.history:
-            rows = np.flatnonzero(bumping)
-            clock_before = state.clock[rows]
+            rows = _EVERY if every else np.flatnonzero(bumping)
+            clock_before = state.clock.copy() if every else state.clock[rows]
         if self.cell_robots is not None:
             # every robot is blocked (each step and each reset ends in contact): the bump tick
             # is the rotation, then each robot drives on by itself
@@ -208,7 +209,7 @@ class BounceVectorEnv(VectorEnv):
         self._ticks += ticks
         last = self._last_angle
         changed = bumping & (angles != last) & (last == last)  # last == last: not NaN
-        if bumping.all():
+        if every:
             self._last_angle = angles
         else:
             last[bumping] = angles[bumping]
@@ -220,7 +221,8 @@ class BounceVectorEnv(VectorEnv):
         # a bump is the one rotation tick of a blocked robot, so bumps grew by ``bumping``
         events = StepEvents(
             ticks=ticks, start=start, end=state.position.copy(), heading=state.heading.copy(),
-            bumps=bumping.astype(np.int64), angles=np.where(bumping, angles, math.nan),
+            bumps=bumping.astype(np.int64),
+            angles=angles.copy() if every else np.where(bumping, angles, math.nan),
             angle_changed=changed, robot_contact=self._no_contact)
         rewards, terminated, task_info = self.task.step(state, events, self._ticks,
                                                         self._positions())
@@ -516,7 +518,7 @@ class _NavigationBatch(_FreeBatch):
     def step(self, state, events, ticks, positions=None):
         single = self.single
         err = (events.heading - self.goal_heading + np.pi) % (2 * np.pi) - np.pi
-        arrive = np.full(self.n, np.nan)
+        hits, arrivals = [], []  # the envs whose robot reached its goal, and at which tick
         # the disk test of a lone robot, run only where the heading is within tolerance and the
         # path passes near the goal
         aligned = np.flatnonzero(np.abs(err) <= single.heading_tolerance)
@@ -529,10 +531,13 @@ class _NavigationBatch(_FreeBatch):
                              robot_contact=events.robot_contact[i:i + 1])
             found = single.ticks_to_goal(one)
             if found is not None:
-                arrive[i] = found
-        hit = ~np.isnan(arrive)
+                hits.append(i)
+                arrivals.append(found)
+        hit = np.zeros(self.n, dtype=bool)
+        hit[hits] = True
         changed = events.angle_changed
-        spent = np.where(hit, np.minimum(events.ticks, arrive), events.ticks).astype(np.float64)
+        spent = events.ticks.astype(np.float64)
+        spent[hits] = np.minimum(events.ticks[hits], arrivals)
         before = after = None
         if single.geodesic is not None:
             before = self.potential_now
@@ -543,23 +548,23 @@ class _NavigationBatch(_FreeBatch):
         self.reached |= hit
         info = self.info(state)
         info["angle_changed"] = changed
-        if hit.any():
-            to_goal = np.where(hit, ticks - events.ticks + np.nan_to_num(arrive), 0)
-            info["ticks_to_goal"] = (to_goal.astype(np.int64), hit)
+        if hits:
+            to_goal = np.zeros(self.n, dtype=np.int64)
+            to_goal[hits] = ticks[hits] - events.ticks[hits] + np.array(arrivals)
+            info["ticks_to_goal"] = (to_goal, hit)
         return reward, self.reached.copy(), info
 
     def _near_goal(self, events: StepEvents, rows: np.ndarray) -> np.ndarray:
         """(len(rows),) bool: the step's segment of envs ``rows`` comes within the goal radius
         (plus a margin far above rounding) of the goal — a superset of the robots the exact
         disk test can accept."""
-        start = events.start[rows]
-        seg = events.end[rows] - start
-        rel = self.goal_position[rows] - start
-        length2 = np.einsum("ij,ij->i", seg, seg)
-        along = np.clip(np.einsum("ij,ij->i", rel, seg) / np.where(length2 > 0, length2, 1.0),
-                        0.0, 1.0)
-        gap = rel - along[:, None] * seg
-        return np.einsum("ij,ij->i", gap, gap) <= (self.single.goal_radius + 1e-6) ** 2
+        start = events.start[rows].T
+        sx, sy = events.end[rows].T - start
+        rx, ry = self.goal_position[rows].T - start
+        length2 = sx * sx + sy * sy
+        along = np.clip((rx * sx + ry * sy) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
+        gx, gy = rx - along * sx, ry - along * sy
+        return gx * gx + gy * gy <= (self.single.goal_radius + 1e-6) ** 2
 
 class _CoverageBatch(_FreeBatch):
     """`CoverageTask` for N robots: one visit histogram and visited grid per env."""
