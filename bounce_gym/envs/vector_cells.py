@@ -4,7 +4,7 @@ On the cell backend a robot that ignores the others is its cell: a position inde
 orientation bin ``k`` of the `CellModel`. Every env step of bounce mode starts and ends in
 contact, so a step is the rotation of the bounce rule (a new bin) followed by the drive to the
 next contact, which `ContactDrives` tabulates per cell. The cell backend takes discrete actions
-only, so the rotations are tabulated too (bin x action): the whole step is a few array lookups.
+only, so a whole step is tabulated per (cell, action): where it ends and its ticks.
 The float pose of each robot (the cell centre and the bin heading, the values the cell backend
 gives a lone robot) is written into a `RobotState` for the observations, infos and tasks.
 
@@ -30,7 +30,7 @@ class CellRobots:
     Attributes:
         model: the `CellModel`.
         state: the robots' `RobotState` (None before the first `place`).
-        p, k: (N,) each robot's position index and bin.
+        z, p: (N,) each robot's cell number and its position index.
     """
 
     def __init__(self, dynamics: BounceDynamics, angles: np.ndarray) -> None:
@@ -38,8 +38,8 @@ class CellRobots:
         model = self.model = dynamics.backend.model
         self.n = dynamics.n_robots
         drives = ContactDrives(model)
-        self.drive_ticks = drives.ticks  # per cell number
-        self.drive_end = model.decode(drives.end)[0]  # position index where each drive stops
+        #: per cell number: the ticks of its drive to contact and the cell where it stops
+        self.drive_ticks, self.drive_end = drives.ticks, drives.end
         #: the heading of each bin, as the cell backend snaps headings (bin · width)
         self.bin_heading = np.arange(model.n_bins) * model.bin_width
         direction = np.empty((model.n_bins, 2))  # `RobotState.direction`'s arithmetic
@@ -47,16 +47,27 @@ class CellRobots:
         np.sin(self.bin_heading, out=direction[:, 1])
         #: the contact normal of a blocked robot of each bin: back along its heading
         self.bin_normal = -direction
-        #: (n_bins, n_actions) the bin a robot in each bin turns to under each action's angle:
-        #: the bounce rule (with the angle checked as `BounceDynamics.parameters` checks it)
-        self.turns = np.empty((model.n_bins, len(angles)), dtype=np.int64)
+        self.n_actions = len(angles)
+        z = np.arange(model.n_cells)
+        p, k = model.decode(z)
+        turns = np.empty((model.n_cells, self.n_actions), dtype=np.int64)
         for action, angle in enumerate(angles.tolist()):
+            # the bounce rule, with the angle checked as `BounceDynamics.parameters` checks it
             params = np.full(model.n_bins, dynamics.parameters(angle)[0])
-            self.turns[:, action] = model.bin_of(dynamics.rule(self.bin_heading, self.bin_normal,
-                                                               params))
+            turned = model.bin_of(dynamics.rule(self.bin_heading, self.bin_normal, params))
+            turns[:, action] = model.cell_id(p, turned[k])
+        #: per cell z and action a, at z · n_actions + a: where the step ends and its drive's
+        #: ticks
+        self.step_end = drives.end[turns].ravel()
+        self.step_ticks = drives.ticks[turns].ravel()
+        #: per cell: its position index, centre, bin heading and contact normal
+        self.position_of = p
+        self.centre_of = model.centres[p]
+        self.heading_of = self.bin_heading[k]
+        self.normal_of = self.bin_normal[k]
         self.state: RobotState | None = None
+        self.z = np.zeros(self.n, dtype=np.int64)
         self.p = np.zeros(self.n, dtype=np.int64)
-        self.k = np.zeros(self.n, dtype=np.int64)
 
     def cells_of(self, position: np.ndarray, heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(position index, bin) of start poses, as the cell backend places them;
@@ -71,11 +82,11 @@ class CellRobots:
     def place(self, rows: np.ndarray, p: np.ndarray, k: np.ndarray) -> np.ndarray:
         """Start robots ``rows`` afresh in cells (``p``, ``k``) and drive each to its first
         contact (the first call places every robot). Returns the ticks each drove."""
-        ticks = self.drive_ticks[self.model.cell_id(p, k)]
-        end = self.drive_end[self.model.cell_id(p, k)]
-        self.p[rows] = end
-        self.k[rows] = k
-        position, heading = self.model.centres[end], self.bin_heading[k]
+        start = self.model.cell_id(p, k)
+        ticks = self.drive_ticks[start]
+        z = self.z[rows] = self.drive_end[start]
+        self.p[rows] = self.position_of[z]
+        position, heading = self.centre_of[z], self.heading_of[z]
         if self.state is None:
             if len(rows) != self.n:
                 raise ConfigError("the first reset places every robot")
@@ -88,21 +99,21 @@ class CellRobots:
         state.bumps[rows] = 0
         state.contact_edge[rows] = NO_CONTACT
         state.contact_robot[rows] = NO_CONTACT
-        state.contact_normal[rows] = self.bin_normal[k]
+        state.contact_normal[rows] = self.normal_of[z]
         return ticks
 
     def bounce(self, actions: np.ndarray) -> np.ndarray:
         """One bounce-mode step of every robot (all in contact): the bump tick turns each by
         its action's angle (``actions``: (N,) indices into the angles), then each drives to its
         next contact. Returns the ticks each drove."""
-        k = self.k = self.turns[self.k, actions]
-        z = self.model.cell_id(self.p, k)
-        ticks = self.drive_ticks[z]
-        p = self.p = self.drive_end[z]
+        at = self.z * self.n_actions + actions
+        ticks = self.step_ticks[at]
+        z = self.z = self.step_end[at]
+        self.p = self.position_of[z]
         state = self.state
-        state.position[...] = self.model.centres[p]
-        state.heading[...] = self.bin_heading[k]
+        state.position[...] = self.centre_of[z]
+        state.heading[...] = self.heading_of[z]
         state.clock[...] = ticks
         state.bumps += 1
-        state.contact_normal[...] = self.bin_normal[k]
+        state.contact_normal[...] = self.normal_of[z]
         return ticks
