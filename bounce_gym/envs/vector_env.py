@@ -98,6 +98,10 @@ class BounceVectorEnv(VectorEnv):
         self._origin = np.array(opts.world.bounds[:2], dtype=np.float64)
         self._all_true = _read_only(np.ones(n, dtype=bool))
         self._no_contact = _read_only(np.zeros(n, dtype=bool))
+        core = self.single.core
+        first = len(core.obs_low) - task.observation_size  # the task's features come last
+        #: the observation bounds of the task's features
+        self._feature_bounds = (core.obs_low[first:], core.obs_high[first:])
         #: ``info["cell"]`` of each position index of the cell model
         self._cell_rc = (np.ascontiguousarray(self._cells(model.centres)) if model is not None
                          else None)
@@ -166,6 +170,7 @@ class BounceVectorEnv(VectorEnv):
                 self._ticks[rows] = robots.place(rows, *robots.cells_of(position, heading))
             else:
                 self._ticks[rows] = self._place_kinematic(rows, position, heading)
+        self.task.bound_features(rows, *self._feature_bounds)
         self.task.start(rows, self.state, self._ticks, self._positions())
         self._elapsed[rows] = 0
         self._history[rows] = 0.0
@@ -286,14 +291,17 @@ class BounceVectorEnv(VectorEnv):
             col += 2 * opts.history
         if opts.privileged:
             xmin, ymin, xmax, ymax = opts.world.bounds
-            obs[:, col:col + 2] = (state.position - (xmin, ymin)) / (xmax - xmin, ymax - ymin)
-            obs[:, col + 2:col + 4] = state.direction
+            pose = obs[:, col:col + 4]
+            pose[:, :2] = (state.position - (xmin, ymin)) / (xmax - xmin, ymax - ymin)
+            pose[:, 2:] = state.direction
+            # np.clip's arithmetic, without its wrapper; the clock and the history are in range
+            # by construction, and the task's features were bounded when drawn
+            np.minimum(np.maximum(pose, core.obs_low[col:col + 4], out=pose),
+                       core.obs_high[col:col + 4], out=pose)
             col += 4
         features = self.task.observation()
         if features is not None:
             obs[:, col:] = features
-        if opts.privileged or features is not None:  # np.clip's arithmetic, without its wrapper
-            np.minimum(np.maximum(obs, core.obs_low, out=obs), core.obs_high, out=obs)
         return obs
 
     def _step_infos(self, resetting: np.ndarray, task_info: dict, events: StepEvents,
@@ -425,6 +433,10 @@ class _FreeBatch:
     def drawn(self, i: int, task) -> None:
         """Take what the single-robot ``task`` drew for env ``i``'s new episode (its goal)."""
 
+    def bound_features(self, rows: np.ndarray, low: np.ndarray, high: np.ndarray) -> None:
+        """Clip the observation features of envs ``rows``, just drawn, to [``low``, ``high``]
+        (as the single env clips its observation)."""
+
     def start(self, rows: np.ndarray, state, ticks: np.ndarray,
               positions: np.ndarray | None = None) -> None:
         """Start the episodes of envs ``rows``, whose robots (``state``) were placed and drove
@@ -511,6 +523,10 @@ class _NavigationBatch(_FreeBatch):
                 "distance_to_goal": np.hypot(gap[:, 0], gap[:, 1]),
                 "is_success": self.reached[rows].copy(),
                 "plan_cost": self.plan_cost[rows].copy()}
+
+    def bound_features(self, rows, low, high):
+        if self.single.observe_task:  # np.clip's arithmetic
+            self.features[rows] = np.minimum(np.maximum(self.features[rows], low), high)
 
     def observation(self):
         return self.features if self.single.observe_task else None
