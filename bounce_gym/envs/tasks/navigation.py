@@ -8,7 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from bounce_gym.cells.geodesic import GridGeodesic
-from bounce_gym.envs.tasks.base import StepEvents, Task, _normalised, pose_option, tick_length
+from bounce_gym.envs.tasks.base import StepEvents, Task, _normalised, pose_option, tick_length_at
 from bounce_gym.errors import ConfigError
 from bounce_gym.validate import flag, number
 
@@ -269,7 +269,7 @@ class NavigationTask(Task):
             s = -b - math.sqrt(disc)  # where the segment's line enters the goal disk
             if s < 0 or s > length:
                 return None  # the disk lies behind the start, or beyond the end
-        per_tick = float(tick_length(self.options, events.heading[:1])[0])
+        per_tick = tick_length_at(self.options, float(events.heading[0]))
         drive = math.ceil(s / per_tick - 1e-9)
         return float(events.bumps[0] + drive)
 
