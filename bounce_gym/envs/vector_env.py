@@ -146,11 +146,11 @@ class BounceVectorEnv(VectorEnv):
         for i in rows:
             if seeds[i] is not None or self._rngs[i] is None:
                 self._rngs[i] = seeding.np_random(seeds[i])[0]
-        infos = self._reset_envs(rows, {}, options)
+        self._reset_envs(rows, options)
         self._autoreset[rows] = False
-        return self._observation(), infos
+        return self._observation(), self._reset_infos(rows)
 
-    def _reset_envs(self, rows: np.ndarray, infos: dict, options: dict | None = None) -> dict:
+    def _reset_envs(self, rows: np.ndarray, options: dict | None = None) -> None:
         """Start new episodes in ``rows``: each draws its start (and task) poses from its own
         generator with ``options`` (an autoreset passes none) as a single env's reset draws them;
         then the rows are placed, driven to their first contact and handed to the task at once."""
@@ -175,7 +175,6 @@ class BounceVectorEnv(VectorEnv):
         self._elapsed[rows] = 0
         self._history[rows] = 0.0
         self._last_angle[rows] = math.nan
-        return self._reset_infos(infos, rows)
 
     def _place_kinematic(self, rows: np.ndarray, position: np.ndarray,
                          heading: np.ndarray) -> np.ndarray:
@@ -235,9 +234,11 @@ class BounceVectorEnv(VectorEnv):
         truncated = (np.zeros(self.num_envs, dtype=bool) if self.max_episode_steps is None
                      else self._elapsed >= self.max_episode_steps)
         resetting = np.flatnonzero(self._autoreset)
-        infos = self._step_infos(resetting, task_info, events, ticks)
+        values = self._step_values(task_info, events, ticks)
         if len(resetting):
-            self._reset_envs(resetting, infos)
+            self._reset_envs(resetting)
+        infos = self._step_infos(values, resetting)
+        if len(resetting):
             rewards[resetting] = 0.0
             terminated[resetting] = False
             truncated[resetting] = False
@@ -304,63 +305,71 @@ class BounceVectorEnv(VectorEnv):
             obs[:, col:] = features
         return obs
 
-    def _step_infos(self, resetting: np.ndarray, task_info: dict, events: StepEvents,
-                    step_ticks: np.ndarray) -> dict:
-        """The infos of a step (arrays with ``_key`` masks) for the robots' ``events`` (whose
-        end positions and headings are fresh copies) and ``step_ticks``; envs ``resetting``
-        report nothing here (their reset infos are written afterwards).
-
-        Every value is a fresh array handed out as it is, its ``resetting`` rows zeroed. A key
-        every env reports has the shared read-only all-True array as its mask.
-        """
-        if len(resetting) == self.num_envs:
-            return {}
+    def _step_values(self, task_info: dict, events: StepEvents, step_ticks: np.ndarray
+                     ) -> dict:
+        """The info values of a step, fresh arrays (``(values, mask)`` for a key only some envs
+        report), for the robots' ``events`` (whose end positions and headings are fresh copies)
+        and ``step_ticks``."""
         state = self.state
-        values = {"ticks": self._ticks.copy(), "position": events.end, "heading": events.heading,
-                  "cell": self._info_cells(state.position), "clock": state.clock.copy(),
-                  "bumps": state.bumps.copy(), "contact_edge": state.contact_edge.copy(),
-                  **task_info, "step_ticks": step_ticks}
+        return {"ticks": self._ticks.copy(), "position": events.end, "heading": events.heading,
+                "cell": self._info_cells(state.position), "clock": state.clock.copy(),
+                "bumps": state.bumps.copy(), "contact_edge": state.contact_edge.copy(),
+                **task_info, "step_ticks": step_ticks}
+
+    def _reset_values(self, rows: np.ndarray) -> dict:
+        """The info values of envs ``rows`` just reset, one row each (the keys a step reports,
+        less its own)."""
+        state = self.state
+        position = state.position[rows]
+        return {"ticks": self._ticks[rows], "position": position,
+                "heading": state.heading[rows], "cell": self._info_cells(position, rows),
+                "clock": state.clock[rows], "bumps": state.bumps[rows],
+                "contact_edge": state.contact_edge[rows], **self.task.info(state, rows)}
+
+    def _step_infos(self, values: dict, resetting: np.ndarray) -> dict:
+        """The infos of a step (arrays with ``_key`` masks, as SyncVectorEnv builds them): the
+        step's ``values`` (`_step_values`), where envs ``resetting`` (reset after the step)
+        report their reset's values instead, or nothing (0, mask False) for the keys a reset
+        does not report.
+
+        The value arrays are handed out as they are; a key every env reports has the shared
+        read-only all-True array as its mask.
+        """
+        reset = self._reset_values(resetting) if len(resetting) else {}
         stepped = None
         if len(resetting):
             stepped = np.ones(self.num_envs, dtype=bool)
             stepped[resetting] = False
         infos = {}
         for key, value in values.items():
+            present = self._all_true
             if isinstance(value, tuple):  # (values, mask): a key only some envs report
                 value, present = value
                 if stepped is not None:
                     present = present & stepped
-                if not present.any():
-                    continue
-            elif stepped is None:
-                present = self._all_true
-            else:
+            elif key not in reset and stepped is not None:
                 present = stepped.copy()
-            if stepped is not None:
+            if key in reset:
+                value[resetting] = reset[key]
+            elif stepped is not None:
                 value[resetting] = 0
-            infos[key] = value
-            infos[f"_{key}"] = present
+            if present is self._all_true or present.any():
+                infos[key] = value
+                infos[f"_{key}"] = present
         return infos
 
-    def _reset_infos(self, infos: dict, rows: np.ndarray) -> dict:
-        """Write the reset info of envs ``rows`` into ``infos`` (`_infos`, computed for those
-        rows only)."""
-        state = self.state
-        position = state.position[rows]
-        values = {"ticks": self._ticks[rows], "position": position,
-                  "heading": state.heading[rows], "cell": self._info_cells(position, rows),
-                  "clock": state.clock[rows], "bumps": state.bumps[rows],
-                  "contact_edge": state.contact_edge[rows], **self.task.info(state, rows)}
+    def _reset_infos(self, rows: np.ndarray) -> dict:
+        """The infos of `reset` for envs ``rows`` (arrays with ``_key`` masks)."""
         n = self.num_envs
-        for key, value in values.items():
-            if key not in infos:
-                if len(rows) == n:
-                    infos[key] = value  # fresh arrays, in env order
-                    infos[f"_{key}"] = self._all_true
-                    continue
-                infos[key] = np.zeros((n, *value.shape[1:]), dtype=value.dtype)
-                infos[f"_{key}"] = np.zeros(n, dtype=bool)
+        infos = {}
+        for key, value in self._reset_values(rows).items():
+            if len(rows) == n:
+                infos[key] = value  # fresh arrays, in env order
+                infos[f"_{key}"] = self._all_true
+                continue
+            infos[key] = np.zeros((n, *value.shape[1:]), dtype=value.dtype)
             infos[key][rows] = value
+            infos[f"_{key}"] = np.zeros(n, dtype=bool)
             infos[f"_{key}"][rows] = True
         return infos
 
