@@ -86,7 +86,7 @@ class CellRobots:
         ticks = self.drive_ticks[start]
         z = self.z[rows] = self.drive_end[start]
         self.p[rows] = self.position_of[z]
-        position, heading = self.centre_of[z], self.heading_of[z]
+        position, heading = self.centre_of.take(z, axis=0), self.heading_of[z]
         if self.state is None:
             if len(rows) != self.n:
                 raise ConfigError("the first reset places every robot")
@@ -99,21 +99,22 @@ class CellRobots:
         state.bumps[rows] = 0
         state.contact_edge[rows] = NO_CONTACT
         state.contact_robot[rows] = NO_CONTACT
-        state.contact_normal[rows] = self.normal_of[z]
+        state.contact_normal[rows] = self.normal_of.take(z, axis=0)
         return ticks
 
     def bounce(self, actions: np.ndarray) -> np.ndarray:
         """One bounce-mode step of every robot (all in contact): the bump tick turns each by
         its action's angle (``actions``: (N,) indices into the angles), then each drives to its
         next contact. Returns the ticks each drove."""
+        # ``take`` rather than fancy indexing: the same values, gathered several times faster
         at = self.z * self.n_actions + actions
-        ticks = self.step_ticks[at]
-        z = self.z = self.step_end[at]
-        self.p = self.position_of[z]
+        ticks = self.step_ticks.take(at)
+        z = self.z = self.step_end.take(at)
+        self.p = self.position_of.take(z)
         state = self.state
-        state.position[...] = self.centre_of[z]
-        state.heading[...] = self.heading_of[z]
+        self.centre_of.take(z, axis=0, out=state.position, mode="clip")  # z is in range
+        self.heading_of.take(z, out=state.heading, mode="clip")
+        self.normal_of.take(z, axis=0, out=state.contact_normal, mode="clip")
         state.clock[...] = ticks
         state.bumps += 1
-        state.contact_normal[...] = self.normal_of[z]
         return ticks

@@ -261,7 +261,7 @@ class BounceVectorEnv(VectorEnv):
                 i = int(np.flatnonzero(bad)[0])
                 raise ActionError(f"actions[{i}]: index {int(raw[i])} is out of range "
                                   f"[0, {len(phi)})")
-            return phi[raw], raw
+            return phi.take(raw), raw
         if raw.dtype.kind not in "iuf":
             raise ActionError(f"actions: expected real numbers in [-1, 1], got dtype {raw.dtype}")
         if raw.shape not in ((n, 1), (n,)):
@@ -320,7 +320,7 @@ class BounceVectorEnv(VectorEnv):
         """The info values of envs ``rows`` just reset, one row each (the keys a step reports,
         less its own)."""
         state = self.state
-        position = state.position[rows]
+        position = state.position.take(rows, axis=0)  # ``take``: fancy indexing's values, faster
         return {"ticks": self._ticks[rows], "position": position,
                 "heading": state.heading[rows], "cell": self._info_cells(position, rows),
                 "clock": state.clock[rows], "bumps": state.bumps[rows],
@@ -377,7 +377,7 @@ class BounceVectorEnv(VectorEnv):
         """``info["cell"]`` of robots ``rows`` at positions ``position`` (their rows of the
         state): on the cell backend looked up by position index."""
         if self._cell_rc is not None:
-            return self._cell_rc[self.cell_robots.p[rows]]
+            return self._cell_rc.take(self.cell_robots.p[rows], axis=0)
         return self._cells(position)
 
     def _cells(self, position: np.ndarray) -> np.ndarray:
@@ -494,19 +494,24 @@ class _NavigationBatch(_FreeBatch):
         drawn = np.array([single.random_cell(rng) + single.random_cell(rng) for rng in rngs],
                          dtype=np.int64).reshape(-1, 4)
         p, k, goal_p, goal_k = drawn.T
-        self.goal_position[rows] = model.centres[goal_p]
+        self.goal_position[rows] = model.centres.take(goal_p, axis=0)
         self.goal_heading[rows] = goal_k * model.bin_width
         if single.observe_task:
             self.features[rows] = np.concatenate(
-                (self.cell_features[model.cell_id(p, k)],
-                 self.cell_features[model.cell_id(goal_p, goal_k)]), axis=1)
+                (self.cell_features.take(model.cell_id(p, k), axis=0),
+                 self.cell_features.take(model.cell_id(goal_p, goal_k), axis=0)), axis=1)
         return p, k
+
+    def _potentials_at(self, rows: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """Φ of envs ``rows`` at grid nodes ``nodes`` (``self.potentials[rows, nodes]``, gathered
+        from the flat array: several times faster than two-axis fancy indexing)."""
+        return self.potentials.reshape(-1).take(rows * self.potentials.shape[1] + nodes)
 
     def _nodes(self, position: np.ndarray, positions: np.ndarray | None) -> np.ndarray:
         """The grid nodes of robots at ``position``, or at position indices ``positions``."""
         if positions is None:
             return self.single.geodesic.node_of(position)
-        return self.node_of_position[positions]
+        return self.node_of_position.take(positions)
 
     def drawn(self, i, task):
         self.goal_position[i] = task.goal[0][0]
@@ -521,8 +526,8 @@ class _NavigationBatch(_FreeBatch):
         if single.geodesic is not None:
             goals = single.geodesic.node_of(self.goal_position[rows])
             self.potentials[rows] = [single.goal_potentials(goal) for goal in goals.tolist()]
-            self.potential_now[rows] = self.potentials[rows, self._nodes(
-                state.position[rows], None if positions is None else positions[rows])]
+            self.potential_now[rows] = self._potentials_at(rows, self._nodes(
+                state.position[rows], None if positions is None else positions[rows]))
 
     def info(self, state, rows=_EVERY):
         goal = self.goal_position[rows]  # a copy where ``rows`` is an array
@@ -566,7 +571,7 @@ class _NavigationBatch(_FreeBatch):
         before = after = None
         if single.geodesic is not None:
             before = self.potential_now
-            after = self.potentials[self.rows, self._nodes(events.end, positions)]
+            after = self._potentials_at(self.rows, self._nodes(events.end, positions))
             self.potential_now = np.where(hit, 0.0, after)
         reward = single.step_rewards(spent, changed, hit, before, after)
         self.plan_cost = self.plan_cost + single.plan_cost_of(spent, changed)
@@ -583,9 +588,9 @@ class _NavigationBatch(_FreeBatch):
         """(len(rows),) bool: the step's segment of envs ``rows`` comes within the goal radius
         (plus a margin far above rounding) of the goal — a superset of the robots the exact
         disk test can accept."""
-        start = events.start[rows].T
-        sx, sy = events.end[rows].T - start
-        rx, ry = self.goal_position[rows].T - start
+        start = events.start.take(rows, axis=0).T
+        sx, sy = events.end.take(rows, axis=0).T - start
+        rx, ry = self.goal_position.take(rows, axis=0).T - start
         length2 = sx * sx + sy * sy
         along = np.clip((rx * sx + ry * sy) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
         gx, gy = rx - along * sx, ry - along * sy
