@@ -484,6 +484,7 @@ class _NavigationBatch(_FreeBatch):
         if task.geodesic is not None:  # the progress reward: Φ of every grid node, per env
             self.potentials = np.zeros((n, task.geodesic.n_nodes))
             self.potential_now = np.zeros(n)
+            self.goal_node = np.zeros(n, dtype=np.int64)  # the grid node of each env's goal
             #: the grid node of each position index of the cell model
             self.node_of_position = (task.geodesic.node_of(model.centres)
                                      if model is not None else None)
@@ -496,6 +497,8 @@ class _NavigationBatch(_FreeBatch):
         p, k, goal_p, goal_k = drawn.T
         self.goal_position[rows] = model.centres.take(goal_p, axis=0)
         self.goal_heading[rows] = goal_k * model.bin_width
+        if single.geodesic is not None:
+            self.goal_node[rows] = self.node_of_position.take(goal_p)
         if single.observe_task:
             self.features[rows] = np.concatenate(
                 (self.cell_features.take(model.cell_id(p, k), axis=0),
@@ -514,8 +517,11 @@ class _NavigationBatch(_FreeBatch):
         return self.node_of_position.take(positions)
 
     def drawn(self, i, task):
-        self.goal_position[i] = task.goal[0][0]
+        goal = task.goal[0][0]
+        self.goal_position[i] = goal
         self.goal_heading[i] = task.goal[1][0]
+        if task.geodesic is not None:
+            self.goal_node[i] = task.geodesic.node_at(*goal.tolist())
         if task.observe_task:
             self.features[i] = task.observation(None)[0]
 
@@ -524,8 +530,8 @@ class _NavigationBatch(_FreeBatch):
         self.reached[rows] = False
         self.plan_cost[rows] = single.w1 * ticks[rows]  # the drive of a bounce-mode reset
         if single.geodesic is not None:
-            goals = single.geodesic.node_of(self.goal_position[rows])
-            self.potentials[rows] = [single.goal_potentials(goal) for goal in goals.tolist()]
+            self.potentials[rows] = [single.goal_potentials(goal)
+                                     for goal in self.goal_node[rows].tolist()]
             self.potential_now[rows] = self._potentials_at(rows, self._nodes(
                 state.position[rows], None if positions is None else positions[rows]))
 
