@@ -88,7 +88,10 @@ class BounceVectorEnv(VectorEnv):
         self.cell_robots = (CellRobots(self.dynamics, opts.angles[0])
                             if opts.backend == "cell" else None)
         model = self.cell_robots.model if self.cell_robots else None
-        self.task = _BATCHED[task.name](task, n, model)
+        core = self.single.core
+        first = len(core.obs_low) - task.observation_size  # the task's features come last
+        self.task = _BATCHED[task.name](task, n, model,
+                                        (core.obs_low[first:], core.obs_high[first:]))
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._ticks = np.zeros(n, dtype=np.int64)
         self._elapsed = np.zeros(n, dtype=np.int64)
@@ -98,10 +101,7 @@ class BounceVectorEnv(VectorEnv):
         self._origin = np.array(opts.world.bounds[:2], dtype=np.float64)
         self._all_true = _read_only(np.ones(n, dtype=bool))
         self._no_contact = _read_only(np.zeros(n, dtype=bool))
-        core = self.single.core
-        first = len(core.obs_low) - task.observation_size  # the task's features come last
-        #: the observation bounds of the task's features
-        self._feature_bounds = (core.obs_low[first:], core.obs_high[first:])
+        self._one_bump = _read_only(np.ones(n, dtype=np.int64))
         #: ``info["cell"]`` of each position index of the cell model
         self._cell_rc = (np.ascontiguousarray(self._cells(model.centres)) if model is not None
                          else None)
@@ -170,7 +170,6 @@ class BounceVectorEnv(VectorEnv):
                 self._ticks[rows] = robots.place(rows, *robots.cells_of(position, heading))
             else:
                 self._ticks[rows] = self._place_kinematic(rows, position, heading)
-        self.task.bound_features(rows, *self._feature_bounds)
         self.task.start(rows, self.state, self._ticks, self._positions())
         self._elapsed[rows] = 0
         self._history[rows] = 0.0
@@ -212,10 +211,11 @@ class BounceVectorEnv(VectorEnv):
         ticks = bumping + driven
         self._ticks += ticks
         last = self._last_angle
-        changed = bumping & (angles != last) & (last == last)  # last == last: not NaN
+        changed = (angles != last) & (last == last)  # last == last: not NaN
         if every:
             self._last_angle = angles
         else:
+            changed &= bumping
             last[bumping] = angles[bumping]
         if opts.history:
             history = self._history
@@ -225,8 +225,8 @@ class BounceVectorEnv(VectorEnv):
         # a bump is the one rotation tick of a blocked robot, so bumps grew by ``bumping``
         events = StepEvents(
             ticks=ticks, start=start, end=state.position.copy(), heading=state.heading.copy(),
-            bumps=bumping.astype(np.int64),
-            angles=angles.copy() if every else np.where(bumping, angles, math.nan),
+            bumps=self._one_bump if every else bumping.astype(np.int64),
+            angles=angles if every else np.where(bumping, angles, math.nan),
             angle_changed=changed, robot_contact=self._no_contact)
         rewards, terminated, task_info = self.task.step(state, events, self._ticks,
                                                         self._positions())
@@ -423,14 +423,16 @@ def _unbatchable(opts, task) -> str | None:
 class _FreeBatch:
     """No reward, never terminates.
 
-    ``model``: the `CellModel` of the cell backend, else None. ``positions`` (`start`, `step`):
-    each robot's position index in that model, else None.
+    ``model``: the `CellModel` of the cell backend, else None. ``bounds``: (low, high), the
+    observation bounds of the task's features, which the batch clips them to when drawn (as
+    the single env clips its observation). ``positions`` (`start`, `step`): each robot's
+    position index in that model, else None.
     """
 
     #: whether `draw_cells` draws the episodes (without reset options)
     draws_cells = False
 
-    def __init__(self, task, n: int, model=None) -> None:
+    def __init__(self, task, n: int, model=None, bounds=None) -> None:
         self.n = n
 
     def draw_cells(self, rngs: list, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -442,9 +444,6 @@ class _FreeBatch:
     def drawn(self, i: int, task) -> None:
         """Take what the single-robot ``task`` drew for env ``i``'s new episode (its goal)."""
 
-    def bound_features(self, rows: np.ndarray, low: np.ndarray, high: np.ndarray) -> None:
-        """Clip the observation features of envs ``rows``, just drawn, to [``low``, ``high``]
-        (as the single env clips its observation)."""
 
     def start(self, rows: np.ndarray, state, ticks: np.ndarray,
               positions: np.ndarray | None = None) -> None:
@@ -467,14 +466,20 @@ class _NavigationBatch(_FreeBatch):
     """`NavigationTask` for N robots: goals, arrival, the rewards (`NavigationTask.step_rewards`,
     every ``reward`` option) and the plan cost."""
 
-    def __init__(self, task: NavigationTask, n: int, model=None) -> None:
+    def __init__(self, task: NavigationTask, n: int, model=None, bounds=None) -> None:
         super().__init__(task, n)
         self.single = task
         self.model = model
+        self.low, self.high = bounds
         self.draws_cells = model is not None and task.random_cells
-        if self.draws_cells and task.observe_task:  # the features of every cell as a pose
+        if self.draws_cells and task.observe_task:
+            # every cell's features as the start's and as the goal's pose, cast and clipped
             p, k = model.decode(np.arange(model.n_cells))
-            self.cell_features = task.pose_features(model.centres[p], k * model.bin_width)
+            pose = task.pose_features(model.centres[p], k * model.bin_width).astype(np.float32)
+            half = pose.shape[1]
+            self.start_features, self.goal_features = (
+                self._bounded(pose, self.low[part], self.high[part])
+                for part in (slice(None, half), slice(half, None)))
         self.goal_position = np.zeros((n, 2))
         self.goal_heading = np.zeros(n)
         self.reached = np.zeros(n, dtype=bool)
@@ -501,8 +506,8 @@ class _NavigationBatch(_FreeBatch):
             self.goal_node[rows] = self.node_of_position.take(goal_p)
         if single.observe_task:
             self.features[rows] = np.concatenate(
-                (self.cell_features.take(model.cell_id(p, k), axis=0),
-                 self.cell_features.take(model.cell_id(goal_p, goal_k), axis=0)), axis=1)
+                (self.start_features.take(model.cell_id(p, k), axis=0),
+                 self.goal_features.take(model.cell_id(goal_p, goal_k), axis=0)), axis=1)
         return p, k
 
     def _potentials_at(self, rows: np.ndarray, nodes: np.ndarray) -> np.ndarray:
@@ -523,7 +528,7 @@ class _NavigationBatch(_FreeBatch):
         if task.geodesic is not None:
             self.goal_node[i] = task.geodesic.node_at(*goal.tolist())
         if task.observe_task:
-            self.features[i] = task.observation(None)[0]
+            self.features[i] = self._bounded(task.observation(None)[0], self.low, self.high)
 
     def start(self, rows, state, ticks, positions=None):
         single = self.single
@@ -544,9 +549,10 @@ class _NavigationBatch(_FreeBatch):
                 "is_success": self.reached[rows].copy(),
                 "plan_cost": self.plan_cost[rows].copy()}
 
-    def bound_features(self, rows, low, high):
-        if self.single.observe_task:  # np.clip's arithmetic
-            self.features[rows] = np.minimum(np.maximum(self.features[rows], low), high)
+    @staticmethod
+    def _bounded(features: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+        """``features`` clipped to [``low``, ``high``] (np.clip's arithmetic)."""
+        return np.minimum(np.maximum(features, low), high)
 
     def observation(self):
         return self.features if self.single.observe_task else None
@@ -605,7 +611,7 @@ class _NavigationBatch(_FreeBatch):
 class _CoverageBatch(_FreeBatch):
     """`CoverageTask` for N robots: one visit histogram and visited grid per env."""
 
-    def __init__(self, task: CoverageTask, n: int, model=None) -> None:
+    def __init__(self, task: CoverageTask, n: int, model=None, bounds=None) -> None:
         super().__init__(task, n)
         self.single = task
         shape = (n, *task.free.shape)
