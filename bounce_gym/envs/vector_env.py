@@ -234,10 +234,9 @@ class BounceVectorEnv(VectorEnv):
         truncated = (np.zeros(self.num_envs, dtype=bool) if self.max_episode_steps is None
                      else self._elapsed >= self.max_episode_steps)
         resetting = np.flatnonzero(self._autoreset)
-        values = self._step_values(task_info, events, ticks)
         if len(resetting):
             self._reset_envs(resetting)
-        infos = self._step_infos(values, resetting)
+        infos = self._step_infos({**task_info, "step_ticks": ticks}, resetting)
         if len(resetting):
             rewards[resetting] = 0.0
             terminated[resetting] = False
@@ -305,42 +304,42 @@ class BounceVectorEnv(VectorEnv):
             obs[:, col:] = features
         return obs
 
-    def _step_values(self, task_info: dict, events: StepEvents, step_ticks: np.ndarray
-                     ) -> dict:
-        """The info values of a step, fresh arrays (``(values, mask)`` for a key only some envs
-        report), for the robots' ``events`` (whose end positions and headings are fresh copies)
-        and ``step_ticks``."""
+    def _robot_values(self, rows: np.ndarray | None = None) -> dict:
+        """The info values of the robots themselves (fresh arrays) for envs ``rows`` (None:
+        every env)."""
         state = self.state
-        return {"ticks": self._ticks.copy(), "position": events.end, "heading": events.heading,
-                "cell": self._info_cells(state.position), "clock": state.clock.copy(),
-                "bumps": state.bumps.copy(), "contact_edge": state.contact_edge.copy(),
-                **task_info, "step_ticks": step_ticks}
+        arrays = {"ticks": self._ticks, "position": state.position, "heading": state.heading,
+                  "clock": state.clock, "bumps": state.bumps, "contact_edge": state.contact_edge}
+        if rows is None:
+            values = {key: array.copy() for key, array in arrays.items()}
+        else:  # ``take``: fancy indexing's values, faster
+            values = {key: array.take(rows, axis=0) for key, array in arrays.items()}
+        values["cell"] = self._info_cells(values["position"], _EVERY if rows is None else rows)
+        return values
 
     def _reset_values(self, rows: np.ndarray) -> dict:
-        """The info values of envs ``rows`` just reset, one row each (the keys a step reports,
-        less its own)."""
-        state = self.state
-        position = state.position.take(rows, axis=0)  # ``take``: fancy indexing's values, faster
-        return {"ticks": self._ticks[rows], "position": position,
-                "heading": state.heading[rows], "cell": self._info_cells(position, rows),
-                "clock": state.clock[rows], "bumps": state.bumps[rows],
-                "contact_edge": state.contact_edge[rows], **self.task.info(state, rows)}
+        """The info values of envs ``rows`` just reset, one row each."""
+        return {**self._robot_values(rows), **self.task.info(self.state, rows)}
 
     def _step_infos(self, values: dict, resetting: np.ndarray) -> dict:
-        """The infos of a step (arrays with ``_key`` masks, as SyncVectorEnv builds them): the
-        step's ``values`` (`_step_values`), where envs ``resetting`` (reset after the step)
-        report their reset's values instead, or nothing (0, mask False) for the keys a reset
-        does not report.
+        """The infos of a step (arrays with ``_key`` masks, as SyncVectorEnv builds them), taken
+        after envs ``resetting`` were reset: the robots' values (`_robot_values`, so the reset
+        envs' already), then the step's own ``values`` (the task's info and ``step_ticks``,
+        fresh arrays; ``(values, mask)`` for a key only some envs report), where the reset envs
+        report the task's reset info instead, or nothing (0, mask False) for a key it lacks.
 
         The value arrays are handed out as they are; a key every env reports has the shared
         read-only all-True array as its mask.
         """
-        reset = self._reset_values(resetting) if len(resetting) else {}
+        infos = {}
+        for key, value in self._robot_values().items():
+            infos[key] = value
+            infos[f"_{key}"] = self._all_true
+        reset = self.task.info(self.state, resetting) if len(resetting) else {}
         stepped = None
         if len(resetting):
             stepped = np.ones(self.num_envs, dtype=bool)
             stepped[resetting] = False
-        infos = {}
         for key, value in values.items():
             present = self._all_true
             if isinstance(value, tuple):  # (values, mask): a key only some envs report
