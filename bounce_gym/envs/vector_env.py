@@ -1,15 +1,17 @@
 """`BounceVectorEnv`: N independent single-robot episodes stepped as one batch.
 
 A Gymnasium 1.x ``VectorEnv`` (registered as the ``vector_entry_point`` of the free, navigation
-and coverage ids, so ``gym.make_vec(id, num_envs=N)`` builds it). The N robots live in ONE
-`BounceDynamics` with ``robot_collisions="ignore"``: a step rotates every robot and drives each
-to its own next contact in one vectorised call (`BounceDynamics.bounce_each` on the kinematic
-backend, whole-cell moves of the `CellModel` on the cell backend); rewards and terminations are
-the tasks' formulas on arrays.
+and coverage ids, so ``gym.make_vec(id, num_envs=N)`` builds it). On the kinematic backend the N
+robots live in ONE `BounceDynamics` with ``robot_collisions="ignore"``: a step rotates every robot
+and drives each to its own next contact in one vectorised call (`BounceDynamics.bounce_each`). On
+the cell backend each robot is kept as its cell (`bounce_gym.envs.vector_cells.CellRobots`) and a
+step is a lookup in tables of the `CellModel`; the batch keeps no odometer there (nothing it
+reports reads one). Rewards and terminations are the tasks' formulas on arrays.
 
 It reproduces ``gym.make_vec(id, num_envs=N, vectorization_mode="sync")`` step for step:
 ``reset(seed=s)`` seeds env i with s + i, each env starts where a single env reset with that seed
-starts (the reset runs the single-robot core and copies its state into the batch), autoreset is
+starts (each env draws its start, and its task's poses, from its own generator as a single env
+does; navigation on the cell backend draws its random cells directly), autoreset is
 ``NEXT_STEP`` and the registered ``max_episode_steps`` truncates each env. Infos are dicts of
 arrays with ``_key`` masks, as SyncVectorEnv builds them, except ``cell``, an (N, 2) int array
 (row, col) where SyncVectorEnv has an object array of tuples, and the masks of keys every env
