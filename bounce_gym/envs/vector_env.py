@@ -91,14 +91,16 @@ class BounceVectorEnv(VectorEnv):
                             if opts.backend == "cell" else None)
         model = self.cell_robots.model if self.cell_robots else None
         core = self.single.core
-        first = len(core.obs_low) - task.observation_size  # the task's features come last
+        first = self._first_feature = len(core.obs_low) - task.observation_size  # they come last
         self.task = _BATCHED[task.name](task, n, model,
                                         (core.obs_low[first:], core.obs_high[first:]))
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._ticks = np.zeros(n, dtype=np.int64)
         self._elapsed = np.zeros(n, dtype=np.int64)
         self._autoreset = np.zeros(n, dtype=bool)
-        self._history = np.zeros((n, opts.history, 2), dtype=np.float32)
+        #: the observation's columns kept from step to step (each step copies it and writes the
+        #: clock and any privileged pose): the history (`_history`) and the task's features
+        self._kept_obs = np.zeros((n, len(self.single.core.obs_low)), dtype=np.float32)
         self._last_angle = np.full(n, math.nan)
         self._origin = np.array(opts.world.bounds[:2], dtype=np.float64)
         self._all_true = _read_only(np.ones(n, dtype=bool))
@@ -174,7 +176,10 @@ class BounceVectorEnv(VectorEnv):
                 self._ticks[rows] = self._place_kinematic(rows, position, heading)
         self.task.start(rows, self.state, self._ticks, self._positions())
         self._elapsed[rows] = 0
-        self._history[rows] = 0.0
+        self._history()[rows] = 0.0
+        features = self.task.observation()
+        if features is not None:
+            self._kept_obs[rows, self._first_feature:] = features[rows]
         self._last_angle[rows] = math.nan
 
     def _place_kinematic(self, rows: np.ndarray, position: np.ndarray,
@@ -220,8 +225,9 @@ class BounceVectorEnv(VectorEnv):
             changed &= bumping
             last[bumping] = angles[bumping]
         if opts.history:
-            history = self._history
-            history[rows, 1:] = history[rows, :-1]
+            history = self._history()
+            for j in range(opts.history - 1, 0, -1):  # one pair at a time: no overlapping copy
+                history[rows, j] = history[rows, j - 1]
             history[rows, 0, 0] = clock_before / opts.max_clock
             history[rows, 0, 1] = np.mod(angles[rows], 2 * np.pi) / (2 * np.pi)
         # a bump is the one rotation tick of a blocked robot, so bumps grew by ``bumping``
@@ -277,20 +283,21 @@ class BounceVectorEnv(VectorEnv):
         return lo + (a + 1.0) / 2.0 * (hi - lo), None
 
     # -- sensing ----------------------------------------------------------------------------
+    def _history(self) -> np.ndarray:
+        """(N, history, 2) the history columns of `_kept_obs`, a view."""
+        return self._kept_obs[:, 1:1 + 2 * self.options.history].reshape(self.num_envs, -1, 2)
+
     def _observation(self) -> np.ndarray:
-        """(N, d) float32 observations, written column block by column block into one fresh
-        array (the values `BounceCore.observation` concatenates, cast the same way)."""
+        """(N, d) float32 observations in one fresh array, the values `BounceCore.observation`
+        concatenates, cast the same way: `_kept_obs` with the clock and any privileged pose
+        written in."""
         state = self.state
         opts = self.options
-        n = self.num_envs
         core = self.single.core
-        obs = np.empty((n, len(core.obs_low)), dtype=np.float32)
+        obs = self._kept_obs.copy()
         # bounce mode, one robot per env: every step ends in contact, so no contact column
         obs[:, 0] = state.clock / opts.max_clock
-        col = 1
-        if opts.history:
-            obs[:, col:col + 2 * opts.history] = self._history.reshape(n, -1)
-            col += 2 * opts.history
+        col = 1 + 2 * opts.history
         if opts.privileged:
             xmin, ymin, xmax, ymax = opts.world.bounds
             pose = obs[:, col:col + 4]
@@ -300,10 +307,6 @@ class BounceVectorEnv(VectorEnv):
             # by construction, and the task's features were bounded when drawn
             np.minimum(np.maximum(pose, core.obs_low[col:col + 4], out=pose),
                        core.obs_high[col:col + 4], out=pose)
-            col += 4
-        features = self.task.observation()
-        if features is not None:
-            obs[:, col:] = features
         return obs
 
     def _robot_values(self, rows: np.ndarray | None = None) -> dict:
