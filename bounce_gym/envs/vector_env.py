@@ -486,6 +486,7 @@ class _NavigationBatch(_FreeBatch):
                 for part in (slice(None, half), slice(half, None)))
         self.goal_position = np.zeros((n, 2))
         self.goal_heading = np.zeros(n)
+        self.goal_wrapped = np.zeros(n)  # the goal headings in [0, 2π)
         self.reached = np.zeros(n, dtype=bool)
         self.plan_cost = np.zeros(n)
         self.features = np.zeros((n, task.observation_size), dtype=np.float32)
@@ -537,6 +538,7 @@ class _NavigationBatch(_FreeBatch):
     def start(self, rows, state, ticks, positions=None):
         single = self.single
         self.reached[rows] = False
+        self.goal_wrapped[rows] = np.mod(self.goal_heading[rows], 2 * np.pi)
         self.plan_cost[rows] = single.w1 * ticks[rows]  # the drive of a bounce-mode reset
         if single.geodesic is not None:
             self.potentials[rows] = [single.goal_potentials(goal)
@@ -563,11 +565,13 @@ class _NavigationBatch(_FreeBatch):
 
     def step(self, state, events, ticks, positions=None):
         single = self.single
-        err = (events.heading - self.goal_heading + np.pi) % (2 * np.pi) - np.pi
         hits, arrivals = [], []  # the envs whose robot reached its goal, and at which tick
-        # the disk test of a lone robot, run only where the heading is within tolerance and the
-        # path passes near the goal
-        aligned = np.flatnonzero(np.abs(err) <= single.heading_tolerance)
+        # the exact test of a lone robot, run only where the heading is about within tolerance
+        # (headings and wrapped goal headings lie in [0, 2π], so their gap needs no wrapping;
+        # the margin lies far above rounding) and the path passes near the goal
+        gap = np.abs(events.heading - self.goal_wrapped)
+        tolerance = single.heading_tolerance + 1e-9
+        aligned = np.flatnonzero((gap <= tolerance) | (gap >= 2 * np.pi - tolerance))
         for i in aligned[self._near_goal(events, aligned)].tolist():
             single.goal = (self.goal_position[i:i + 1], self.goal_heading[i:i + 1])
             one = StepEvents(ticks=int(events.ticks[i]), start=events.start[i:i + 1],
