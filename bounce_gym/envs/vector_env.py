@@ -106,6 +106,8 @@ class BounceVectorEnv(VectorEnv):
         self._all_true = _read_only(np.ones(n, dtype=bool))
         self._no_contact = _read_only(np.zeros(n, dtype=bool))
         self._one_bump = _read_only(np.ones(n, dtype=np.int64))
+        #: each discrete action's angle as the history records it (a fraction of a turn)
+        self._history_turns = np.mod(opts.angles[0], 2 * np.pi) / (2 * np.pi)
         #: ``info["cell"]`` of each position index of the cell model
         self._cell_rc = (np.ascontiguousarray(self._cells(model.centres)) if model is not None
                          else None)
@@ -229,7 +231,9 @@ class BounceVectorEnv(VectorEnv):
             for j in range(opts.history - 1, 0, -1):  # one pair at a time: no overlapping copy
                 history[rows, j] = history[rows, j - 1]
             history[rows, 0, 0] = clock_before / opts.max_clock
-            history[rows, 0, 1] = np.mod(angles[rows], 2 * np.pi) / (2 * np.pi)
+            turns = (self._history_turns.take(choices) if choices is not None
+                     else np.mod(angles, 2 * np.pi) / (2 * np.pi))
+            history[rows, 0, 1] = turns[rows]
         # a bump is the one rotation tick of a blocked robot, so bumps grew by ``bumping``
         events = StepEvents(
             ticks=ticks, start=start, end=state.position.copy(), heading=state.heading.copy(),
