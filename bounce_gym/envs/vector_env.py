@@ -587,11 +587,13 @@ class _NavigationBatch(_FreeBatch):
             if found is not None:
                 hits.append(i)
                 arrivals.append(found)
+        hits, arrivals = np.array(hits, dtype=np.int64), np.array(arrivals)
         hit = np.zeros(self.n, dtype=bool)
         hit[hits] = True
         changed = events.angle_changed
         spent = events.ticks.astype(np.float64)
-        spent[hits] = np.minimum(events.ticks[hits], arrivals)
+        hit_ticks = events.ticks[hits]
+        spent[hits] = np.minimum(hit_ticks, arrivals)
         before = after = None
         if single.geodesic is not None:
             before = self.potential_now
@@ -602,9 +604,9 @@ class _NavigationBatch(_FreeBatch):
         self.reached |= hit
         info = self.info(state)
         info["angle_changed"] = changed
-        if hits:
+        if len(hits):
             to_goal = np.zeros(self.n, dtype=np.int64)
-            to_goal[hits] = ticks[hits] - events.ticks[hits] + np.array(arrivals)
+            to_goal[hits] = ticks[hits] - hit_ticks + arrivals
             info["ticks_to_goal"] = (to_goal, hit)
         return reward, self.reached.copy(), info
 
