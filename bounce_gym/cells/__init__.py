@@ -5,8 +5,8 @@ robots, the joint cell model of m robots, and the drifter cells of a layered flo
 from bounce_gym.cells.conflicts import crossing, crowded, resolve_moves, too_close
 from bounce_gym.cells.drifter import ACTIONS, DOWN, DRIFT, UP, DrifterCells
 from bounce_gym.cells.joint import NEIGHBORS, JointCellModel
-from bounce_gym.cells.model import CORNER_RULES, CellModel, king_offset
+from bounce_gym.cells.model import CORNER_RULES, CellModel, king_offset, king_step
 
 __all__ = ["ACTIONS", "CORNER_RULES", "DOWN", "DRIFT", "NEIGHBORS", "UP", "CellModel",
-           "DrifterCells", "JointCellModel", "crossing", "crowded", "king_offset",
+           "DrifterCells", "JointCellModel", "crossing", "crowded", "king_offset", "king_step",
            "resolve_moves", "too_close"]

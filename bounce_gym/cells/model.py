@@ -55,6 +55,15 @@ def king_offset(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return snap(np.cos(theta)), snap(np.sin(theta))
 
 
+def king_step(theta: float) -> tuple[int, int]:
+    """`king_offset` of one heading (radians) in Python floats, (d_col, d_row): the same tie
+    rule on `math`'s cosine and sine (a lone robot's hot path)."""
+    def snap(v: float) -> int:
+        return 1 if v >= 0.5 - _TIE else -1 if v <= -0.5 + _TIE else 0
+
+    return snap(math.cos(theta)), snap(math.sin(theta))
+
+
 def _is_free(free: np.ndarray, row: np.ndarray, col: np.ndarray) -> np.ndarray:
     rows, cols = free.shape
     inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)

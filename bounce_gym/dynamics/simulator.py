@@ -191,7 +191,7 @@ class BounceDynamics:
         Returns the (m,) mask of robots whose tick was a bump.
         """
         state = self._require_state()
-        params = self._parameters(params)
+        params = self.parameters(params)
         bumping = state.blocked.copy()
         if self._timed:  # the rotations start with the tick and take their time
             self._rotate(np.flatnonzero(bumping), params)
@@ -208,7 +208,7 @@ class BounceDynamics:
         the first tick if a rotated robot still faces the boundary. Returns the ticks elapsed.
         """
         state = self._require_state()
-        params = self._parameters(params)
+        params = self.parameters(params)
         if self._timed:  # the bump tick and the drive in one window: turns take ticks
             self._rotate(np.flatnonzero(state.blocked), params)
             return self.backend.drive(state, np.inf, until_first_block=True)
@@ -285,7 +285,7 @@ class BounceDynamics:
         if not self.backend.drives_independently:
             raise ConfigError(f"backend {self.backend.name!r} does not drive robots independently")
         state = self._require_state()
-        self._rotate(np.flatnonzero(state.blocked), self._parameters(params))
+        self._rotate(np.flatnonzero(state.blocked), self.parameters(params))
         return self.backend.drive_each(state)
 
     def rotate(self, robots: np.ndarray, params: np.ndarray) -> None:
@@ -294,7 +294,7 @@ class BounceDynamics:
         nobody drives and the global clock stays (`tick` is this plus one tick of driving the
         others; the batched env drives each robot on by itself)."""
         self._require_state()
-        self._rotate(np.asarray(robots, dtype=np.int64), self._parameters(params))
+        self._rotate(np.asarray(robots, dtype=np.int64), self.parameters(params))
 
     def _rotate(self, idx: np.ndarray, params: np.ndarray) -> None:
         """Bump ticks of robots ``idx``: each rotates by the rule (and the noise) in place."""
@@ -346,7 +346,7 @@ class BounceDynamics:
         state.clock[idx] = 0
         self.backend.begin_turns(state, idx, rotation)
 
-    def _parameters(self, params: object) -> np.ndarray:
+    def parameters(self, params: object) -> np.ndarray:
         """Bounce parameters as an (m,) float array; a scalar applies to every robot."""
         try:
             values = np.asarray(params, dtype=np.float64).reshape(-1)

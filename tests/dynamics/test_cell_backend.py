@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bounce_gym import worlds
-from bounce_gym.cells import CellModel, king_offset
+from bounce_gym.cells import CellModel, king_offset, king_step
 from bounce_gym.dynamics import BounceDynamics
 from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
@@ -21,6 +21,15 @@ def test_king_moves_and_the_tie_rule():
     assert list(zip(dcol.tolist(), drow.tolist(), strict=True)) == [
         (1, 0), (1, 1), (0, 1), (1, 1), (1, 1), (-1, 1), (-1, 1), (-1, -1), (-1, -1), (1, -1),
         (1, -1)]
+
+
+def test_king_step_is_king_offset_of_one_heading():
+    """The scalar form agrees on every heading of 1° bins and on random headings."""
+    headings = np.concatenate((deg(np.arange(360.0)),
+                               np.random.default_rng(0).uniform(-10, 10, 1000)))
+    dcol, drow = king_offset(headings)
+    assert [king_step(h) for h in headings.tolist()] == list(
+        zip(dcol.tolist(), drow.tolist(), strict=True))
 
 
 def test_numbering_is_orientation_major_east_layer_first():

@@ -204,3 +204,29 @@ def test_returned_arrays_are_not_the_env_state():
         _same_step(out, expect, t)
         for array in (out[0], *(v for k, v in out[4].items() if not k.startswith("_"))):
             array[...] = 0
+
+
+@pytest.mark.parametrize(("task_kwargs", "options"), [
+    # reset options: the first episodes are placed from the single core's draws, the autoreset
+    # ones from random cells drawn by the batch
+    ({}, {"start": {"position": [0.5, 0.5], "heading": 0.0},
+          "goal": {"position": [8.5, 4.5], "heading": np.pi / 2}}),
+    # a fixed goal: every episode draws only its start, through the single core
+    ({"goal": {"position": [8.5, 4.5], "heading": np.pi / 2}}, None),
+])
+def test_cell_navigation_episodes_drawn_either_way(task_kwargs, options):
+    native, sync = _pair("bounce_gym/BounceNavigation-v0", 6, max_episode_steps=30,
+                         backend="cell", angles=[45, 90, 135],
+                         task_kwargs={"goal_radius": 1.0, "heading_tolerance_deg": 90,
+                                      **task_kwargs})
+    a, b = native.reset(seed=7, options=options), sync.reset(seed=7, options=options)
+    assert np.array_equal(a[0], b[0])
+    _same_infos(a[1], b[1], "reset")
+    native.action_space.seed(4)
+    ended = 0
+    for t in range(80):
+        actions = native.action_space.sample()
+        out = native.step(actions)
+        _same_step(out, sync.step(actions), t)
+        ended += int((out[2] | out[3]).sum())
+    assert ended >= 6  # every env went through an autoreset

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from bounce_gym.cells import king_offset
+from bounce_gym.cells import king_offset, king_step
 from bounce_gym.dynamics.state import RobotState
 from bounce_gym.errors import ConfigError
 from bounce_gym.validate import numbers
@@ -98,6 +99,14 @@ def tick_length(options, heading: np.ndarray) -> np.ndarray:
         return np.full(heading.shape, options.step_length)
     dcol, drow = king_offset(heading)
     return options.step_length * np.hypot(dcol, drow)
+
+
+def tick_length_at(options, heading: float) -> float:
+    """`tick_length` of one heading, in Python floats (`king_step`)."""
+    if options.backend != "cell":
+        return float(options.step_length)
+    dcol, drow = king_step(heading)
+    return options.step_length * math.hypot(dcol, drow)
 
 
 def path_samples(events: StepEvents, step_length: np.ndarray | float, spacing: float):

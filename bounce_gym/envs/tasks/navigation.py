@@ -8,7 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from bounce_gym.cells.geodesic import GridGeodesic
-from bounce_gym.envs.tasks.base import StepEvents, Task, _normalised, pose_option, tick_length
+from bounce_gym.envs.tasks.base import StepEvents, Task, _normalised, pose_option, tick_length_at
 from bounce_gym.errors import ConfigError
 from bounce_gym.validate import flag, number
 
@@ -155,7 +155,7 @@ class NavigationTask(Task):
         world, radius = self.options.world, self.options.robot_radius
         for key in ("start", "goal"):
             if chosen[key] is None and self._cells is not None:
-                p, k = rng.integers(self._cells.n_positions), rng.integers(self._cells.n_bins)
+                p, k = self.random_cell(rng)
                 chosen[key] = (self._cells.centres[[p]], np.array([k * self._cells.bin_width]))
             elif chosen[key] is None:
                 chosen[key] = (world.sample_free(rng, 1, radius), rng.uniform(0, 2 * np.pi, 1))
@@ -164,6 +164,17 @@ class NavigationTask(Task):
                                   "free space")
         self.start, self.goal = chosen["start"], chosen["goal"]
         return self.start
+
+    @property
+    def random_cells(self) -> bool:
+        """Whether, without reset options, every episode's start and goal are random cells of
+        the cell backend (`random_cell`, the start's draw first)."""
+        return self._cells is not None and all(pose is None for pose in self._fixed.values())
+
+    def random_cell(self, rng: np.random.Generator) -> tuple[int, int]:
+        """A random start or goal cell on the cell backend, (position index, bin), drawn from
+        ``rng`` as `start_poses` draws it."""
+        return int(rng.integers(self._cells.n_positions)), int(rng.integers(self._cells.n_bins))
 
     def reset(self, state, rng, options):
         self.reached = False
@@ -231,6 +242,11 @@ class NavigationTask(Task):
                 "distance_to_goal": gap, "is_success": self.reached,
                 "plan_cost": self.plan_cost}
 
+    def ticks_to_goal(self, events: StepEvents) -> float | None:
+        """Ticks into the step of a lone robot (``events``) at which it first enters this
+        episode's goal region with its heading within tolerance, else None."""
+        return self._ticks_to_goal(events)
+
     def _ticks_to_goal(self, events: StepEvents) -> float | None:
         """Ticks into the step at which the robot first enters the goal region, else None."""
         err = (events.heading[0] - self.goal[1][0] + np.pi) % (2 * np.pi) - np.pi
@@ -253,7 +269,7 @@ class NavigationTask(Task):
             s = -b - math.sqrt(disc)  # where the segment's line enters the goal disk
             if s < 0 or s > length:
                 return None  # the disk lies behind the start, or beyond the end
-        per_tick = float(tick_length(self.options, events.heading[:1])[0])
+        per_tick = tick_length_at(self.options, float(events.heading[0]))
         drive = math.ceil(s / per_tick - 1e-9)
         return float(events.bumps[0] + drive)
 
@@ -281,11 +297,16 @@ class NavigationTask(Task):
     def observation(self, state):
         if not self.observe_task:
             return np.zeros((1, 0), dtype=np.float32)
-        feats = [_normalised(self.options.world, self.start[0][0]),
-                 [math.cos(self.start[1][0]), math.sin(self.start[1][0])],
-                 _normalised(self.options.world, self.goal[0][0]),
-                 [math.cos(self.goal[1][0]), math.sin(self.goal[1][0])]]
-        return np.concatenate(feats).astype(np.float32)[None, :]
+        feats = (self.pose_features(*self.start), self.pose_features(*self.goal))
+        return np.concatenate(feats, axis=1).astype(np.float32)
+
+    def pose_features(self, position: np.ndarray, heading: np.ndarray) -> np.ndarray:
+        """(m, 4) float64 observation features of poses (positions (m, 2), headings (m,)): the
+        normalised position, then the heading's cosine and sine; the observation is those of
+        the start and of the goal, cast to float32."""
+        trig = [[math.cos(h), math.sin(h)] for h in np.asarray(heading).tolist()]
+        return np.concatenate((_normalised(self.options.world, position),
+                               np.array(trig).reshape(-1, 2)), axis=1)
 
     def render_layers(self):
         return {"goal": (*self.goal[0][0], self.goal_radius, float(self.goal[1][0]),
