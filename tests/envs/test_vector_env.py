@@ -43,6 +43,19 @@ def _same_infos(mine, theirs, where):
             assert mine[key].dtype == value.dtype, (where, key)
 
 
+def _steps_alike(native, sync, steps: int, action_seed: int) -> int:
+    """Step both envs with the same random actions, checking every step alike; returns how
+    many episodes ended."""
+    native.action_space.seed(action_seed)
+    ended = 0
+    for t in range(steps):
+        actions = native.action_space.sample()
+        out = native.step(actions)
+        _same_step(out, sync.step(actions), t)
+        ended += int((out[2] | out[3]).sum())
+    return ended
+
+
 @pytest.mark.parametrize(("env_id", "kwargs"), CASES)
 def test_same_episodes_as_sync_vector_env(env_id, kwargs):
     """Same seeds and actions: identical observations, rewards, flags and infos, across
@@ -52,14 +65,7 @@ def test_same_episodes_as_sync_vector_env(env_id, kwargs):
     a, b = native.reset(seed=11), sync.reset(seed=11)
     assert np.array_equal(a[0], b[0])
     _same_infos(a[1], b[1], "reset")
-    native.action_space.seed(2)
-    ended = 0
-    for t in range(130):
-        actions = native.action_space.sample()
-        out, ref = native.step(actions), sync.step(actions)
-        _same_step(out, ref, t)
-        ended += int((out[2] | out[3]).sum())
-    assert ended >= n  # every env went through at least one autoreset
+    assert _steps_alike(native, sync, 130, action_seed=2) >= n  # every env autoreset
     a, b = native.reset(seed=5), sync.reset(seed=5)  # a second reset with a new seed
     assert np.array_equal(a[0], b[0])
 
@@ -222,11 +228,4 @@ def test_cell_navigation_episodes_drawn_either_way(task_kwargs, options):
     a, b = native.reset(seed=7, options=options), sync.reset(seed=7, options=options)
     assert np.array_equal(a[0], b[0])
     _same_infos(a[1], b[1], "reset")
-    native.action_space.seed(4)
-    ended = 0
-    for t in range(80):
-        actions = native.action_space.sample()
-        out = native.step(actions)
-        _same_step(out, sync.step(actions), t)
-        ended += int((out[2] | out[3]).sum())
-    assert ended >= 6  # every env went through an autoreset
+    assert _steps_alike(native, sync, 80, action_seed=4) >= 6  # every env autoreset
