@@ -15,7 +15,6 @@ angle's drive passes; `scipy.sparse.csgraph.shortest_path` with unit weights).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -41,7 +40,6 @@ class BounceReach:
             driving on from z first bumps (z's own index when z is a decision pose).
         bounces: (D, N) int16: the fewest bounces after which a robot at decision pose
             ``decisions[i]`` passes pose z (at least 1), `UNREACHABLE` where it never does.
-        reachable: (D,) bool: decision poses from which some pose can be passed.
     """
 
     def __init__(self, model: CellModel, angles: Sequence[float]) -> None:
@@ -57,7 +55,6 @@ class BounceReach:
         index[self.decisions] = np.arange(len(self.decisions))
         self.arrival = index[self._drive_ends(np.arange(n, dtype=np.int64))]
         self.bounces = self._table()
-        self.reachable = (self.bounces > 0).any(axis=1)
 
     def rotated(self, z: np.ndarray, action: np.ndarray) -> np.ndarray:
         """The poses z turned in place by the angles of Φ with indices ``action``."""
@@ -110,13 +107,3 @@ class BounceReach:
         finite = np.isfinite(dist)
         out[finite] = dist[finite].astype(np.int16)
         return out
-
-    def from_pose(self, z: int) -> np.ndarray:
-        """(N,) fewest bounces to pass each pose for a robot placed at pose z, which first
-        drives on to its decision pose (`UNREACHABLE` where never)."""
-        return self.bounces[self.arrival[int(z)]]
-
-
-def bounce_reach(model: CellModel, angles_deg: Sequence[float]) -> BounceReach:
-    """`BounceReach` of ``model`` for the angles Φ given in degrees."""
-    return BounceReach(model, [math.radians(float(a)) for a in angles_deg])
