@@ -61,8 +61,9 @@ class GoalNavigationEnv(BounceEnv):
     ## Arguments
 
     Those of `BounceEnv`, with ``task_kwargs`` for `GoalNavigationTask` (``draw``,
-    ``heading_tolerance_deg``, ``start``, ``goal``, ``goal_bonus``, ``w1``, ``w2``); the task is always ``goal_navigation``. Discrete actions only (the bounce angle is
-    an index into Φ, whose angles must be whole bins of the cell model).
+    ``heading_tolerance_deg``, ``start``, ``goal``, ``goal_bonus``, ``w1``, ``w2``); the task is
+    always ``goal_navigation``. Discrete actions only (the bounce angle is an index into Φ,
+    whose angles must be whole bins of the cell model).
 
     ## Version History
 
