@@ -1,6 +1,6 @@
 """`GoalNavigationEnv`: ``bounce_gym/BounceNavigation-v1``, navigation as a goal-conditioned task.
 
-The goal-conditioned convention of Gymnasium-Robotics (its ``GoalEnv``), which Stable-Baselines3's
+The goal-conditioned convention of Gymnasium-Robotics (its ``GoalEnv``), which SB3's
 ``HerReplayBuffer`` relabels with (Andrychowicz et al., "Hindsight Experience Replay", NeurIPS
 2017): a ``Dict`` observation of ``observation``, ``achieved_goal`` and ``desired_goal``, and a
 vectorised ``compute_reward(achieved_goal, desired_goal, info)`` equal to the step's reward.

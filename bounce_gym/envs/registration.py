@@ -79,6 +79,8 @@ max_cycles 500.
 
 from __future__ import annotations
 
+import warnings
+
 import gymnasium as gym
 import pettingzoo
 
@@ -147,8 +149,15 @@ _ENTRY = {
 }
 
 
+#: Gymnasium's notice on making an id whose newer version is registered: here v0 beside v1 of
+#: navigation, two different tasks (v0 kept for reproducibility), so the notice is wrong
+OUT_OF_DATE = r"\x1b\[33mWARN: The environment bounce_gym/\w+-v\d+ is out of date"
+
+
 def register_envs() -> None:
-    """Register every environment id (idempotent)."""
+    """Register every environment id (idempotent), and silence Gymnasium's "out of date"
+    notice for them (`OUT_OF_DATE`)."""
+    warnings.filterwarnings("ignore", message=OUT_OF_DATE, category=DeprecationWarning)
     for env_id, (kwargs, steps) in GYM_ENVS.items():
         if env_id not in gym.registry:
             gym.register(env_id, entry_point=ENTRY_POINTS.get(

@@ -34,7 +34,8 @@ TINY = {"samples": 2, "cell_size": 1.0, "depth": 1, "reach": 3}
 
 
 def _experiments(name: str) -> list[dict]:
-    return load_config(ROOT / "configs" / name)["experiments"]
+    """The configuration's experiments as written, ``env_kwargs`` filled in where left out."""
+    return [{"env_kwargs": {}, **exp} for exp in load_config(ROOT / "configs" / name)["experiments"]]
 
 
 def _dynamic(exp: dict) -> bool:
