@@ -17,8 +17,9 @@ What changes from v0's `NavigationTask` (Gymnasium's rule: a changed task gets a
 * **draws only pairs the model joins** (``draw="reachable"``, the default): the start is a pose
   from which the robot, after driving on to its first bump, can reach some other decision pose,
   and the goal a decision pose it can reach after one bounce or more, other than the one it
-  first bumps in (`bounce_gym.cells.reach`, on the env's cell model); ``draw="any"`` draws start and goal as v0 does, without asking the model
-  (on the lab map about 3 in 4 such pairs are not joined). ``info["optimal_bounces"]`` is the
+  first bumps in (`bounce_gym.cells.reach`, on the env's cell model); ``draw="any"`` draws
+  any start pose and any decision pose as the goal, without asking the model (on the lab map
+  about 3 in 4 such pairs are not joined). ``info["optimal_bounces"]`` is the
   fewest bounces the model needs for the pair (−1: never);
 * **the sparse reward** ``goal_bonus`` (1) on arrival and 0 otherwise, the reward a goal-
   conditioned learner relabels (no shaping: a potential depends on the goal, which relabelling
