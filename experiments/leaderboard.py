@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from baselines.drifters.policy import AlwaysDriftPolicy, RandomLayerPolicy
 from baselines.policy import RandomAnglePolicy
 from baselines.rl.policies import GREEDY_SUFFIX
 from bounce_gym.files import atomic_write
@@ -38,15 +39,16 @@ def ordered(rows: list[dict], family) -> list[dict]:
 
 
 def kind(policy: str) -> str:
-    """``rl``, ``greedy`` (a trained agent's greedy twin), ``random``, ``fixed``, ``oracle`` or
-    ``planner`` (every other row: the family's reference planners)."""
+    """``rl``, ``greedy`` (a trained agent's greedy twin), ``random`` (a random angle, or the
+    drifter's random layer), ``fixed`` (a fixed angle, or the drifter that never changes
+    layer), ``oracle`` or ``planner`` (every other row: the family's reference planners)."""
     if policy.startswith("rl "):
         return "greedy" if policy.endswith(GREEDY_SUFFIX) else "rl"
-    if policy == RandomAnglePolicy.name:
+    if policy in (RandomAnglePolicy.name, RandomLayerPolicy.name):
         return "random"
-    if policy.startswith("fixed ") or policy == ORACLE_NAME:
-        return "fixed" if policy.startswith("fixed ") else "oracle"
-    return "planner"
+    if policy.startswith("fixed ") or policy == AlwaysDriftPolicy.name:
+        return "fixed"
+    return "oracle" if policy == ORACLE_NAME else "planner"
 
 
 def _best(rows: list[dict], family, which: str) -> dict | None:

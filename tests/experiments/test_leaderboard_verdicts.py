@@ -13,8 +13,9 @@ def _row(experiment, policy, value, lo, hi, score="success"):
 def test_kinds_of_rows():
     assert [kind(p) for p in ("rl dqn", "rl ppo (greedy)", "random", "fixed 45°",
                               "oracle: best fixed angle per episode (hindsight)",
-                              "roadmap planner")] == [
-        "rl", "greedy", "random", "fixed", "oracle", "planner"]
+                              "roadmap planner", "random layer", "always drift",
+                              "value iteration")] == [
+        "rl", "greedy", "random", "fixed", "oracle", "planner", "random", "fixed", "planner"]
 
 
 def test_verdicts_by_disjoint_intervals():
