@@ -21,6 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import shortest_path
 
+from bounce_gym.cells.drives import ContactDrives
 from bounce_gym.cells.model import CellModel
 
 #: `BounceReach.bounces` of a pose that cannot be passed from a decision pose
@@ -47,30 +48,21 @@ class BounceReach:
         self.turns = np.array([model.angle_bins(float(a), "bounce angle") % model.n_bins
                                for a in angles], dtype=np.int64)
         n = model.n_cells
-        p, k = model.decode(np.arange(n, dtype=np.int64))
-        self.forward = np.where(model.targets[k, p] >= 0,
-                                model.cell_id(np.maximum(model.targets[k, p], 0), k), -1)
+        #: where every pose's drive to contact stops (`ContactDrives`, shared with the env)
+        self.drives = drives = ContactDrives(model)
+        z = np.arange(n, dtype=np.int64)
+        #: (N,) the pose one tick of driving leads to, −1 where the next move is blocked
+        self.forward = np.where(drives.next != z, drives.next, -1)
         self.decisions = np.flatnonzero(self.forward < 0)
         index = np.full(n, -1, dtype=np.int64)
         index[self.decisions] = np.arange(len(self.decisions))
-        self.arrival = index[self._drive_ends(np.arange(n, dtype=np.int64))]
+        self.arrival = index[drives.end]
         self.bounces = self._table()
 
     def rotated(self, z: np.ndarray, action: np.ndarray) -> np.ndarray:
         """The poses z turned in place by the angles of Φ with indices ``action``."""
         p, k = self.model.decode(np.asarray(z, dtype=np.int64))
         return self.model.cell_id(p, (k + self.turns[np.asarray(action)]) % self.model.n_bins)
-
-    def _drive_ends(self, z: np.ndarray) -> np.ndarray:
-        """Where a robot driving on from each pose z first bumps (a decision pose)."""
-        z = z.copy()
-        for _ in range(self.model.n_positions + 1):
-            ahead = self.forward[z]
-            moving = ahead >= 0
-            if not moving.any():
-                return z
-            z[moving] = ahead[moving]
-        raise AssertionError("a straight drive never reached a wall")
 
     def drive_passes(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Every pose passed by drives starting at poses z (each start pose included):
@@ -94,7 +86,7 @@ class BounceReach:
                               np.tile(np.arange(len(self.turns)), d))
         source = np.repeat(np.arange(d), len(self.turns))
         # decision pose -> next decision pose, for every angle
-        nxt = self.arrival[self._drive_ends(starts)]
+        nxt = self.arrival[self.drives.end[starts]]
         # decision pose -> goal node (d + pose) for every pose the drive passes
         row, pose = self.drive_passes(starts)
         graph = sp.coo_matrix(

@@ -163,7 +163,7 @@ class GoalNavigationTask(NavigationTask):
         return z if z >= 0 and abs(error) <= self.heading_tolerance else -1
 
     # -- arrival ---------------------------------------------------------------------------
-    def _ticks_to_goal(self, events: StepEvents) -> float | None:
+    def ticks_to_goal(self, events: StepEvents) -> float | None:
         """Records the pose the step ends in (`achieved`); the step's ticks if it is the
         goal, else None."""
         self.achieved = self.pose_at(events.end[0], float(events.heading[0]))

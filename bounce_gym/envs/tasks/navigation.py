@@ -245,10 +245,6 @@ class NavigationTask(Task):
     def ticks_to_goal(self, events: StepEvents) -> float | None:
         """Ticks into the step of a lone robot (``events``) at which it first enters this
         episode's goal region with its heading within tolerance, else None."""
-        return self._ticks_to_goal(events)
-
-    def _ticks_to_goal(self, events: StepEvents) -> float | None:
-        """Ticks into the step at which the robot first enters the goal region, else None."""
         err = (events.heading[0] - self.goal[1][0] + np.pi) % (2 * np.pi) - np.pi
         if abs(err) > self.heading_tolerance:
             return None
@@ -275,7 +271,7 @@ class NavigationTask(Task):
 
     def step(self, state, events):
         changed = np.array([bool(events.angle_changed[0])])
-        arrive = self._ticks_to_goal(events)
+        arrive = self.ticks_to_goal(events)
         hit = np.array([arrive is not None])
         ticks = np.array([events.ticks if arrive is None else min(events.ticks, arrive)],
                          dtype=np.float64)
