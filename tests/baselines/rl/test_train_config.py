@@ -130,3 +130,26 @@ def test_numbers_anywhere_in_the_hyperparameters_are_finite():
             validate_train_config({**base, "hyperparams": hyperparams})
     assert validate_train_config({**base, "hyperparams": {"target_kl": None, "clip_range_vf":
                                                           None}})["hyperparams"]["target_kl"] is None
+
+
+def test_the_replay_buffer_is_named_and_its_arguments_checked():
+    from bounce_gym.errors import ConfigError
+
+    base = {"name": "x", "env": "bounce_gym/BounceNavigation-v1", "algo": "dqn",
+            "total_timesteps": 64}
+    her = {"replay_buffer_class": "HerReplayBuffer"}
+    config = validate_train_config({**base, "hyperparams": {
+        **her, "replay_buffer_kwargs": {"n_sampled_goal": 4, "goal_selection_strategy": "future"}}})
+    assert algo_kwargs(config["hyperparams"])["replay_buffer_class"].__name__ == "HerReplayBuffer"
+    for hyperparams, message in (
+            ({"replay_buffer_class": "builtins.eval"}, r"replay_buffer_class: expected one of"),
+            ({"replay_buffer_kwargs": {"n_sampled_goal": 4}}, r"only with replay_buffer_class"),
+            ({**her, "replay_buffer_kwargs": {"env": "x"}}, r"kwargs.env: not an argument"),
+            ({**her, "replay_buffer_kwargs": {"n_sampled_goal": 0}}, r"n_sampled_goal"),
+            ({**her, "replay_buffer_kwargs": {"goal_selection_strategy": "past"}},
+             r"goal_selection_strategy: expected one of"),
+            ({**her, "replay_buffer_kwargs": {"copy_info_dict": 1}}, r"expected true or false")):
+        with pytest.raises(ConfigError, match=rf"^config.hyperparams.{message}|{message}"):
+            validate_train_config({**base, "hyperparams": hyperparams})
+    assert policy_name("dqn", make_train_env({**config, "n_envs": 1}).observation_space) == \
+        "MultiInputPolicy"
