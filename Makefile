@@ -15,7 +15,7 @@ install: $(STAMP)
 $(STAMP): pyproject.toml setup.py constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -c constraints.txt -e ".[dev,rl,drifters-check,patrol-check,distributed]"
+	$(BIN)/pip install -c constraints.txt -e ".[dev,rl,jax,drifters-check,patrol-check,distributed]"
 	touch $@
 
 test: $(STAMP)

@@ -56,8 +56,9 @@ class CellRobots:
             params = np.full(model.n_bins, dynamics.parameters(angle)[0])
             turned = model.bin_of(dynamics.rule(self.bin_heading, self.bin_normal, params))
             turns[:, action] = model.cell_id(p, turned[k])
-        #: per cell z and action a, at z · n_actions + a: where the step ends and its drive's
-        #: ticks
+        #: per cell z and action a, at z · n_actions + a: the cell the bump turns the robot to
+        #: (where the step's drive starts), where the step ends and its drive's ticks
+        self.step_turned = turns.ravel()
         self.step_end = drives.end[turns].ravel()
         self.step_ticks = drives.ticks[turns].ravel()
         #: per cell: its position index, centre, bin heading and contact normal

@@ -577,13 +577,13 @@ class _NavigationBatch(_FreeBatch):
         tolerance = single.heading_tolerance + 1e-9
         aligned = np.flatnonzero((gap <= tolerance) | (gap >= 2 * np.pi - tolerance))
         for i in aligned[self._near_goal(events, aligned)].tolist():
-            single.goal = (self.goal_position[i:i + 1], self.goal_heading[i:i + 1])
             one = StepEvents(ticks=int(events.ticks[i]), start=events.start[i:i + 1],
                              end=events.end[i:i + 1], heading=events.heading[i:i + 1],
                              bumps=events.bumps[i:i + 1], angles=events.angles[i:i + 1],
                              angle_changed=events.angle_changed[i:i + 1],
                              robot_contact=events.robot_contact[i:i + 1])
-            found = single.ticks_to_goal(one)
+            found = single.ticks_to_goal(
+                one, (self.goal_position[i:i + 1], self.goal_heading[i:i + 1]))
             if found is not None:
                 hits.append(i)
                 arrivals.append(found)

@@ -91,12 +91,14 @@ class GoalNavigationTask(NavigationTask):
         #: (D, D) fewest bounces between decision poses (`BounceReach.bounces` at the goals)
         self.bounces = self.reach.bounces[:, self.reach.decisions]
         joins = ((self.bounces > 0) & ~np.eye(len(self.bounces), dtype=bool)).any(axis=1)
-        self._starts = np.flatnonzero(joins[self.reach.arrival])
-        if self.draw == "reachable" and not len(self._starts):
+        #: the poses ``draw="reachable"`` draws starts from (uniformly)
+        self.starts = np.flatnonzero(joins[self.reach.arrival])
+        if self.draw == "reachable" and not len(self.starts):
             raise ConfigError("draw: 'reachable' needs a start pose that joins some goal pose, "
                               "and this world has none for these angles")
-        self._goal_index = np.full(model.n_cells, -1, dtype=np.int64)
-        self._goal_index[self.reach.decisions] = np.arange(len(self.reach.decisions))
+        #: per pose: its index among the decision poses (−1: not one)
+        self.goal_index = np.full(model.n_cells, -1, dtype=np.int64)
+        self.goal_index[self.reach.decisions] = np.arange(len(self.reach.decisions))
         #: the pose the robot is in after the last step (−1: outside the model's free cells,
         #: or heading farther than the tolerance from every bin)
         self.achieved = -1
@@ -125,7 +127,7 @@ class GoalNavigationTask(NavigationTask):
         if given["start"] is not None:
             start = self._snap(given["start"])
         elif self.draw == "reachable":
-            start = int(self._starts[rng.integers(len(self._starts))])
+            start = int(self.starts[rng.integers(len(self.starts))])
         else:
             start = int(rng.integers(self.model.n_cells))
         arrival = self.reach.arrival[start]
@@ -133,7 +135,7 @@ class GoalNavigationTask(NavigationTask):
         decisions = self.reach.decisions
         if given["goal"] is not None:
             goal = self._snap(given["goal"])
-            if self._goal_index[goal] < 0:
+            if self.goal_index[goal] < 0:
                 raise ConfigError(f"goal: pose at {given['goal'][0][0].tolist()} is not a "
                                   "decision pose (the robot's next move there is not blocked)")
         elif self.draw == "reachable":
@@ -142,7 +144,7 @@ class GoalNavigationTask(NavigationTask):
             goal = int(choices[rng.integers(len(choices))])
         else:
             goal = int(decisions[rng.integers(len(decisions))])
-        bounces = bounces[self._goal_index[goal]]
+        bounces = bounces[self.goal_index[goal]]
         #: pose numbers of the episode's start and goal, and the fewest bounces between them
         self.start_pose, self.goal_pose = start, goal
         self.optimal_bounces = int(bounces) if bounces > 0 else UNREACHABLE
@@ -163,11 +165,12 @@ class GoalNavigationTask(NavigationTask):
         return z if z >= 0 and abs(error) <= self.heading_tolerance else -1
 
     # -- arrival ---------------------------------------------------------------------------
-    def ticks_to_goal(self, events: StepEvents) -> float | None:
-        """Records the pose the step ends in (`achieved`); the step's ticks if it is the
-        goal, else None."""
+    def ticks_to_goal(self, events: StepEvents, goal: tuple | None = None) -> float | None:
+        """Records the pose the step ends in (`achieved`); the step's ticks if it is the goal
+        (``goal``: (position (1, 2), heading (1,)), default this episode's), else None."""
         self.achieved = self.pose_at(events.end[0], float(events.heading[0]))
-        return float(events.ticks) if self.achieved == self.goal_pose else None
+        goal_pose = self.goal_pose if goal is None else self._snap(goal)
+        return float(events.ticks) if self.achieved == goal_pose else None
 
     def _info(self, state) -> dict:
         info = super()._info(state)

@@ -242,13 +242,14 @@ class NavigationTask(Task):
                 "distance_to_goal": gap, "is_success": self.reached,
                 "plan_cost": self.plan_cost}
 
-    def ticks_to_goal(self, events: StepEvents) -> float | None:
-        """Ticks into the step of a lone robot (``events``) at which it first enters this
-        episode's goal region with its heading within tolerance, else None."""
-        err = (events.heading[0] - self.goal[1][0] + np.pi) % (2 * np.pi) - np.pi
-        if abs(err) > self.heading_tolerance:
+    def ticks_to_goal(self, events: StepEvents, goal: tuple | None = None) -> float | None:
+        """Ticks into the step of a lone robot (``events``) at which it first enters the goal
+        region with its heading within tolerance, else None. ``goal``: (position (1, 2),
+        heading (1,)), default this episode's — the batched env passes each env's own."""
+        goal_position, goal_heading = self.goal if goal is None else goal
+        if not self.heading_within(events.heading[0], goal_heading[0]):
             return None
-        p0, p1, g = events.start[0], events.end[0], self.goal[0][0]
+        p0, p1, g = events.start[0], events.end[0], goal_position[0]
         seg = p1 - p0
         length = float(np.hypot(*seg))
         rel = p0 - g
@@ -268,6 +269,12 @@ class NavigationTask(Task):
         per_tick = tick_length_at(self.options, float(events.heading[0]))
         drive = math.ceil(s / per_tick - 1e-9)
         return float(events.bumps[0] + drive)
+
+    def heading_within(self, heading, goal_heading):
+        """Whether headings (radians, floats or arrays) are within ``heading_tolerance`` of the
+        goal headings, the arrival test's heading half."""
+        err = (heading - goal_heading + np.pi) % (2 * np.pi) - np.pi
+        return np.abs(err) <= self.heading_tolerance
 
     def step(self, state, events):
         changed = np.array([bool(events.angle_changed[0])])
