@@ -17,8 +17,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from bounce_gym.envs.tasks.base import StepEvents
-from bounce_gym.jax.tasks.base import FreeTask
 from bounce_gym.errors import ConfigError
+from bounce_gym.jax.tasks.base import FreeTask
 
 #: drives whose nearby goals are found at once
 _BLOCK = 256
