@@ -69,8 +69,6 @@ def _unsupported(opts, task: str) -> str | None:
         return f"backend {opts.backend!r} (the JAX envs run the cell backend)"
     if task not in CELL_TASKS:
         return f"task {task!r} (the cell env has {list(CELL_TASKS)})"
-    if opts.n_robots != 1:
-        return "several robots (the JAX envs are single-robot)"
     if opts.step_mode != "bounce":
         return "step_mode 'tick' (a JAX step is a bounce)"
     if len(opts.turn_angles):
