@@ -50,6 +50,8 @@ class CellEnv(Environment):
     spaces it has (as `bounce_gym.jax.spaces`).
     """
 
+    deterministic_step = True  # a step is table lookups; only resets draw
+
     def __init__(self, env_id: str, model, tables: CellTables, task, n_actions: int, history: int,
                  privileged: bool, max_steps: int, observation_space, action_space) -> None:
         self.env_id = env_id

@@ -30,6 +30,9 @@ class Environment:
 
     #: the Gymnasium id this env reproduces
     env_id: str = ""
+    #: whether `step_env` draws nothing from its key (then `step` hands the whole key to the
+    #: reset instead of splitting it: a split costs as much as a cell env's step)
+    deterministic_step: bool = False
 
     @property
     def default_params(self):
@@ -42,7 +45,8 @@ class Environment:
     def step(self, key: jax.Array, state, action, params=None):
         """One step with automatic reset (module docstring)."""
         params = self.default_params if params is None else params
-        key_step, key_reset = jax.random.split(key)
+        key_step, key_reset = ((key, key) if self.deterministic_step
+                               else tuple(jax.random.split(key)))
         obs, next_state, reward, done, info = self.step_env(key_step, state, action, params)
         fresh_obs, fresh_state = self.reset_env(key_reset, params)
         info = {**info, "final_observation": obs}

@@ -12,6 +12,8 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
+from bounce_gym.jax import draws
+
 
 class CellStep(NamedTuple):
     """What one bounce-mode step of a lone robot did on the cell backend."""
@@ -37,7 +39,7 @@ class FreeTask:
 
     def draw(self, key: jax.Array, params, tables) -> tuple[jax.Array, object]:
         """A random start cell (before the reset's drive) and what else the task draws."""
-        return jax.random.randint(key, (), 0, tables.drive_end.shape[0], jnp.int32), ()
+        return draws.index(draws.uniforms(key, 1)[0], tables.drive_end.shape[0]), ()
 
     def given(self, start: jax.Array, goal, params) -> object:
         """What `draw` would have drawn besides the start, for a given ``goal`` (None if the

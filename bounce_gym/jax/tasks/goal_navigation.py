@@ -12,6 +12,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from bounce_gym.jax import draws
 from bounce_gym.jax.tasks.base import FreeTask
 
 
@@ -57,15 +58,13 @@ class GoalNavigationTask(FreeTask):
         return self._params
 
     def draw(self, key, params, tables):
-        key_start, key_goal = jax.random.split(key)
+        u_start, u_goal = draws.uniforms(key, 2)
         if self.reachable:
-            start = jax.random.choice(key_start, params.starts)
-            choices = params.goal_choices[start]
-            goal = params.decisions[jax.random.choice(
-                key_goal, choices.shape[0], p=choices / choices.sum())]
+            start = params.starts[draws.index(u_start, params.starts.shape[0])]
+            goal = params.decisions[draws.weighted_index(u_goal, params.goal_choices[start])]
         else:
-            start = jax.random.randint(key_start, (), 0, tables.drive_end.shape[0], jnp.int32)
-            goal = jax.random.choice(key_goal, params.decisions)
+            start = draws.index(u_start, tables.drive_end.shape[0])
+            goal = params.decisions[draws.index(u_goal, params.decisions.shape[0])]
         return start, goal
 
     def given(self, start, goal, params):

@@ -18,6 +18,7 @@ import numpy as np
 
 from bounce_gym.envs.tasks.base import StepEvents
 from bounce_gym.errors import ConfigError
+from bounce_gym.jax import draws
 from bounce_gym.jax.tasks.base import FreeTask
 
 #: drives whose nearby goals are found at once
@@ -90,10 +91,8 @@ class NavigationTask(FreeTask):
 
     # -- episodes ---------------------------------------------------------------------------
     def draw(self, key, params, tables):
-        keys = jax.random.split(key, 4)
-        start_p, start_k, goal_p, goal_k = (
-            jax.random.randint(k, (), 0, n, jnp.int32)
-            for k, n in zip(keys, (self.n_positions, self.n_bins) * 2, strict=True))
+        start_p, start_k, goal_p, goal_k = draws.index(
+            draws.uniforms(key, 4), jnp.array((self.n_positions, self.n_bins) * 2))
         start = start_k * self.n_positions + start_p
         return start, goal_k * self.n_positions + goal_p
 

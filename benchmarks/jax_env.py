@@ -1,0 +1,147 @@
+"""Throughput of the functional JAX env against the native NumPy vector env, in one run.
+
+Run with ``python -m benchmarks.jax_env`` (``--steps``, ``--rounds``). Prints a table; asserts
+nothing. Issue 26's rows, on ``BounceNavigation-v0`` on the cell backend (angles 45°, 90°, 135°,
+goal radius 0.3, heading tolerance 10°: the configuration of `benchmarks.vector_env`'s cell row;
+random actions, episodes ending by goal and by time, so resets included):
+
+* env-steps/s of the JAX env (`bounce_gym.jax.make`; ``jax.jit`` of a ``lax.scan`` over steps of
+  ``jax.vmap(env.step)``, one key per env and step as the gymnax convention asks) ÷ the native
+  vector env (``gym.make_vec(..., vectorization_mode="vector_entry_point")``), both with the
+  same random actions drawn beforehand, at
+  N = 1, 64 and 1,024 envs (targets: ≥ 10 at N = 64, ≥ 1 at N = 1,024).
+
+Both run on one CPU thread (`benchmarks.one_core`; NumPy's loops are single-threaded). The
+JAX function is compiled before timing. The envs are built once and interleaved: each round
+times every env in turn, so the load of a shared machine hits all alike; each ratio is taken
+within a round, and the table gives its median and min–max over the rounds, with the one-minute
+load average before and after.
+"""
+
+from __future__ import annotations  # noqa: I001  (one_core must come before jax)
+
+import argparse
+import os
+import statistics
+import time
+from collections.abc import Callable
+
+from benchmarks import one_core  # before jax
+
+import gymnasium as gym
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import bounce_gym  # noqa: F401  (registers the environments)
+from benchmarks.vector_env import CELL_NAVIGATION
+from bounce_gym.jax import make
+
+#: the batch sizes, and the target of the JAX ÷ native ratio at each (None: reported)
+SIZES = {1: None, 64: 10.0, 1024: 1.0}
+
+
+def jax_steps(n: int, steps: int) -> Callable[[], float]:
+    """Env-steps/s of ``steps`` steps of N vmapped JAX envs (compiled before the first call)."""
+    env_id, kwargs = CELL_NAVIGATION
+    env, params = make(env_id, **kwargs)
+    batch_step = jax.vmap(env.step, in_axes=(0, 0, 0, None))
+
+    actions = jnp.asarray(np.random.default_rng(1).integers(0, env.n_actions, (steps, n)),
+                          jnp.int32)
+
+    @jax.jit
+    def run(key, state):
+        def body(carry, row):
+            key, state = carry
+            key, step_key = jax.random.split(key)
+            _, state, reward, done, _ = batch_step(jax.random.split(step_key, n), state, row,
+                                                   params)
+            return (key, state), reward.sum() + done.sum()
+
+        (key, state), total = jax.lax.scan(body, (key, state), actions)
+        return key, state, total.sum()
+
+    _, state = jax.vmap(env.reset, in_axes=(0, None))(
+        jax.random.split(jax.random.PRNGKey(0), n), params)
+    carry = run(jax.random.PRNGKey(1), state)  # compiles
+    jax.block_until_ready(carry)
+
+    def rate() -> float:
+        nonlocal carry
+        start = time.perf_counter()
+        carry = jax.block_until_ready(run(carry[0], carry[1]))
+        return n * steps / (time.perf_counter() - start)
+
+    return rate
+
+
+def native_steps(n: int, steps: int) -> Callable[[], float]:
+    """Env-steps/s of ``steps`` steps of the native NumPy vector env with N envs."""
+    env_id, kwargs = CELL_NAVIGATION
+    env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+    env.reset(seed=0)
+    actions = np.random.default_rng(1).integers(0, 3, (steps, n))
+
+    def rate() -> float:
+        start = time.perf_counter()
+        for row in actions:
+            env.step(row)
+        return n * steps / (time.perf_counter() - start)
+
+    return rate
+
+
+def measure(steps: int, rounds: int) -> dict[str, list[float]]:
+    """Env-steps/s of every env and size in every round, interleaved within each round; each
+    size runs about ``steps`` × 64 env-steps (at least ``steps`` steps of the batch)."""
+    runs = {}
+    for n in SIZES:
+        batch_steps = max(steps * 64 // n, steps)
+        runs[f"JAX N={n}"] = jax_steps(n, batch_steps)
+        runs[f"native N={n}"] = native_steps(n, batch_steps)
+    rates: dict[str, list[float]] = {label: [] for label in runs}
+    for _ in range(rounds):
+        for label, run in runs.items():
+            rates[label].append(run())
+    return rates
+
+
+def _spread(values: list[float], fmt: str) -> str:
+    return f"{min(values):{fmt}}–{max(values):{fmt}}"
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=200,
+                        help="batch steps at N = 64 per round (N = 1 runs 64× more)")
+    parser.add_argument("--rounds", type=int, default=5)
+    args = parser.parse_args(argv)
+    load_before = os.getloadavg()[0]
+    rates = measure(args.steps, args.rounds)
+    load_after = os.getloadavg()[0]
+    threads = "one XLA thread" if one_core.PINNED else "XLA threads NOT pinned (jax imported first)"
+    print(f"JAX env (issue 26): {args.rounds} rounds, interleaved; {threads}; load average "
+          f"{load_before:.1f} before, {load_after:.1f} after, {os.cpu_count()} cores; "
+          f"device {jax.devices()[0].device_kind}")
+    print(f"{'environment':<16} {'env-steps/s':>14} {'min–max':>24}")
+    for label, values in rates.items():
+        print(f"{label:<16} {statistics.median(values):>14,.0f} {_spread(values, ',.0f'):>24}")
+    print(f"{'ratio (within a round)':<28} {'median':>8} {'min–max':>15} {'target':>7}")
+    ratios = {}
+    for n, target in SIZES.items():
+        name = f"JAX ÷ native, N={n}"
+        per_round = [a / b for a, b in zip(rates[f"JAX N={n}"], rates[f"native N={n}"],
+                                           strict=True)]
+        median = statistics.median(per_round)
+        goal = "-" if target is None else f"≥ {target:g}"
+        verdict = "" if target is None else "  ok" if median >= target else "  below target"
+        print(f"{name:<28} {median:>8.2f} {_spread(per_round, '.2f'):>15} {goal:>7}{verdict}",
+              flush=True)
+        ratios[name] = dict(median=median, low=min(per_round), high=max(per_round),
+                            target=target)
+    return dict(rates=rates, ratios=ratios, load=(load_before, load_after))
+
+
+if __name__ == "__main__":
+    main()
