@@ -91,10 +91,9 @@ class NavigationTask(FreeTask):
 
     # -- episodes ---------------------------------------------------------------------------
     def draw(self, key, params, tables):
-        start_p, start_k, goal_p, goal_k = draws.index(
-            draws.uniforms(key, 4), jnp.array((self.n_positions, self.n_bins) * 2))
-        start = start_k * self.n_positions + start_p
-        return start, goal_k * self.n_positions + goal_p
+        # a uniform cell is a uniform position and a uniform bin (the NumPy task's two draws)
+        start, goal = draws.index(draws.uniforms(key, 2), self.n_positions * self.n_bins)
+        return start, goal
 
     def given(self, start, goal, params):
         if goal is None:
