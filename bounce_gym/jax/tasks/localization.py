@@ -60,7 +60,8 @@ class LocalizationTask(FreeTask):
             raise ConfigError(
                 f"bounce_gym.jax: localization with filter_factory={task.filter_factory!r} is "
                 "not offered: the JAX env runs the combinatorial filter only (the belief and "
-                "particle filters are float posteriors updated by NumPy models)")
+                "particle filters are posteriors moved by NumPy models, a user's filter is "
+                "Python code, and without a filter the task has no reward to reproduce)")
         model = robots.model
         if model.n_cells != task.states.model.n_cells:
             raise ConfigError("bounce_gym.jax: the filter's cell model is not the robots'")
