@@ -18,11 +18,13 @@ from bounce_gym.jax import spaces
 from bounce_gym.jax.cell_env import CellEnv
 from bounce_gym.jax.cell_tables import cell_tables
 from bounce_gym.jax.tasks.base import FreeTask
+from bounce_gym.jax.tasks.coverage import CoverageTask
 from bounce_gym.jax.tasks.goal_navigation import GoalNavigationTask
+from bounce_gym.jax.tasks.localization import LocalizationTask
 from bounce_gym.jax.tasks.navigation import NavigationTask
 
 #: the tasks of the cell env, by the NumPy task's name
-CELL_TASKS = ("free", "navigation", "goal_navigation")
+CELL_TASKS = ("free", "navigation", "goal_navigation", "localization", "coverage")
 
 
 def make(env_id: str, **options):
@@ -56,6 +58,10 @@ def _build(env_id: str, numpy_env, max_steps: int | None):
         jax_task = GoalNavigationTask(task, robots)
     elif name == "navigation":
         jax_task = NavigationTask(task, robots, core.obs_low, core.obs_high)
+    elif name == "localization":
+        jax_task = LocalizationTask(task, robots, opts.angles[0])
+    elif name == "coverage":
+        jax_task = CoverageTask(task, robots)
     else:
         jax_task = FreeTask()
     return CellEnv(env_id, robots.model, tables, jax_task, len(opts.angles[0]), opts.history,
