@@ -229,3 +229,30 @@ def test_cell_navigation_episodes_drawn_either_way(task_kwargs, options):
     assert np.array_equal(a[0], b[0])
     _same_infos(a[1], b[1], "reset")
     assert _steps_alike(native, sync, 80, action_seed=4) >= 6  # every env autoreset
+
+
+def test_the_batched_env_uses_only_public_members_of_other_objects():
+    """`BounceVectorEnv` and `CellRobots` read no private field of another object and assign
+    no attribute of the single env, its core, its task or the backend (``single.goal = …`` was
+    one)."""
+    import ast
+    from pathlib import Path
+
+    import bounce_gym.envs.vector_cells as cells_module
+    import bounce_gym.envs.vector_env as env_module
+
+    for module in (env_module, cells_module):
+        tree = ast.parse(Path(module.__file__).read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute) and node.attr.startswith("_") \
+                    and not node.attr.startswith("__"):
+                base = node.value
+                assert isinstance(base, ast.Name) and base.id in ("self", "cls"), \
+                    f"{module.__name__}:{node.lineno} reads private {node.attr!r}"
+            if isinstance(node, ast.Assign | ast.AugAssign):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                for target in targets:
+                    if isinstance(target, ast.Attribute):
+                        owners = set(ast.unparse(target).split(".")[:-1])  # whose field
+                        assert not owners & {"single", "core", "task", "backend", "dynamics"}, \
+                            f"{module.__name__}:{node.lineno} assigns {ast.unparse(target)}"
