@@ -25,7 +25,8 @@ the local pool and Ray: wall times and the checksums of their files); issue #23:
 `benchmarks.dynamic_physics` (``physics="dynamic"`` against the kinematic backend, CartPole-v1
 and pistonball_v6 in the same run, median and min–max over rounds, load average); issue #24:
 `benchmarks.sampled_model` (building the sampled GCM of the lab map and of a 10⁴-cell map,
-against the raw kinematic simulator in the same run).
+against the raw kinematic simulator in the same run); issue #26: `benchmarks.jax_env` (the
+functional JAX env against the native vector env at N = 1, 64 and 1,024, one XLA thread).
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from collections.abc import Callable
 import gymnasium as gym
 import numpy as np
 
+from benchmarks import one_core  # noqa: F401  (before anything imports jax: one XLA thread)
 from bounce_gym import worlds
 from bounce_gym.dynamics import BounceDynamics
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
@@ -193,6 +195,11 @@ def main(argv: list[str] | None = None) -> None:
     env_step.main(["--steps", "2000", "--rounds", "3"] if args.quick else [])
     print()
     vector_env.main(quick=args.quick, repeats=args.repeats)
+    # the functional JAX env against the native vector env (issue #26)
+    from benchmarks import jax_env
+
+    print()
+    jax_env.main(["--steps", "50", "--rounds", "3"] if args.quick else [])
     print()
     multirobot_scaling.main(["--steps", "4000"] if args.quick else [])
     # the pymunk backend's dynamic physics (issue #23)

@@ -1,0 +1,14 @@
+"""The JAX env benchmark (issue 26) runs with a tiny budget and reports every row."""
+
+from benchmarks import jax_env
+
+
+def test_jax_env_benchmark_runs(capsys):
+    out = jax_env.main(["--steps", "4", "--rounds", "2"])
+    text = capsys.readouterr().out
+    assert set(out["rates"]) == {f"{kind} N={n}" for n in jax_env.SIZES
+                                 for kind in ("JAX", "native")}
+    assert all(len(v) == 2 and min(v) > 0 for v in out["rates"].values())
+    for row in out["ratios"].values():
+        assert 0 < row["low"] <= row["median"] <= row["high"]
+    assert "load average" in text and "≥ 10" in text and "XLA thread" in text
