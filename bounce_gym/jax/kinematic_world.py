@@ -2,14 +2,18 @@
 
 The NumPy envs draw a start uniformly from the free space more than the robot's radius (and the
 world's tolerance) from the boundary (`World.sample_free`, rejection sampling with as many rounds
-as it takes). A jitted function needs a fixed amount of work, so `FreeSpace.sample` draws a fixed
-number ``candidates`` of points uniformly in the bounding box at once and keeps the first that
-passes the same test as `World.sample_free`'s (inside the polygon, even–odd rule over every ring;
-distance to the nearest edge > radius + tol). Each candidate passes with probability p, the share
-of the box the robot's centre can occupy, so ``candidates`` is chosen from p such that all miss
-with probability at most `MISS` (at most `MAX_CANDIDATES`): the drawn point is then uniform in
-the free space but for that probability, with which the draw is the free space's fixed
-representative point instead.
+as it takes). A jitted function needs a fixed amount of work, so `sample` draws a fixed number
+``candidates`` of points at once and keeps the first that passes the same test as
+`World.sample_free`'s (inside the polygon, even–odd rule over every ring; distance to the nearest
+edge > radius + tol). The candidates are uniform in the polygonal C-space `World.eroded` (a
+triangle of its triangulation chosen by area, then a uniform point of it, as
+`bounce_gym.worlds.world.sample_in` draws), which contains the exact C-space — its arcs about
+reflex vertices are cut by chords on the vertex side — so the kept point is uniform in the
+exact C-space. A candidate passes with probability p (1 but for the chords' slivers and the
+tolerance), estimated once in NumPy from `ESTIMATE` candidates; ``candidates`` is chosen so that
+all miss with probability at most `MISS` at a 95 % upper bound of 1 − p (at most
+`MAX_CANDIDATES`). With that
+probability the draw is the free space's fixed representative point instead.
 """
 
 from __future__ import annotations
@@ -20,24 +24,30 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
+import shapely
 
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
+from bounce_gym.worlds.world import sample_in
 
 #: the most probability with which every candidate of a draw misses the free space
 MISS = 1e-12
 #: the most candidates one draw tests
-MAX_CANDIDATES = 4096
+MAX_CANDIDATES = 256
+#: candidates drawn in NumPy to estimate the share that passes
+ESTIMATE = 4096
 
 
 class FreeSpace(NamedTuple):
-    """A world's edges and box, for `inside` and `sample`."""
+    """A world's edges and its C-space's triangles, for `inside` and `sample`."""
 
     start: jax.Array  # (E, 2) edge starts
     vector: jax.Array  # (E, 2) edge vectors
     length2: jax.Array  # (E,) squared edge lengths
-    low: jax.Array  # (2,) bounding box corner
-    span: jax.Array  # (2,) bounding box size
+    corner: jax.Array  # (T, 2) a corner of each triangle of the C-space
+    side_b: jax.Array  # (T, 2) its two sides from that corner
+    side_c: jax.Array
+    cumulative: jax.Array  # (T,) the triangles' cumulative share of the area
     clearance: jax.Array  # radius + tol: the least distance to the boundary of a start
     fallback: jax.Array  # (2,) a point of the free space, used where every candidate missed
 
@@ -46,22 +56,29 @@ def free_space(world: World, radius: float, dtype) -> tuple[FreeSpace, int]:
     """The `FreeSpace` of ``world`` for a robot of ``radius`` in float ``dtype``, and the number
     of candidates a draw needs (module docstring)."""
     region = world.eroded(radius)
-    xmin, ymin, xmax, ymax = world.bounds
-    share = region.area / ((xmax - xmin) * (ymax - ymin))
-    if share <= 0:
+    if region.area <= world.tol ** 2:
         raise ConfigError(f"bounce_gym.jax: world {world.name!r} has no free space for a robot "
                           f"of radius {radius}")
-    if share >= 1:
-        candidates = 1
-    else:
-        candidates = min(MAX_CANDIDATES, max(1, math.ceil(math.log(MISS) / math.log1p(-share))))
+    triangles = shapely.get_parts(shapely.constrained_delaunay_triangles(region))
+    corners = shapely.get_coordinates(shapely.get_exterior_ring(triangles)).reshape(-1, 4, 2)
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    ab, ac = b - a, c - a
+    area = 0.5 * np.abs(ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0])
+    cumulative = np.cumsum(area) / area.sum()
+    estimate = sample_in(region, np.random.default_rng(0), ESTIMATE)
+    passed = shapely.contains_xy(world.polygon, estimate[:, 0], estimate[:, 1])
+    passed &= world.boundary_distance(estimate) > radius + world.tol
+    # a 95 % upper bound on the share that misses ("rule of three" above the count seen)
+    miss = min((ESTIMATE - int(passed.sum()) + 3) / ESTIMATE, 1.0)
+    candidates = MAX_CANDIDATES if miss >= 1 else min(
+        MAX_CANDIDATES, math.ceil(math.log(MISS) / math.log(miss)))
     point = region.representative_point()
     real = lambda values: jnp.asarray(np.asarray(values, dtype=np.float64), dtype)  # noqa: E731
     vector = world.edge_end - world.edge_start
     space = FreeSpace(start=real(world.edge_start), vector=real(vector),
-                      length2=real(world.lengths ** 2), low=real([xmin, ymin]),
-                      span=real([xmax - xmin, ymax - ymin]), clearance=real(radius + world.tol),
-                      fallback=real([point.x, point.y]))
+                      length2=real(world.lengths ** 2), corner=real(a), side_b=real(ab),
+                      side_c=real(ac), cumulative=real(cumulative),
+                      clearance=real(radius + world.tol), fallback=real([point.x, point.y]))
     return space, candidates
 
 
@@ -85,7 +102,14 @@ def inside(space: FreeSpace, points: jax.Array) -> jax.Array:
 
 def sample(key: jax.Array, space: FreeSpace, candidates: int) -> jax.Array:
     """A uniform point (2,) of the free space (module docstring)."""
-    points = space.low + jax.random.uniform(key, (candidates, 2), space.low.dtype) * space.span
+    dtype = space.corner.dtype
+    pick, u, v = jax.random.uniform(key, (3, candidates, 1), dtype)
+    triangle = jnp.minimum(jnp.searchsorted(space.cumulative, pick[:, 0]),
+                           space.cumulative.shape[0] - 1)
+    flip = u + v > 1
+    u, v = jnp.where(flip, 1 - u, u), jnp.where(flip, 1 - v, v)
+    points = (space.corner[triangle] + u * space.side_b[triangle]
+              + v * space.side_c[triangle])
     ok = inside(space, points)
     first = jnp.argmax(ok)
     return jnp.where(ok[first], points[first], space.fallback)

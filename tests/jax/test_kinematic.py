@@ -249,8 +249,8 @@ def test_random_starts_lie_in_the_free_space_in_contact(navigation):
     keys = jax.random.split(jax.random.PRNGKey(11), 2000)
     _, states = jax.jit(jax.vmap(env.reset, in_axes=(0, None)))(keys, params)
     position = np.asarray(states.position, dtype=np.float64)
-    # every reset ends against a wall (float32: to a few float32 roundings)
-    assert world.boundary_distance(position).max() < 1e-5
+    # every reset ends against a wall, within the contact tolerance (float32's, here)
+    assert world.boundary_distance(position).max() <= float(params.contact_tol)
     assert world.contains(position + 1e-3 * np.asarray(states.normal)).all()
     goals = np.asarray(states.task.goal_position, dtype=np.float64)
     assert world.contains(goals, 0.0).all()
