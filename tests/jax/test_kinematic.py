@@ -38,13 +38,17 @@ TRAJECTORIES = {
               "action_type": "continuous", "angle_range": (20.0, 340.0)}),
 }
 #: (id, options) compared step by step, each JAX step from the NumPy env's state: the
-#: boundary-relative rules are chaotic here (two NumPy runs whose start headings differ by
-#: 1e-11 part by more than 1e-9 within tens of bounces, `test_boundary_rules_are_chaotic`), so
-#: rounding-level differences grow along a trajectory whatever the implementation
+#: boundary-relative rules. The fixed and monotonic ones are chaotic here (two NumPy runs whose
+#: start positions differ by 1e-11 part by more than 1e-9 within tens of bounces,
+#: `test_boundary_rules_are_chaotic`), so rounding-level differences grow along a trajectory
+#: whatever the implementation
 STEPWISE = {
     "star_monotonic": ("bounce_gym/Bounce-v0",
                        {"world": STAR, "robot_radius": 5.0, "step_length": 10.0, "history": 2,
                         "bounce_rule": "monotonic", "action_type": "continuous"}),
+    "two_rooms_specular": ("bounce_gym/Bounce-v0",
+                           {"world": "two_rooms", "robot_radius": 0.3,
+                            "bounce_rule": "specular"}),
     "grid_fixed": ("bounce_gym/Bounce-v0",
                    {"world": "grid_10x10", "robot_radius": 0.25, "bounce_rule": "fixed",
                     "history": 1}),
