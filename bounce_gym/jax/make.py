@@ -17,6 +17,8 @@ from bounce_gym.errors import ConfigError
 from bounce_gym.jax import spaces
 from bounce_gym.jax.cell_env import CellEnv
 from bounce_gym.jax.cell_tables import cell_tables
+from bounce_gym.jax.kinematic import kinematic_env
+from bounce_gym.jax.kinematic import unsupported as kinematic_unsupported
 from bounce_gym.jax.tasks.base import FreeTask
 from bounce_gym.jax.tasks.coverage import CoverageTask
 from bounce_gym.jax.tasks.goal_navigation import GoalNavigationTask
@@ -52,6 +54,9 @@ def _build(env_id: str, numpy_env, max_steps: int | None):
     if max_steps is None:
         raise ConfigError(f"bounce_gym.jax: {env_id!r} has no registered horizon "
                           "(max_episode_steps); the JAX env truncates by one")
+    if opts.backend == "kinematic":
+        return kinematic_env(env_id, numpy_env, int(max_steps),
+                             _space(numpy_env.observation_space), _space(numpy_env.action_space))
     tables, robots = cell_tables(numpy_env)
     core = numpy_env.core
     if name == "goal_navigation":
@@ -71,9 +76,11 @@ def _build(env_id: str, numpy_env, max_steps: int | None):
 
 def _unsupported(opts, task: str) -> str | None:
     """Why options cannot be a JAX env, or None."""
-    if opts.backend != "cell":
-        return f"backend {opts.backend!r} (the JAX envs run the cell backend)"
-    if task not in CELL_TASKS:
+    if opts.backend not in ("cell", "kinematic"):
+        return f"backend {opts.backend!r} (the JAX envs run the cell and kinematic backends)"
+    if opts.backend == "kinematic" and kinematic_unsupported(opts, task):
+        return kinematic_unsupported(opts, task)
+    if opts.backend == "cell" and task not in CELL_TASKS:
         return f"task {task!r} (the cell env has {list(CELL_TASKS)})"
     if opts.step_mode != "bounce":
         return "step_mode 'tick' (a JAX step is a bounce)"

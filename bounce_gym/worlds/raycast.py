@@ -61,7 +61,7 @@ def first_hit(world: World, origins: np.ndarray, directions: np.ndarray, radius:
         raise ValueError(f"origins {o.shape} and directions {d.shape} must have the same shape")
     n = len(o)
     radius = float(radius)
-    geometry = _features(world, radius)
+    geometry = features(world, radius)
     if n == 1:
         return _first_hit_one(geometry, radius, o[0], d[0])
     step = max(1, _MAX_PAIRS // max(5 * geometry.n_edges + len(geometry.vx), 1))
@@ -73,7 +73,7 @@ def first_hit(world: World, origins: np.ndarray, directions: np.ndarray, radius:
 
 
 @dataclass(frozen=True)
-class _Features:
+class Features:
     """Edge and vertex data of a world, prepared for one disk radius.
 
     ``mat`` turns the per-ray row ``[dx, dy, ox, oy, cross(o, d), 1]`` into, per edge, the four
@@ -95,7 +95,9 @@ class _Features:
     ttol: float
 
 
-def _features(world: World, radius: float) -> _Features:
+def features(world: World, radius: float) -> Features:
+    """The edge and vertex data of ``world`` prepared for disks of ``radius`` (cached on the
+    world): what every query here, and the JAX ray cast (`bounce_gym.jax.raycast`), reads."""
     cache = world.__dict__.setdefault("_raycast_features", {})
     feats = cache.get(radius)
     if feats is None:
@@ -123,7 +125,7 @@ def _features(world: World, radius: float) -> _Features:
         for ring in np.unique(world.edge_ring):
             idx = np.flatnonzero(world.edge_ring == ring)
             prev[idx[0]] = idx[-1]
-        feats = _Features(
+        feats = Features(
             mat=np.ascontiguousarray(mat), n_edges=len(ax), ax=ax.copy(), ay=ay.copy(),
             ex=ex.copy(), ey=ey.copy(), normals=world.normals,
             vx=verts[:, 0].copy(), vy=verts[:, 1].copy(), vid=vid, vprev=prev[vid], ttol=ttol,
@@ -132,7 +134,7 @@ def _features(world: World, radius: float) -> _Features:
     return feats
 
 
-def _first_hit_chunk(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) -> Hits:
+def _first_hit_chunk(f: Features, radius: float, o: np.ndarray, d: np.ndarray) -> Hits:
     n, m = len(o), f.n_edges
     ray = np.empty((n, 6))
     ray[:, 0:2] = d
@@ -181,7 +183,7 @@ def _first_hit_chunk(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) 
     return Hits(distance, edge, vertex, normal)
 
 
-def _first_hit_one(f: _Features, radius: float, o: np.ndarray, d: np.ndarray) -> Hits:
+def _first_hit_one(f: Features, radius: float, o: np.ndarray, d: np.ndarray) -> Hits:
     """`_first_hit_chunk` for a single ray, as `_cast_one` computes it."""
     distance, edge, vertex, nx, ny = _cast_one(f, radius, float(o[0]), float(o[1]), float(d[0]),
                                                float(d[1]))
@@ -195,10 +197,10 @@ def first_hit_scalar(world: World, ox: float, oy: float, dx: float, dy: float,
     ``(distance, edge, vertex, nx, ny)``, bit for bit the values `first_hit` returns (the
     single-robot hot path). The edges in ``skip``, and the reflex vertices at their ends, are
     left out (a robot already touching them)."""
-    return _cast_one(_features(world, radius), radius, ox, oy, dx, dy, skip)
+    return _cast_one(features(world, radius), radius, ox, oy, dx, dy, skip)
 
 
-def _cast_one(f: _Features, radius: float, ox: float, oy: float, dx: float,
+def _cast_one(f: Features, radius: float, ox: float, oy: float, dx: float,
               dy: float, skip: frozenset = frozenset()) -> tuple[float, int, int, float, float]:
     """One ray against prepared features. The edge tests come from the same matrix product as
     `_first_hit_chunk`, so they round alike; the choice among edges is a Python loop, cheaper
