@@ -142,10 +142,7 @@ class Family:
         for path in model_files(folder):
             name = MODEL_NAME.fullmatch(path.name)
             group = f"rl {label}{run_name(name['algo'], name['variant'])}"
-            if name["algo"] in JAX_ALGOS:
-                from baselines.rl.jaxrl.policy import JaxPolicy as kind
-            else:
-                kind = sb3
+            kind = _jax_policy() if name["algo"] in JAX_ALGOS else sb3
             for deterministic in (False, True):
                 suffix = GREEDY_SUFFIX if deterministic else ""
                 policy = kind(path, env, deterministic)
@@ -211,3 +208,11 @@ class SingleRobotFamily(Family):
 
     def metrics(self, info: dict) -> dict:
         return {}
+
+
+def _jax_policy():
+    """`baselines.rl.jaxrl.policy.JaxPolicy`, imported only for a JAX learner's model (it needs
+    JAX)."""
+    from baselines.rl.jaxrl.policy import JaxPolicy
+
+    return JaxPolicy
