@@ -154,3 +154,17 @@ def test_dqn_configuration_checks(tmp_path, change, field):
     config.pop("hyperparams_file")
     with pytest.raises(ConfigError, match=field.replace(".", r"\.")):
         prepare(config)
+
+
+def test_the_example_trains_and_scores_on_held_out_seeds():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).parents[3] / "examples" / "jax_ppo_navigation.py"
+    spec = importlib.util.spec_from_file_location("jax_ppo_navigation", path)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    out = example.train_and_score(steps=2048, episodes=5)
+    assert out["episodes"] == 5 and 0.0 <= out["success"] <= 1.0
+    low, high = out["interval"]
+    assert low <= out["success"] <= high
