@@ -8,6 +8,10 @@
 * checkpoints ``checkpoints/<run>_seed<seed>_<steps>_steps.zip`` (`CHECKPOINT_NAME`), never
   overwritten.
 
+A JAX learner's file (``jax_ppo``, ``jax_dqn``; `JAX_ALGOS`) holds no SB3 part: its weights as an
+``.npz`` (`WEIGHTS_ENTRY`, read with ``allow_pickle=False`` by `baselines.rl.jaxrl.weights`) and
+its `METADATA_ENTRY`, saved and listed in the manifest like the others.
+
 A model zip is Stable-Baselines3's file plus entries of its own, which SB3 ignores:
 ``bounce_gym.json`` (`METADATA_ENTRY`: the training configuration and the observation wrappers
 the model was trained behind — frame stacking, VecNormalize statistics, `baselines.rl.wrappers`

@@ -59,6 +59,14 @@ logging) or no checkpoint for any seed is a `ConfigError`. Without ``resume`` a 
 checkpoints is a `ConfigError` too: nothing is overwritten. Same configuration and seed, same
 weights, bit for bit (torch on the CPU).
 
+**JAX learners.** ``algo: jax_ppo`` and ``algo: jax_dqn`` (`baselines.rl.jaxrl`) train on the
+functional env ``bounce_gym.jax.make(env, **env_kwargs)`` (a `ConfigError` where it has none)
+with the hyperparameter keys of SB3's PPO and DQN (a key they do not read is a `ConfigError`);
+they write the same model, checkpoint and monitor files, weights only (an ``.npz``). They take
+no ``vec_env``, ``n_stack``, ``normalize`` or ``tensorboard``, and cannot resume: their
+checkpoints hold the weights, not the optimiser, key, envs and replay buffer that live on the
+device, so ``resume: true`` is a `ConfigError` (`baselines.rl.jaxrl.runner`).
+
 **Batched episodes.** ``vec_env: native`` (the default for ids with a Gymnasium
 ``vector_entry_point``: free, navigation, coverage) steps the ``n_envs`` episodes as one batch
 (`baselines.rl.train_env`); it runs the same episodes as ``sync`` (SB3's DummyVecEnv of

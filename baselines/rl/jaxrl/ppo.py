@@ -47,9 +47,10 @@ class Transition(NamedTuple):
     x: jax.Array
     action: jax.Array
     log_prob: jax.Array
-    value: jax.Array
     reward: jax.Array
     done: jax.Array
+    cut: jax.Array  # truncated, not terminated: the reward gets γ·V(final)
+    final_x: jax.Array
 
 
 def network_sizes(n_inputs: int, n_actions: int, arch: dict[str, list[int]]) -> dict:
@@ -117,46 +118,50 @@ class PPO:
 
     def _rollout_step(self, carry, _):
         params, env_state, obs, running, key = carry
-        gamma = self.settings["gamma"]
         key, k_act, k_step = jax.random.split(key, 3)
         x = flatten_observation(obs)
         logits = policy_logits(params, x, self.activation)
-        value = self._value(params, x)
         action = jax.random.categorical(k_act, logits)
         log_prob = jnp.take_along_axis(jax.nn.log_softmax(logits), action[:, None], 1)[:, 0]
         obs, env_state, reward, done, info = self._step(
             jax.random.split(k_step, self.n_envs), env_state, action, self.env_params)
         running, record = episodes.track(running, reward, done, info, self.monitor_keys)
         cut = info["truncated"] & ~info["terminated"]
-        final_value = self._value(params, flatten_observation(info["final_observation"]))
-        train_reward = reward + gamma * jnp.where(cut, final_value, 0.0)
-        transition = Transition(x, action, log_prob, value, train_reward, done)
+        transition = Transition(x, action, log_prob, reward, done, cut,
+                                flatten_observation(info["final_observation"]))
         return (params, env_state, obs, running, key), (transition, record)
 
-    def _advantages(self, batch: Transition, last_value: jax.Array):
+    def _advantages(self, params, batch: Transition, last_value: jax.Array):
+        """Advantages and returns of a rollout, its values computed in one batch after it (a
+        truncated episode's reward raised by γ·V of its last observation)."""
         gamma, lam = self.settings["gamma"], self.settings["gae_lambda"]
+        values = self._value(params, batch.x)
+        rewards = batch.reward + gamma * jnp.where(batch.cut, self._value(params, batch.final_x),
+                                                   0.0)
 
         def back(carry, t):
             gae, next_value = carry
-            live = 1.0 - t.done.astype(jnp.float32)
-            delta = t.reward + gamma * next_value * live - t.value
+            reward, value, done = t
+            live = 1.0 - done.astype(jnp.float32)
+            delta = reward + gamma * next_value * live - value
             gae = delta + gamma * lam * live * gae
-            return (gae, t.value), gae
+            return (gae, value), gae
 
-        _, advantages = jax.lax.scan(back, (jnp.zeros_like(last_value), last_value), batch,
-                                     reverse=True)
-        return advantages, advantages + batch.value
+        _, advantages = jax.lax.scan(back, (jnp.zeros_like(last_value), last_value),
+                                     (rewards, values, batch.done), reverse=True)
+        return advantages, advantages + values
 
-    def _loss(self, params, batch: Transition, advantages, returns):
+    def _loss(self, params, batch: tuple, advantages, returns):
         s = self.settings
-        logits = policy_logits(params, batch.x, self.activation)
+        x, action, old_log_prob = batch
+        logits = policy_logits(params, x, self.activation)
         log_probs = jax.nn.log_softmax(logits)
-        log_prob = jnp.take_along_axis(log_probs, batch.action[:, None], 1)[:, 0]
+        log_prob = jnp.take_along_axis(log_probs, action[:, None], 1)[:, 0]
         adv = (advantages - advantages.mean()) / (advantages.std(ddof=1) + 1e-8)
-        ratio = jnp.exp(log_prob - batch.log_prob)
+        ratio = jnp.exp(log_prob - old_log_prob)
         clipped = jnp.clip(ratio, 1.0 - s["clip_range"], 1.0 + s["clip_range"])
         policy_loss = -jnp.minimum(adv * ratio, adv * clipped).mean()
-        value_loss = ((returns - self._value(params, batch.x)) ** 2).mean()
+        value_loss = ((returns - self._value(params, x)) ** 2).mean()
         entropy = -(jnp.exp(log_probs) * log_probs).sum(-1).mean()
         return policy_loss - s["ent_coef"] * entropy + s["vf_coef"] * value_loss
 
@@ -166,10 +171,10 @@ class PPO:
         carry, (batch, records) = jax.lax.scan(self._rollout_step, carry, None, self.n_steps)
         params, env_state, obs, running, key = carry
         advantages, returns = self._advantages(
-            batch, self._value(params, flatten_observation(obs)))
+            params, batch, self._value(params, flatten_observation(obs)))
         total = self.steps_per_iteration
         flat = jax.tree.map(lambda a: a.reshape((total, *a.shape[2:])),
-                            (batch, advantages, returns))
+                            ((batch.x, batch.action, batch.log_prob), advantages, returns))
         n_batches = total // s["batch_size"]
         progress = state.iteration.astype(jnp.float32) / self.iterations
         rate = self.rate * (1.0 - progress) if self.linear else self.rate

@@ -56,9 +56,14 @@ def learner(config: dict):
 
 
 def chunk_length(agent, config: dict) -> int:
-    """Iterations per chunk: at most `CHUNK_STEPS` env steps and ``checkpoint_every``."""
-    steps = min(CHUNK_STEPS, config["checkpoint_every"] or CHUNK_STEPS)
-    return max(1, min(agent.iterations, steps // agent.steps_per_iteration))
+    """Iterations per chunk: at most `CHUNK_STEPS` env steps (one iteration at least) and at
+    most ``checkpoint_every`` rounded up to whole iterations, so that a checkpoint is saved at
+    the end of the first chunk at or past each multiple of it."""
+    every = config["checkpoint_every"]
+    length = max(1, CHUNK_STEPS // agent.steps_per_iteration)
+    if every:
+        length = min(length, -(-every // agent.steps_per_iteration))
+    return min(agent.iterations, length)
 
 
 def write_rows(writer, records: dict, keys: tuple[str, ...], seconds: float) -> int:
