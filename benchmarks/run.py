@@ -25,7 +25,9 @@ the local pool and Ray: wall times and the checksums of their files); issue #23:
 `benchmarks.dynamic_physics` (``physics="dynamic"`` against the kinematic backend, CartPole-v1
 and pistonball_v6 in the same run, median and min–max over rounds, load average); issue #24:
 `benchmarks.sampled_model` (building the sampled GCM of the lab map and of a 10⁴-cell map,
-against the raw kinematic simulator in the same run).
+against the raw kinematic simulator in the same run); issue 26: `benchmarks.jax_training`
+(jax_ppo against SB3's PPO, env steps/s on one core each, and DQN with hindsight relabelling,
+jax and SB3, wall time to 0.90 held-out success).
 """
 
 from __future__ import annotations
