@@ -63,8 +63,14 @@ def epsilon_greedy(model, seen: np.ndarray, rng: np.random.Generator) -> np.ndar
     """A DQN model's action for the batch of one ``seen``: uniformly random with probability
     ``exploration_final_eps``, else its greedy action."""
     greedy, _ = model.predict(seen, deterministic=True)
-    if rng.random() < model.exploration_final_eps:
-        return rng.integers(model.action_space.n, size=np.shape(greedy))
+    return epsilon_draw(greedy, model.exploration_final_eps, model.action_space.n, rng)
+
+
+def epsilon_draw(greedy, epsilon: float, n: int, rng: np.random.Generator):
+    """With probability ``epsilon`` uniformly random actions of ``n`` (shaped like ``greedy``),
+    else ``greedy``; both draws from ``rng``."""
+    if rng.random() < epsilon:
+        return rng.integers(n, size=np.shape(greedy))
     return greedy
 
 

@@ -26,7 +26,7 @@ from bounce_gym.errors import ConfigError
 WINDOW = 100
 #: Points of the across-seed curves.
 POINTS = 200
-_MONITOR = re.compile(r"(?P<run>[a-z0-9-]+)_seed(?P<seed>\d+)" + re.escape(SUFFIX))
+_MONITOR = re.compile(r"(?P<run>[a-z0-9_-]+)_seed(?P<seed>\d+)" + re.escape(SUFFIX))
 #: Monitor columns that are metrics, and their names in tables and plots.
 METRICS = {"r": "return", "is_success": "success", "localized": "localized",
            "coverage": "coverage"}

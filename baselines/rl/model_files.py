@@ -8,6 +8,10 @@
 * checkpoints ``checkpoints/<run>_seed<seed>_<steps>_steps.zip`` (`CHECKPOINT_NAME`), never
   overwritten.
 
+A JAX learner's file (``jax_ppo``, ``jax_dqn``; `JAX_ALGOS`) holds no SB3 part: its weights as an
+``.npz`` (`WEIGHTS_ENTRY`, read with ``allow_pickle=False`` by `baselines.rl.jaxrl.weights`) and
+its `METADATA_ENTRY`, saved and listed in the manifest like the others.
+
 A model zip is Stable-Baselines3's file plus entries of its own, which SB3 ignores:
 ``bounce_gym.json`` (`METADATA_ENTRY`: the training configuration and the observation wrappers
 the model was trained behind — frame stacking, VecNormalize statistics, `baselines.rl.wrappers`
@@ -54,8 +58,10 @@ from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_file, atomic_write, check_path_component, locked
 from bounce_gym.trust import add_trusted, digest, sign, trusted_digests, verify
 
-ALGOS = ("ppo", "dqn", "recurrentppo")
-_RUN = r"(?P<algo>ppo|dqn|recurrentppo)(?:-(?P<variant>[a-z0-9]+(?:-[a-z0-9]+)*))?"
+#: The learners trained in JAX (`baselines.rl.jaxrl`): their files hold weights only.
+JAX_ALGOS = ("jax_ppo", "jax_dqn")
+ALGOS = ("ppo", "dqn", "recurrentppo", *JAX_ALGOS)
+_RUN = r"(?P<algo>" + "|".join(ALGOS) + r")(?:-(?P<variant>[a-z0-9]+(?:-[a-z0-9]+)*))?"
 #: A saved model: ``<algo>[-<variant>]_seed<seed>.zip``.
 MODEL_NAME = re.compile(_RUN + r"_seed(?P<seed>\d+)\.zip")
 #: A checkpoint: ``<algo>[-<variant>]_seed<seed>_<steps>_steps.zip``.
@@ -65,6 +71,8 @@ VARIANT = re.compile(r"[a-z0-9]+(?:-[a-z0-9]+)*")
 MANIFEST = "manifest.json"
 #: The zip entry of Stable-Baselines3's attributes of the algorithm (JSON).
 DATA_ENTRY = "data"
+#: The zip entry of a JAX learner's weights (an ``.npz``, read without pickle).
+WEIGHTS_ENTRY = "weights.npz"
 #: The zip entry holding this package's metadata of a model (JSON).
 METADATA_ENTRY = "bounce_gym.json"
 #: The zip entry of a checkpoint holding the state resuming needs (a pickle).
@@ -182,7 +190,7 @@ def _signature(state_digest: str) -> str:
 def _check_name(path: Path, what: str) -> re.Match:
     match = MODEL_NAME.fullmatch(path.name) or CHECKPOINT_NAME.fullmatch(path.name)
     if match is None:
-        raise ConfigError(f"{what} {path}: expected a name <ppo|dqn|recurrentppo>[-<variant>]"
+        raise ConfigError(f"{what} {path}: expected a name <{'|'.join(ALGOS)}>[-<variant>]"
                           "_seed<N>[_<steps>_steps].zip")
     return match
 
@@ -298,6 +306,8 @@ def read_model(path: Path) -> ModelFile:
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
             sizes = {info.filename: info.file_size for info in archive.infolist()}
+            if algo in JAX_ALGOS:
+                return _jax_model(path, algo, data, archive, sizes)
             if DATA_ENTRY not in sizes:
                 raise ConfigError(f"model {path}: not a readable Stable-Baselines3 model file "
                                   f"(it has no {DATA_ENTRY!r} entry)")
@@ -314,6 +324,18 @@ def read_model(path: Path) -> ModelFile:
         raise ConfigError(f"model {path}: its name says {algo}, but it holds a {saved[0]} "
                           f"policy; name it after the algorithm that trained it")
     return ModelFile(path, algo, data, sizes, sb3_data, metadata)
+
+
+def _jax_model(path: Path, algo: str, data: bytes, archive: zipfile.ZipFile,
+               sizes: dict[str, int]) -> ModelFile:
+    """A JAX learner's file: its weights (`WEIGHTS_ENTRY`, read by `baselines.rl.jaxrl.weights`)
+    and its metadata, no SB3 part."""
+    for entry in (WEIGHTS_ENTRY, METADATA_ENTRY):
+        if entry not in sizes:
+            raise ConfigError(f"model {path}: not a readable {algo} model file (it has no "
+                              f"{entry!r} entry)")
+    return ModelFile(path, algo, data, sizes, {}, _json_entry(archive, sizes, METADATA_ENTRY,
+                                                             path))
 
 
 def load_model(path: Path, observation_space, action_space, **load_kwargs):

@@ -9,7 +9,8 @@ checked by `baselines.rl.train_config`, whose docstring gives every number's ran
                                      # patrollers | adversary (`baselines.rl.patrol`)
     env_kwargs: {backend: cell, angles: [45, 90, 135]}
     algo: ppo                        # ppo | dqn | recurrentppo (sb3-contrib; memory for a robot
-                                     # that senses only contact and time)
+                                     # that senses only contact and time) | jax_ppo | jax_dqn
+                                     # (trained in JAX, `baselines.rl.jaxrl`)
     variant: stack4                  # optional: files ppo-stack4_seed<N>.zip (several variants
                                      # of one algorithm side by side in models/<name>/)
     hyperparams_file: hyperparams/ppo.yaml  # optional, rl-zoo style, keyed by env id; relative
@@ -58,6 +59,14 @@ logging) or no checkpoint for any seed is a `ConfigError`. Without ``resume`` a 
 checkpoints is a `ConfigError` too: nothing is overwritten. Same configuration and seed, same
 weights, bit for bit (torch on the CPU).
 
+**JAX learners.** ``algo: jax_ppo`` and ``algo: jax_dqn`` (`baselines.rl.jaxrl`) train on the
+functional env ``bounce_gym.jax.make(env, **env_kwargs)`` (a `ConfigError` where it has none)
+with the hyperparameter keys of SB3's PPO and DQN (a key they do not read is a `ConfigError`);
+they write the same model, checkpoint and monitor files, weights only (an ``.npz``). They take
+no ``vec_env``, ``n_stack``, ``normalize`` or ``tensorboard``, and cannot resume: their
+checkpoints hold the weights, not the optimiser, key, envs and replay buffer that live on the
+device, so ``resume: true`` is a `ConfigError` (`baselines.rl.jaxrl.runner`).
+
 **Batched episodes.** ``vec_env: native`` (the default for ids with a Gymnasium
 ``vector_entry_point``: free, navigation, coverage) steps the ``n_envs`` episodes as one batch
 (`baselines.rl.train_env`); it runs the same episodes as ``sync`` (SB3's DummyVecEnv of
@@ -89,7 +98,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import bounce_gym  # noqa: F401  (registers the environments)
-from baselines.rl.model_files import read_model, run_name, save_model
+from baselines.rl.model_files import JAX_ALGOS, read_model, run_name, save_model
 from baselines.rl.monitor import SUFFIX
 from baselines.rl.train_config import (
     algo_class,
@@ -166,6 +175,11 @@ def prepare(config: Mapping, folder: Path | None = None) -> dict:
     if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
         raise ConfigError("config.tensorboard: needs the tensorboard package "
                           "(pip install -e .[tensorboard]), or set tensorboard: false")
+    if config["algo"] in JAX_ALGOS:
+        from baselines.rl.jaxrl.runner import learner
+
+        learner(config)  # the JAX env exists, the actions are discrete, the sizes fit
+        return config
     check_hyperparams(algo_class(config["algo"]), config["hyperparams"])
     _check_action_space(config)
     return config
@@ -175,7 +189,12 @@ def train_seed(config: Mapping, seed: int, progress: bool = True, callbacks: Seq
                log: Callable[[str], None] | None = None) -> Path:
     """Train (or, with ``resume``, continue from its newest checkpoint) the run of one seed of
     a configuration `prepare` returned; returns the model path. torch uses
-    ``torch_threads`` threads meanwhile."""
+    ``torch_threads`` threads meanwhile. A JAX learner trains in `baselines.rl.jaxrl.runner`
+    (it cannot resume)."""
+    if config["algo"] in JAX_ALGOS:
+        from baselines.rl.jaxrl.runner import train_run
+
+        return train_run(Run(config, seed), log or (lambda line: None))
     import torch
 
     threads = torch.get_num_threads()

@@ -47,7 +47,8 @@ from pathlib import Path
 import gymnasium as gym
 
 import bounce_gym  # noqa: F401  (registers the environments)
-from baselines.rl.model_files import ALGOS, VARIANT, check_folder_name
+from baselines.rl.jaxrl.settings import hyperparameters as jax_hyperparameters
+from baselines.rl.model_files import ALGOS, JAX_ALGOS, VARIANT, check_folder_name
 from baselines.rl.patrol import PATROL_ID, ROLES
 from baselines.seeds import EVALUATION_SEEDS_START
 from bounce_gym.documents import read_document
@@ -65,9 +66,12 @@ MULTI_ALGOS = ("ppo",)
 VEC_ENVS = ("native", "sync", "subproc")
 #: The SB3 policy each algorithm trains on a flat observation, and on a ``Dict`` one (the
 #: goal-conditioned envs); a hyperparameter file's ``policy`` must be one of the two.
-POLICIES = {"ppo": "MlpPolicy", "dqn": "MlpPolicy", "recurrentppo": "MlpLstmPolicy"}
+#: (The JAX learners read the same hyperparameter file entries as their SB3 twins.)
+POLICIES = {"ppo": "MlpPolicy", "dqn": "MlpPolicy", "recurrentppo": "MlpLstmPolicy",
+            "jax_ppo": "MlpPolicy", "jax_dqn": "MlpPolicy"}
 DICT_POLICIES = {"ppo": "MultiInputPolicy", "dqn": "MultiInputPolicy",
-                 "recurrentppo": "MultiInputLstmPolicy"}
+                 "recurrentppo": "MultiInputLstmPolicy", "jax_ppo": "MultiInputPolicy",
+                 "jax_dqn": "MultiInputPolicy"}
 #: ``replay_buffer_class`` names a hyperparameter may give (off-policy algorithms), and the
 #: ``replay_buffer_kwargs`` each takes with their checks: (kind, least, most) or the choices.
 REPLAY_BUFFERS = {"HerReplayBuffer": {"n_sampled_goal": (int, 1, 64),
@@ -175,6 +179,8 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
                           f"{MULTI_ALGOS}, got {config['algo']!r}")
     native = multi or "role" not in config and \
         gym.spec(config["env"]).vector_entry_point is not None
+    if config["algo"] in JAX_ALGOS:
+        _check_jax(config, multi)
     _check_vec_env(config, multi, native)
     integer("config.total_timesteps", config["total_timesteps"], 1, MAX_TIMESTEPS)
     check_folder_name("config.name", config["name"])
@@ -182,7 +188,7 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
         raise ConfigError(f"config.variant: expected lower-case letters and digits in parts "
                           f"joined by '-' (e.g. stack4), got {config['variant']!r}")
     defaults = {"vec_env": "native" if native else "sync", "env_kwargs": {}, "variant": None,
-                "n_envs": 1 if multi or config["algo"] == "dqn" else 4, "n_stack": 1,
+                "n_envs": 1 if multi or config["algo"] in ("dqn", "jax_dqn") else 4, "n_stack": 1,
                 "normalize": False, "hyperparams": {}, "checkpoint_every": 0,
                 "tensorboard": False, "models": "models", "resume": False, "torch_threads": 1}
     for key, value in defaults.items():
@@ -208,7 +214,29 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
                           f"{rollout} transitions; at most {MAX_ROLLOUT} are allowed")
     _check_policy_kwargs(config["hyperparams"])
     _check_replay_buffer(config["hyperparams"])
+    if config["algo"] in JAX_ALGOS:
+        jax_hyperparameters(config["algo"], config["hyperparams"])
     return config
+
+
+#: Keys of a configuration the JAX learners do not honour, each with the value they need.
+_JAX_FIXED = {"n_stack": 1, "normalize": False, "tensorboard": False, "resume": False}
+
+
+def _check_jax(config: dict, multi: bool) -> None:
+    """The JAX learners (`baselines.rl.jaxrl`) train one robot on the functional env itself:
+    no VecEnv, wrappers, tensorboard or resuming (`baselines.rl.jaxrl.runner` says why)."""
+    algo = config["algo"]
+    if multi or "role" in config:
+        raise ConfigError(f"config.algo: {algo} trains single-robot envs; use ppo here")
+    if "vec_env" in config:
+        raise ConfigError(f"config.vec_env: {algo} steps its envs in JAX; remove the key")
+    for key, value in _JAX_FIXED.items():
+        if config.get(key, value) != value:
+            why = ("its checkpoints hold weights only (the optimiser, key, envs and replay "
+                   "buffer live on the device); train again without resume") if key == "resume" \
+                else "not supported by the JAX learners; remove the key"
+            raise ConfigError(f"config.{key}: {algo}: {why}")
 
 
 def policy_name(algo: str, observation_space) -> str:

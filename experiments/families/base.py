@@ -130,17 +130,19 @@ class Family:
         """Every trusted model of ``folder`` as a policy for ``env`` (none if there are none),
         with the group it is aggregated into; ``label`` prefixes the names (``""`` or
         ``"<folder>/"``). Gymnasium env: `baselines.rl.policies.SB3Policy`; parallel env: one
-        `baselines.rl.policies.SharedSB3Policy` for every robot. Each model plays twice: its
+        `baselines.rl.policies.SharedSB3Policy` for every robot; a JAX learner's model
+        (``jax_ppo``, ``jax_dqn``): `baselines.rl.jaxrl.policy.JaxPolicy`. Each model plays twice: its
         sampled actions (``rl <algo>_seed<N>``, group ``rl <algo>``) and its greedy ones (the
         same names with `baselines.rl.policies.GREEDY_SUFFIX`), two groups of their own."""
-        from baselines.rl.model_files import MODEL_NAME, model_files, run_name
+        from baselines.rl.model_files import JAX_ALGOS, MODEL_NAME, model_files, run_name
         from baselines.rl.policies import GREEDY_SUFFIX, SB3Policy, SharedSB3Policy
 
-        kind = SharedSB3Policy if is_parallel_env(env) else SB3Policy
+        sb3 = SharedSB3Policy if is_parallel_env(env) else SB3Policy
         out = []
         for path in model_files(folder):
             name = MODEL_NAME.fullmatch(path.name)
             group = f"rl {label}{run_name(name['algo'], name['variant'])}"
+            kind = _jax_policy() if name["algo"] in JAX_ALGOS else sb3
             for deterministic in (False, True):
                 suffix = GREEDY_SUFFIX if deterministic else ""
                 policy = kind(path, env, deterministic)
@@ -206,3 +208,11 @@ class SingleRobotFamily(Family):
 
     def metrics(self, info: dict) -> dict:
         return {}
+
+
+def _jax_policy():
+    """`baselines.rl.jaxrl.policy.JaxPolicy`, imported only for a JAX learner's model (it needs
+    JAX)."""
+    from baselines.rl.jaxrl.policy import JaxPolicy
+
+    return JaxPolicy

@@ -8,7 +8,7 @@ import yaml
 
 pytest.importorskip("stable_baselines3")
 
-from baselines.rl.model_files import ALGOS  # noqa: E402
+from baselines.rl.model_files import ALGOS, JAX_ALGOS  # noqa: E402
 from baselines.rl.train_config import (  # noqa: E402
     algo_class,
     algo_kwargs,
@@ -29,6 +29,12 @@ def test_shipped_training_configs_build_their_model(path):
     config = validate_train_config(yaml.safe_load(path.read_text()), path.parent)
     assert config["total_timesteps"] >= 10_000 and len(config["seeds"]) >= 1
     assert max(config["seeds"]) + config["n_envs"] <= EVALUATION_SEEDS_START
+    if config["algo"] in JAX_ALGOS:  # the JAX learner, built (its checks) but not compiled
+        pytest.importorskip("jax")
+        from baselines.rl.jaxrl.runner import learner
+
+        assert learner(config).iterations >= 1
+        return
     cls = algo_class(config["algo"])
     check_hyperparams(cls, config["hyperparams"])
     env = make_train_env({**config, "n_envs": min(config["n_envs"], 2),
