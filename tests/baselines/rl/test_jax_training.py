@@ -130,7 +130,7 @@ def test_same_configuration_and_seed_give_the_same_weights(runs, tmp_path, algo)
     ({"hyperparams": {"policy_kwargs": {"ortho_init": False}}},
      "config.hyperparams.policy_kwargs.ortho_init"),
     ({"hyperparams": {"n_steps": 64, "batch_size": 100}}, "config.hyperparams.batch_size"),
-    ({"env": "bounce_gym/BounceNavigation-v0", "env_kwargs": {"backend": "kinematic"}},
+    ({"env": "bounce_gym/BounceNavigation-v0", "env_kwargs": {"backend": "pymunk"}},
      "config.env"),
 ])
 def test_configuration_checks(tmp_path, change, field):
