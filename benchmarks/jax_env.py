@@ -94,13 +94,13 @@ def native_steps(n: int, steps: int) -> Callable[[], float]:
     return rate
 
 
-def measure(steps: int, rounds: int) -> dict[str, list[float]]:
+def measure(steps: int, rounds: int, sizes: dict) -> dict[str, list[float]]:
     """Env-steps/s of every env and size in every round, interleaved within each round; the
     native env runs about ``steps`` × 64 env-steps per size (at least ``steps`` steps of the
     batch), the JAX env `JAX_MORE` times as many (so that its timings, too, last milliseconds
     rather than microseconds)."""
     runs = {}
-    for n in SIZES:
+    for n in sizes:
         batch_steps = max(steps * 64 // n, steps)
         runs[f"JAX N={n}"] = jax_steps(n, JAX_MORE * batch_steps)
         runs[f"native N={n}"] = native_steps(n, batch_steps)
@@ -120,9 +120,12 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--steps", type=int, default=200,
                         help="batch steps at N = 64 per round (N = 1 runs 64× more)")
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES),
+                        help="batch sizes N (e.g. 65536 on a GPU)")
     args = parser.parse_args(argv)
+    sizes = {n: SIZES.get(n) for n in args.sizes}
     load_before = os.getloadavg()[0]
-    rates = measure(args.steps, args.rounds)
+    rates = measure(args.steps, args.rounds, sizes)
     load_after = os.getloadavg()[0]
     threads = "one XLA thread" if one_core.PINNED else "XLA threads NOT pinned (jax imported first)"
     print(f"JAX env (issue 26): {args.rounds} rounds, interleaved; {threads}; load average "
@@ -133,7 +136,7 @@ def main(argv: list[str] | None = None) -> dict:
         print(f"{label:<16} {statistics.median(values):>14,.0f} {_spread(values, ',.0f'):>24}")
     print(f"{'ratio (within a round)':<28} {'median':>8} {'min–max':>15} {'target':>7}")
     ratios = {}
-    for n, target in SIZES.items():
+    for n, target in sizes.items():
         name = f"JAX ÷ native, N={n}"
         per_round = [a / b for a, b in zip(rates[f"JAX N={n}"], rates[f"native N={n}"],
                                            strict=True)]
