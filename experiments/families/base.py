@@ -3,6 +3,7 @@ follows one episode."""
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -212,7 +213,10 @@ class SingleRobotFamily(Family):
 
 def _jax_policy():
     """`baselines.rl.jaxrl.policy.JaxPolicy`, imported only for a JAX learner's model (it needs
-    JAX)."""
+    JAX: without it, a `ConfigError` naming the extra)."""
+    if importlib.util.find_spec("jax") is None:
+        raise ConfigError("models: a jax_ppo or jax_dqn model needs JAX to play: "
+                          "pip install 'bounce-gym[jax]'")
     from baselines.rl.jaxrl.policy import JaxPolicy
 
     return JaxPolicy

@@ -168,3 +168,16 @@ def test_the_example_trains_and_scores_on_held_out_seeds():
     assert out["episodes"] == 5 and 0.0 <= out["success"] <= 1.0
     low, high = out["interval"]
     assert low <= out["success"] <= high
+
+
+def test_a_jax_model_without_jax_installed_is_one_line_naming_the_extra(monkeypatch):
+    import importlib.util
+
+    from experiments.families import base
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *args: None if name == "jax" else real(name, *args))
+    with pytest.raises(ConfigError, match=r"pip install 'bounce-gym\[jax\]'") as raised:
+        base._jax_policy()
+    assert "\n" not in str(raised.value)
