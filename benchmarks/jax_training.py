@@ -5,7 +5,11 @@ Run with ``python -m benchmarks.jax_training`` (``--rounds``, ``--ppo-steps``, `
 
 * **PPO env steps/s**, ``jax_ppo`` ÷ SB3's ``ppo`` on ``bounce_gym/BounceNavigation-v1`` with the
   same hyperparameters (hyperparams/ppo.yaml's v1 entry: 8 envs, ``n_steps`` 128, mini-batches
-  of 256, 10 epochs, separate [64, 64] tanh policy and value nets), target ≥ 20. Each side runs
+  of 256, 10 epochs, separate [64, 64] tanh policy and value nets), target ≥ 20; and on
+  ``BounceNavigation-v0`` on the cell backend (the env of ``configs/train_navigation.yaml``:
+  a 17-number observation instead of v1's 113) with ppo.yaml's v0 entry, its VecNormalize
+  dropped on both sides (jax_ppo has none), to show how the ratio moves with the network's
+  input size (the JAX side is bound by its gradient steps' arithmetic). Each side runs
   in a fresh process pinned to one core (``taskset -c 0``; SB3 with one torch thread and its
   native batched env, JAX with ``XLA_FLAGS=--xla_cpu_multi_thread_eigen=false
   intra_op_parallelism_threads=1``). The rate excludes start-up: SB3 learns one rollout before
@@ -44,9 +48,22 @@ THRESHOLD = 0.90
 EXPLORATION_STEPS = 20_000
 
 
-def _ppo_config(algo: str, steps: int, folder: str) -> dict:
-    return {"name": "bench", "env": ENV, "algo": algo, "total_timesteps": steps, "seed": 0,
-            "hyperparams_file": str(CONFIGS / "ppo.yaml"), "models": folder}
+#: the PPO rows' tasks: env id, env_kwargs and configuration keys over the hyperparameter
+#: file's entry (v0 drops its VecNormalize on both sides: jax_ppo has none)
+PPO_TASKS = {
+    "v1": (ENV, {}, {}),
+    "v0-cell": ("bounce_gym/BounceNavigation-v0",
+                {"backend": "cell", "angles": [45, 90, 135],
+                 "task_kwargs": {"goal_radius": 0.3, "heading_tolerance_deg": 10}},
+                {"normalize": False}),
+}
+
+
+def _ppo_config(algo: str, steps: int, folder: str, task: str = "v1") -> dict:
+    env, env_kwargs, keys = PPO_TASKS[task]
+    return {"name": "bench", "env": env, "env_kwargs": env_kwargs, "algo": algo,
+            "total_timesteps": steps, "seed": 0,
+            "hyperparams_file": str(CONFIGS / "ppo.yaml"), "models": folder, **keys}
 
 
 def _dqn_config(algo: str, steps: int, every: int, folder: str) -> dict:
@@ -57,13 +74,13 @@ def _dqn_config(algo: str, steps: int, every: int, folder: str) -> dict:
 
 
 # -- workers (each in its own pinned process) ---------------------------------------------------
-def jax_ppo_rate(steps: int) -> float:
+def jax_ppo_rate(steps: int, task: str) -> float:
     import jax
 
     from baselines.rl.jaxrl.runner import learner
     from baselines.rl.train import prepare
 
-    agent = learner(prepare(_ppo_config("jax_ppo", steps, tempfile.mkdtemp())))
+    agent = learner(prepare(_ppo_config("jax_ppo", steps, tempfile.mkdtemp(), task)))
     chunk = agent.chunk(agent.iterations)
     jax.block_until_ready(chunk(agent.init(jax.random.PRNGKey(0))))  # compile
     state = agent.init(jax.random.PRNGKey(1))
@@ -72,7 +89,7 @@ def jax_ppo_rate(steps: int) -> float:
     return agent.iterations * agent.steps_per_iteration / (time.perf_counter() - start)
 
 
-def sb3_ppo_rate(steps: int) -> float:
+def sb3_ppo_rate(steps: int, task: str) -> float:
     import torch
     from stable_baselines3 import PPO
 
@@ -81,7 +98,7 @@ def sb3_ppo_rate(steps: int) -> float:
     from baselines.rl.train_env import make_train_env
 
     torch.set_num_threads(1)
-    config = prepare(_ppo_config("ppo", steps, tempfile.mkdtemp()))
+    config = prepare(_ppo_config("ppo", steps, tempfile.mkdtemp(), task))
     env = make_train_env(config, 0)
     model = PPO(policy_name("ppo", env.observation_space), env, seed=0, device="cpu",
                 verbose=0, **algo_kwargs(config["hyperparams"]))
@@ -114,16 +131,17 @@ def _pinned(args: list[str]) -> object:
 
 
 # -- the measurements --------------------------------------------------------------------------
-def ppo_rows(rounds: int, jax_steps: int, sb3_steps: int) -> None:
+def ppo_rows(rounds: int, jax_steps: int, sb3_steps: int, task: str = "v1") -> None:
     load_before = os.getloadavg()[0]
     rates = {"jax_ppo": [], "ppo": []}
     for _ in range(rounds):
-        rates["jax_ppo"].append(_pinned(["jax_ppo", str(jax_steps)]))
-        rates["ppo"].append(_pinned(["ppo", str(sb3_steps)]))
+        rates["jax_ppo"].append(_pinned(["jax_ppo", str(jax_steps), task]))
+        rates["ppo"].append(_pinned(["ppo", str(sb3_steps), task]))
     ratios = [j / s for j, s in zip(rates["jax_ppo"], rates["ppo"], strict=True)]
     load_after = os.getloadavg()[0]
-    print(f"PPO on {ENV}, one core each, {rounds} rounds (load {load_before:.2f} before, "
-          f"{load_after:.2f} after)")
+    env, env_kwargs, keys = PPO_TASKS[task]
+    print(f"PPO on {env} {env_kwargs or ''} {keys or ''}, one core each, {rounds} rounds "
+          f"(load {load_before:.2f} before, {load_after:.2f} after)")
     for name, values in rates.items():
         print(f"  {name:<8} env steps/s  median {statistics.median(values):>9,.0f}  "
               f"min–max {min(values):,.0f}–{max(values):,.0f}")
@@ -201,9 +219,11 @@ def main(argv: list[str] | None = None) -> None:
         if kind == "dqn":
             print(json.dumps(dqn_run(rest[0], int(rest[1]), int(rest[2]), rest[3])))
         else:
-            print(json.dumps((jax_ppo_rate if kind == "jax_ppo" else sb3_ppo_rate)(int(rest[0]))))
+            rate = jax_ppo_rate if kind == "jax_ppo" else sb3_ppo_rate
+            print(json.dumps(rate(int(rest[0]), rest[1])))
         return
-    ppo_rows(args.rounds, args.ppo_steps, args.sb3_steps)
+    for task in PPO_TASKS:
+        ppo_rows(args.rounds, args.ppo_steps, args.sb3_steps, task)
     if not args.skip_dqn:
         dqn_rows(args.dqn_steps, args.checkpoint_every, args.episodes)
 
