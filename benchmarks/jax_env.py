@@ -2,8 +2,9 @@
 
 Run with ``python -m benchmarks.jax_env`` (``--steps``, ``--rounds``). Prints a table; asserts
 nothing. Issue 26's rows, on ``BounceNavigation-v0`` on the cell backend (angles 45°, 90°, 135°,
-goal radius 0.3, heading tolerance 10°: the configuration of `benchmarks.vector_env`'s cell row;
-random actions, episodes ending by goal and by time, so resets included):
+goal radius 0.3, heading tolerance 10°: the configuration of `benchmarks.vector_env`'s cell row)
+and on the kinematic backend (the registered v0); random actions, episodes ending by goal and by
+time, so resets included:
 
 * env-steps/s of the JAX env (`bounce_gym.jax.make`; ``jax.jit`` of a ``lax.scan`` over steps of
   ``jax.vmap(env.step)``, one key per env and step as the gymnax convention asks) ÷ the native
@@ -21,6 +22,7 @@ load average before and after.
 from __future__ import annotations  # noqa: I001  (one_core must come before jax)
 
 import argparse
+import itertools
 import os
 import statistics
 import time
@@ -39,17 +41,18 @@ from bounce_gym.jax import make
 
 #: how many times more steps the JAX env runs per round than the native one
 JAX_MORE = 10
+#: the envs: label -> (id, keyword arguments); the kinematic one is the registered v0
+ENVS = {"cell": CELL_NAVIGATION, "kinematic": ("bounce_gym/BounceNavigation-v0", {})}
 #: the batch sizes, and the target of the JAX ÷ native ratio at each (None: reported)
 SIZES = {1: None, 64: 10.0, 1024: 1.0}
 
 
-def jax_steps(n: int, steps: int) -> Callable[[], float]:
+def jax_steps(n: int, steps: int, env_id: str, kwargs: dict) -> Callable[[], float]:
     """Env-steps/s of ``steps`` steps of N vmapped JAX envs (compiled before the first call)."""
-    env_id, kwargs = CELL_NAVIGATION
     env, params = make(env_id, **kwargs)
     batch_step = jax.vmap(env.step, in_axes=(0, 0, 0, None))
 
-    actions = jnp.asarray(np.random.default_rng(1).integers(0, env.n_actions, (steps, n)),
+    actions = jnp.asarray(np.random.default_rng(1).integers(0, env.num_actions, (steps, n)),
                           jnp.int32)
 
     @jax.jit
@@ -78,12 +81,11 @@ def jax_steps(n: int, steps: int) -> Callable[[], float]:
     return rate
 
 
-def native_steps(n: int, steps: int) -> Callable[[], float]:
+def native_steps(n: int, steps: int, env_id: str, kwargs: dict) -> Callable[[], float]:
     """Env-steps/s of ``steps`` steps of the native NumPy vector env with N envs."""
-    env_id, kwargs = CELL_NAVIGATION
     env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
     env.reset(seed=0)
-    actions = np.random.default_rng(1).integers(0, 3, (steps, n))
+    actions = np.random.default_rng(1).integers(0, env.single_action_space.n, (steps, n))
 
     def rate() -> float:
         start = time.perf_counter()
@@ -100,10 +102,11 @@ def measure(steps: int, rounds: int, sizes: dict) -> dict[str, list[float]]:
     batch), the JAX env `JAX_MORE` times as many (so that its timings, too, last milliseconds
     rather than microseconds)."""
     runs = {}
-    for n in sizes:
-        batch_steps = max(steps * 64 // n, steps)
-        runs[f"JAX N={n}"] = jax_steps(n, JAX_MORE * batch_steps)
-        runs[f"native N={n}"] = native_steps(n, batch_steps)
+    for label, (env_id, kwargs) in ENVS.items():
+        for n in sizes:
+            batch_steps = max(steps * 64 // n, steps)
+            runs[f"{label} JAX N={n}"] = jax_steps(n, JAX_MORE * batch_steps, env_id, kwargs)
+            runs[f"{label} native N={n}"] = native_steps(n, batch_steps, env_id, kwargs)
     rates: dict[str, list[float]] = {label: [] for label in runs}
     for _ in range(rounds):
         for label, run in runs.items():
@@ -131,19 +134,19 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"JAX env (issue 26): {args.rounds} rounds, interleaved; {threads}; load average "
           f"{load_before:.1f} before, {load_after:.1f} after, {os.cpu_count()} cores; "
           f"device {jax.devices()[0].device_kind}")
-    print(f"{'environment':<16} {'env-steps/s':>14} {'min–max':>24}")
+    print(f"{'environment':<26} {'env-steps/s':>14} {'min–max':>24}")
     for label, values in rates.items():
-        print(f"{label:<16} {statistics.median(values):>14,.0f} {_spread(values, ',.0f'):>24}")
-    print(f"{'ratio (within a round)':<28} {'median':>8} {'min–max':>15} {'target':>7}")
+        print(f"{label:<26} {statistics.median(values):>14,.0f} {_spread(values, ',.0f'):>24}")
+    print(f"{'ratio (within a round)':<38} {'median':>8} {'min–max':>15} {'target':>7}")
     ratios = {}
-    for n, target in sizes.items():
-        name = f"JAX ÷ native, N={n}"
-        per_round = [a / b for a, b in zip(rates[f"JAX N={n}"], rates[f"native N={n}"],
-                                           strict=True)]
+    for label, n in itertools.product(ENVS, sizes):
+        name, target = f"{label}: JAX ÷ native, N={n}", sizes[n]
+        per_round = [a / b for a, b in zip(rates[f"{label} JAX N={n}"],
+                                           rates[f"{label} native N={n}"], strict=True)]
         median = statistics.median(per_round)
         goal = "-" if target is None else f"≥ {target:g}"
         verdict = "" if target is None else "  ok" if median >= target else "  below target"
-        print(f"{name:<28} {median:>8.2f} {_spread(per_round, '.2f'):>15} {goal:>7}{verdict}",
+        print(f"{name:<38} {median:>8.2f} {_spread(per_round, '.2f'):>15} {goal:>7}{verdict}",
               flush=True)
         ratios[name] = dict(median=median, low=min(per_round), high=max(per_round),
                             target=target)

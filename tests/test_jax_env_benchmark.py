@@ -4,10 +4,11 @@ from benchmarks import jax_env
 
 
 def test_jax_env_benchmark_runs(capsys):
-    out = jax_env.main(["--steps", "4", "--rounds", "2"])
+    out = jax_env.main(["--steps", "4", "--rounds", "2", "--sizes", "64"])
     text = capsys.readouterr().out
-    assert set(out["rates"]) == {f"{kind} N={n}" for n in jax_env.SIZES
+    assert set(out["rates"]) == {f"{env} {kind} N=64" for env in jax_env.ENVS
                                  for kind in ("JAX", "native")}
+    assert set(out["ratios"]) == {f"{env}: JAX ÷ native, N=64" for env in jax_env.ENVS}
     assert all(len(v) == 2 and min(v) > 0 for v in out["rates"].values())
     for row in out["ratios"].values():
         assert 0 < row["low"] <= row["median"] <= row["high"]
