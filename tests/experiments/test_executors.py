@@ -200,6 +200,7 @@ def test_a_pool_worker_that_dies_is_replaced_and_its_unit_retried(tmp_path):
     assert results == {**{f"sq{k}": k * k for k in range(8)}, "x": 25}
 
 
+@pytest.mark.slow  # three pools die and restart: ~45 s on two cores
 def test_a_pool_worker_that_always_dies_fails_for_good(tmp_path):
     units = [Unit("x", sweep_units.die, (5,)), *_squares(5)]
     results, failures = make_executor(workers=2, retries=2).run(
