@@ -141,13 +141,15 @@ class KinematicEnv(Environment):
 
     # -- episodes ---------------------------------------------------------------------------
     def reset_env(self, key: jax.Array, params: KinematicParams):
-        def sample_pose(k):
-            key_position, key_heading = jax.random.split(k)
-            position = sample(key_position, params.free, self._candidates)
-            heading = jax.random.uniform(key_heading, (), params.angles.dtype, 0.0, TWO_PI)
-            return position, heading
+        # every random number of the reset in one draw: per pose 3 × candidates for the
+        # position and one for the heading
+        uniforms = jax.random.uniform(key, (self.task.poses_drawn, 3 * self._candidates + 1),
+                                      params.angles.dtype)
 
-        position, heading, drawn = self.task.draw(key, params.task, sample_pose)
+        def sample_pose(i):
+            return sample(uniforms[i, :-1], params.free), uniforms[i, -1] * TWO_PI
+
+        position, heading, drawn = self.task.draw(params.task, sample_pose)
         return self._start(position, heading, drawn, params)
 
     def reset_to(self, params: KinematicParams | None, position, heading, goal_position=None,

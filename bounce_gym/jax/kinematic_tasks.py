@@ -35,7 +35,7 @@ class KinematicStep(NamedTuple):
 
 
 #: draws a uniform pose of the free space: key -> (position (2,), heading)
-PoseSampler = Callable[[jax.Array], tuple[jax.Array, jax.Array]]
+PoseSampler = Callable[[int], tuple[jax.Array, jax.Array]]
 
 
 class FreeTask:
@@ -48,9 +48,13 @@ class FreeTask:
     def params(self, dtype):
         return ()
 
-    def draw(self, key: jax.Array, params, sample_pose: PoseSampler):
-        """A random start pose (position, heading) and what else the task draws."""
-        position, heading = sample_pose(key)
+    #: the random poses a reset draws (the start, and the goal of a task with one)
+    poses_drawn = 1
+
+    def draw(self, params, sample_pose: PoseSampler):
+        """A random start pose (position, heading) and what else the task draws;
+        ``sample_pose(i)`` is the i-th of the reset's `poses_drawn` random poses."""
+        position, heading = sample_pose(0)
         return position, heading, ()
 
     def given(self, goal_position, goal_heading, params):
@@ -150,10 +154,11 @@ class NavigationTask(FreeTask):
         return NavigationParams(node_of_cell=jnp.asarray(self._node_of_cell, jnp.int32), **reals)
 
     # -- episodes ---------------------------------------------------------------------------
-    def draw(self, key, params, sample_pose):
-        key_start, key_goal = jax.random.split(key)
-        position, heading = sample_pose(key_start)
-        return position, heading, sample_pose(key_goal)
+    poses_drawn = 2
+
+    def draw(self, params, sample_pose):
+        position, heading = sample_pose(0)
+        return position, heading, sample_pose(1)
 
     def given(self, goal_position, goal_heading, params):
         if goal_position is None or goal_heading is None:

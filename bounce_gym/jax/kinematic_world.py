@@ -100,10 +100,11 @@ def inside(space: FreeSpace, points: jax.Array) -> jax.Array:
     return (crossings % 2 == 1) & (distance > space.clearance)
 
 
-def sample(key: jax.Array, space: FreeSpace, candidates: int) -> jax.Array:
-    """A uniform point (2,) of the free space (module docstring)."""
-    dtype = space.corner.dtype
-    pick, u, v = jax.random.uniform(key, (3, candidates, 1), dtype)
+def sample(uniforms: jax.Array, space: FreeSpace) -> jax.Array:
+    """A uniform point (2,) of the free space (module docstring), from 3 × candidates uniforms
+    in [0, 1) (drawn with the reset's others in one call: each call costs as much as a cell
+    env's step)."""
+    pick, u, v = uniforms.reshape(3, -1, 1)
     triangle = jnp.minimum(jnp.searchsorted(space.cumulative, pick[:, 0]),
                            space.cumulative.shape[0] - 1)
     flip = u + v > 1
