@@ -18,6 +18,7 @@ import statistics
 
 import bounce_gym  # noqa: F401  (registers the environments)
 from benchmarks.env_step import stepper
+from benchmarks.rounds import interleaved
 
 #: (label, gym id, keyword arguments, fraction of --steps it runs)
 ENVS = [
@@ -31,11 +32,7 @@ def measure(n_steps: int, rounds: int) -> dict[str, list[float]]:
     """Steps/s of every env in every round, the envs interleaved within each round."""
     runs = {label: stepper(env_id, max(1, int(n_steps * share)), **kwargs)
             for label, env_id, kwargs, share in ENVS}
-    rates: dict[str, list[float]] = {label: [] for label in runs}
-    for _ in range(rounds):
-        for label, run in runs.items():
-            rates[label].append(run())
-    return rates
+    return interleaved(runs, rounds)
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:

@@ -32,6 +32,7 @@ from collections.abc import Callable
 import bounce_gym  # noqa: F401  (registers the environments)
 from benchmarks.env_step import stepper
 from benchmarks.multirobot_scaling import multi_env, pistonball
+from benchmarks.rounds import interleaved, spread
 
 #: (label, gym id, keyword arguments) of the single-robot envs
 SINGLE = [
@@ -68,15 +69,7 @@ def measure(steps: int, agent_steps: int, rounds: int) -> dict[str, list[float]]
     piston = pistonball(env_steps)
     if piston is not None:
         runs[PISTONBALL] = timed(piston)
-    rates: dict[str, list[float]] = {label: [] for label in runs}
-    for _ in range(rounds):
-        for label, run in runs.items():
-            rates[label].append(run())
-    return rates
-
-
-def _spread(values: list[float], fmt: str) -> str:
-    return f"{min(values):{fmt}}–{max(values):{fmt}}"
+    return interleaved(runs, rounds)
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -94,7 +87,7 @@ def main(argv: list[str] | None = None) -> dict:
           f"{load_before:.1f} before, {load_after:.1f} after, {os.cpu_count()} cores")
     print(f"{'environment':<26} {'(agent-)steps/s':>16} {'min–max':>16}")
     for label, values in rates.items():
-        print(f"{label:<26} {statistics.median(values):>16,.0f} {_spread(values, ',.0f'):>16}")
+        print(f"{label:<26} {statistics.median(values):>16,.0f} {spread(values, ',.0f'):>16}")
     print(f"{'ratio (within a round)':<50} {'median':>7} {'min–max':>13} {'target':>8}")
     ratios = {}
     for num, den, target in RATIOS:
@@ -108,7 +101,7 @@ def main(argv: list[str] | None = None) -> dict:
         if target is not None:
             goal = f"≥ {target:g}" if target >= 1 else f"≥ 1/{round(1 / target)}"
             verdict = "  ok" if median >= target else "  below target"
-        print(f"{name:<50} {median:>7.3f} {_spread(per_round, '.3f'):>13} {goal:>8}{verdict}",
+        print(f"{name:<50} {median:>7.3f} {spread(per_round, '.3f'):>13} {goal:>8}{verdict}",
               flush=True)
         ratios[name] = dict(median=median, low=min(per_round), high=max(per_round),
                             target=target)

@@ -20,6 +20,7 @@ from collections.abc import Callable
 import gymnasium as gym
 
 import bounce_gym  # noqa: F401  (registers the environments)
+from benchmarks.rounds import interleaved
 
 #: (label, gym id, keyword arguments, target ratio to CartPole-v1 or None)
 ENVS = [
@@ -52,11 +53,7 @@ def stepper(env_id: str, n_steps: int, **kwargs) -> Callable[[], float]:
 def measure(n_steps: int, rounds: int) -> dict[str, list[float]]:
     """Steps/s of every env in every round, the envs interleaved within each round."""
     runs = {label: stepper(env_id, n_steps, **kwargs) for label, env_id, kwargs, _ in ENVS}
-    rates: dict[str, list[float]] = {label: [] for label in runs}
-    for _ in range(rounds):
-        for label, run in runs.items():
-            rates[label].append(run())
-    return rates
+    return interleaved(runs, rounds)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import bounce_gym  # noqa: F401  (registers the environments)
+from benchmarks.rounds import interleaved, spread
 from benchmarks.vector_env import CELL_NAVIGATION
 from bounce_gym.jax import make
 
@@ -107,15 +108,7 @@ def measure(steps: int, rounds: int, sizes: dict) -> dict[str, list[float]]:
             batch_steps = max(steps * 64 // n, steps)
             runs[f"{label} JAX N={n}"] = jax_steps(n, JAX_MORE * batch_steps, env_id, kwargs)
             runs[f"{label} native N={n}"] = native_steps(n, batch_steps, env_id, kwargs)
-    rates: dict[str, list[float]] = {label: [] for label in runs}
-    for _ in range(rounds):
-        for label, run in runs.items():
-            rates[label].append(run())
-    return rates
-
-
-def _spread(values: list[float], fmt: str) -> str:
-    return f"{min(values):{fmt}}–{max(values):{fmt}}"
+    return interleaved(runs, rounds)
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -136,7 +129,7 @@ def main(argv: list[str] | None = None) -> dict:
           f"device {jax.devices()[0].device_kind}")
     print(f"{'environment':<26} {'env-steps/s':>14} {'min–max':>24}")
     for label, values in rates.items():
-        print(f"{label:<26} {statistics.median(values):>14,.0f} {_spread(values, ',.0f'):>24}")
+        print(f"{label:<26} {statistics.median(values):>14,.0f} {spread(values, ',.0f'):>24}")
     print(f"{'ratio (within a round)':<38} {'median':>8} {'min–max':>15} {'target':>7}")
     ratios = {}
     for label, n in itertools.product(ENVS, sizes):
@@ -146,7 +139,7 @@ def main(argv: list[str] | None = None) -> dict:
         median = statistics.median(per_round)
         goal = "-" if target is None else f"≥ {target:g}"
         verdict = "" if target is None else "  ok" if median >= target else "  below target"
-        print(f"{name:<38} {median:>8.2f} {_spread(per_round, '.2f'):>15} {goal:>7}{verdict}",
+        print(f"{name:<38} {median:>8.2f} {spread(per_round, '.2f'):>15} {goal:>7}{verdict}",
               flush=True)
         ratios[name] = dict(median=median, low=min(per_round), high=max(per_round),
                             target=target)

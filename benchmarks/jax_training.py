@@ -156,6 +156,7 @@ def _success(path: Path, episodes: int) -> int:
     from baselines.rl.model_files import JAX_ALGOS, read_model
     from baselines.rl.policies import SB3Policy
     from baselines.seeds import EVALUATION_SEEDS_START
+    from experiments.runner import run_episode
 
     env = gym.make(ENV)
     if read_model(path).algo in JAX_ALGOS:
@@ -164,17 +165,9 @@ def _success(path: Path, episodes: int) -> int:
         policy = JaxPolicy(path, env)
     else:
         policy = SB3Policy(path, env)
-    reached = 0
-    for seed in range(EVALUATION_SEEDS_START, EVALUATION_SEEDS_START + episodes):
-        policy.start_options(env, seed)
-        obs, info = env.reset(seed=seed)
-        policy.reset(env)
-        done = False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(policy.act(obs, None))
-            done = terminated or truncated
-        reached += bool(info["is_success"])
-    return reached
+    seeds = range(EVALUATION_SEEDS_START, EVALUATION_SEEDS_START + episodes)
+    return sum(bool(run_episode(env, policy, seed, 10**6)[0]["info"]["is_success"])
+               for seed in seeds)
 
 
 def dqn_rows(steps: int, every: int, episodes: int) -> None:

@@ -21,9 +21,12 @@ import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.jaxrl.policy import JaxPolicy
 from baselines.rl.train import train
 from baselines.seeds import EVALUATION_SEEDS_START
+from experiments.runner import run_episode
 from experiments.stats import wilson_interval
 
 ENV = "bounce_gym/BounceNavigation-v1"
+#: more steps than any episode takes (the env's horizon ends it first)
+MAX_STEPS = 10**6
 HYPERPARAMS = Path(__file__).resolve().parents[1] / "configs" / "hyperparams" / "ppo.yaml"
 
 
@@ -31,17 +34,10 @@ def success(path: Path, episodes: int) -> int:
     """How many of ``episodes`` held-out episodes the model at ``path`` ends at its goal."""
     env = gym.make(ENV)
     policy = JaxPolicy(path, env)
-    reached = 0
-    for seed in range(EVALUATION_SEEDS_START, EVALUATION_SEEDS_START + episodes):
-        policy.start_options(env, seed)
-        obs, info = env.reset(seed=seed)
-        policy.reset(env)
-        done = False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(policy.act(obs, None))
-            done = terminated or truncated
-        reached += bool(info["is_success"])
-    return reached
+    seeds = range(EVALUATION_SEEDS_START, EVALUATION_SEEDS_START + episodes)
+    # the evaluation's own episode loop (the policy acts on the observation only)
+    return sum(bool(run_episode(env, policy, seed, MAX_STEPS)[0]["info"]["is_success"])
+               for seed in seeds)
 
 
 def train_and_score(steps: int = 200_000, episodes: int = 200, seed: int = 0) -> dict:
