@@ -9,9 +9,13 @@ on its first N seeds; ``--quick``: the multi-robot study on 2 seeds). Prints row
 nothing. Each run is the whole command, ``python evaluate.py <config> --no-progress`` with the
 executor's flags, in a fresh process timed from outside (imports, preparing the experiments,
 Ray's start, the episodes and the files: what a user waits for), once per executor, one after
-another. The machine's load average before and after is printed too: on a shared machine the
-pool's and Ray's gain is what the cores left over allow. Ray's row is skipped, with a line
-saying so, when ray is not installed (``pip install bounce-gym[distributed]``).
+another. The runs execute a copy of the checkout taken before the first (`snapshot`): its files
+may change while the benchmark runs (minutes on a loaded machine), and a run reading the checkout
+itself would then execute other code, or record another git state in its ``results.json``
+(``provenance``), than the runs before it. The machine's load average before and after is
+printed too: on a shared machine the pool's and Ray's gain is what the cores left over allow.
+Ray's row is skipped, with a line saying so, when ray is not installed (``pip install
+bounce-gym[distributed]``).
 """
 
 from __future__ import annotations
@@ -55,10 +59,29 @@ def _config(source: Path, folder: Path, seeds: int | None) -> Path:
     return path
 
 
-def run_one(config: Path, flags: list[str], folder: Path) -> dict:
-    """One timed ``evaluate.py`` run: seconds and the checksums of its files."""
+def snapshot(checkout: Path, into: Path) -> Path:
+    """A copy in ``into`` of the files of the git checkout ``checkout`` — tracked ones as they
+    are now, uncommitted changes included, and untracked ones that are not ignored — for runs
+    that must all execute the same code and record the same provenance, whatever happens to the
+    checkout meanwhile; ``checkout`` itself when it is not a git checkout (nothing there records
+    a git state)."""
+    try:
+        listed = subprocess.run(["git", "-C", str(checkout), "ls-files", "-z", "--cached",
+                                 "--others", "--exclude-standard"], capture_output=True,
+                                check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return checkout
+    for name in filter(None, listed.decode().split("\0")):
+        if (checkout / name).is_file():  # not a tracked file deleted from the work tree
+            (into / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(checkout / name, into / name)
+    return into
+
+
+def run_one(config: Path, flags: list[str], folder: Path, code: Path) -> dict:
+    """One timed run of ``code``'s ``evaluate.py``: seconds and the checksums of its files."""
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, str(ROOT / "evaluate.py"), str(config),
+    done = subprocess.run([sys.executable, str(code / "evaluate.py"), str(config),
                            "--no-progress", *flags], capture_output=True, text=True,
                           env={**os.environ, "RAY_USAGE_STATS_ENABLED": "0"})
     seconds = time.perf_counter() - start
@@ -73,15 +96,17 @@ def run_one(config: Path, flags: list[str], folder: Path) -> dict:
 
 
 def bench(source: Path, seeds: int | None) -> dict[str, dict]:
-    """Every executor on one evaluation (ray left out when it is not installed)."""
+    """Every executor on one evaluation, all running one `snapshot` of the checkout (ray left
+    out when it is not installed)."""
     rows = {}
     with tempfile.TemporaryDirectory(prefix="bench-executors-") as tmp:
         folder = Path(tmp)
         config = _config(source, folder, seeds)
+        code = snapshot(ROOT, folder / "source")
         for name, flags in EXECUTORS.items():
             if "ray" in flags and importlib.util.find_spec("ray") is None:
                 continue
-            rows[name] = run_one(config, flags, folder)
+            rows[name] = run_one(config, flags, folder, code)
     return rows
 
 
