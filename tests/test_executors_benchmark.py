@@ -38,6 +38,7 @@ def _git(folder, *args):
                            *args], capture_output=True, check=True).stdout
 
 
+@pytest.mark.slow  # two evaluations in a checkout of its own: ~25 s on two cores
 def test_the_checkout_changing_between_runs_changes_no_file(tmp_path, monkeypatch):
     """Someone editing the checkout while the benchmark runs (minutes on a loaded machine) made
     the next executor's ``results.json`` record another git state (``dirty``) than the one
