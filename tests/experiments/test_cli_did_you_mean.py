@@ -44,6 +44,13 @@ def test_pettingzoo_make_names_the_argument_meant(env_id, hint):
         pettingzoo.make("parallel", env_id, worlds="x")
 
 
+def test_a_task_argument_names_the_one_meant():
+    with pytest.raises(ConfigError, match=r"^task_kwargs for 'navigation': NavigationTask.__init__"
+                                          r"\(\) got an unexpected keyword argument 'rewrd' "
+                                          r"\(did you mean 'reward'\?\)"):
+        gym.make("bounce_gym/BounceNavigation-v0", task_kwargs={"rewrd": "sparse"})
+
+
 def test_an_argument_close_to_none_gets_no_guess():
     with pytest.raises(ConfigError) as error:
         gym.make("bounce_gym/Bounce-v0", colour=1)
@@ -92,6 +99,10 @@ def _without(mapping: dict, key: str) -> dict:
     ({"experiments": [_experiment(env_kwargs={**NAV, "worlds": "square"})]},
      "error: config.experiments[0].env_kwargs: BounceEnv() got an unexpected keyword argument "
      "'worlds' (did you mean 'world'?)"),
+    ({"experiments": [_experiment(env_kwargs={**NAV, "task_kwargs": {"rewrd": "sparse"}})]},
+     "error: config.experiments[0].env_kwargs: task_kwargs for 'navigation': "
+     "NavigationTask.__init__() got an unexpected keyword argument 'rewrd' (did you mean "
+     "'reward'?)"),
 ])
 def test_evaluate_names_the_key_meant(tmp_path, capsys, config, message):
     assert _one_error(capsys, tmp_path, ["evaluate"], config).startswith(message)
