@@ -11,11 +11,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from experiments.cli import Parser, dispatch, evaluate_parser
+from experiments.cli import Parser, add_version_flag, dispatch, evaluate_parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = evaluate_parser(Parser(description=__doc__.splitlines()[0]))
+    parser = evaluate_parser(add_version_flag(Parser(description=__doc__.splitlines()[0])))
     return dispatch(parser.parse_args(argv, argparse.Namespace(command="evaluate")))
 
 

@@ -10,11 +10,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from experiments.cli import Parser, dispatch, train_parser
+from experiments.cli import Parser, add_version_flag, dispatch, train_parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = train_parser(Parser(description=__doc__.splitlines()[0]))
+    parser = train_parser(add_version_flag(Parser(description=__doc__.splitlines()[0])))
     return dispatch(parser.parse_args(argv, argparse.Namespace(command="train")))
 
 

@@ -66,7 +66,7 @@ def team(world_name: str, n_robots: int, n_steps: int, seed: int) -> dict[str, f
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
     seed = args.seed

@@ -9,8 +9,9 @@ and what is allowed. The module imports only `bounce_gym.errors`, so any layer m
 
 from __future__ import annotations
 
+import difflib
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -80,12 +81,41 @@ def keyword_arguments(table: Mapping, kwargs: Mapping, defaults: Mapping | None 
     values = {**table, **(defaults or {})}
     for name in kwargs:
         if name not in values or name in fixed:
-            raise unexpected(who, name)
+            raise unexpected(who, name, [n for n in values if n not in fixed])
     values.update(kwargs)
     return values
 
 
-def unexpected(who: str, name: str) -> UnknownArgumentError:
+def unexpected(who: str, name: str, valid: Iterable[str] = ()) -> UnknownArgumentError:
     """The error of a keyword argument ``name`` that ``who`` does not take: Python's message
-    for it, as a `ConfigError` that is also the `TypeError` Python raises."""
-    return UnknownArgumentError(f"{who}() got an unexpected keyword argument {name!r}")
+    for it, followed by the closest of the ``valid`` names in parentheses if one is close
+    (`did_you_mean`), as a `ConfigError` that is also the `TypeError` Python raises."""
+    hint = did_you_mean([name], valid)
+    return UnknownArgumentError(f"{who}() got an unexpected keyword argument {name!r}"
+                                + (f" ({hint})" if hint else ""))
+
+
+def unknown_keys(field: str, mapping: Mapping, allowed: Iterable[str]) -> None:
+    """Refuse the keys of ``mapping`` not among ``allowed``: one `ConfigError` naming them, the
+    allowed keys they may misspell (`did_you_mean`) and every allowed key."""
+    allowed = sorted(allowed)
+    unknown = sorted(set(mapping) - set(allowed), key=str)
+    if unknown:
+        hint = did_you_mean(unknown, allowed)
+        raise ConfigError(f"{field}: unknown keys {unknown}{f' ({hint})' if hint else ''}; "
+                          f"allowed are {allowed}")
+
+
+def did_you_mean(names: Iterable[object], valid: Iterable[object]) -> str:
+    """``did you mean 'seeds'?`` for a misspelled name (one of ``names`` close to one of the
+    ``valid`` names, by `difflib.get_close_matches`); for several, which valid name each stands
+    for (``did you mean 'seeds' for 'seed', 'world' for 'wrld'?``); ``""`` if none is close."""
+    names = [str(name) for name in names]
+    valid = [str(name) for name in valid]
+    pairs = [(name, close[0]) for name in names
+             if (close := difflib.get_close_matches(name, valid, n=1))]
+    if not pairs:
+        return ""
+    if len(names) == 1:
+        return f"did you mean {pairs[0][1]!r}?"
+    return "did you mean " + ", ".join(f"{match!r} for {name!r}" for name, match in pairs) + "?"

@@ -49,6 +49,10 @@ for good is ``error: <run>_seed<N> failed after ...`` (status 1) once the others
 ``tune`` searches hyperparameters with Ray Tune (`experiments.search`): trials are training runs
 in ``models/<name>-tune/``, summarised in ``trials.csv`` and ``best_hyperparams.yaml``.
 
+``bounce-gym --version`` (and ``train.py --version``, ``evaluate.py --version``) prints the
+installed distribution's version, ``bounce-gym <version>``. Flags are never abbreviated:
+``--worker 2`` is an unknown flag, not ``--workers 2``.
+
 The environment variable ``BOUNCE_GYM_MAX_TIMESTEPS=N`` caps every training run at N env steps
 (SB3 still finishes the iteration it is in): a smoke test of a documented training command,
 which then runs exactly as written.
@@ -58,6 +62,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib.metadata
 import os
 import sys
 from collections.abc import Mapping
@@ -315,6 +320,35 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"error: {message} (see {self.prog} --help)\n")
 
 
+#: the distribution whose version ``--version`` prints (pyproject.toml's ``[project] name``)
+DISTRIBUTION = "bounce-gym"
+
+
+class VersionAction(argparse.Action):
+    """``--version``: print ``bounce-gym <version>`` (the installed distribution's metadata,
+    `importlib.metadata`) and exit 0; from a checkout that is not installed, a one-line error
+    (status 2) that says so."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS,
+                         help="print the version and exit", **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None) -> NoReturn:
+        try:
+            version = importlib.metadata.version(DISTRIBUTION)
+        except importlib.metadata.PackageNotFoundError:
+            parser.exit(2, f"error: {DISTRIBUTION} is not installed, so it has no version "
+                           f"(pip install . in the checkout)\n")
+        print(f"{DISTRIBUTION} {version}")
+        parser.exit(0)
+
+
+def add_version_flag(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """Give ``parser`` the ``--version`` flag (`VersionAction`)."""
+    parser.add_argument("--version", action=VersionAction)
+    return parser
+
+
 def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("config", nargs="?", help="YAML configuration (default: eval_default.yaml)")
     add_executor_flags(parser)
@@ -403,7 +437,7 @@ def dispatch(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = Parser(prog="bounce-gym", description=__doc__.splitlines()[0])
+    parser = add_version_flag(Parser(prog="bounce-gym", description=__doc__.splitlines()[0]))
     commands = parser.add_subparsers(dest="command", required=True)
     evaluate_parser(commands.add_parser("evaluate", help="evaluate policies side by side"))
     train_parser(commands.add_parser("train", help="train a Stable-Baselines3 agent"))

@@ -91,7 +91,7 @@ from bounce_gym.envs.registration import (
 )
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import check_path_component, check_path_text
-from bounce_gym.validate import integer
+from bounce_gym.validate import integer, unknown_keys
 from experiments.executors import executor_settings
 
 POLICY_KINDS = ("planner", "random", "fixed", "rl")
@@ -372,9 +372,7 @@ def _check_multi_robot(where: str, exp: dict) -> None:
 
 
 def _check_keys(where: str, mapping: Mapping, allowed: dict, required: tuple) -> None:
-    unknown = sorted(set(mapping) - set(allowed))
-    if unknown:
-        raise ConfigError(f"{where}: unknown keys {unknown}; allowed are {sorted(allowed)}")
+    unknown_keys(where, mapping, allowed)
     for key in required:
         if key not in mapping:
             raise ConfigError(f"{where}: missing key {key!r}")

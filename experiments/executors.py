@@ -61,7 +61,7 @@ from pathlib import Path
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_write, open_no_follow
 from bounce_gym.trust import secret_key, sign, verify
-from bounce_gym.validate import integer
+from bounce_gym.validate import integer, unknown_keys
 
 EXECUTOR_KINDS = ("local", "ray")
 #: how the local pool starts its processes: never a fork of this one (which may hold threads:
@@ -457,10 +457,7 @@ def executor_settings(value: object, where: str = "executor",
     if not isinstance(value, Mapping):
         raise ConfigError(f"{where}: expected a mapping {{kind, workers, address, retries}}, "
                           f"got {type(value).__name__}")
-    unknown = sorted(set(value) - set(EXECUTOR_DEFAULTS))
-    if unknown:
-        raise ConfigError(f"{where}: unknown keys {unknown}; allowed are "
-                          f"{sorted(EXECUTOR_DEFAULTS)}")
+    unknown_keys(where, value, EXECUTOR_DEFAULTS)
     out = {**EXECUTOR_DEFAULTS, **value}
     if out["kind"] not in EXECUTOR_KINDS:
         raise ConfigError(f"{field('kind')}: expected one of {EXECUTOR_KINDS}, got "

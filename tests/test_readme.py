@@ -1,5 +1,5 @@
-"""The README's code — and that of the docs pages — runs, and prints what the page says it
-prints."""
+"""The README's code — and that of the docs pages — runs, prints what the page says it
+prints, and writes nothing into the folder it runs in."""
 
 import contextlib
 import io
@@ -39,6 +39,8 @@ def test_readme_block_runs(page, code, expected, tmp_path, monkeypatch):
         exec(compile(code, page, "exec"), {"__name__": "readme"})
     if expected:
         assert out.getvalue() == expected
+    # run from a checkout, a block leaves nothing behind: what it writes goes to a temporary folder
+    assert sorted(path.name for path in tmp_path.iterdir()) == []
 
 
 def test_readme_has_code_and_outputs():

@@ -60,7 +60,7 @@ from bounce_gym.envs.registration import (
 )
 from bounce_gym.errors import ConfigError
 from bounce_gym.files import check_path_text
-from bounce_gym.validate import integer, number
+from bounce_gym.validate import did_you_mean, integer, number, unknown_keys
 
 MULTI_ALGOS = ("ppo",)
 VEC_ENVS = ("native", "sync", "subproc")
@@ -138,13 +138,21 @@ def _kind_name(kind) -> str:
     return " or ".join(k.__name__ for k in kind) if isinstance(kind, tuple) else kind.__name__
 
 
+def _is_kind(value: object, kind) -> bool:
+    return isinstance(value, kind) and not (kind is int and isinstance(value, bool))
+
+
 def _check_types(config: Mapping) -> None:
+    """Each key's value is of its type; a value of the wrong type that fits a key of a close
+    name (``seed: [1, 2]`` for ``seeds``) names that key too (`did_you_mean`)."""
     for key, kind in _KEYS.items():
         value = config.get(key)
-        if key in config and (not isinstance(value, kind)
-                              or kind is int and isinstance(value, bool)):
+        if key in config and not _is_kind(value, kind):
+            fitting = [other for other, other_kind in _KEYS.items()
+                       if other not in config and _is_kind(value, other_kind)]
+            hint = did_you_mean([key], fitting)
             raise ConfigError(f"config.{key}: expected {_kind_name(kind)}, got "
-                              f"{type(value).__name__}")
+                              f"{type(value).__name__}{f' ({hint})' if hint else ''}")
 
 
 def validate_train_config(config: object, folder: Path | None = None) -> dict:
@@ -153,9 +161,7 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     current one), defaults filled in, ``seed``/``seeds`` turned into the list ``seeds``."""
     if not isinstance(config, Mapping):
         raise ConfigError(f"config: expected a mapping, got {type(config).__name__}")
-    unknown = sorted(set(config) - set(_KEYS))
-    if unknown:
-        raise ConfigError(f"config: unknown keys {unknown}; allowed are {sorted(_KEYS)}")
+    unknown_keys("config", config, _KEYS)
     for key in ("name", "env", "algo"):
         if key not in config:
             raise ConfigError(f"config: missing key {key!r}")
@@ -348,10 +354,7 @@ def _normalize(value: bool | dict) -> dict | None:
         return None
     settings = dict(NORMALIZE_DEFAULTS)
     if isinstance(value, dict):
-        unknown = sorted(set(value) - set(NORMALIZE_DEFAULTS))
-        if unknown:
-            raise ConfigError(f"config.normalize: unknown keys {unknown}; allowed are "
-                              f"{sorted(NORMALIZE_DEFAULTS)}")
+        unknown_keys("config.normalize", value, NORMALIZE_DEFAULTS)
         for key, default in NORMALIZE_DEFAULTS.items():
             item = value.get(key, default)
             if isinstance(default, float):
@@ -393,10 +396,7 @@ def _check_policy_kwargs(hyperparams: dict) -> None:
     if "net_arch" in policy_kwargs:
         arch = policy_kwargs["net_arch"]
         if isinstance(arch, dict):
-            unknown = sorted(set(arch) - {"pi", "vf", "qf"})
-            if unknown:
-                raise ConfigError(f"{field}.net_arch: unknown keys {unknown}; allowed are "
-                                  "['pi', 'qf', 'vf']")
+            unknown_keys(f"{field}.net_arch", arch, ("pi", "vf", "qf"))
             for key, layers in arch.items():
                 _check_layers(f"{field}.net_arch.{key}", layers)
         else:
@@ -487,11 +487,12 @@ def check_hyperparams(algo_class, hyperparams: Mapping) -> None:
     import inspect
 
     arguments = inspect.signature(algo_class).parameters
+    fixed = ("policy", "env", "device", "seed", "verbose", "tensorboard_log")
     for key, value in hyperparams.items():
-        if key not in arguments or key in ("policy", "env", "device", "seed", "verbose",
-                                           "tensorboard_log"):
+        if key not in arguments or key in fixed:
+            hint = did_you_mean([key], [name for name in arguments if name not in fixed])
             raise ConfigError(f"config.hyperparams.{key}: not a hyperparameter of "
-                              f"{algo_class.__name__}")
+                              f"{algo_class.__name__}{f' ({hint})' if hint else ''}")
         default = arguments[key].default
         number = (int, float)
         scheduled = isinstance(value, str) and value.startswith("lin_")  # _check_schedules

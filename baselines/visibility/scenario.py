@@ -42,6 +42,7 @@ from baselines.visibility.planning import (
     patrol,
 )
 from bounce_gym.errors import ConfigError
+from bounce_gym.validate import unknown_keys
 
 PLAN_KINDS = ("fewest", "bottleneck", "constant")
 
@@ -59,9 +60,7 @@ class VisibilityScenario:
     @classmethod
     def for_experiment(cls, env, spec: Mapping) -> VisibilityScenario:
         allowed = {"start", "goal", "plan", "max_arcs", "patrol", "theta", "max_len"}
-        unknown = sorted(set(spec) - allowed)
-        if unknown:
-            raise ConfigError(f"visibility: unknown keys {unknown}; allowed are {sorted(allowed)}")
+        unknown_keys("visibility", spec, allowed)
         opts = env.unwrapped.options
         if opts.bounce_rule != "fixed" or opts.action_type != "continuous":
             raise ConfigError("visibility: needs env_kwargs bounce_rule: fixed and "

@@ -72,6 +72,7 @@ patroller where it is, and an adversary's start after the attack began is a wait
 from __future__ import annotations
 
 import hashlib
+import inspect
 from collections.abc import Mapping
 
 import numpy as np
@@ -108,7 +109,9 @@ class PatrolEnv(RendererOwner, ParallelEnv):
                  illegal_action: str = "stay", render_mode: str | None = None,
                  **unknown) -> None:
         if unknown:  # refused as every env refuses one (`bounce_gym.validate.unexpected`)
-            raise validate.unexpected("PatrolEnv", next(iter(unknown)))
+            arguments = inspect.signature(PatrolEnv.__init__).parameters
+            raise validate.unexpected("PatrolEnv", next(iter(unknown)),
+                                      [name for name in arguments if name not in ("self", "unknown")])
         self.options = parse_options(world, cell_size, corner_rule, n_patrollers, sensor_range,
                                      visibility_rule, attack_time, adversary_observes, strategy,
                                      start, max_cycles, illegal_action, render_mode)

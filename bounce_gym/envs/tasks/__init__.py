@@ -24,6 +24,7 @@ drives straight, so its path is the segment ``start → end``; tasks integrate o
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping
 
 from bounce_gym.envs.tasks.base import FreeTask, StepEvents, Task
@@ -33,6 +34,7 @@ from bounce_gym.envs.tasks.localization import LocalizationTask
 from bounce_gym.envs.tasks.monitoring import MonitoringTask
 from bounce_gym.envs.tasks.navigation import NavigationTask
 from bounce_gym.errors import ConfigError
+from bounce_gym.validate import unexpected
 
 TASKS: dict[str, type[Task]] = {
     "free": FreeTask,
@@ -59,6 +61,11 @@ def make_task(task: object, task_kwargs: Mapping | None, allowed: tuple[str, ...
         raise ConfigError(f"task: expected one of {list(allowed)} or a Task, got {task!r}")
     if task_kwargs is not None and not isinstance(task_kwargs, Mapping):
         raise ConfigError(f"task_kwargs: expected a dict, got {task_kwargs!r}")
+    arguments = inspect.signature(TASKS[task]).parameters
+    for name in task_kwargs or {}:  # a misspelled argument names the one meant
+        if name not in arguments:
+            error = unexpected(f"{TASKS[task].__name__}.__init__", name, arguments)
+            raise ConfigError(f"task_kwargs for {task!r}: {error}")
     try:
         return TASKS[task](**dict(task_kwargs or {}))
     except TypeError as exc:
