@@ -27,7 +27,14 @@ REFERENCE = (
     "bounce_gym.markov",
     "bounce_gym.flows",
     "bounce_gym.jax",
-    "baselines",
+    "baselines.navigation",
+    "baselines.coverage",
+    "baselines.localization",
+    "baselines.multirobot",
+    "baselines.patrolling",
+    "baselines.drifters",
+    "baselines.visibility",
+    "baselines.rl",
 )
 
 
