@@ -8,14 +8,14 @@ PYTEST_ARGS ?=
 # runs only those. CI runs both.
 PYTEST_MARK ?= not slow
 
-.PHONY: install test test-slow demo bench lint clean
+.PHONY: install test test-slow demo bench lint docs clean
 
 install: $(STAMP)
 
 $(STAMP): pyproject.toml setup.py constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -c constraints.txt -e ".[dev,rl,jax,drifters-check,patrol-check,distributed]"
+	$(BIN)/pip install -c constraints.txt -e ".[dev,rl,jax,drifters-check,patrol-check,distributed,docs]"
 	touch $@
 
 test: $(STAMP)
@@ -32,10 +32,15 @@ demo: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks.run
 
+# The docs site into site/ (mkdocs.yml); --strict: any warning (a broken link, a docstring that
+# does not render) fails the build.
+docs: $(STAMP)
+	SDL_VIDEODRIVER=dummy NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/lint-imports
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build dist *.egg-info
+	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build dist site *.egg-info
 	find . -name __pycache__ -type d -prune -exec rm -rf {} +

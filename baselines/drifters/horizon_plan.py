@@ -101,8 +101,9 @@ class HorizonReachPolicy(Policy):
 
     Args:
         horizon: the episode's horizon H (steps).
-        samples, seed, refine: of the sampled model (`DrifterEnvBase.cell_model`);
-            ``samples=None`` takes its default.
+        samples: of the sampled model (`DrifterEnvBase.cell_model`); None takes its default.
+        seed: of the sampled model.
+        refine: of the sampled model.
 
     Attributes:
         model, plan: the episode's model and `HorizonPlan` (after `reset`).

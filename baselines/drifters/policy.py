@@ -49,8 +49,10 @@ class ValueIterationPolicy(Policy):
     (module docstring).
 
     Args:
-        gamma, form, tol, max_iterations: as `value_iteration`; the reward is Eq. 5.10
-            whatever the env pays.
+        gamma: as `value_iteration`; the reward is Eq. 5.10 whatever the env pays.
+        form: as `value_iteration`.
+        tol: as `value_iteration`.
+        max_iterations: as `value_iteration`.
 
     Attributes:
         model: the env's cell model (after `reset`).

@@ -58,10 +58,12 @@ class CoveragePlanPolicy(MultiPolicy):
         joint_model: the joint cell model the plan is made on (its angles are the φ_i).
         phi_index: per robot, the action index of its φ_i in the env's Φ_i.
         turn_index: ``{signed bins: action index offset}`` of the env's turn commands.
-        neighbors, max_steps, lookahead: passed to `plan_coverage`.
-        seed: the random start on continuous backends and the planner's random fallback.
+        neighbors: passed to `plan_coverage`.
+        max_steps: passed to `plan_coverage`.
+        lookahead: passed to `plan_coverage`.
 
-    After `reset`: ``result`` (the `CoverageResult`), ``predicted_steps_to_full`` (env steps
+    `start_options` draws the random start on continuous backends from its ``seed``; the
+    planner's random fallback uses seed 0. After `reset`: ``result`` (the `CoverageResult`), ``predicted_steps_to_full`` (env steps
     until the plan covers every reachable free cell, or None) and ``executable_steps``.
     """
 

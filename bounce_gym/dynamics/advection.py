@@ -39,7 +39,8 @@ class Drifters:
 
     Args:
         field: the flow.
-        x, y: (N,) start positions in the field's coordinates; each must be in water.
+        x: (N,) start x positions in the field's coordinates; each (x, y) must be in water.
+        y: (N,) start y positions.
         layer: (N,) or scalar start layers.
         t: start time in seconds (default: the field's first snapshot, or 0 if static).
         land_rule: ``"stay"`` or ``"slide"`` (module docstring).

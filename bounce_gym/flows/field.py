@@ -54,8 +54,11 @@ class FlowField:
     """An immutable, validated layered flow field (see the module docstring).
 
     Args:
-        u, v: (L, Ny, Nx) for a static field, (L, T, Ny, Nx) with ``time``; m/s; NaN = land.
-        x, y: (Nx,), (Ny,) strictly increasing node coordinates (metres or degrees, see ``crs``).
+        u: eastward velocity, (L, Ny, Nx) for a static field, (L, T, Ny, Nx) with ``time``;
+            m/s; NaN = land.
+        v: northward velocity, shaped as ``u``.
+        x: (Nx,) strictly increasing node coordinates (metres or degrees, see ``crs``).
+        y: (Ny,) strictly increasing node coordinates.
         depth: (L,) metres, strictly increasing from the surface; may be omitted for one layer
             (then ``[0.0]``).
         time: (T,) seconds, strictly increasing, or None for a static field.

@@ -288,7 +288,9 @@ def save(
     Args:
         world: the world to write.
         path: target file, ending in ``.json``, ``.yaml`` or ``.yml``; its directory must exist.
-        grid, cell_size, description: as in `to_dict` (``grid=None`` writes the polygon form).
+        grid: as in `to_dict` (``None`` writes the polygon form).
+        cell_size: as in `to_dict`.
+        description: as in `to_dict`.
 
     Returns:
         The path written, so that ``load(save(world, path)) == world``.

@@ -1,0 +1,96 @@
+"""MkDocs hooks of the docs site (mkdocs.yml, ``hooks:``): the generated pages.
+
+Nothing on the environment pages is typed by hand: each registered id (the tables of
+`bounce_gym.envs.registration`) is built with its registered arguments, and its page shows
+the registration, the observation and action spaces the env reports (a Box's bounds per
+index) and the sections of its env class's docstring. The API reference has one page per
+module of `REFERENCE`, rendered by mkdocstrings. The pages exist only in the build (virtual
+paths under ``envs/`` and ``reference/``); the site's navigation lists them.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from mkdocs.structure.files import File
+
+ROOT = Path(__file__).resolve().parents[2]
+#: the modules of the API reference, in navigation order: the public groups whose docstrings
+#: render under ``mkdocs build --strict`` (not yet: the submodules of bounce_gym.envs.tasks,
+#: bounce_gym.markov and baselines.visibility, whose docstrings document several arguments in
+#: one entry, "w1, w2: ...", which griffe cannot match to the signature)
+REFERENCE = (
+    "bounce_gym",
+    "bounce_gym.envs.registration",
+    "bounce_gym.envs.bounce_env",
+    "bounce_gym.envs.goal_navigation_env",
+    "bounce_gym.envs.vector_env",
+    "bounce_gym.envs.multi_bounce_env",
+    "bounce_gym.worlds",
+    "bounce_gym.dynamics",
+    "bounce_gym.cells",
+    "bounce_gym.markov",
+    "bounce_gym.flows",
+    "bounce_gym.jax",
+    "baselines.navigation",
+    "baselines.coverage",
+    "baselines.localization",
+    "baselines.multirobot",
+    "baselines.patrolling",
+    "baselines.drifters",
+    "baselines.visibility",
+    "baselines.rl",
+    "experiments",
+)
+#: the packages of `REFERENCE` that export nothing themselves: their pages show their modules
+WITH_SUBMODULES = ("baselines.rl", "experiments")
+
+
+def _env_pages() -> dict[str, str]:
+    """Page path -> Markdown of every registered id (imported here, not at module import, so
+    that the checkout's own package is the one documented)."""
+    for folder in (ROOT, Path(__file__).parent):  # the checkout's package, then site_pages
+        if str(folder) not in sys.path:
+            sys.path.insert(0, str(folder))
+    from site_pages import env_pages
+
+    return env_pages()
+
+
+def _reference_pages() -> dict[str, str]:
+    """Page path -> the mkdocstrings directive of each module of `REFERENCE`."""
+    submodules = "\n    options:\n      show_submodules: true"
+    return {f"reference/{module}.md":
+            f"# `{module}`\n\n::: {module}{submodules if module in WITH_SUBMODULES else ''}\n"
+            for module in REFERENCE}
+
+
+_PAGES: dict[str, str] = {}
+
+
+def on_config(config):
+    """Build the generated pages once and list them in the navigation's placeholders:
+    ``Environments: envs/`` and ``API reference: reference/``."""
+    _PAGES.clear()
+    _PAGES.update(_env_pages())
+    _PAGES.update(_reference_pages())
+    for entry in config["nav"]:
+        if isinstance(entry, dict):
+            (title, target), = entry.items()
+            if target in ("envs/", "reference/"):
+                entry[title] = [{_title(path): path} for path in _PAGES
+                                if path.startswith(target)]
+    return config
+
+
+def _title(path: str) -> str:
+    """The navigation title of a generated page: its first heading, without backticks."""
+    return _PAGES[path].split("\n", 1)[0].lstrip("# ").strip("`")
+
+
+def on_files(files, config):
+    """Add the generated pages to the site's files."""
+    for path, text in _PAGES.items():
+        files.append(File.generated(config, path, content=text))
+    return files

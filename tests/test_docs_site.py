@@ -1,0 +1,92 @@
+"""The docs site builds with ``mkdocs build --strict`` (no warning), and has a page for every
+registered id and for every page of docs/."""
+
+import os
+import re
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("mkdocs", reason="the docs site needs the docs extra (pip install '.[docs]')")
+pytest.importorskip("material", reason="the docs site needs the docs extra (mkdocs-material)")
+pytest.importorskip("mkdocstrings_handlers.python",
+                    reason="the docs site needs the docs extra (mkdocstrings[python])")
+
+from bounce_gym.envs import registration  # noqa: E402 - after the skips
+
+ROOT = Path(__file__).parents[1]
+IDS = (*registration.GYM_ENVS, *registration.DRIFTER_GYM_ENVS, *registration.PETTINGZOO_ENVS,
+       *registration.DRIFTER_PETTINGZOO_ENVS, *registration.PATROL_PETTINGZOO_ENVS)
+
+
+class _Text(HTMLParser):
+    """The text of a page's main article (its ``<article>`` element)."""
+
+    def __init__(self):
+        super().__init__()
+        self.depth, self.parts = 0, []
+
+    def handle_starttag(self, tag, attrs):
+        self.depth += tag == "article"
+
+    def handle_endtag(self, tag):
+        self.depth -= tag == "article"
+
+    def handle_data(self, data):
+        if self.depth:
+            self.parts.append(data)
+
+
+def _article(page: Path) -> str:
+    parser = _Text()
+    parser.feed(page.read_text(encoding="utf-8"))
+    return " ".join(" ".join(parser.parts).split())
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("site")
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "NO_MKDOCS_2_WARNING": "1"}
+    result = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
+        cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr[-4000:]
+    assert not re.search(r"^WARNING", result.stderr, re.M), result.stderr[-4000:]
+    return out
+
+
+def test_every_registered_id_has_a_page(site):
+    assert len(IDS) == len(set(IDS)) >= 11
+    overview = _article(site / "envs" / "index.html")
+    for env_id in IDS:
+        text = _article(site / "envs" / env_id.split("/")[-1] / "index.html")
+        assert env_id in text and env_id in overview
+        # the spaces the env reports and its class's documentation
+        assert re.search(r"Observation spaces?", text) and re.search(r"Action spaces?", text)
+        assert "Documentation (from the docstring of" in text
+        assert "Version History" in text
+        assert len(text) > 1500
+
+
+def test_gymnasium_pages_show_the_registered_horizon_and_bounds(site):
+    for env_id, (kwargs, steps) in registration.GYM_ENVS.items():
+        text = _article(site / "envs" / env_id.split("/")[-1] / "index.html")
+        assert re.search(rf"horizon \( ?max_episode_steps ?\) {steps}\b", text)
+        assert f"world='{kwargs['world']}'" in text
+        assert "index low high" in text
+    navigation = _article(site / "envs" / "BounceNavigation-v0" / "index.html")
+    # the history's angles are in [-1, 1], the clock in [0, 1]
+    assert "0–8 0 1" in navigation and "9–16 -1 1" in navigation
+
+
+def test_every_docs_page_and_reference_page_is_built(site):
+    for page in sorted((ROOT / "docs").glob("*.md")):
+        built = site / ("" if page.stem == "index" else page.stem) / "index.html"
+        assert len(_article(built)) > 200, page.name
+    reference = sorted((site / "reference").iterdir())
+    assert len(reference) >= 5
+    for folder in reference:
+        assert len(_article(folder / "index.html")) > 100, folder.name
