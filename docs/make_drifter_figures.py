@@ -1,4 +1,4 @@
-"""Draw the README's drifter figures: the value-iteration policy of ``Drifter-v0`` and the
+"""Draw the drifter figures of docs/drifters.md: the value-iteration policy of ``Drifter-v0`` and the
 surface coverage of the deployments in ``configs/eval_drifters.yaml``.
 
 Run from the repository root: ``.venv/bin/python docs/make_drifter_figures.py`` (writes
@@ -21,7 +21,7 @@ from experiments.report import write_plots
 from experiments.runner import run
 
 HERE = Path(__file__).parent
-#: the experiment of configs/eval_drifters.yaml whose coverage plot the README shows
+#: the experiment of configs/eval_drifters.yaml whose coverage plot docs/drifters.md shows
 DEPLOYMENT = "drifter-deployment-two-sink"
 
 

@@ -1,4 +1,4 @@
-"""Record the README's pictures: one short episode of each environment as a GIF.
+"""Record the docs' pictures: one short episode of each environment as a GIF.
 
 Run from the repository root: ``.venv/bin/python docs/make_gifs.py`` (writes ``docs/*.gif``).
 """

@@ -75,13 +75,20 @@ def on_config(config):
     _PAGES.clear()
     _PAGES.update(_env_pages())
     _PAGES.update(_reference_pages())
-    for entry in config["nav"]:
+    _fill(config["nav"])
+    return config
+
+
+def _fill(nav: list) -> None:
+    """Replace the placeholders ``envs/`` and ``reference/`` in ``nav`` and its sections."""
+    for entry in nav:
         if isinstance(entry, dict):
             (title, target), = entry.items()
             if target in ("envs/", "reference/"):
                 entry[title] = [{_title(path): path} for path in _PAGES
                                 if path.startswith(target)]
-    return config
+            elif isinstance(target, list):
+                _fill(target)
 
 
 def _title(path: str) -> str:
