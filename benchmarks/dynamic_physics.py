@@ -32,7 +32,7 @@ from collections.abc import Callable
 import bounce_gym  # noqa: F401  (registers the environments)
 from benchmarks.env_step import stepper
 from benchmarks.multirobot_scaling import multi_env, pistonball
-from benchmarks.rounds import interleaved, spread
+from benchmarks.rounds import interleaved, ratio, spread, verdict
 
 #: (label, gym id, keyword arguments) of the single-robot envs
 SINGLE = [
@@ -96,15 +96,11 @@ def main(argv: list[str] | None = None) -> dict:
             print(f"{name:<50} skipped: pettingzoo.butterfly does not import")
             continue
         per_round = [a / b for a, b in zip(rates[num], rates[den], strict=True)]
-        median = statistics.median(per_round)
-        goal, verdict = "-", ""
-        if target is not None:
-            goal = f"≥ {target:g}" if target >= 1 else f"≥ 1/{round(1 / target)}"
-            verdict = "  ok" if median >= target else "  below target"
-        print(f"{name:<50} {median:>7.3f} {spread(per_round, '.3f'):>13} {goal:>8}{verdict}",
-              flush=True)
-        ratios[name] = dict(median=median, low=min(per_round), high=max(per_round),
-                            target=target)
+        row = ratios[name] = ratio(per_round, target)
+        goal = "-" if target is None else (f"≥ {target:g}" if target >= 1
+                                           else f"≥ 1/{round(1 / target)}")
+        print(f"{name:<50} {row['median']:>7.3f} {spread(per_round, '.3f'):>13} {goal:>8}"
+              f"{verdict(row)}", flush=True)
     return dict(rates=rates, ratios=ratios, load=(load_before, load_after))
 
 

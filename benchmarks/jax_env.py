@@ -36,7 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import bounce_gym  # noqa: F401  (registers the environments)
-from benchmarks.rounds import interleaved, spread
+from benchmarks.rounds import interleaved, ratio, spread, verdict
 from benchmarks.vector_env import CELL_NAVIGATION
 from bounce_gym.jax import make
 
@@ -136,13 +136,10 @@ def main(argv: list[str] | None = None) -> dict:
         name, target = f"{label}: JAX ÷ native, N={n}", sizes[n]
         per_round = [a / b for a, b in zip(rates[f"{label} JAX N={n}"],
                                            rates[f"{label} native N={n}"], strict=True)]
-        median = statistics.median(per_round)
+        row = ratios[name] = ratio(per_round, target)
         goal = "-" if target is None else f"≥ {target:g}"
-        verdict = "" if target is None else "  ok" if median >= target else "  below target"
-        print(f"{name:<38} {median:>8.2f} {spread(per_round, '.2f'):>15} {goal:>7}{verdict}",
-              flush=True)
-        ratios[name] = dict(median=median, low=min(per_round), high=max(per_round),
-                            target=target)
+        print(f"{name:<38} {row['median']:>8.2f} {spread(per_round, '.2f'):>15} {goal:>7}"
+              f"{verdict(row)}", flush=True)
     return dict(rates=rates, ratios=ratios, load=(load_before, load_after))
 
 

@@ -27,24 +27,19 @@ SECTION = re.compile(r"^## (.+)$", re.M)
 def env_pages() -> dict[str, str]:
     """Page path (``envs/<name>.md``) -> Markdown, the overview first."""
     rows, pages = [], {}
-    for env_id in registration.GYMNASIUM_IDS:
-        env = gym.make(env_id)
-        try:
-            page, row = _gymnasium_page(env_id, env)
-        finally:
-            env.close()
-        pages[_path(env_id)] = page
-        rows.append(row)
     pz_ids = (*registration.PETTINGZOO_ENVS, *registration.DRIFTER_PETTINGZOO_ENVS,
               *registration.PATROL_PETTINGZOO_ENVS)
-    for env_id in pz_ids:
-        env = pettingzoo.make("parallel", env_id)
-        try:
-            page, row = _pettingzoo_page(env_id, env)
-        finally:
-            env.close()
-        pages[_path(env_id)] = page
-        rows.append(row)
+    kinds = ((registration.GYMNASIUM_IDS, gym.make, _gymnasium_page),
+             (pz_ids, lambda env_id: pettingzoo.make("parallel", env_id), _pettingzoo_page))
+    for ids, make, page_of in kinds:
+        for env_id in ids:
+            env = make(env_id)
+            try:
+                page, row = page_of(env_id, env)
+            finally:
+                env.close()
+            pages[_path(env_id)] = page
+            rows.append(row)
     return {"envs/index.md": _overview(rows), **pages}
 
 
