@@ -19,6 +19,7 @@ def _tiny(tmp_path):
     return config
 
 
+@pytest.mark.slow  # three whole evaluate.py runs, one on Ray: ~45 s on two cores
 def test_executors_benchmark_runs_and_finds_identical_files(tmp_path, capsys):
     config = _tiny(tmp_path)
     out = executors.main(["--config", str(config), "--seeds", "2"])

@@ -230,6 +230,7 @@ def test_coverage_planner_rows_reproduce_the_predicted_steps():
 
 # -- training and the evaluate CLI ----------------------------------------------------------------
 
+@pytest.mark.slow  # trains a shared PPO through train.py, then evaluates: ~45 s on two cores
 def test_shared_ppo_trained_by_train_py_is_scored_by_evaluate(tmp_path):
     train_config = {"name": "shared", "env": COVERAGE,
                     "env_kwargs": dict(GRID, n_robots=3, max_cycles=100),

@@ -56,6 +56,7 @@ def test_rows_come_in_the_canonical_order(reference):
     assert rows[48:] == [["localization-lab", ORACLE_NAME, s] for s in seeds]
 
 
+@pytest.mark.slow  # a sweep killed and run again: ~16 s on two cores
 def test_a_killed_sweep_started_again_runs_only_the_rest_and_writes_the_same_files(reference):
     folder, config, expected = reference
     store = folder / "runs/sweep-units"
