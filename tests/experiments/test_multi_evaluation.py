@@ -270,6 +270,7 @@ def test_shared_ppo_trained_by_train_py_is_scored_by_evaluate(tmp_path):
         run({"models": str(tmp_path / "models"), "experiments": [wrong]}, progress=False)
 
 
+@pytest.mark.slow  # a whole multi-robot evaluation through the CLI: ~19 s
 def test_evaluate_cli_prints_multi_tables_with_intervals(tmp_path, capsys):
     config = {"name": "multi", "output": str(tmp_path / "runs"),
               "experiments": [coverage_exp(seeds=[10_000, 10_001, 10_002], policies=["random"]),

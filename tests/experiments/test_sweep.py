@@ -38,6 +38,7 @@ def reference(tmp_path_factory):
     return folder, config, _evaluate(folder, config, "one", "--workers", "1")
 
 
+@pytest.mark.slow  # a pool of two over the reference sweep: ~30 s with its setup
 def test_a_pool_of_two_writes_the_same_files_as_one_process(reference):
     folder, config, expected = reference
     assert _evaluate(folder, config, "pool", "--workers", "2") == expected
@@ -181,6 +182,7 @@ def test_bad_executor_flags_and_keys_are_one_line_errors(tmp_path, capsys, flags
     assert not (tmp_path / "runs").exists()
 
 
+@pytest.mark.slow  # the sweep again on another executor: ~16 s
 def test_the_executor_key_does_not_change_the_episodes(reference, tmp_path):
     folder, _, expected = reference
     config = sweep_runs.write_config(tmp_path)
