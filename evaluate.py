@@ -3,7 +3,7 @@
     python evaluate.py                    # the default configuration (configs/eval_default.yaml)
     python evaluate.py configs/eval.yaml  # a configuration file (see configs/)
 
-The same as ``bounce-gym evaluate`` (`experiments.cli`).
+The same as ``bounce-gym evaluate`` (`bounce_gym_experiments.cli`).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from experiments.cli import Parser, add_version_flag, dispatch, evaluate_parser
+from bounce_gym_experiments.cli import Parser, add_version_flag, dispatch, evaluate_parser
 
 
 def main(argv: list[str] | None = None) -> int:

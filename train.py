@@ -2,7 +2,7 @@
 
     python train.py configs/train_navigation.yaml
 
-The same as ``bounce-gym train`` (`experiments.cli`).
+The same as ``bounce-gym train`` (`bounce_gym_experiments.cli`).
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from experiments.cli import Parser, add_version_flag, dispatch, train_parser
+from bounce_gym_experiments.cli import Parser, add_version_flag, dispatch, train_parser
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import yaml
 
-from experiments.run_folders import finished_runs
+from bounce_gym_experiments.run_folders import finished_runs
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ("configs/eval_multirobot.yaml", "configs/benchmark.yaml")
@@ -46,7 +46,7 @@ FILES = ("episodes.csv", "results.json")
 def _config(source: Path, folder: Path, seeds: int | None) -> Path:
     """``source`` writing into ``folder/runs``, its model folders and map files read where
     ``source`` names them, on the first ``seeds`` seeds of every experiment (all if ``None``)."""
-    from experiments.config import load_config
+    from bounce_gym_experiments.config import load_config
 
     config = load_config(source)  # map files resolved against the source's folder
     config["output"] = str(folder / "runs")

@@ -156,7 +156,7 @@ def _success(path: Path, episodes: int) -> int:
     from baselines.rl.model_files import JAX_ALGOS, read_model
     from baselines.rl.policies import SB3Policy
     from baselines.seeds import EVALUATION_SEEDS_START
-    from experiments.runner import run_episode
+    from bounce_gym_experiments.runner import run_episode
 
     env = gym.make(ENV)
     if read_model(path).algo in JAX_ALGOS:
@@ -172,7 +172,7 @@ def _success(path: Path, episodes: int) -> int:
 
 def dqn_rows(steps: int, every: int, episodes: int) -> None:
     from baselines.rl.model_files import CHECKPOINT_NAME
-    from experiments.stats import wilson_interval
+    from bounce_gym_experiments.stats import wilson_interval
 
     print(f"DQN + hindsight relabelling on {ENV} to success ≥ {THRESHOLD} ({episodes} held-out "
           f"episodes per checkpoint, one run each, seed 0, one core; load "

@@ -25,7 +25,7 @@ from baselines.navigation import NavigationPlanner
 from baselines.navigation.roadmap import goal_cells
 from baselines.navigation.sampled import SampledNavigationPlanner
 from baselines.navigation.search import shortest_plan
-from experiments.stats import wilson_interval
+from bounce_gym_experiments.stats import wilson_interval
 
 ENV_ID = "bounce_gym/BounceNavigation-v0"
 KWARGS = {"angles": [45, 90, 135], "task_kwargs": {"goal_radius": 0.3, "heading_tolerance_deg": 10}}

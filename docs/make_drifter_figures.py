@@ -15,10 +15,10 @@ import gymnasium as gym
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.drifters import ValueIterationPolicy
 from bounce_gym.files import atomic_write
-from experiments.config import configs_folder, load_config
-from experiments.plots.drifters import plot_policy
-from experiments.report import write_plots
-from experiments.runner import run
+from bounce_gym_experiments.config import configs_folder, load_config
+from bounce_gym_experiments.plots.drifters import plot_policy
+from bounce_gym_experiments.report import write_plots
+from bounce_gym_experiments.runner import run
 
 HERE = Path(__file__).parent
 #: the experiment of configs/eval_drifters.yaml whose coverage plot docs/drifters.md shows

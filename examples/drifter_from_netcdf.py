@@ -29,7 +29,7 @@ import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.drifters import ValueIterationPolicy
 from baselines.seeds import EVALUATION_SEEDS_START
 from bounce_gym.flows import load_flow
-from experiments.stats import wilson_interval
+from bounce_gym_experiments.stats import wilson_interval
 
 ROWS, COLUMNS, CELL = 10, 14, 1000.0  # cells, metres
 DEPTHS = np.array([0.0, 10.0, 20.0])  # metres, positive down

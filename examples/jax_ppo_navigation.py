@@ -21,8 +21,8 @@ import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.jaxrl.policy import JaxPolicy
 from baselines.rl.train import train
 from baselines.seeds import EVALUATION_SEEDS_START
-from experiments.runner import run_episode
-from experiments.stats import wilson_interval
+from bounce_gym_experiments.runner import run_episode
+from bounce_gym_experiments.stats import wilson_interval
 
 ENV = "bounce_gym/BounceNavigation-v1"
 #: more steps than any episode takes (the env's horizon ends it first)

@@ -36,7 +36,7 @@ from baselines.visibility.partition import partition
 from baselines.visibility.planning import fewest_bounce_plan, monte_carlo
 from bounce_gym import worlds
 from bounce_gym.worlds import World
-from experiments.stats import wilson_interval
+from bounce_gym_experiments.stats import wilson_interval
 
 #: an L-shaped room (12 x 10 with the north-east quarter cut away) and a 2 x 2 pillar
 OUTER = [(0, 0), (12, 0), (12, 5), (6, 5), (6, 10), (0, 10)]

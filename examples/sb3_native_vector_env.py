@@ -26,7 +26,7 @@ from stable_baselines3 import PPO
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.vector_vec_env import VectorToVecEnv
 from baselines.seeds import EVALUATION_SEEDS_START
-from experiments.stats import wilson_interval
+from bounce_gym_experiments.stats import wilson_interval
 
 ENV = "bounce_gym/BounceNavigation-v0"
 ENV_KWARGS = {"backend": "cell"}

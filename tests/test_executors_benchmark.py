@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from benchmarks import executors
-from experiments.config import load_config
+from bounce_gym_experiments.config import load_config
 
 
 def _tiny(tmp_path):

@@ -100,7 +100,7 @@ def test_the_wheel_ships_the_licence_the_markers_and_the_metadata(tmp_path):
     for name in ("pyproject.toml", "setup.py", "README.md", "LICENSE"):
         (source / name).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy(ROOT / name, source / name)
-    for folder in ("bounce_gym", "baselines", "experiments", "configs"):
+    for folder in ("bounce_gym", "baselines", "bounce_gym_experiments", "configs"):
         shutil.copytree(ROOT / folder, source / folder,
                         ignore=shutil.ignore_patterns("__pycache__", "agents", "*.zip"))
     build = ("from setuptools import build_meta; "
@@ -111,6 +111,9 @@ def test_the_wheel_ships_the_licence_the_markers_and_the_metadata(tmp_path):
     wheel = zipfile.ZipFile(tmp_path / "dist" / done.stdout.strip().splitlines()[-1])
     names = set(wheel.namelist())
     assert {"bounce_gym/py.typed", "baselines/py.typed"} <= names
+    # the design's two top-level packages, and the runner under a name of this project's own
+    assert {name.split("/")[0] for name in names if not name.startswith("bounce_gym-")} == {
+        "bounce_gym", "baselines", "bounce_gym_experiments"}
     dist_info = f"bounce_gym-{PROJECT['version']}.dist-info"
     assert f"{dist_info}/licenses/LICENSE" in names
     metadata = email.message_from_bytes(wheel.read(f"{dist_info}/METADATA"))

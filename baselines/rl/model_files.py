@@ -36,7 +36,7 @@ The manifest maps a file name to the list of its accepted digests: one, except f
 of a save, when the new digest is added before the file is renamed into place and the old one
 dropped after, so that a crash at any instant leaves a correctly listed file. Several processes
 may save into one folder at once (the seeds of a training sweep, the trials of a search,
-`experiments.training`): each reads, changes and rewrites the manifest under an exclusive lock
+`bounce_gym_experiments.training`): each reads, changes and rewrites the manifest under an exclusive lock
 (`bounce_gym.files.locked`), so no update is lost.
 """
 

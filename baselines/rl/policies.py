@@ -2,7 +2,7 @@
 
 A model file (as `baselines.rl.train` saves them, ``<algo>[-<variant>]_seed<seed>.zip``; read as
 data, nothing in it unpickled, `baselines.rl.model_files`) becomes the policy that fits the env
-(`experiments.families.base.Family.trained_policies` picks the kind):
+(`bounce_gym_experiments.families.base.Family.trained_policies` picks the kind):
 
 * Gymnasium env — `SB3Policy`: the model's action (PPO, DQN or RecurrentPPO, with the recurrent
   state carried through the episode), on the observations passed through the wrappers it was

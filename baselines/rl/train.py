@@ -32,7 +32,7 @@ checked by `baselines.rl.train_config`, whose docstring gives every number's ran
     torch_threads: 1                 # torch intra-op threads while training (default 1), at
                                      # most 4 x the machine's cores
     executor: {kind: local, workers: 2}  # where the seeds run at once (`bounce-gym train`,
-                                     # experiments.training; default: a process per core)
+                                     # bounce_gym_experiments.training; default: a process per core)
 
 **What a run writes** into ``<models>/<name>/`` for each seed: the model
 ``<run>_seed<seed>.zip`` (``<run>`` = ``<algo>[-<variant>]``), where the evaluation finds it;
@@ -165,7 +165,7 @@ def prepare(config: Mapping, folder: Path | None = None) -> dict:
     """The validated configuration (`validate_train_config`), checked for everything that can
     be checked before any training: the models folder, the checkpoints there, the
     hyperparameters and the action space. Its seeds may then train in any order or at once
-    (`train_seed`; a sweep over processes, `experiments.training`)."""
+    (`train_seed`; a sweep over processes, `bounce_gym_experiments.training`)."""
     config = validate_train_config(config, folder)  # the quick checks first, before torch
     runs = [Run(config, seed) for seed in config["seeds"]]
     check_writable("config.models", runs[0].folder)

@@ -41,10 +41,10 @@ REFERENCE = (
     "baselines.drifters",
     "baselines.visibility",
     "baselines.rl",
-    "experiments",
+    "bounce_gym_experiments",
 )
 #: the packages of `REFERENCE` that export nothing themselves: their pages show their modules
-WITH_SUBMODULES = ("baselines.rl", "experiments")
+WITH_SUBMODULES = ("baselines.rl", "bounce_gym_experiments")
 
 
 def _env_pages() -> dict[str, str]:

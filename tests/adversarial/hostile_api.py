@@ -207,7 +207,7 @@ def _load_flow(path: Path, **options):
 
 
 def _validate(config: object):
-    from experiments.config import validate_config
+    from bounce_gym_experiments.config import validate_config
 
     return lambda: validate_config(config)
 

@@ -434,8 +434,8 @@ def _resume_case(name: str, signature: bytes) -> Case:
 # -- unit files ------------------------------------------------------------------------------
 def store(box: Sandbox) -> Path:
     """The units folder of the case's evaluation ``c.yaml`` (written here), created."""
-    from experiments.config import load_config, validate_config
-    from experiments.sweep import store_folder
+    from bounce_gym_experiments.config import load_config, validate_config
+    from bounce_gym_experiments.sweep import store_folder
 
     box.yaml("c.yaml", evaluation())
     folder = store_folder(validate_config(load_config(box.here / "c.yaml")))
@@ -446,7 +446,7 @@ def store(box: Sandbox) -> Path:
 def _signed_elsewhere(box: Sandbox, folder: Path, key: str, home: str) -> None:
     """A payload signed by the store of another user (``home``) or for another unit."""
     from bounce_gym.trust import HOME_VARIABLE
-    from experiments.executors import UnitStore
+    from bounce_gym_experiments.executors import UnitStore
 
     saved = os.environ.get(HOME_VARIABLE)
     os.environ[HOME_VARIABLE] = str(box.here / home)
@@ -471,14 +471,14 @@ def _other_user(box: Sandbox, folder: Path, unit: Path) -> None:
 
 
 def _other_unit(box: Sandbox, folder: Path, unit: Path) -> None:
-    from experiments.executors import UnitStore
+    from bounce_gym_experiments.executors import UnitStore
 
     UnitStore(folder).save("0-0-1", Payload(box.marker))
     (folder / "0-0-1.unit").rename(unit)
 
 
 def _other_sweep(box: Sandbox, folder: Path, unit: Path) -> None:
-    from experiments.executors import UnitStore
+    from bounce_gym_experiments.executors import UnitStore
 
     other = folder.with_name("f" * 16)
     UnitStore(other).save("0-0-0", Payload(box.marker))
@@ -487,7 +487,7 @@ def _other_sweep(box: Sandbox, folder: Path, unit: Path) -> None:
 
 
 def _cut_short(box: Sandbox, folder: Path, unit: Path) -> None:
-    from experiments.executors import UnitStore
+    from bounce_gym_experiments.executors import UnitStore
 
     UnitStore(folder).save("0-0-0", Payload(box.marker))
     unit.write_bytes(unit.read_bytes()[:-3])

@@ -4,7 +4,7 @@ command (and its wrappers ``evaluate.py`` and ``train.py``) and to the Python AP
 catalogue: `hostile_cases`, `hostile_files`, `hostile_api`).
 
 Each command-line case runs in a case folder two levels below the test's temporary folder, in
-this process (``experiments.cli.main``), and must end with
+this process (``bounce_gym_experiments.cli.main``), and must end with
 
 * exit status 2 and exactly one line on stderr, ``error: ...`` containing what the case
   expects, nothing on stdout, no traceback (a Python warning counts as lines on stderr) — or,
@@ -27,7 +27,7 @@ this process (``experiments.cli.main``), and must end with
 Every Python API case must raise its `bounce_gym.errors.BounceGymError` subclass with a
 one-line message, within the same CPU and memory bounds and with the same checks on files and
 markers. A subset of the command-line cases, a few of every class, runs again as real
-processes (``python -m experiments.cli``) that must exit 2 with one ``error:`` line and no
+processes (``python -m bounce_gym_experiments.cli``) that must exit 2 with one ``error:`` line and no
 traceback (0 with warnings, for unit files), each within `CHILD_MEMORY_BOUND` (1.5 GiB) of
 peak resident memory (``ru_maxrss`` of the child, from ``wait4``).
 
@@ -59,7 +59,7 @@ import pytest
 from hostile_cases import Case, Sandbox
 
 from bounce_gym.errors import BounceGymError
-from experiments.cli import main
+from bounce_gym_experiments.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 #: CPU seconds a case may take after start-up
@@ -273,7 +273,7 @@ def _check_output(case: Case, ran: Ran, box: Sandbox) -> None:
         assert bool(lines) == bool(case.expect), ran.err
         assert all(line.startswith("warning: ") and case.expect in line for line in lines), \
             ran.err
-        from experiments.run_folders import finished_runs
+        from bounce_gym_experiments.run_folders import finished_runs
 
         assert len(finished_runs(box.here / "out/runs")) == 1
 
@@ -310,14 +310,14 @@ def test_a_hostile_call_raises_the_package_error(case, box, tmp_path, request, m
 
 
 def run_child(argv: list[str], cwd: Path, timeout: float = 120) -> tuple[Ran, float, int]:
-    """``python -m experiments.cli <argv>`` (or ``python <wrapper> <argv[1:]>``) as its own
+    """``python -m bounce_gym_experiments.cli <argv>`` (or ``python <wrapper> <argv[1:]>``) as its own
     process: what it printed, its CPU seconds (start-up included) and its peak resident memory
     (bytes)."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
         command = [str(ROOT / argv[0]), *argv[1:]] if argv[:1] and argv[0] in WRAPPERS \
-            else ["-m", "experiments.cli", *argv]
+            else ["-m", "bounce_gym_experiments.cli", *argv]
         child = subprocess.Popen([sys.executable, *command], cwd=cwd, stdout=out, stderr=err,
                                  env=env)
         deadline = time.monotonic() + timeout

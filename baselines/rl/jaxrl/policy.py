@@ -1,6 +1,6 @@
 """A saved JAX learner (``jax_ppo_seed<N>.zip``, ``jax_dqn_seed<N>.zip``) as a policy of the
 evaluation (`baselines.policy.Policy`), beside the SB3 models of the same folder
-(`experiments.families.base.Family.trained_policies`).
+(`bounce_gym_experiments.families.base.Family.trained_policies`).
 
 It acts from the NumPy env's observation alone (never ``info``), flattened as in training
 (`baselines.rl.jaxrl.networks.flatten_observation`). As `baselines.rl.policies.SB3Policy`, its

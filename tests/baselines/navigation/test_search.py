@@ -85,7 +85,7 @@ def test_predicted_equals_measured_on_generated_maps(map_seed):
     predicted success lies inside the 95 % Wilson interval of the measured success — here,
     without noise, every episode's prediction is its outcome."""
     from bounce_gym.worlds.generators import random_grid
-    from experiments.stats import wilson_interval
+    from bounce_gym_experiments.stats import wilson_interval
 
     world = random_grid(np.random.default_rng(map_seed), 7, 7, 3, 2, name=f"grid{map_seed}")
     kwargs = dict(KWARGS, world=world)

@@ -14,7 +14,7 @@ pytest.importorskip("stable_baselines3")
 from baselines.rl.curves import learning_curves, smoothed  # noqa: E402
 from baselines.rl.monitor import open_monitor_file, read_monitor  # noqa: E402
 from bounce_gym.errors import ConfigError  # noqa: E402
-from experiments.cli import main  # noqa: E402
+from bounce_gym_experiments.cli import main  # noqa: E402
 
 
 def _monitor(path: Path, rows: list[tuple], partial: str = "") -> Path:

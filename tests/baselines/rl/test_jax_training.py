@@ -100,7 +100,7 @@ def test_the_model_plays_sampled_by_default_and_greedy_as_its_twin(runs, algo):
 
 
 def test_the_evaluation_finds_jax_models_beside_sb3_ones(runs):
-    from experiments.runner import run
+    from bounce_gym_experiments.runner import run
 
     folder, _ = runs
     config = {"models": str(folder), "experiments": [
@@ -173,7 +173,7 @@ def test_the_example_trains_and_scores_on_held_out_seeds():
 def test_a_jax_model_without_jax_installed_is_one_line_naming_the_extra(monkeypatch):
     import importlib.util
 
-    from experiments.families import base
+    from bounce_gym_experiments.families import base
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec",

@@ -31,7 +31,7 @@ from baselines.rl.policies import SB3Policy  # noqa: E402
 from baselines.rl.train import train  # noqa: E402
 from bounce_gym.errors import ConfigError  # noqa: E402
 from bounce_gym.trust import HOME_VARIABLE, digest, trusted_digests  # noqa: E402
-from experiments.cli import main  # noqa: E402
+from bounce_gym_experiments.cli import main  # noqa: E402
 
 NAV = {"world": "square", "backend": "cell", "angles": [90, 135]}
 CONFIG = {"name": "nav", "env": "bounce_gym/BounceNavigation-v0", "env_kwargs": NAV,

@@ -173,8 +173,8 @@ def test_the_recurrent_state_is_carried_as_sb3_carries_it(models):
 
 
 def test_a_pool_of_two_plays_the_same_sampled_episodes_as_one_process(models):
-    from experiments.executors import make_executor
-    from experiments.runner import run
+    from bounce_gym_experiments.executors import make_executor
+    from bounce_gym_experiments.runner import run
 
     config = {"models": str(models["ppo"].parents[1]), "experiments": [
         {"name": "n", "env": ENV, "env_kwargs": NAV, "seeds": list(range(10_000, 10_012)),

@@ -16,7 +16,7 @@ import yaml
 
 import bounce_gym  # noqa: F401
 from baselines.rl.model_files import MANIFEST, MODEL_NAME, load_model, read_model
-from experiments.runner import run
+from bounce_gym_experiments.runner import run
 
 ROOT = Path(__file__).parents[3]
 NAV = {"world": "square", "backend": "cell", "angles": [90, 135]}
@@ -28,7 +28,7 @@ def _start(folder: Path) -> subprocess.Popen:
               "hyperparams": {"n_steps": 32, "batch_size": 32, "n_epochs": 1},
               "models": str(folder / "models")}
     (folder / "t.yaml").write_text(yaml.safe_dump(config), encoding="utf-8")
-    return subprocess.Popen([sys.executable, "-m", "experiments.cli", "train",
+    return subprocess.Popen([sys.executable, "-m", "bounce_gym_experiments.cli", "train",
                              str(folder / "t.yaml"), "--no-progress"], cwd=ROOT,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 

@@ -98,7 +98,7 @@ def test_bad_wrappers_in_a_model_file_are_one_error(wrappers, message):
 
 
 def test_the_evaluation_scores_a_stacked_model_beside_a_plain_one(tmp_path):
-    from experiments.runner import run
+    from bounce_gym_experiments.runner import run
 
     _trained(tmp_path, n_stack=2, normalize=True, variant="stack2")
     _trained(tmp_path)

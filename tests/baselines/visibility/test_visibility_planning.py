@@ -13,7 +13,7 @@ from baselines.visibility.graph import safe_graph
 from baselines.visibility.partition import partition
 from bounce_gym import worlds
 from bounce_gym.envs.bounce_env import BounceEnv
-from experiments.plots.visibility import (
+from bounce_gym_experiments.plots.visibility import (
     plot_limit_cycle,
     plot_partition,
     plot_plan_cone,

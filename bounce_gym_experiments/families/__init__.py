@@ -1,0 +1,1 @@
+"""One module per experiment family (`bounce_gym_experiments.registry` lists them)."""

@@ -1,0 +1,222 @@
+"""The interface of an experiment family (`bounce_gym_experiments.registry`) and of the object that
+follows one episode."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from collections.abc import Mapping
+from pathlib import Path
+
+from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
+from bounce_gym.errors import ConfigError
+from bounce_gym_experiments.config import POLICY_KINDS
+
+
+class Episode:
+    """Follows one episode for its family: the start options, when it ends, the metrics."""
+
+    def start_options(self, seed: int) -> dict | None:
+        """Reset options the experiment imposes on every policy (``None``: the policy's own)."""
+        return None
+
+    def start(self, info: dict) -> bool:
+        """After ``env.reset`` (``info``: robot 0's); whether the episode is already over."""
+        return False
+
+    def step(self, info: dict) -> bool:
+        """After every step; whether the episode is over."""
+        return False
+
+    def metrics(self, info: dict) -> dict:
+        """The family's columns of the episode's row (``info``: the last step's)."""
+        return {}
+
+    def ticks(self, info: dict, steps: int) -> int:
+        """The clock ticks the episode lasted (``info``: the last step's; ``steps``: env steps
+        taken): the bouncing robots' ``info["ticks"]``."""
+        return int(info["ticks"])
+
+
+class LastInfo(Episode):
+    """An episode whose metrics are read from its last ``info`` alone."""
+
+    def __init__(self, read) -> None:
+        self.read = read
+
+    def metrics(self, info: dict) -> dict:
+        return self.read(info)
+
+
+class Family:
+    """An experiment family: recognised by the env's task (and parallel or not), with the task's
+    planner, per-episode metrics, table columns and plots.
+
+    ``table`` is the heading of the printed table its rows go to (default: the family's name;
+    families with the same heading share one table, columns merged in registry order). Every
+    measured column is shown as its estimate with a 95% interval and count
+    (`bounce_gym_experiments.report`); ``labels`` are columns that describe the row instead (the same in
+    every episode, e.g. the number of robots) and are shown as they are; ``descriptors`` are
+    per-episode facts that are not measured (e.g. which target was attacked): they stay in the
+    episode rows and are left out of the summary. ``record_paths``: whether the first seed's
+    robot positions are recorded for `trajectory_plots` (from ``info["position"]``). ``score`` is the column
+    that ranks policies (in leaderboards, performance profiles and the hindsight oracle),
+    ``higher_is_better`` its direction. ``planner_attributes`` are the planner's predictions
+    copied into its rows when set. ``policy_kinds`` are the kinds of policy of a
+    configuration's ``policies`` (`bounce_gym_experiments.config`) the family runs; `policies` builds
+    them (``rl``: the runner loads the trained models).
+    """
+
+    name = "family"
+    task = "free"
+    parallel = False
+    table: str | None = None
+    columns: tuple[str, ...] = ("experiment", "policy", "episodes", "seeds", "return", "ticks")
+    labels: frozenset[str] = frozenset()
+    descriptors: frozenset[str] = frozenset()
+    record_paths = True
+    score = "return"
+    higher_is_better = True
+    planner_attributes: tuple[str, ...] = ()
+    policy_kinds: tuple[str, ...] = POLICY_KINDS
+
+    @property
+    def heading(self) -> str:
+        """The heading of the table the family's rows go to."""
+        return self.name if self.table is None else self.table
+
+    def rank(self, row: dict) -> tuple:
+        """How good one episode is, for comparing episodes of the same seed: the score (in its
+        direction), then fewer ticks."""
+        score = float(row[self.score])
+        return (score if self.higher_is_better else -score, -row["ticks"])
+
+    def recognises(self, experiment: Mapping, env) -> bool:
+        return (is_parallel_env(env) == self.parallel and "visibility" not in experiment
+                and env.unwrapped.task.name == self.task)
+
+    def prepare(self, env, experiment: Mapping) -> object:
+        """Per-experiment set-up on a fresh env, handed to `planner` and `episode`."""
+        return None
+
+    def world(self, env) -> object:
+        """What the experiment's plots draw the robots in: the env's world."""
+        return env.unwrapped.options.world
+
+    def policies(self, kind: str, env, experiment: Mapping, setup: object) -> list[Policy]:
+        """The policies of one kind (not ``rl``) for a bouncing robot or team: ``planner`` the
+        family's (`planner`), ``random`` a random angle of Φ at every bump, ``fixed`` one policy
+        per angle of Φ (discrete actions only)."""
+        options = env.unwrapped.options
+        discrete = options.action_type == "discrete"
+        if is_parallel_env(env) and not discrete:
+            raise ConfigError("env_kwargs.action_type: multi-robot experiments choose angles by "
+                              "index; use 'discrete'")
+        if kind == "planner":
+            planner = self.planner(env, experiment, setup)
+            return [] if planner is None else [planner]
+        if kind == "random":
+            return [RandomAnglePolicy()]
+        if kind == "fixed" and discrete:
+            n = min(len(phi) for phi in options.angles)
+            return [FixedAnglePolicy(i, math.degrees(options.angles[0][i])) for i in range(n)]
+        return []
+
+    def planner(self, env, experiment: Mapping, setup: object) -> Policy | None:
+        """The task's analytic planner (``None``: none applies to this env)."""
+        raise ConfigError(f"policies: no reference planner for task {self.task!r}")
+
+    def trained_policies(self, folder: Path, env, label: str, experiment: Mapping,
+                         setup: object) -> list[tuple[Policy, str]]:
+        """Every trusted model of ``folder`` as a policy for ``env`` (none if there are none),
+        with the group it is aggregated into; ``label`` prefixes the names (``""`` or
+        ``"<folder>/"``). Gymnasium env: `baselines.rl.policies.SB3Policy`; parallel env: one
+        `baselines.rl.policies.SharedSB3Policy` for every robot; a JAX learner's model
+        (``jax_ppo``, ``jax_dqn``): `baselines.rl.jaxrl.policy.JaxPolicy`. Each model plays twice: its
+        sampled actions (``rl <algo>_seed<N>``, group ``rl <algo>``) and its greedy ones (the
+        same names with `baselines.rl.policies.GREEDY_SUFFIX`), two groups of their own."""
+        from baselines.rl.model_files import JAX_ALGOS, MODEL_NAME, model_files, run_name
+        from baselines.rl.policies import GREEDY_SUFFIX, SB3Policy, SharedSB3Policy
+
+        sb3 = SharedSB3Policy if is_parallel_env(env) else SB3Policy
+        out = []
+        for path in model_files(folder):
+            name = MODEL_NAME.fullmatch(path.name)
+            group = f"rl {label}{run_name(name['algo'], name['variant'])}"
+            kind = _jax_policy() if name["algo"] in JAX_ALGOS else sb3
+            for deterministic in (False, True):
+                suffix = GREEDY_SUFFIX if deterministic else ""
+                policy = kind(path, env, deterministic)
+                policy.name = f"rl {label}{path.stem}{suffix}"
+                out.append((policy, group + suffix))
+        return out
+
+    def episode(self, env, policy: Policy, setup: object) -> Episode:
+        return Episode()
+
+    def row_metrics(self, episode: Episode, info: dict, policy: Policy) -> dict:
+        """The episode's metrics, then the planner's predictions."""
+        out = episode.metrics(info)
+        for key in self.planner_attributes:
+            value = getattr(policy, key, None)
+            if value is not None:
+                out[key] = value
+        return out
+
+    def collect(self, data: dict, env, policy: Policy, setup: object) -> None:
+        """Plot data after a first-seed episode (``data`` holds world, paths, family)."""
+
+    def drain(self, setup: object) -> object:
+        """What the episodes run so far have filed with ``setup`` for the plots (e.g. every
+        episode's coverage curve), taken out of it: a unit of an evaluation sweep
+        (`bounce_gym_experiments.sweep`) runs on its own copy of the setup and hands this back, and
+        `absorb` files it with the experiment's setup. Default: nothing is filed."""
+        return None
+
+    def absorb(self, setup: object, drained: object) -> None:
+        """File what `drain` took from a copy of ``setup`` with ``setup``."""
+
+    def plots(self, folder: Path, name: str, data: dict) -> list[Path]:
+        """The family's plots of one experiment."""
+        return []
+
+    def trajectory_plots(self, folder: Path, name: str, data: dict) -> list[Path]:
+        """The first seed's trajectories of every policy in the world (``data["paths"]``)."""
+        from bounce_gym_experiments.plots.trajectories import plot_trajectories
+
+        return plot_trajectories(folder, name, data)
+
+    def summary_plots(self, folder: Path, plots: Mapping, summary: list[dict]) -> list[Path]:
+        """Plots across the family's experiments (called once per family that ran)."""
+        return []
+
+
+class SingleRobotFamily(Family):
+    """A Gymnasium (one robot) task whose metrics are read from the episode's last ``info``
+    (`metrics`) and whose planner chooses angles of Φ by index: on an env with continuous actions
+    there is no planner to run."""
+
+    def planner(self, env, experiment, setup):
+        if env.unwrapped.options.action_type != "discrete":
+            return None
+        return self.make_planner(env)
+
+    def make_planner(self, env) -> Policy:
+        return super().planner(env, {}, None)
+
+    def episode(self, env, policy, setup):
+        return LastInfo(self.metrics)
+
+    def metrics(self, info: dict) -> dict:
+        return {}
+
+
+def _jax_policy():
+    """`baselines.rl.jaxrl.policy.JaxPolicy`, imported only for a JAX learner's model (it needs
+    JAX: without it, a `ConfigError` naming the extra)."""
+    if importlib.util.find_spec("jax") is None:
+        raise ConfigError("models: a jax_ppo or jax_dqn model needs JAX to play: "
+                          "pip install 'bounce-gym[jax]'")
+    from baselines.rl.jaxrl.policy import JaxPolicy
+
+    return JaxPolicy

@@ -1,0 +1,110 @@
+"""Joint coverage by several robots: Alam, Bobadilla & Shell (2018) and Alam & Bobadilla
+(Algorithm 1), the joint trajectory executed with turn commands for the neighbour jumps
+(`baselines.multirobot.policies.CoveragePlanPolicy`).
+
+Per episode, besides the team columns: ``steps_to_full`` — env steps until ``info["coverage"]``
+first reaches 1 (every free cell at cell size = step length visited; a turn command counts as
+one step), ``None`` if not within ``max_steps``; the episode stops there — and the final
+``coverage``, and ``full`` (whether it was reached); the planner also reports
+``predicted_steps_to_full``. Policies rank by coverage, then fewer steps. Plots: visit counts per
+cell, and steps to full coverage against the number of robots.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bounce_gym_experiments.families.multirobot import MultiRobot, TeamEpisode
+from bounce_gym_experiments.plots.figures import pyplot, save_figure
+
+
+class CoverageEpisode(TeamEpisode):
+    def __init__(self, env) -> None:
+        super().__init__(env)
+        self.steps_to_full = None
+
+    def start(self, info):
+        if info["coverage"] >= 1.0:
+            self.steps_to_full = 0
+        return self.steps_to_full is not None
+
+    def step(self, info):
+        super().step(info)
+        if info["coverage"] >= 1.0:
+            self.steps_to_full = self.steps
+        return self.steps_to_full is not None
+
+    def metrics(self, info):
+        return {**super().metrics(info), "full": self.steps_to_full is not None,
+                "steps_to_full": self.steps_to_full, "coverage": float(info["coverage"])}
+
+
+class MultiRobotCoverage(MultiRobot):
+    name = "multirobot coverage"
+    task = "coverage"
+    table = "multi-robot coverage"
+    columns = ("experiment", "policy", "robots", "episodes", "seeds", "full", "steps_to_full",
+               "predicted_steps_to_full", "coverage", "ticks", "robot_contacts")
+    score = "coverage"
+    planner_attributes = ("predicted_steps_to_full",)
+    planner_class = "CoveragePlanPolicy"
+
+    def episode(self, env, policy, setup):
+        return CoverageEpisode(env)
+
+    def collect(self, data, env, policy, setup):
+        super().collect(data, env, policy, setup)
+        task = env.unwrapped.task
+        data.setdefault("visits", {})[policy.name] = task.visits.copy()
+        data["free"] = task.free
+
+    def plots(self, folder, name, data):
+        if not data.get("visits"):
+            return []
+        plt = pyplot()
+        items = list(data["visits"].items())
+        fig, axes = plt.subplots(1, len(items), figsize=(3.0 * len(items), 2.8), squeeze=False)
+        for ax, (policy, visits) in zip(axes[0], items, strict=True):
+            shown = np.where(data["free"], np.log1p(visits), np.nan)  # blocked cells blank
+            ax.imshow(shown, origin="lower", cmap="magma")
+            ax.set_title(f"{policy}: {np.count_nonzero(visits)} cells", fontsize=8)
+            ax.axis("off")
+        fig.suptitle(f"{name}: log(1 + ticks) per cell (first seed)", fontsize=9)
+        return [save_figure(fig, folder / f"{name}-visits.png")]
+
+    def summary_plots(self, folder, plots, summary):
+        """Steps to full coverage (mean over the episodes that reached it, with its 95%
+        interval) against the number of robots, one figure per (world, backend) with at least
+        two team sizes."""
+        by_world: dict[str, list[dict]] = {}
+        for row in summary:
+            data = plots.get(row["experiment"], {})
+            if data.get("family") is self and row.get("steps_to_full") is not None:
+                key = f"{data['world'].name}-{data['backend']}"
+                by_world.setdefault(key, []).append(row)
+        plt = pyplot()
+        written = []
+        for world, rows in by_world.items():
+            if len({r["robots"] for r in rows}) < 2:
+                continue
+            fig, ax = plt.subplots(figsize=(4.2, 3.0))
+            for policy in dict.fromkeys(r["policy"] for r in rows):
+                mine = sorted((r for r in rows if r["policy"] == policy),
+                              key=lambda r: r["robots"])
+                values = np.array([r["steps_to_full"] for r in mine], dtype=float)
+                bounds = np.array([[r.get("steps_to_full_lo"), r.get("steps_to_full_hi")]
+                                   for r in mine], dtype=float)  # None (one episode) -> nan
+                bounds = np.where(np.isnan(bounds), values[:, None], bounds)
+                ax.errorbar([r["robots"] for r in mine], values,
+                            yerr=[values - bounds[:, 0], bounds[:, 1] - values], marker="o",
+                            capsize=3, label=policy)
+            ax.set_xticks(sorted({r["robots"] for r in rows}))
+            ax.set_xlabel("robots m")
+            ax.set_ylabel("steps to full coverage")
+            ax.set_title(f"{world}: mean over covered episodes, 95% CI", fontsize=9)
+            ax.legend(fontsize=7)
+            written.append(save_figure(fig, folder / f"steps-vs-robots-{world}.png"))
+        return written
+
+
+FAMILY = MultiRobotCoverage()

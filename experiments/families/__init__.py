@@ -1,1 +1,0 @@
-"""One module per experiment family (`experiments.registry` lists them)."""

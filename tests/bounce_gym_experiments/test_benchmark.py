@@ -1,0 +1,92 @@
+"""configs/benchmark.yaml: what it contains, that it validates, and that a tiny-budget run of it
+writes the leaderboard (Markdown, CSV, plot) with intervals and counts in every cell."""
+
+import csv
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from bounce_gym import worlds
+from bounce_gym.worlds import generators
+from bounce_gym_experiments.config import configs_folder, load_config, validate_config
+
+ROOT = Path(__file__).parents[2]
+sys.path.insert(0, str(ROOT))
+
+import evaluate  # noqa: E402
+
+BENCHMARK = configs_folder() / "benchmark.yaml"
+CELL = re.compile(r"-?\d+(\.\d+)? \[(-?\d+(\.\d+)?, -?\d+(\.\d+)?|-, -)\] n=\d+")
+
+
+def test_the_benchmark_covers_every_task_with_200_held_out_episodes():
+    config = validate_config(load_config(BENCHMARK))
+    assert config["leaderboard"] is True
+    experiments = config["experiments"]
+    tasks = {(e["env"], e["env_kwargs"].get("world", "default")) for e in experiments}
+    assert {env for env, _ in tasks} == {
+        "bounce_gym/BounceNavigation-v0", "bounce_gym/BounceNavigation-v1",
+        "bounce_gym/BounceLocalization-v0",
+        "bounce_gym/BounceCoverage-v0", "bounce_gym/MultiBounceCoverage-v0",
+        "bounce_gym/MultiBounceMonitoring-v0", "bounce_gym/Drifter-v0",
+        "bounce_gym/MultiDrifter-v0"}
+    navigation = [w for env, w in tasks if env == "bounce_gym/BounceNavigation-v0"]
+    assert len(navigation) == 2 and any(w.endswith("bench_grid_14x22.yaml") for w in navigation)
+    for exp in experiments:
+        assert exp["difficulty"] in ("easy", "medium", "hard")
+        assert exp["seeds"] == list(range(10_000, 10_200))
+        assert "horizon_reason" not in exp  # every task at its registered horizon
+        if exp["env"] == "bounce_gym/MultiDrifter-v0":  # deployments: all the family runs
+            assert exp["policies"] == ["planner", "random"]
+        else:
+            assert "rl" in exp["policies"] and "fixed" in exp["policies"]
+
+
+def test_the_generated_map_is_what_its_description_says():
+    path = configs_folder() / "maps" / "bench_grid_14x22.yaml"
+    world = worlds.load(path)
+    again = generators.random_grid(np.random.default_rng(3), 14, 22, 14, 3,
+                                   name="bench_grid_14x22")
+    assert world == again and "default_rng(3)" in yaml.safe_load(path.read_text())["description"]
+
+
+def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
+    config = yaml.safe_load(BENCHMARK.read_text(encoding="utf-8"))
+    for exp in config["experiments"]:
+        exp["seeds"] = {"start": 10_000, "count": 2}
+        world = exp.get("env_kwargs", {}).get("world", "")
+        if world.endswith(".yaml"):  # the copy lives elsewhere: point at the shipped map
+            exp["env_kwargs"]["world"] = str(BENCHMARK.parent / world)
+    config.update(output=str(tmp_path / "runs"), models=str(tmp_path / "models"))
+    path = tmp_path / "bench.yaml"
+    path.write_text(yaml.safe_dump(config), encoding="utf-8")
+    assert evaluate.main([str(path), "--no-progress"]) == 0
+    capsys.readouterr()
+    (folder,) = (tmp_path / "runs").iterdir()
+    board = (folder / "leaderboard.md").read_text(encoding="utf-8")
+    assert board.startswith("# benchmark: leaderboard")
+    assert "on lab_navigation;" in board and "on bench_grid_14x22.yaml;" in board
+    assert "on scb_like;" in board and "on two_sink;" in board
+    for exp in config["experiments"]:
+        assert f"## {exp['name']} ({exp['difficulty']})" in board
+    head, tables = board.split("\n## Who wins\n")[1].split("\n## ", 1)
+    verdicts = [line for line in head.splitlines() if line.startswith("| ")][1:]
+    assert [line.split(" | ")[0][2:] for line in verdicts] == [
+        e["name"] for e in config["experiments"]]
+    rows = [line for line in tables.splitlines() if line.startswith("| ")
+            and "policy" not in line]
+    assert len(rows) >= 6 * 3 and all(CELL.search(line) for line in rows)
+    # no models in this run: every rl folder is named in the notes, no rl row is shown
+    assert "## Notes" in board and "navigation-lab-privileged" in board
+    assert "| rl " not in board
+    with (folder / "leaderboard.csv").open(encoding="utf-8") as fh:
+        lines = list(csv.DictReader(fh))
+    assert {line["experiment"] for line in lines} == {e["name"] for e in config["experiments"]}
+    assert {"difficulty", "score", "success_lo", "success_hi", "success_n"} <= set(lines[0])
+    navigation = [line for line in lines if line["experiment"] == "navigation-lab"]
+    scores = [float(line["success"]) for line in navigation]
+    assert scores == sorted(scores, reverse=True)  # best first
+    assert (folder / "leaderboard.png").stat().st_size > 1000
