@@ -9,6 +9,8 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Iterator
 
+from gymnasium.error import DependencyNotInstalled
+
 
 class BounceGymError(ValueError):
     """Base class of every input error raised by bounce_gym."""
@@ -24,6 +26,13 @@ class MapFormatError(InvalidWorldError):
 
 class ConfigError(BounceGymError):
     """A constructor argument, rule, noise model or backend option is not allowed."""
+
+
+class MissingExtraError(ConfigError, ImportError, DependencyNotInstalled):
+    """A feature needs an optional dependency group (an extra) that is not installed; the
+    message names the feature, the extra and the ``pip install`` command that adds it
+    (`bounce_gym.extras.require`). Also an `ImportError`, and Gymnasium's
+    `DependencyNotInstalled` as its envs raise for a missing render library."""
 
 
 class UnknownArgumentError(ConfigError, TypeError):

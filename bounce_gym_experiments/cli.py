@@ -70,6 +70,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from bounce_gym.errors import BounceGymError
+from bounce_gym.extras import from_import_error, require
 
 
 def evaluate(config_path: str | None, progress: bool = True,
@@ -404,10 +405,25 @@ def trust_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     return parser
 
 
+#: the modules each command needs beyond the core (`bounce_gym.extras.MODULE_EXTRAS` says
+#: which extra installs each): checked before the command starts
+COMMAND_MODULES = {
+    "evaluate": ("matplotlib", "tqdm"),
+    "train": ("matplotlib",),  # and those of the algorithm (`baselines.rl.train.prepare`)
+    "tune": ("ray", "stable_baselines3", "sb3_contrib", "torch", "rich", "tqdm", "matplotlib"),
+    "curves": ("matplotlib",),
+    "trust": (),
+}
+
+
 def dispatch(args: argparse.Namespace) -> int:
     """Run the parsed command; an input error of this package (`BounceGymError`: a bad
-    configuration, env argument or model file) becomes ``error: ...`` on stderr and status 2."""
+    configuration, env argument or model file) becomes ``error: ...`` on stderr and status 2,
+    and so does a missing extra (`bounce_gym.extras`): the command's own (`COMMAND_MODULES`),
+    checked first, or one a configuration's choice needs (e.g. trained agents to evaluate)."""
+    feature = f"bounce-gym {args.command}"
     try:
+        require(feature, *COMMAND_MODULES[args.command])
         if args.command == "evaluate":
             return evaluate(args.config, progress=not args.no_progress,
                             flags=executor_flags(args))
@@ -423,6 +439,12 @@ def dispatch(args: argparse.Namespace) -> int:
                      seeds=args.seeds, flags=executor_flags(args))
     except BounceGymError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except ImportError as exc:
+        missing = from_import_error(feature, exc)
+        if missing is None:  # not a module of an extra: a broken install, shown in full
+            raise
+        print(f"error: {missing}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         if args.command == "evaluate":

@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
-import importlib.util
 import ipaddress
 import multiprocessing
 import os
@@ -59,6 +58,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bounce_gym.errors import ConfigError
+from bounce_gym.extras import require
 from bounce_gym.files import atomic_write, open_no_follow
 from bounce_gym.trust import secret_key, sign, verify
 from bounce_gym.validate import integer, unknown_keys
@@ -75,7 +75,6 @@ _KEY = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.=+-]*")
 #: a stored unit's file name ends so (`UnitStore`)
 UNIT_SUFFIX = ".unit"
 _UNIT_MAGIC = "bounce_gym-unit"
-_RAY_MISSING = "executor: ray is not installed; pip install bounce-gym[distributed]"
 
 
 @dataclass(frozen=True)
@@ -579,8 +578,7 @@ def make_executor(kind: str = "local", workers: int | None = None, address: str 
     if kind == "local":
         workers = machine_cores() if workers is None else workers
         return InProcessExecutor(retries) if workers == 1 else PoolExecutor(workers, retries)
-    if importlib.util.find_spec("ray") is None:
-        raise ConfigError(_RAY_MISSING)
+    require("executor: ray", "ray")
     if workers is None and address is None:
         workers = machine_cores()
     return RayExecutor(workers, address, retries)

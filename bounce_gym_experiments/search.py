@@ -53,6 +53,7 @@ from baselines.rl.monitor import read_monitor
 from baselines.rl.train import Run, finished, prepare, train_seed
 from baselines.rl.train_config import POLICIES
 from bounce_gym.errors import ConfigError
+from bounce_gym.extras import require
 from bounce_gym.files import MAX_NAME_BYTES, atomic_write
 from bounce_gym.validate import integer
 from bounce_gym_experiments.executors import check_ray_cluster, executor_settings, init_ray
@@ -204,12 +205,9 @@ def tune_search(prepared: list[tuple[dict, dict]], metric: str = "return",
     ``best_hyperparams.yaml``; returns the trials in order."""
     configs = [config for _, config in prepared]
     check_search(metric, scheduler, workers, address)
-    try:
-        import ray
-        from ray import tune
-    except ImportError:
-        raise ConfigError("executor: ray is not installed; pip install "
-                          "bounce-gym[distributed]") from None
+    require("bounce-gym tune (Ray Tune)", "ray")
+    import ray
+    from ray import tune
     from ray.tune.schedulers import ASHAScheduler
 
     folder = Path(configs[0]["models"]) / configs[0]["name"]

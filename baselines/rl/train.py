@@ -92,7 +92,6 @@ evaluation loads them with `baselines.rl.policies.patrol_policy`.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -109,6 +108,7 @@ from baselines.rl.train_config import (
 )
 from baselines.rl.train_env import attach_monitor_file, make_train_env
 from bounce_gym.errors import ConfigError
+from bounce_gym.extras import require
 from bounce_gym.files import check_writable, refuse_links
 
 __all__ = ["Run", "finished", "make_train_env", "prepare", "train", "train_seed",
@@ -172,14 +172,16 @@ def prepare(config: Mapping, folder: Path | None = None) -> dict:
     for run in runs:
         run.check_links()
     _check_checkpoints(config, runs)
-    if config["tensorboard"] and importlib.util.find_spec("tensorboard") is None:
-        raise ConfigError("config.tensorboard: needs the tensorboard package "
-                          "(pip install -e .[tensorboard]), or set tensorboard: false")
+    if config["tensorboard"]:
+        require("config.tensorboard: true", "tensorboard")
     if config["algo"] in JAX_ALGOS:
+        require(f"config.algo: {config['algo']}", "jax", "optax")
         from baselines.rl.jaxrl.runner import learner
 
         learner(config)  # the JAX env exists, the actions are discrete, the sizes fit
         return config
+    require(f"config.algo: {config['algo']}", "stable_baselines3", "sb3_contrib", "torch", "rich",
+            "tqdm")
     check_hyperparams(algo_class(config["algo"]), config["hyperparams"])
     _check_action_space(config)
     return config

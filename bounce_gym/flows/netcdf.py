@@ -52,6 +52,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bounce_gym.errors import BounceGymError, FlowFileError, InvalidFlowError
+from bounce_gym.extras import require
 from bounce_gym.files import atomic_path
 from bounce_gym.flows import nc_checks
 from bounce_gym.flows.field import FlowField
@@ -87,6 +88,8 @@ _TIME_UNITS = re.compile(r"^\s*([a-z]+)(?:\s+since\s+(.+?))?\s*$", re.IGNORECASE
 
 
 def _xr():
+    """xarray, after checking that the ``drifters`` extra (xarray, netCDF4) is installed."""
+    require("reading or writing a NetCDF flow file", "xarray", "netCDF4")
     import xarray as xr
 
     return xr
@@ -169,8 +172,8 @@ def load_flow(path, mapping: Mapping[str, str] | None = None, *,
     if not path.is_file():
         raise FlowFileError(f"{path}: no such file")
     cap = nc_checks.max_values(max_values)
-    _check_file(path, cap)
     xr = _xr()
+    _check_file(path, cap)
     try:
         ds = xr.open_dataset(path, engine=ENGINE, decode_times=False, decode_timedelta=False,
                              mask_and_scale=True)

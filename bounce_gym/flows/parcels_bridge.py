@@ -13,18 +13,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from bounce_gym.errors import ConfigError
+from bounce_gym.extras import require
 from bounce_gym.flows.field import FlowField
 
 __all__ = ["parcels_advect", "to_parcels_fieldset"]
 
 
 def _parcels():
-    try:
-        import parcels
-    except ImportError as exc:
-        raise ConfigError("parcels: OceanParcels is not installed; install the extra "
-                          "bounce-gym[drifters-check]") from exc
+    require("the OceanParcels cross-check", "parcels", "xarray")
+    import parcels
+
     return parcels
 
 

@@ -8,14 +8,11 @@ The NumPy envs are the reference; see docs/jax.md.
 
 from __future__ import annotations
 
-try:
-    import jax  # noqa: F401
-except ModuleNotFoundError:  # pragma: no cover - the extra is missing
-    from bounce_gym.errors import ConfigError
+from bounce_gym.extras import require
 
-    raise ConfigError("bounce_gym.jax needs JAX: pip install 'bounce-gym[jax]'") from None
+require("bounce_gym.jax", "jax", "optax")
 
-from bounce_gym.jax.environment import Environment
-from bounce_gym.jax.make import make, pose_options
+from bounce_gym.jax.environment import Environment  # noqa: E402  (after the check)
+from bounce_gym.jax.make import make, pose_options  # noqa: E402
 
 __all__ = ["Environment", "make", "pose_options"]

@@ -3,13 +3,13 @@ follows one episode."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
 from collections.abc import Mapping
 from pathlib import Path
 
 from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
 from bounce_gym.errors import ConfigError
+from bounce_gym.extras import require
 from bounce_gym_experiments.config import POLICY_KINDS
 
 
@@ -214,9 +214,7 @@ class SingleRobotFamily(Family):
 def _jax_policy():
     """`baselines.rl.jaxrl.policy.JaxPolicy`, imported only for a JAX learner's model (it needs
     JAX: without it, a `ConfigError` naming the extra)."""
-    if importlib.util.find_spec("jax") is None:
-        raise ConfigError("models: a jax_ppo or jax_dqn model needs JAX to play: "
-                          "pip install 'bounce-gym[jax]'")
+    require("models: a jax_ppo or jax_dqn model", "jax", "optax")
     from baselines.rl.jaxrl.policy import JaxPolicy
 
     return JaxPolicy

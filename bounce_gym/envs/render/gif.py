@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from bounce_gym.errors import ConfigError
+from bounce_gym.extras import require
 from bounce_gym.files import atomic_file
 
 
@@ -71,6 +72,7 @@ def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike, fps: float =
     The GIF is written to a temporary file in the same directory and moved into place with
     `os.replace`, so readers never see a half-written file and a failure leaves nothing behind.
     """
+    require("writing a GIF", "PIL")
     from PIL import Image
 
     frames = _check_frames(frames)

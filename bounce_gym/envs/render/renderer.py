@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from bounce_gym.errors import ConfigError
+from bounce_gym.extras import require
 from bounce_gym.worlds.world import World
 
 # -- colours (RGB) ---------------------------------------------------------------------------
@@ -94,15 +95,10 @@ def robot_colour(index: int) -> tuple[int, int, int]:
 
 def _import_pygame():
     os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
-    try:
-        import pygame
-        import pygame.gfxdraw  # noqa: F401  (registers the submodule)
-    except ImportError as exc:  # pragma: no cover - pygame is a core dependency
-        from gymnasium.error import DependencyNotInstalled
+    require("rendering (render_mode 'rgb_array' or 'human')", "pygame")
+    import pygame
+    import pygame.gfxdraw  # noqa: F401  (registers the submodule)
 
-        raise DependencyNotInstalled(
-            'pygame is not installed; rendering needs it: run `pip install "pygame>=2.5"`'
-        ) from exc
     return pygame
 
 
