@@ -15,7 +15,7 @@ install: $(STAMP)
 $(STAMP): pyproject.toml setup.py constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -c constraints.txt -e ".[dev,rl,jax,drifters-check,patrol-check,distributed,docs]"
+	$(BIN)/pip install -c constraints.txt -e ".[dev,render,drifters,experiments,rl,jax,drifters-check,patrol-check,distributed,docs]"
 	touch $@
 
 test: $(STAMP)

@@ -26,7 +26,7 @@ COMMANDS = [c.strip() for c in re.findall(
     r"(?:^|`)((?:\.venv/bin/)?(?:python train\.py|bounce-gym (?:train|curves|tune)) [^#`\n]*)",
     PAGES, re.M) if "<" not in c]
 #: the extras `make install` installs besides the core dependencies (dev only adds test tools)
-EXTRAS = ("rl", "jax", "distributed")
+EXTRAS = ("experiments", "rl", "jax", "distributed")
 OURS = {"bounce_gym", "baselines", "experiments", "train", "evaluate"}
 #: optional imports that libraries try and do without (imported only because they happen to be
 #: installed here)
