@@ -165,14 +165,14 @@ def test_train_reports_each_mistake_in_one_line(tmp_path, capsys, monkeypatch, c
     assert not (tmp_path / "models").exists()  # nothing written, not even an empty folder
 
 
-@pytest.mark.skipif(__import__("importlib").util.find_spec("tensorboard") is not None,
-                    reason="tensorboard is installed")
 def test_tensorboard_logs_name_the_extra_to_install(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
+    monkeypatch.setitem(sys.modules, "tensorboard", None)  # as if not installed
     _write(tmp_path / "t.yaml", _train(tensorboard=True))
     line = _one_error(capsys, ["train", "t.yaml", "--no-progress"])
-    assert line == ("error: config.tensorboard: needs the tensorboard package "
-                    "(pip install -e .[tensorboard]), or set tensorboard: false")
+    assert line == ("error: config.tensorboard: true needs the 'tensorboard' extra: "
+                    "pip install 'bounce-gym[tensorboard]'")
+    assert not (tmp_path / "models").exists()
 
 
 # -- hostile documents, numbers and Ray addresses (issue 22) -----------------------------------

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 import sweep_units
 
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import ConfigError, MissingExtraError
 from bounce_gym_experiments.executors import (
     InProcessExecutor,
     PoolExecutor,
@@ -246,7 +246,8 @@ def test_a_missing_ray_names_the_extra(monkeypatch):
     import sys
 
     monkeypatch.setitem(sys.modules, "ray", None)
-    with pytest.raises(ConfigError, match=r"pip install bounce-gym\[distributed\]"):
+    with pytest.raises(MissingExtraError, match=r"^executor: ray needs the 'distributed' extra: "
+                                                r"pip install 'bounce-gym\[distributed\]'$"):
         make_executor("ray")
 
 
