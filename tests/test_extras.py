@@ -213,6 +213,9 @@ def test_a_command_without_its_extra_is_one_line_and_status_2(tmp_path, argv, bl
     assert done.stdout == ""
     _one_line_naming(done.stderr.removeprefix("error: "), extra)
     assert not (tmp_path / "models").exists()  # refused before any work
+    if argv == ["bounce-gym", "evaluate"]:  # the example the install guide shows
+        guide = (ROOT / "docs" / "getting_started.md").read_text(encoding="utf-8")
+        assert f"\n{done.stderr.removeprefix('error: ')}" in guide
 
 
 def test_require_names_the_extras_of_the_missing_modules(monkeypatch):
