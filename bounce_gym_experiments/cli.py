@@ -28,7 +28,10 @@ file is one line ``error: ...`` on stderr and exit status 2, reported before any
 starts — among them a name that becomes part of a path but is not one plain path component, or
 a symbolic link planted where a command writes its own files (`bounce_gym.files`); a
 configuration's (`bounce_gym.documents` reads every file, each command's module checks the
-numbers) before anything heavy (torch, SB3, Ray) is imported.
+numbers) before anything heavy (torch, SB3, Ray) is imported. So is a command whose extra is
+not installed (``evaluate`` and ``curves`` need ``experiments``, ``train`` also ``rl`` or
+``jax``, ``tune`` also ``rl`` and ``distributed``; `bounce_gym.extras`): ``error: bounce-gym
+evaluate needs the 'experiments' extra: pip install 'bounce-gym[experiments]'``.
 
 ``evaluate`` runs its units — one policy of one experiment on up to ten seeds
 (`bounce_gym_experiments.sweep`) — on the configuration's ``executor`` or the one the flags choose

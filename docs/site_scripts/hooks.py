@@ -33,6 +33,7 @@ REFERENCE = (
     "bounce_gym.markov",
     "bounce_gym.flows",
     "bounce_gym.jax",
+    "bounce_gym.extras",
     "baselines.navigation",
     "baselines.coverage",
     "baselines.localization",
