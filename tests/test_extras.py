@@ -115,6 +115,26 @@ def test_every_env_runs_without_any_extra():
     assert sum(entry.startswith("aec ") for entry in report["made"]) >= 5
 
 
+def test_the_core_packages_import_without_any_extra():
+    """Every module of bounce_gym and baselines imports with no extra installed (an optional
+    library is imported where a feature needs it), but the JAX and RL learners'."""
+    code = textwrap.dedent("""
+        import importlib, json, pkgutil, sys
+        import baselines, bounce_gym
+        names = [m.name for package in (bounce_gym, baselines)
+                 for m in pkgutil.walk_packages(package.__path__, package.__name__ + ".")
+                 if not m.name.startswith(("bounce_gym.jax", "baselines.rl"))]
+        for name in names:
+            importlib.import_module(name)
+        print(json.dumps(names))
+    """)
+    done = _run(code)
+    assert done.returncode == 0, done.stderr[-3000:]
+    names = json.loads(done.stdout.splitlines()[-1])
+    assert {"bounce_gym.envs.render.renderer", "bounce_gym.flows.netcdf",
+            "baselines.drifters"} <= set(names)
+
+
 def _one_line_naming(text: str, extra: str) -> None:
     lines = text.strip().splitlines()
     assert len(lines) == 1, text
