@@ -259,6 +259,6 @@ def json_schema(cls: type[TakesArguments]) -> dict:
     takes, with its defaults), for configuration files that hold them."""
     schema = cls.options_model.model_json_schema()
     properties = {name: dict(schema["properties"][name]) for name in cls.taken()}
-    for name, value in cls.option_defaults.items():
-        properties[name]["default"] = value
+    for name in properties.keys() & cls.option_defaults.keys():
+        properties[name]["default"] = cls.option_defaults[name]
     return {**schema, "title": f"{cls.__name__} arguments", "properties": properties}
