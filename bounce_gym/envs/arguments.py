@@ -248,9 +248,10 @@ def arguments_table(cls: type[TakesArguments]) -> list[str]:
     lines = ["| argument | type | default | description |", "|---|---|---|---|"]
     for name in cls.taken():
         default = cls.option_defaults.get(name, fields[name].default)
-        cells = (f"`{name}`", f"`{type_name(fields[name].annotation)}`", f"`{default!r}`",
-                 " ".join((fields[name].description or "").split()))
-        lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |")
+        description = " ".join((fields[name].description or "").split()).replace("|", "\\|")
+        # a pipe inside a code span does not split a cell (Python-Markdown's tables)
+        lines.append(f"| `{name}` | `{type_name(fields[name].annotation)}` | `{default!r}` | "
+                     f"{description} |")
     return lines
 
 
