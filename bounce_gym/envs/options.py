@@ -112,8 +112,9 @@ class EnvOptions(Arguments):
             "eps) or {'type': 'interval', 'lo_deg': -5, 'hi_deg': 5} (off by a uniform "
             "amount in the interval)."))] = None
     robot_radius: Annotated[Real | None, Field(ge=0.0, description=(
-        "Robot radius in world units. None: a point, or with physics='dynamic' (where a body "
-        "has a size) the Create 2's 0.17 m, i.e. 0.17 / world_scale."))] = None
+        "Robot radius in world units, less than the world's diameter. None: a point, or with "
+        "physics='dynamic' (where a body has a size) the Create 2's 0.17 m, i.e. 0.17 / "
+        "world_scale."))] = None
     step_length: Annotated[Real, Field(gt=0.0, description=(
         "Distance driven per tick, in world units (1: one cell per tick; the cell size of the "
         "cell model). With physics='dynamic', the distance driven in one tick at cruise "
@@ -196,9 +197,12 @@ class EnvOptions(Arguments):
     @field_validator("robot_radius")
     @classmethod
     def _radius(cls, value: float | None, info: ValidationInfo) -> float:
-        [params] = needs(info, "physics_params")
+        world, params = needs(info, "world", "physics_params")
         if value is None:
             return 0.0 if params is None else PLATFORM_RADIUS / params.world_scale
+        if value >= world.diameter:  # no pose fits (and 1e308 would overflow the packing check)
+            raise ConfigError(f"robot_radius: expected a number in [0, {world.diameter:g}) (the "
+                              f"world's diameter), got {value!r}")
         if params is not None and value == 0.0:
             raise ConfigError("robot_radius: physics='dynamic' simulates bodies of a size and "
                               "needs robot_radius > 0 (None: the Create 2's 0.17 m / "

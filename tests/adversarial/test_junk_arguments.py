@@ -77,6 +77,7 @@ HUGE_INPUTS = [
     ("multi", "n_robots", 10**9),
     ("single", "noise", {"type": "reliable", "r": "a"}),
     ("single", "noise", {"type": "interval", "lo": [1], "hi": 2}),
+    ("multi", "robot_radius", 1e308),  # overflowed the robot packing check (OverflowError)
 ]
 
 
