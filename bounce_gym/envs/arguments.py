@@ -12,12 +12,13 @@ defaults and the arguments it does not take (`TakesArguments`); from that follow
   leaves this module);
 * `signature`: the class's `inspect.Signature`, so ``help()`` and editors list every argument;
 * `arguments_table`: the Markdown table of the docs' env pages;
-* `json_schema`: the JSON Schema of the arguments an env class takes.
+* `json_schema`: the JSON Schema of the arguments an env class, or a registered id, takes.
 """
 
 from __future__ import annotations
 
 import functools
+import importlib
 import inspect
 import operator
 import types
@@ -35,6 +36,7 @@ from pydantic import (
     ValidationError,
     ValidationInfo,
 )
+from pydantic_core import to_jsonable_python
 
 from bounce_gym.errors import BounceGymError, ConfigError
 from bounce_gym.validate import unexpected
@@ -255,11 +257,36 @@ def arguments_table(cls: type[TakesArguments]) -> list[str]:
     return lines
 
 
-def json_schema(cls: type[TakesArguments]) -> dict:
-    """The JSON Schema of the keyword arguments of env class ``cls`` (those of its model it
-    takes, with its defaults), for configuration files that hold them."""
+def json_schema(env: str | type[TakesArguments]) -> dict:
+    """The JSON Schema of the keyword arguments of an env: of env class ``env`` (the arguments
+    of its model it takes, with its defaults), or of a registered id (its class's, with the
+    registered arguments as defaults: what ``gym.make(id, **kwargs)`` or
+    ``pettingzoo.make(..., id, **kwargs)`` takes as ``kwargs``). For configuration files."""
+    cls, registered = (env, {}) if isinstance(env, type) else registered_env(env)
     schema = cls.options_model.model_json_schema()
     properties = {name: dict(schema["properties"][name]) for name in cls.taken()}
-    for name in properties.keys() & cls.option_defaults.keys():
-        properties[name]["default"] = cls.option_defaults[name]
-    return {**schema, "title": f"{cls.__name__} arguments", "properties": properties}
+    defaults = {**cls.option_defaults, **registered}
+    for name in properties.keys() & defaults.keys():
+        properties[name]["default"] = to_jsonable_python(defaults[name])
+    title = f"{env if isinstance(env, str) else cls.__name__} arguments"
+    return {**schema, "title": title, "properties": properties}
+
+
+def registered_env(env_id: str) -> tuple[type[TakesArguments], dict]:
+    """The env class a registered id builds and the keyword arguments it is registered with
+    (a PettingZoo id's class: the return annotation of its ``parallel_env``)."""
+    import gymnasium as gym
+    import pettingzoo
+
+    if env_id in pettingzoo.parallel_registry:
+        spec = pettingzoo.parallel_registry[env_id]
+        module, name = spec.entry_point.split(":")
+        maker = getattr(importlib.import_module(module), name)
+        cls = typing.get_type_hints(maker)["return"]
+    else:
+        spec = gym.spec(env_id)  # raises gymnasium's error naming the id if it is unknown
+        cls = gym.envs.registration.load_env_creator(spec.entry_point) \
+            if isinstance(spec.entry_point, str) else spec.entry_point
+    if not (isinstance(cls, type) and issubclass(cls, TakesArguments)):
+        raise ConfigError(f"env: {env_id!r} is not one of bounce_gym's environments")
+    return cls, dict(spec.kwargs or {})

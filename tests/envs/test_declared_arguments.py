@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
+import bounce_gym  # noqa: F401 - registers the ids
 from bounce_gym.envs import options as bounce_options
-from bounce_gym.envs.arguments import arguments_table, json_schema, location
+from bounce_gym.envs import registration
+from bounce_gym.envs.arguments import arguments_table, json_schema, location, registered_env
 from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.drifters import options as drifter_options
 from bounce_gym.envs.drifters.env import DrifterEnv
@@ -120,3 +122,24 @@ def test_nested_locations_read_as_python():
     assert location(("angles", 2)) == "angles[2]"
     assert location(("physics_params", "friction")) == "physics_params.friction"
     assert location(("angles", 0, 1)) == "angles[0][1]"
+
+
+@pytest.mark.parametrize("env_id", [*registration.GYMNASIUM_IDS, *registration.PETTINGZOO_ENVS,
+                                    *registration.DRIFTER_PETTINGZOO_ENVS,
+                                    *registration.PATROL_PETTINGZOO_ENVS])
+def test_a_registered_ids_schema_takes_its_registered_arguments(env_id):
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = json_schema(env_id)
+    cls, registered = registered_env(env_id)
+    assert list(schema["properties"]) == cls.taken()
+    registered = json.loads(json.dumps(registered))  # as a YAML/JSON config holds them
+    jsonschema.validate(registered, schema)
+    for name, value in registered.items():
+        assert schema["properties"][name]["default"] == value
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({"colour": 1}, schema)
+
+
+def test_only_this_packages_ids_have_an_argument_schema():
+    with pytest.raises(ConfigError, match="not one of bounce_gym's environments"):
+        json_schema("CartPole-v1")
