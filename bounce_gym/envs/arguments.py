@@ -26,7 +26,6 @@ import typing
 from collections.abc import Mapping, Sequence
 from typing import Annotated, Any, ClassVar, Literal
 
-import annotated_types
 import numpy as np
 from pydantic import (
     AllowInfNan,
@@ -179,12 +178,10 @@ def _is_int(annotation: object) -> bool:
 
 
 def _bounds(metadata: Sequence) -> str:
-    """" in [0, 10]", " > 0", ... from a field's ``annotated_types`` bounds; "" if none."""
-    found = {}
-    for item in metadata:
-        for key in ("gt", "ge", "lt", "le"):
-            if isinstance(item, getattr(annotated_types, key.capitalize())):
-                found[key] = getattr(item, key)
+    """" in [0, 10]", " > 0", ... from a field's bounds (``Field(ge=..., le=...)``); "" if
+    none."""
+    found = {key: getattr(item, key) for item in metadata for key in ("gt", "ge", "lt", "le")
+             if getattr(item, key, None) is not None}
     return _ctx_bounds(found)
 
 

@@ -14,11 +14,9 @@ from bounce_gym.dynamics.sampled_model import SampledModel
 from bounce_gym.envs.arguments import TakesArguments, parse
 from bounce_gym.envs.core import BounceCore
 from bounce_gym.envs.options import EnvOptions
-from bounce_gym.envs.render.owner import RendererOwner
+from bounce_gym.envs.render.owner import RENDER_MODES, RendererOwner, checked_render_mode
 from bounce_gym.envs.tasks import make_task
 from bounce_gym.errors import ConfigError
-
-RENDER_MODES = ["human", "rgb_array"]
 
 
 class EnvBase(TakesArguments, RendererOwner):
@@ -32,9 +30,7 @@ class EnvBase(TakesArguments, RendererOwner):
         """Validate ``render_mode`` and the keyword arguments (those of `EnvOptions` this env
         takes, with its defaults: `bounce_gym.envs.arguments.parse`), then build the core with
         the task."""
-        if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ConfigError(f"render_mode: expected None or one of {RENDER_MODES}, "
-                              f"got {render_mode!r}")
+        checked_render_mode(render_mode)
         self.options: EnvOptions = parse(type(self), kwargs)
         self.core = BounceCore(self.options,
                                make_task(self.options.task, self.options.task_kwargs, tasks))

@@ -14,12 +14,11 @@ from bounce_gym.envs.drifters.core import DrifterCore
 from bounce_gym.envs.drifters.model_cache import sampled_model
 from bounce_gym.envs.drifters.options import DrifterOptions
 from bounce_gym.envs.drifters.sampled import DEFAULT_SAMPLES, MAX_PARTICLES, MAX_REFINE
-from bounce_gym.envs.render.owner import RendererOwner
+from bounce_gym.envs.render.owner import RENDER_MODES, RendererOwner, checked_render_mode
 from bounce_gym.errors import ConfigError
 from bounce_gym.flows import FlowField
 from bounce_gym.validate import integer
 
-RENDER_MODES = ["human", "rgb_array"]
 FIELD_STYLES = ("arrows", "streamlines")
 #: The cell models `DrifterEnvBase.cell_model` hands planners.
 MODEL_KINDS = ("exact", "sampled")
@@ -37,9 +36,7 @@ class DrifterEnvBase(TakesArguments, RendererOwner):
         """Validate the arguments (those of `DrifterOptions` this env takes, with its defaults
         and then ``defaults``: `bounce_gym.envs.arguments.parse`) and build the core;
         ``clock_steps`` None takes it from the options."""
-        if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ConfigError(f"render_mode: expected None or one of {RENDER_MODES}, "
-                              f"got {render_mode!r}")
+        checked_render_mode(render_mode)
         if field_style not in FIELD_STYLES:
             raise ConfigError(f"field_style: expected one of {list(FIELD_STYLES)}, got "
                               f"{field_style!r}")

@@ -78,8 +78,8 @@ from bounce_gym.envs.arguments import TakesArguments, parse
 from bounce_gym.envs.parallel_step import check_parallel_actions
 from bounce_gym.envs.patrol import capture
 from bounce_gym.envs.patrol.board import DIRECTIONS
-from bounce_gym.envs.patrol.options import RENDER_MODES, PatrolOptions, check_start, check_strategy
-from bounce_gym.envs.render.owner import RendererOwner
+from bounce_gym.envs.patrol.options import PatrolOptions, check_start, check_strategy
+from bounce_gym.envs.render.owner import RENDER_MODES, RendererOwner, checked_render_mode
 from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.errors import ActionError, ConfigError
 
@@ -97,12 +97,9 @@ class PatrolEnv(TakesArguments, RendererOwner, ParallelEnv):
     options_model: ClassVar[type[PatrolOptions]] = PatrolOptions
 
     def __init__(self, render_mode: str | None = None, **options: object) -> None:
-        if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ConfigError(f"render_mode: expected None or one of {RENDER_MODES}, "
-                              f"got {render_mode!r}")
+        self.render_mode = checked_render_mode(render_mode)
         self.options: PatrolOptions = parse(type(self), options)
         self.board = self.options.board
-        self.render_mode = render_mode
         self.max_cycles = self.options.max_cycles
         self.attack_time = self.options.attack_time
         m, n = self.options.n_patrollers, self.board.n

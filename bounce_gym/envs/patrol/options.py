@@ -29,7 +29,6 @@ from bounce_gym.envs.patrol.board import PatrolBoard, build_board
 from bounce_gym.errors import ConfigError
 from bounce_gym.worlds import World
 
-RENDER_MODES = ["human", "rgb_array"]
 #: How far a strategy's rows may be from summing to 1.
 ROW_SUM_TOLERANCE = 1e-8
 #: Default number of patrollers when ``start`` does not fix it.
