@@ -106,11 +106,7 @@ def parse(cls: type[TakesArguments], kwargs: Mapping[str, object],
     for name in kwargs:
         if name not in taken:
             raise unexpected(cls.__name__, name, taken)
-    try:
-        return cls.options_model.model_validate(
-            {**cls.option_defaults, **(defaults or {}), **kwargs})
-    except ValidationError as exc:
-        raise config_error(cls.options_model, exc) from None
+    return validated(cls.options_model, {**cls.option_defaults, **(defaults or {}), **kwargs})
 
 
 def validated(model: type[Arguments], values: Mapping[str, object]) -> Arguments:
@@ -174,6 +170,8 @@ def _literals(annotation: object) -> list | None:
 
 
 def _is_int(annotation: object) -> bool:
+    """Whether an annotation is ``int``, optional or not."""
+    annotation = bare(annotation)
     return annotation is int or int in typing.get_args(annotation)
 
 

@@ -95,6 +95,7 @@ def test_the_env_schema_and_docs_table_hold_what_it_takes(cls):
     (DrifterEnv, {"reward": "thesis", "task": "cover"}, r"^reward: only the reach task"),
     (MultiDrifterEnv, {"n_drifters": 0}, r"^n_drifters: expected an integer in \[1, 10000\]"),
     (PatrolEnv, {"cell_size": -1.0}, r"^cell_size: expected a number > 0, got -1.0$"),
+    (PatrolEnv, {"n_patrollers": 0}, r"^n_patrollers: expected an integer >= 1, got 0$"),
     (PatrolEnv, {"max_cycles": 10}, r"^attack_time: expected an integer in \[1, 10\], got 20$"),
 ])
 def test_bad_values_are_one_line_config_errors_naming_the_field(cls, kwargs, message):
