@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 
 import numpy as np
 
@@ -72,18 +72,6 @@ def flag(field: str, value: object) -> bool:
     if not isinstance(value, bool | np.bool_):
         raise ConfigError(f"{field}: expected True or False, got {value!r}")
     return bool(value)
-
-
-def keyword_arguments(table: Mapping, kwargs: Mapping, defaults: Mapping | None = None,
-                      fixed: Sequence[str] = (), who: str = "the environment") -> dict:
-    """The arguments of ``table`` (name -> default) with ``defaults`` and then ``kwargs`` laid
-    over them; a name not in the table, or one of ``fixed``, is refused (`unexpected`)."""
-    values = {**table, **(defaults or {})}
-    for name in kwargs:
-        if name not in values or name in fixed:
-            raise unexpected(who, name, [n for n in values if n not in fixed])
-    values.update(kwargs)
-    return values
 
 
 def unexpected(who: str, name: str, valid: Iterable[str] = ()) -> UnknownArgumentError:

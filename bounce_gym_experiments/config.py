@@ -234,9 +234,9 @@ def world_name(experiment: Mapping) -> str:
     or the one its env id registers; for a drifter env the flow (``env_kwargs.flow``: a zoo
     name, a NetCDF file by its file name or a field by its name; else the env's default)."""
     if is_drifter_id(experiment["env"]):
-        from bounce_gym.envs.drifters.options import ARGUMENTS  # the flow zoo: only if needed
+        from bounce_gym.envs.drifters.options import DrifterOptions  # only if needed
 
-        world = experiment["env_kwargs"].get("flow", ARGUMENTS["flow"])
+        world = experiment["env_kwargs"].get("flow", DrifterOptions.model_fields["flow"].default)
         return Path(world).name if isinstance(world, str) else getattr(world, "name", "?")
     world = experiment["env_kwargs"].get("world")
     if world is None:

@@ -1,37 +1,37 @@
-"""What the single- and multi-robot environments share: construction from the one options table,
-the discrete model they hand planners, rendering, closing and pickling."""
+"""What the single- and multi-robot environments share: construction from their declared arguments
+(`bounce_gym.envs.options.EnvOptions`), the discrete model they hand planners, rendering, closing
+and pickling."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import ClassVar
 
 from gymnasium import logger
 
 from bounce_gym.cells import CellModel
 from bounce_gym.dynamics.sampled_model import SampledModel
+from bounce_gym.envs.arguments import TakesArguments, parse
 from bounce_gym.envs.core import BounceCore
-from bounce_gym.envs.options import parse_options
-from bounce_gym.envs.render.owner import RendererOwner
+from bounce_gym.envs.options import EnvOptions
+from bounce_gym.envs.render.owner import RENDER_MODES, RendererOwner, checked_render_mode
 from bounce_gym.envs.tasks import make_task
 from bounce_gym.errors import ConfigError
 
-RENDER_MODES = ["human", "rgb_array"]
 
-
-class EnvBase(RendererOwner):
+class EnvBase(TakesArguments, RendererOwner):
     """Mixin of `BounceEnv` and the multi-robot envs; it comes before the Gymnasium or
     PettingZoo base class so that its ``render``, ``close`` and ``metadata`` win."""
 
     metadata = {"render_modes": RENDER_MODES, "render_fps": 10}
+    options_model: ClassVar[type[EnvOptions]] = EnvOptions
 
-    def _build(self, kwargs: Mapping, render_mode: str | None, tasks: Sequence[str],
-               defaults: Mapping | None = None, fixed: Sequence[str] = ()) -> None:
-        """Validate ``render_mode`` and the keyword arguments (`parse_options` with this env's
-        ``defaults`` and ``fixed`` arguments), then build the core with the task."""
-        if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ConfigError(f"render_mode: expected None or one of {RENDER_MODES}, "
-                              f"got {render_mode!r}")
-        self.options = parse_options(kwargs, defaults, fixed, who=type(self).__name__)
+    def _build(self, kwargs: Mapping, render_mode: str | None, tasks: Sequence[str]) -> None:
+        """Validate ``render_mode`` and the keyword arguments (those of `EnvOptions` this env
+        takes, with its defaults: `bounce_gym.envs.arguments.parse`), then build the core with
+        the task."""
+        checked_render_mode(render_mode)
+        self.options: EnvOptions = parse(type(self), kwargs)
         self.core = BounceCore(self.options,
                                make_task(self.options.task, self.options.task_kwargs, tasks))
         self.core.keep_trails = render_mode is not None  # only drawings read the trails

@@ -10,7 +10,7 @@ from bounce_gym.envs.actions import action_space, to_angle
 from bounce_gym.envs.base import EnvBase
 
 SINGLE_ROBOT_TASKS = ("free", "navigation", "coverage", "localization")
-#: arguments of `bounce_gym.envs.options` that the single-robot env does not take
+#: arguments of `bounce_gym.envs.options.EnvOptions` that the single-robot env does not take
 MULTI_ROBOT_ONLY = ("n_robots", "robot_collisions", "turn_angles", "min_sep_cells")
 
 
@@ -65,11 +65,10 @@ class BounceEnv(EnvBase, gym.Env):
 
     ## Arguments
 
-    The keyword arguments of `bounce_gym.envs.options` (world, task, backend, bounce rule, Φ,
-    noise, …; the multi-robot ones excepted), defaults there: ``two_rooms``, a point robot, the
-    ``free`` task, Φ = {45°, 90°, 135°}. Plus ``render_mode``: None, ``"human"`` or
-    ``"rgb_array"``. Planners get the env's discrete model from `cell_model` (on
-    ``env.unwrapped``).
+    ``render_mode`` (None, ``"human"`` or ``"rgb_array"``), then the keyword arguments declared
+    in `bounce_gym.envs.options.EnvOptions` (type, default and meaning of each: the model, the
+    signature of this class and the "Arguments" table of its docs page), the multi-robot ones
+    excepted. Planners get the env's discrete model from `cell_model` (on ``env.unwrapped``).
 
     ## Version History
 
@@ -78,9 +77,10 @@ class BounceEnv(EnvBase, gym.Env):
 
     #: the task names this env accepts
     tasks = SINGLE_ROBOT_TASKS
+    not_taken = MULTI_ROBOT_ONLY
 
     def __init__(self, render_mode: str | None = None, **options: object) -> None:
-        self._build(options, render_mode, self.tasks, fixed=MULTI_ROBOT_ONLY)
+        self._build(options, render_mode, self.tasks)
         self.action_space = action_space(self.options.action_type, len(self.options.angles[0]))
         self.observation_space = spaces.Box(self.core.obs_low, self.core.obs_high, dtype=np.float32)
 

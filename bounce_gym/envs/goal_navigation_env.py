@@ -60,7 +60,7 @@ class GoalNavigationEnv(BounceEnv):
 
     ## Arguments
 
-    Those of `BounceEnv`, with ``task_kwargs`` for `GoalNavigationTask` (``draw``,
+    Those of `BounceEnv` (the "Arguments" table), with ``task_kwargs`` for `GoalNavigationTask` (``draw``,
     ``heading_tolerance_deg``, ``start``, ``goal``, ``goal_bonus``, ``w1``, ``w2``); the task is
     always ``goal_navigation``. Discrete actions only (the bounce angle is an index into Φ,
     whose angles must be whole bins of the cell model).
@@ -72,9 +72,9 @@ class GoalNavigationEnv(BounceEnv):
     """
 
     tasks = ("goal_navigation",)
+    option_defaults = {"task": "goal_navigation"}
 
     def __init__(self, render_mode: str | None = None, **options: object) -> None:
-        options.setdefault("task", "goal_navigation")
         super().__init__(render_mode, **options)
         if self.options.action_type != "discrete":
             raise ConfigError("action_type: BounceNavigation-v1 takes discrete actions (an "

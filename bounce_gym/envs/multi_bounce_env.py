@@ -38,12 +38,13 @@ AEC: each robot is truncated after ``max_cycles`` decisions of its own.
 
 ## Arguments
 
-The keyword arguments of `bounce_gym.envs.options` — those of `BounceEnv` plus ``n_robots``,
-``robot_collisions``, ``turn_angles`` and ``min_sep_cells`` (``cell`` backend: robots within
-this Chebyshev distance collide, 0 = the same cell; docs/choices.md, "Robot–robot conflicts on
-the grid") — with the defaults ``grid_15x15``, 4 robots of radius 0.3 and collisions on; plus
-``max_cycles`` (default 500) and ``render_mode``. Planners get the env's discrete model from
-``env.unwrapped.cell_model()``.
+``max_cycles`` (default 500) and ``render_mode``, then every keyword argument declared in
+`bounce_gym.envs.options.EnvOptions` — those of `BounceEnv` plus ``n_robots``,
+``robot_collisions``, ``turn_angles`` and ``min_sep_cells`` (docs/choices.md, "Robot–robot
+conflicts on the grid") — with this env's own defaults (`_MultiBase.option_defaults`: the
+``grid_15x15`` world, 4 robots of radius 0.3, collisions on); each argument's type, default and
+meaning are in the signature of the class and the "Arguments" table of its docs page. Planners
+get the env's discrete model from ``env.unwrapped.cell_model()``.
 
 ## Version History
 
@@ -73,20 +74,20 @@ MULTI_ROBOT_TASKS = ("free", "coverage", "monitoring")
 PER_ROBOT_INFO = ("position", "heading", "cell", "clock", "bumps", "contact_edge",
                   "contact_robot")
 
-#: the multi-robot envs' own defaults of the arguments of `bounce_gym.envs.options`
-MULTI_ROBOT_DEFAULTS = {"world": "grid_15x15", "n_robots": 4, "robot_radius": 0.3,
-                        "robot_collisions": "bounce"}
 
 
 class _MultiBase(EnvBase):
     """Construction, spaces and per-agent bookkeeping shared by both forms."""
 
     metadata = {**EnvBase.metadata, "name": "multi_bounce_v0", "is_parallelizable": True}
+    #: the multi-robot envs' own defaults of the arguments of `bounce_gym.envs.options.EnvOptions`
+    option_defaults = {"world": "grid_15x15", "n_robots": 4, "robot_radius": 0.3,
+                       "robot_collisions": "bounce"}
 
     def __init__(self, max_cycles: int = 500, render_mode: str | None = None,
                  **options: object) -> None:
         max_cycles = integer("max_cycles", max_cycles, 1)
-        self._build(options, render_mode, MULTI_ROBOT_TASKS, defaults=MULTI_ROBOT_DEFAULTS)
+        self._build(options, render_mode, MULTI_ROBOT_TASKS)
         self.max_cycles = int(max_cycles)
         self.possible_agents = [f"robot_{i}" for i in range(self.options.n_robots)]
         self.agent_index = {a: i for i, a in enumerate(self.possible_agents)}
@@ -106,6 +107,10 @@ class _MultiBase(EnvBase):
         )
         self.np_random = None
         self.np_random_seed = None
+        self._check_form()
+
+    def _check_form(self) -> None:
+        """Refuse the arguments this form cannot run (the AEC form's checks)."""
 
     def observation_space(self, agent: str) -> spaces.Space:
         """The same (shared) space object on every call, as PettingZoo's API test requires."""
@@ -187,8 +192,7 @@ class MultiBounceAEC(_MultiBase, AECEnv):
     robot that bumps keeps its last angle. Requires ``step_mode="bounce"``.
     """
 
-    def __init__(self, **kwargs) -> None:
-        super().__init__(**kwargs)
+    def _check_form(self) -> None:
         if self.options.step_mode != "bounce":
             raise ConfigError("step_mode: the AEC form is event-driven and needs 'bounce'; use "
                               "the parallel form for tick stepping")

@@ -1,58 +1,12 @@
-"""The environments' constructor arguments: one table, one parser, one place for their docs.
+"""The keyword arguments of the bouncing-robot environments, declared once: `EnvOptions`.
 
-`BounceEnv` and the multi-robot envs (`MultiBounceEnv`, `MultiBounceAEC`) take the same keyword
-arguments, listed with their defaults in `ARGUMENTS`; each env passes `parse_options` a small
-dict of its own defaults and the arguments it does not take. Angles enter in **degrees** here
-(this is the configuration edge of the package) and are stored in radians. An unknown argument
-raises `TypeError` naming it; every bad value raises `ConfigError` naming the argument and what is
-allowed.
-
-Arguments (defaults of the single-robot env; the multi-robot envs start from ``grid_15x15``,
-4 robots of radius 0.3 and ``robot_collisions="bounce"``):
-
-* ``world``: zoo name (`bounce_gym.worlds.names()`), map-file path, or `World`.
-* ``task``: a task name or a `Task` (see `bounce_gym.envs.tasks`; single robot: ``"free"``,
-  ``"navigation"``, ``"coverage"``, ``"localization"``; multi-robot: ``"free"``, ``"coverage"``,
-  ``"monitoring"``); ``task_kwargs``: keyword arguments of the task class.
-* ``backend``: ``"kinematic"`` (exact, continuous), ``"pymunk"`` (physics engine) or ``"cell"``
-  (the papers' discrete cell-to-cell model: cell size = ``step_length``, ``cell_bins``
-  orientation bins, ``corner_rule``; relative rule and discrete actions whose angles are whole
-  bins; one tick = one cell step or one rotation).
-* ``physics``: ``"ideal"`` (the papers' exact model: straight drives at one cell per tick,
-  rotations within a tick) or ``"dynamic"`` (rigid bodies with mass, motors of limited
-  acceleration and turn rate, a bumper, friction and restitution:
-  `bounce_gym.dynamics.backends.pymunk_dynamic`). None (default): ``"dynamic"`` on the pymunk
-  backend, ``"ideal"`` on the others, which have only that one.
-* ``physics_params``: with ``physics="dynamic"``, a dict of the physical parameters of
-  `bounce_gym.dynamics.platform.PhysicsParams` (SI units, angles in degrees; defaults: an iRobot
-  Create 2 and ``world_scale`` = 1 metre per world unit), e.g. ``{"cruise_speed": 0.3,
-  "friction": 0.0}``.
-* ``bounce_rule``: ``"relative"`` (Alam), ``"fixed"``, ``"specular"``, ``"monotonic"``,
-  ``"nilles_relative"`` (Nilles).
-* ``angles``: the set Φ, in degrees (default 45, 90, 135); multi-robot: also one set per robot,
-  as a list of sets or a ``{"robot_i": ...}`` dict.
-* ``angle_range``: (low, high) degrees for continuous actions (default: min/max of Φ); per robot
-  like ``angles``.
-* ``noise``: None, ``{"type": "reliable", "r": 0.8, "eps_deg": 5}`` or
-  ``{"type": "interval", "lo_deg": -5, "hi_deg": 5}``.
-* ``robot_radius`` (default None: a point, or with ``physics="dynamic"`` — where point robots
-  do not exist — the Create 2's 0.17 m in world units, 0.17 / ``world_scale``),
-  ``step_length`` (default 1: one cell per tick; with ``physics="dynamic"`` the distance
-  driven in one tick at cruise speed).
-* ``step_mode``: ``"bounce"`` (one step = the bump, then driving to the next contact) or
-  ``"tick"`` (one step = one tick).
-* ``action_type``: ``"discrete"`` or ``"continuous"``.
-* ``history``: number of (segment ticks, angle) pairs in the observation (default 0, at most
-  `MAX_HISTORY` = 10 000: far more bounces than any episode of the papers' experiments has).
-* ``privileged``: add the true pose to the observation (default False).
-* ``cell_bins``, ``corner_rule``: orientation bins (default 8) and diagonal rule (default
-  ``"target_only"``, see `bounce_gym.cells.model`) of the env's cell model — the cell backend's
-  grid, and the model the env hands planners on every backend (``env.cell_model()``).
-* multi-robot only: ``n_robots`` (at most 10,000: one PettingZoo agent each);
-  ``robot_collisions`` (``"bounce"`` | ``"ignore"``);
-  ``turn_angles`` (degrees; extra discrete actions that turn a robot in place, parallel form
-  only); ``min_sep_cells`` (``cell`` backend: robots within this Chebyshev distance collide,
-  0 = the same cell).
+`BounceEnv`, `GoalNavigationEnv` and the multi-robot envs (`MultiBounceEnv`, `MultiBounceAEC`)
+take the fields of `EnvOptions` as keyword arguments — each field's type, default and meaning
+are in the model (and in the "Arguments" table of every env page of the docs); an env replaces
+a few defaults and leaves out the arguments it does not take (`bounce_gym.envs.arguments`).
+Angles enter in **degrees** (this is the configuration edge of the package) and are stored in
+radians. An unknown argument raises `TypeError` naming it; every bad value raises `ConfigError`
+naming the argument and what is allowed. `json_schema` gives the JSON Schema of the arguments.
 """
 
 from __future__ import annotations
@@ -60,11 +14,19 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
+from typing import Annotated, Any, Literal
 
 import numpy as np
+from pydantic import (
+    Field,
+    SkipValidation,
+    ValidationInfo,
+    WithJsonSchema,
+    field_validator,
+    model_validator,
+)
 
 from bounce_gym import worlds
 from bounce_gym.cells import CORNER_RULES
@@ -73,74 +35,223 @@ from bounce_gym.dynamics.noise import NoiseModel, make_noise
 from bounce_gym.dynamics.platform import PLATFORM_RADIUS, PhysicsParams, physics_params
 from bounce_gym.dynamics.rules import RULES, check_parameters
 from bounce_gym.dynamics.simulator import PHYSICS
+from bounce_gym.envs.arguments import Arguments, Flag, Integer, Real, needs
+from bounce_gym.envs.tasks.base import Task
 from bounce_gym.errors import ConfigError, InvalidWorldError
-from bounce_gym.validate import integer, keyword_arguments
-from bounce_gym.validate import number as _number
+from bounce_gym.validate import number
 from bounce_gym.worlds import World
 
-BACKENDS = ("kinematic", "pymunk", "cell")
+Backend = Literal["kinematic", "pymunk", "cell"]
+StepMode = Literal["bounce", "tick"]
+ActionType = Literal["discrete", "continuous"]
+BACKENDS = Backend.__args__
+STEP_MODES = StepMode.__args__
+ACTION_TYPES = ActionType.__args__
 #: Largest ``history`` (observation length grows by 2 per entry).
 MAX_HISTORY = 10_000
 #: Largest ``n_robots`` of an env (every robot is a PettingZoo agent with its own dicts; the
 #: batched dynamics, `bounce_gym.dynamics.BounceDynamics`, takes more).
 MAX_ROBOTS = 10_000
-STEP_MODES = ("bounce", "tick")
-ACTION_TYPES = ("discrete", "continuous")
+
+#: a set of angles in degrees; per robot: one set for all, a list of sets or a robot_<i> dict
+AngleSets = Sequence[float] | Sequence[Sequence[float]] | Mapping[str, Sequence[float]]
+AngleRanges = tuple[float, float] | Sequence[tuple[float, float]] \
+    | Mapping[str, tuple[float, float]]
 
 
-#: Every constructor argument of the environments, with the single-robot env's defaults.
-ARGUMENTS: dict[str, object] = {
-    "world": "two_rooms",
-    "task": "free",
-    "task_kwargs": None,
-    "backend": "kinematic",
-    "physics": None,
-    "physics_params": None,
-    "bounce_rule": "relative",
-    "angles": (45.0, 90.0, 135.0),
-    "angle_range": None,
-    "noise": None,
-    "robot_radius": None,
-    "step_length": 1.0,
-    "step_mode": "bounce",
-    "action_type": "discrete",
-    "history": 0,
-    "privileged": False,
-    "cell_bins": 8,
-    "corner_rule": "target_only",
-    "n_robots": 1,
-    "robot_collisions": "ignore",
-    "turn_angles": (),
-    "min_sep_cells": 0,
-}
+class EnvOptions(Arguments):
+    """The arguments of the bouncing-robot envs, validated and normalised (angles in radians,
+    one entry per robot; the world, noise model and physical parameters as objects)."""
 
+    world: Annotated[SkipValidation[str | os.PathLike | World], WithJsonSchema(
+        {"type": "string"}), Field(description=(
+            "The map: a zoo name (`bounce_gym.worlds.names()`), the path of a map file, or a "
+            "`World`."))] = "two_rooms"
+    task: Annotated[SkipValidation[str | Task], WithJsonSchema({"type": "string"}), Field(
+        description=(
+            "What the robots are scored on: a task name or a `Task` (`bounce_gym.envs.tasks`). "
+            "One robot: 'free', 'navigation', 'coverage', 'localization'; several: 'free', "
+            "'coverage', 'monitoring'."))] = "free"
+    task_kwargs: Annotated[SkipValidation[dict[str, Any] | None], Field(description=(
+        "Keyword arguments of the task's class (None: its defaults)."))] = None
+    n_robots: Annotated[Integer, Field(ge=1, le=MAX_ROBOTS, description=(
+        "Number of robots, each a PettingZoo agent (multi-robot envs)."))] = 1
+    backend: Annotated[Backend, Field(description=(
+        "The motion model: 'kinematic' (exact and event-driven, continuous poses), 'pymunk' "
+        "(a physics engine) or 'cell' (the papers' discrete cell-to-cell model: cells of side "
+        "`step_length`, `cell_bins` orientation bins, Alam's relative rule and discrete actions "
+        "whose angles are whole bins; one tick is one cell step or one rotation)."))] = \
+        "kinematic"
+    physics: Annotated[Literal[PHYSICS] | None, Field(description=(
+        "'ideal' (the papers' model: straight drives at `step_length` per tick, turns within "
+        "a tick) or 'dynamic' (rigid bodies with mass, motors of bounded acceleration and turn "
+        "rate, a bumper, friction and restitution; pymunk only). None: 'dynamic' on pymunk, "
+        "'ideal' on the other backends, which have only that."))] = None
+    physics_params: Annotated[SkipValidation[dict[str, float] | PhysicsParams | None], Field(
+        description=(
+            "With physics='dynamic': physical parameters of "
+            "`bounce_gym.dynamics.platform.PhysicsParams` to change (SI units, angles in "
+            "degrees), e.g. {'cruise_speed': 0.3, 'friction': 0.0}; the rest are an iRobot "
+            "Create 2's, with world_scale = 1 metre per world unit."))] = None
+    bounce_rule: Annotated[Literal[tuple(sorted(RULES))], Field(description=(
+        "How an angle turns the robot at a bump: 'relative' (Alam: relative to the heading), "
+        "'fixed', 'specular', 'monotonic', 'nilles_relative' (Nilles: relative to the wall)."
+    ))] = "relative"
+    angles: Annotated[SkipValidation[AngleSets], Field(description=(
+        "The set of bounce angles Φ, in degrees: distinct, within the rule's range. Several "
+        "robots: one set for all, a list with one set per robot, or a {'robot_<i>': set} "
+        "dict."))] = (45.0, 90.0, 135.0)
+    angle_range: Annotated[SkipValidation[AngleRanges | None], Field(description=(
+        "(low, high) in degrees, the angles continuous actions map onto: 0 < low < high < 360 "
+        "(relative rule) or < 180. None: the smallest and largest of `angles` (10-350 or "
+        "5-175 for a single angle). Per robot like `angles`."))] = None
+    noise: Annotated[SkipValidation[dict[str, Any] | NoiseModel | None], WithJsonSchema(
+        {"type": ["object", "null"]}), Field(description=(
+            "Actuation noise of the bounce angle: None (exact), {'type': 'reliable', 'r': "
+            "0.8, 'eps_deg': 5} (the commanded angle with probability r, else off by up to "
+            "eps) or {'type': 'interval', 'lo_deg': -5, 'hi_deg': 5} (off by a uniform "
+            "amount in the interval)."))] = None
+    robot_radius: Annotated[Real | None, Field(ge=0.0, description=(
+        "Robot radius in world units, less than the world's diameter. None: a point, or with "
+        "physics='dynamic' (where a body has a size) the Create 2's 0.17 m, i.e. 0.17 / "
+        "world_scale."))] = None
+    step_length: Annotated[Real, Field(gt=0.0, description=(
+        "Distance driven per tick, in world units (1: one cell per tick; the cell size of the "
+        "cell model). With physics='dynamic', the distance driven in one tick at cruise "
+        "speed."))] = 1.0
+    step_mode: Annotated[StepMode, Field(description=(
+        "'bounce': one step is a bump and the drive to the next contact; 'tick': one step is "
+        "one tick."))] = "bounce"
+    action_type: Annotated[ActionType, Field(description=(
+        "'discrete': an action is an index into `angles`; 'continuous': a number in [-1, 1] "
+        "mapped onto `angle_range`."))] = "discrete"
+    history: Annotated[Integer, Field(ge=0, le=MAX_HISTORY, description=(
+        "Number of past (drive ticks, angle) pairs in the observation; at most 10000, far "
+        "more bounces than any episode of the papers' experiments has."))] = 0
+    privileged: Annotated[Flag, Field(description=(
+        "Add the true pose to the observation (an oracle, for comparisons)."))] = False
+    cell_bins: Annotated[Integer, Field(ge=1, le=360, description=(
+        "Orientation bins of the env's cell model (a divisor of 360): the cell backend's grid, "
+        "and the model the env hands planners on every backend (`env.cell_model()`)."))] = 8
+    corner_rule: Annotated[Literal[CORNER_RULES], Field(description=(
+        "How the cell model moves diagonally past corners (`bounce_gym.cells.model`)."))] = \
+        "target_only"
+    robot_collisions: Annotated[Literal[ROBOT_COLLISIONS], Field(description=(
+        "'bounce': robots bump into each other and both turn; 'ignore': they pass through "
+        "each other."))] = "ignore"
+    turn_angles: Annotated[SkipValidation[Sequence[float]], Field(description=(
+        "Degrees (counter-clockwise positive): extra discrete actions that turn a robot in "
+        "place in one tick, after its angles (parallel multi-robot form only); distinct, not "
+        "multiples of 360, whole bins on the cell backend."))] = ()
+    min_sep_cells: Annotated[Integer, Field(ge=0, description=(
+        "Cell backend: robots within this Chebyshev distance in cells collide (0: only in the "
+        "same cell); continuous backends collide by `robot_radius`."))] = 0
 
-@dataclass(frozen=True)
-class EnvOptions:
-    """Validated, normalised environment arguments (angles in radians)."""
+    @field_validator("world")
+    @classmethod
+    def _world(cls, value: object) -> World:
+        return resolve_world(value)
 
-    world: World
-    task: object  # as given: a task name or a `Task`, built by the env
-    task_kwargs: Mapping | None
-    n_robots: int
-    backend: str
-    bounce_rule: str
-    angles: tuple[np.ndarray, ...]  # Φ per robot
-    angle_range: tuple[tuple[float, float], ...]  # continuous-action range per robot
-    noise: NoiseModel
-    robot_radius: float
-    step_length: float
-    step_mode: str
-    action_type: str
-    history: int
-    privileged: bool
-    robot_collisions: str
-    cell_bins: int
-    corner_rule: str
-    min_sep_cells: int = 0
-    turn_angles: np.ndarray = field(default_factory=lambda: np.zeros(0))  # turn commands (multi)
-    physics: str = "ideal"
-    physics_params: PhysicsParams | None = None  # with physics="dynamic"
+    @field_validator("physics")
+    @classmethod
+    def _physics(cls, value: str | None, info: ValidationInfo) -> str | None:
+        [backend] = needs(info, "backend")
+        if value is None:
+            return "dynamic" if backend == "pymunk" else "ideal"
+        if value == "dynamic" and backend != "pymunk":
+            raise ConfigError(f"physics: backend {backend!r} simulates only 'ideal' motion; "
+                              "physics='dynamic' needs backend='pymunk'")
+        return value
+
+    @field_validator("physics_params")
+    @classmethod
+    def _physics_params(cls, value: object, info: ValidationInfo) -> PhysicsParams | None:
+        [physics] = needs(info, "physics")
+        if physics == "dynamic":
+            return physics_params(value)
+        if value is not None:
+            raise ConfigError(f"physics_params: only physics='dynamic' takes physical "
+                              f"parameters, got {value!r} with physics={physics!r}")
+        return None
+
+    @field_validator("angles")
+    @classmethod
+    def _angles(cls, value: object, info: ValidationInfo) -> tuple[np.ndarray, ...]:
+        rule, n_robots = needs(info, "bounce_rule", "n_robots")
+        return _once_each(lambda s: _angle_set("angles", s, rule),
+                          _per_robot("angles", value, n_robots))
+
+    @field_validator("angle_range")
+    @classmethod
+    def _angle_range(cls, value: object, info: ValidationInfo) -> tuple[tuple[float, float], ...]:
+        rule, angles = needs(info, "bounce_rule", "angles")
+        given = [None] * len(angles) if value is None else \
+            _per_robot("angle_range", value, len(angles))
+        return _once_each(lambda r, a: _range("angle_range", r, rule, a), given, angles)
+
+    @field_validator("noise")
+    @classmethod
+    def _noise(cls, value: object) -> NoiseModel:
+        return make_noise(value)
+
+    @field_validator("robot_radius")
+    @classmethod
+    def _radius(cls, value: float | None, info: ValidationInfo) -> float:
+        world, params = needs(info, "world", "physics_params")
+        if value is None:
+            return 0.0 if params is None else PLATFORM_RADIUS / params.world_scale
+        if value >= world.diameter:  # no pose fits (and 1e308 would overflow the packing check)
+            raise ConfigError(f"robot_radius: expected a number in [0, {world.diameter:g}) (the "
+                              f"world's diameter), got {value!r}")
+        if params is not None and value == 0.0:
+            raise ConfigError("robot_radius: physics='dynamic' simulates bodies of a size and "
+                              "needs robot_radius > 0 (None: the Create 2's 0.17 m / "
+                              "world_scale), got 0")
+        return value
+
+    @field_validator("cell_bins")
+    @classmethod
+    def _bins(cls, value: int) -> int:
+        if 360 % value:
+            raise ConfigError(f"cell_bins: expected a divisor of 360 (e.g. 4, 8, 360), got "
+                              f"{value!r}")
+        return value
+
+    @field_validator("turn_angles")
+    @classmethod
+    def _turns(cls, value: object, info: ValidationInfo) -> np.ndarray:
+        backend, action_type, bins = needs(info, "backend", "action_type", "cell_bins")
+        return _turn_angles(value, action_type, bins if backend == "cell" else None)
+
+    @field_validator("min_sep_cells")
+    @classmethod
+    def _separation(cls, value: int, info: ValidationInfo) -> int:
+        [backend] = needs(info, "backend")
+        if value and backend != "cell":
+            raise ConfigError(f"min_sep_cells: only the cell backend has it (continuous robots "
+                              f"collide by robot_radius), got {value!r} with backend "
+                              f"{backend!r}")
+        return value
+
+    @model_validator(mode="after")
+    def _cell_backend(self) -> EnvOptions:
+        """The cell backend steps whole orientation bins with Alam's relative rule."""
+        if self.backend != "cell":
+            return self
+        if self.bounce_rule != "relative":
+            raise ConfigError(f"bounce_rule: the cell backend supports 'relative' only, got "
+                              f"{self.bounce_rule!r}")
+        if self.action_type != "discrete":
+            raise ConfigError("action_type: the cell backend needs discrete actions (angles "
+                              "must be whole orientation bins)")
+        width = 360.0 / self.cell_bins
+        for angles in self.angles:
+            steps = np.degrees(angles) / width
+            if np.any(np.abs(steps - np.rint(steps)) > 1e-6):
+                raise ConfigError(f"angles: {np.degrees(angles).tolist()} degrees are not "
+                                  f"whole multiples of the {width:g}° bins of the cell backend")
+        self.noise.sample_bins(1, np.random.default_rng(0), math.radians(width))  # if not whole
+        return self
 
     @cached_property
     def max_clock(self) -> int:
@@ -172,6 +283,11 @@ class EnvOptions:
                 "step_length": self.step_length, "backend_options": self.backend_options}
 
 
+def json_schema() -> dict:
+    """The JSON Schema of every argument of `EnvOptions` (the single-robot env's defaults)."""
+    return EnvOptions.model_json_schema()
+
+
 def resolve_world(world: object) -> World:
     """A `World`, a zoo name (see `bounce_gym.worlds.names`) or a path to a map file."""
     if isinstance(world, World):
@@ -191,16 +307,10 @@ def resolve_world(world: object) -> World:
     )
 
 
-def _choice(field: str, value: object, allowed: Sequence[str]) -> str:
-    if value not in allowed:
-        raise ConfigError(f"{field}: expected one of {list(allowed)}, got {value!r}")
-    return value  # type: ignore[return-value]
-
-
 def _angle_set(field: str, values: object, rule: str) -> np.ndarray:
     if isinstance(values, str | bytes) or not isinstance(values, Sequence | np.ndarray):
         raise ConfigError(f"{field}: expected a list of angles in degrees, got {values!r}")
-    degrees = [_number(f"{field}[{k}]", v) for k, v in enumerate(values)]
+    degrees = [number(f"{field}[{k}]", v) for k, v in enumerate(values)]
     radians = np.radians(np.array(degrees, dtype=np.float64))
     check_parameters(rule, radians, field=field)
     if len(set(degrees)) != len(degrees):
@@ -246,12 +356,12 @@ def _default_range(rule: str, angles: np.ndarray) -> tuple[float, float]:
         math.radians(5), math.radians(175))
 
 
-def _angle_range(field: str, value: object, rule: str, angles: np.ndarray) -> tuple[float, float]:
+def _range(field: str, value: object, rule: str, angles: np.ndarray) -> tuple[float, float]:
     if value is None:
         return _default_range(rule, angles)
     if isinstance(value, str) or not isinstance(value, Sequence) or len(value) != 2:
         raise ConfigError(f"{field}: expected (low, high) in degrees, got {value!r}")
-    lo, hi = (_number(f"{field}[{k}]", v) for k, v in enumerate(value))
+    lo, hi = (number(f"{field}[{k}]", v) for k, v in enumerate(value))
     top = 360.0 if rule == "relative" else 180.0
     if not 0.0 < lo < hi < top:
         raise ConfigError(f"{field}: expected 0 < low < high < {top:g} degrees for rule {rule!r}, "
@@ -259,105 +369,11 @@ def _angle_range(field: str, value: object, rule: str, angles: np.ndarray) -> tu
     return math.radians(lo), math.radians(hi)
 
 
-def parse_options(kwargs: Mapping, defaults: Mapping | None = None, fixed: Sequence[str] = (),
-                  who: str = "the environment") -> EnvOptions:
-    """Validate an environment's keyword arguments.
-
-    ``defaults`` replaces some of the defaults of `ARGUMENTS`; the arguments named in ``fixed``
-    keep their default and may not be given (the single-robot env fixes ``n_robots`` and the
-    other multi-robot arguments). ``who`` names the env in the error for an unknown argument.
-    """
-    values = keyword_arguments(ARGUMENTS, kwargs, defaults, fixed, who)
-    backend = _choice("backend", values["backend"], BACKENDS)
-    bounce_rule = _choice("bounce_rule", values["bounce_rule"], sorted(RULES))
-    n_robots = integer("n_robots", values["n_robots"], 1, MAX_ROBOTS)
-    history = integer("history", values["history"], 0, MAX_HISTORY)
-    privileged = values["privileged"]
-    if not isinstance(privileged, bool):
-        raise ConfigError(f"privileged: expected True or False, got {privileged!r}")
-    angle_sets = _once_each(lambda s: _angle_set("angles", s, bounce_rule),
-                            _per_robot("angles", values["angles"], n_robots))
-    angle_range = values["angle_range"]
-    ranges = _once_each(
-        lambda r, a: _angle_range("angle_range", r, bounce_rule, a),
-        _per_robot("angle_range", angle_range, n_robots) if angle_range is not None
-        else [None] * n_robots,
-        angle_sets,
-    )
-    noise_model = make_noise(values["noise"])
-    cell_bins = _bins(values["cell_bins"])
-    corner_rule = _choice("corner_rule", values["corner_rule"], CORNER_RULES)
-    action_type = values["action_type"]
-    min_sep_cells = values["min_sep_cells"]
-    if backend == "cell":
-        _check_cell_backend(bounce_rule, angle_sets, action_type, noise_model, cell_bins)
-    elif min_sep_cells != 0:
-        raise ConfigError(f"min_sep_cells: only the cell backend has it (continuous robots "
-                          f"collide by robot_radius), got {min_sep_cells!r} with backend "
-                          f"{backend!r}")
-    turns = _turn_angles(values["turn_angles"], action_type,
-                         cell_bins if backend == "cell" else None)
-    physics, params = _physics(backend, values["physics"], values["physics_params"])
-    return EnvOptions(
-        world=resolve_world(values["world"]),
-        task=values["task"],
-        task_kwargs=values["task_kwargs"],
-        n_robots=n_robots,
-        backend=backend,
-        bounce_rule=bounce_rule,
-        angles=angle_sets,
-        angle_range=ranges,
-        noise=noise_model,
-        robot_radius=_radius(values["robot_radius"], params),
-        step_length=_number("step_length", values["step_length"], minimum=0.0, strict=True),
-        step_mode=_choice("step_mode", values["step_mode"], STEP_MODES),
-        action_type=_choice("action_type", action_type, ACTION_TYPES),
-        history=history,
-        privileged=privileged,
-        robot_collisions=_choice("robot_collisions", values["robot_collisions"],
-                                 ROBOT_COLLISIONS),
-        cell_bins=cell_bins,
-        corner_rule=corner_rule,
-        min_sep_cells=min_sep_cells,  # the cell backend validates it
-        turn_angles=turns,
-        physics=physics,
-        physics_params=params,
-    )
-
-
-def _physics(backend: str, physics: object, params: object) -> tuple[str, PhysicsParams | None]:
-    """The motion model and, for ``"dynamic"``, its validated physical parameters."""
-    if physics is None:
-        physics = "dynamic" if backend == "pymunk" else "ideal"
-    physics = _choice("physics", physics, PHYSICS)
-    if physics == "dynamic" and backend != "pymunk":
-        raise ConfigError(f"physics: backend {backend!r} simulates only 'ideal' motion; "
-                          "physics='dynamic' needs backend='pymunk'")
-    if physics != "dynamic":
-        if params is not None:
-            raise ConfigError(f"physics_params: only physics='dynamic' takes physical "
-                              f"parameters, got {params!r} with physics={physics!r}")
-        return physics, None
-    return physics, physics_params(params)
-
-
-def _radius(value: object, params: PhysicsParams | None) -> float:
-    """``robot_radius``: None is a point robot, or the platform's radius under dynamic
-    physics, where a body has a size."""
-    if value is None:
-        return 0.0 if params is None else PLATFORM_RADIUS / params.world_scale
-    radius = _number("robot_radius", value, minimum=0.0)
-    if params is not None and radius == 0.0:
-        raise ConfigError("robot_radius: physics='dynamic' simulates bodies of a size and needs "
-                          "robot_radius > 0 (None: the Create 2's 0.17 m / world_scale), got 0")
-    return radius
-
-
 def _turn_angles(value: object, action_type: str, n_bins: int | None) -> np.ndarray:
     """Turn commands (degrees in, radians out): distinct, non-zero, whole bins on the grid."""
     if isinstance(value, str | bytes) or not isinstance(value, Sequence | np.ndarray):
         raise ConfigError(f"turn_angles: expected a list of angles in degrees, got {value!r}")
-    degrees = [_number(f"turn_angles[{k}]", v) for k, v in enumerate(value)]
+    degrees = [number(f"turn_angles[{k}]", v) for k, v in enumerate(value)]
     if not degrees:
         return np.zeros(0)
     if action_type != "discrete":
@@ -372,27 +388,3 @@ def _turn_angles(value: object, action_type: str, n_bins: int | None) -> np.ndar
             raise ConfigError(f"turn_angles: {degrees} degrees are not whole multiples of the "
                               f"{width:g}° bins of the cell backend")
     return np.radians(np.array(degrees, dtype=np.float64))
-
-
-def _bins(n_bins: object) -> int:
-    if isinstance(n_bins, bool) or not isinstance(n_bins, int | np.integer) or n_bins < 1 \
-            or 360 % n_bins:
-        raise ConfigError(f"cell_bins: expected a divisor of 360 (e.g. 4, 8, 360), got {n_bins!r}")
-    return int(n_bins)
-
-
-def _check_cell_backend(rule: str, angle_sets, action_type: str, noise: NoiseModel,
-                        n_bins: int) -> None:
-    """The cell backend steps whole orientation bins with Alam's relative rule."""
-    if rule != "relative":
-        raise ConfigError(f"bounce_rule: the cell backend supports 'relative' only, got {rule!r}")
-    if action_type != "discrete":
-        raise ConfigError("action_type: the cell backend needs discrete actions (angles must be "
-                          "whole orientation bins)")
-    width = 360.0 / n_bins
-    for angles in angle_sets:
-        steps = np.degrees(angles) / width
-        if np.any(np.abs(steps - np.rint(steps)) > 1e-6):
-            raise ConfigError(f"angles: {np.degrees(angles).tolist()} degrees are not whole "
-                              f"multiples of the {width:g}° bins of the cell backend")
-    noise.sample_bins(1, np.random.default_rng(0), math.radians(width))  # raises if not whole

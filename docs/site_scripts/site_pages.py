@@ -2,8 +2,10 @@
 
 `env_pages` builds every registered id with its registered arguments and writes, per id: how to
 make it, the registration (entry point, arguments, horizon), the spaces the env reports — a
-Box's bounds per index, runs of equal bounds joined — and the sections of the env class's
-docstring (or of its module's, where the class points there). Plus an overview page.
+Box's bounds per index, runs of equal bounds joined — the table of the keyword arguments the env
+class takes, generated from their declaration (`bounce_gym.envs.arguments.arguments_table`), and
+the sections of the env class's docstring (or of its module's, where the class points there).
+Plus an overview page.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import pettingzoo
 
 import bounce_gym  # noqa: F401 - registers the ids
 from bounce_gym.envs import registration
+from bounce_gym.envs.arguments import TakesArguments, arguments_table
 
 #: where a docstring's sections start: its Markdown level-2 headings
 SECTION = re.compile(r"^## (.+)$", re.M)
@@ -95,6 +98,7 @@ def _gymnasium_page(env_id: str, env: gym.Env) -> tuple[str, tuple[str, ...]]:
         "## Action space",
         "",
         *_space(env.action_space),
+        *_arguments(cls),
         *_docstring_sections(cls),
     ]
     row = (env_id, "Gymnasium", cls.__name__, str(spec.max_episode_steps),
@@ -134,7 +138,7 @@ def _pettingzoo_page(env_id: str, env) -> tuple[str, tuple[str, ...]]:
         lines += [f"## {title}", ""]
         for agents, space in _groups(env.possible_agents, space_of):
             lines += [f"### {', '.join(_code(agent) for agent in agents)}", "", *_space(space)]
-    lines += _docstring_sections(cls)
+    lines += [*_arguments(cls), *_docstring_sections(cls)]
     row = (env_id, "PettingZoo", cls.__name__, str(spec.max_cycles),
            _per_agent(env.possible_agents, env.observation_space),
            _per_agent(env.possible_agents, env.action_space))
@@ -204,6 +208,21 @@ def _kwargs(kwargs: dict) -> str:
     if not kwargs:
         return "none (the class's defaults)"
     return ", ".join(f"`{key}={value!r}`" for key, value in kwargs.items())
+
+
+def _arguments(cls: type) -> list[str]:
+    """The "Arguments" section: the class's own parameters, then the table of the declared
+    keyword arguments it takes (name, type, default, description)."""
+    if not issubclass(cls, TakesArguments):
+        return []
+    model = cls.options_model
+    own = [str(parameter) for parameter in inspect.signature(cls).parameters.values()
+           if parameter.kind is not inspect.Parameter.KEYWORD_ONLY]
+    return ["## Arguments", "",
+            f"`{cls.__name__}({', '.join(own)}, **arguments)`: the keyword arguments below, "
+            f"declared in `{model.__module__}.{model.__name__}` (the defaults are this "
+            "class's; the registered arguments above replace some of them).", "",
+            *arguments_table(cls), ""]
 
 
 def _docstring_sections(cls: type) -> list[str]:

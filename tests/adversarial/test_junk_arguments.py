@@ -1,7 +1,7 @@
 """Junk constructor arguments raise the package's own errors, never a raw ValueError,
 IndexError, KeyError, MemoryError or RecursionError.
 
-Every keyword of `bounce_gym.envs.options.ARGUMENTS` gets strings, None, bools, NaN, inf, huge
+Every field of `bounce_gym.envs.options.EnvOptions` gets strings, None, bools, NaN, inf, huge
 ints, nested lists and complex numbers, on `BounceEnv` and `MultiBounceEnv`. Allowed outcomes:
 the env builds (the value happens to be valid), a `BounceGymError`, or a `TypeError` for a
 keyword the env does not take. Huge sizes (which would allocate in proportion if they were not
@@ -17,7 +17,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bounce_gym.envs.options import ARGUMENTS
+from bounce_gym.envs.options import EnvOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 JUNK = st.one_of(
@@ -77,6 +77,7 @@ HUGE_INPUTS = [
     ("multi", "n_robots", 10**9),
     ("single", "noise", {"type": "reliable", "r": "a"}),
     ("single", "noise", {"type": "interval", "lo": [1], "hi": 2}),
+    ("multi", "robot_radius", 1e308),  # overflowed the robot packing check (OverflowError)
 ]
 
 
@@ -105,7 +106,7 @@ def _in_process(env: str, key: str, value: object) -> None:
 @pytest.mark.timeout(300)
 @settings(max_examples=300, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
-@given(env=st.sampled_from(["single", "multi"]), key=st.sampled_from(sorted(ARGUMENTS)),
+@given(env=st.sampled_from(["single", "multi"]), key=st.sampled_from(sorted(EnvOptions.model_fields)),
        data=st.data())
 def test_junk_arguments_raise_package_errors(tally, env, key, data):
     """Excluded here, and covered by KNOWN_BAD: huge history / n_robots (unbounded

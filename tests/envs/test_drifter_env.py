@@ -406,7 +406,7 @@ def test_a_flow_file_is_capped_by_flow_kwargs(tmp_path):
     with pytest.raises(ConfigError, match="^flow_kwargs: a NetCDF file takes only 'mapping' and "
                                           "'max_values', got \\['hours'\\]"):
         DrifterEnv(flow=path, flow_kwargs={"hours": 6})
-    assert DrifterEnv(flow=path, flow_kwargs={"max_values": 10**6}).options.field.n_layers == 3
+    assert DrifterEnv(flow=path, flow_kwargs={"max_values": 10**6}).options.flow.n_layers == 3
 
 
 def test_unknown_arguments_and_reset_options():

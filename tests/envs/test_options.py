@@ -1,4 +1,5 @@
-"""One options table serves both environments: shared arguments, per-env defaults."""
+"""One declaration of the arguments serves every bouncing-robot env: shared arguments, per-env
+defaults, signatures derived from it."""
 
 from __future__ import annotations
 
@@ -6,9 +7,10 @@ import gymnasium as gym
 import pettingzoo
 import pytest
 
+from bounce_gym.envs.arguments import validated
 from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.multi_bounce_env import MultiBounceAEC, MultiBounceEnv
-from bounce_gym.envs.options import ARGUMENTS, parse_options
+from bounce_gym.envs.options import EnvOptions
 from bounce_gym.errors import ConfigError
 
 
@@ -34,7 +36,7 @@ def test_each_env_keeps_its_defaults():
         == ("grid_15x15", 4, 0.3, "bounce")
     for options in (single, multi):
         assert (options.backend, options.cell_bins, options.corner_rule, options.history) == (
-            ARGUMENTS["backend"], 8, "target_only", 0)
+            EnvOptions.model_fields["backend"].default, 8, "target_only", 0)
 
 
 def test_registered_ids_accept_overrides():
@@ -44,35 +46,39 @@ def test_registered_ids_accept_overrides():
     assert parallel.unwrapped.options.n_robots == 2
 
 
+def _parse(values: dict) -> EnvOptions:
+    return validated(EnvOptions, values)
+
+
 @pytest.mark.parametrize("history", [10_001, 10**9])
 def test_history_is_bounded(history):
     # history=10**9 used to pass the options and run out of memory building the observation
     with pytest.raises(ConfigError, match=r"history: expected an integer in \[0, 10000\]"):
-        parse_options({"history": history})
+        _parse({"history": history})
 
 
 def test_the_largest_history_is_accepted():
-    assert parse_options({"history": 10_000}).history == 10_000
+    assert _parse({"history": 10_000}).history == 10_000
 
 
 def test_physics_defaults_per_backend():
     """pymunk runs the rigid-body model unless told otherwise; the others have only the exact
     one. Under dynamic physics the robot is a Create 2 unless sized."""
-    assert parse_options({}).physics == "ideal"
-    assert parse_options({"backend": "cell"}).physics == "ideal"
-    dynamic = parse_options({"backend": "pymunk"})
+    assert _parse({}).physics == "ideal"
+    assert _parse({"backend": "cell"}).physics == "ideal"
+    dynamic = _parse({"backend": "pymunk"})
     assert dynamic.physics == "dynamic" and dynamic.robot_radius == 0.17
     assert dynamic.backend_options["physics"] == "dynamic"
-    scaled = parse_options({"backend": "pymunk", "physics_params": {"world_scale": 0.5}})
+    scaled = _parse({"backend": "pymunk", "physics_params": {"world_scale": 0.5}})
     assert scaled.robot_radius == pytest.approx(0.34)  # 0.17 m in half-metre units
-    ideal = parse_options({"backend": "pymunk", "physics": "ideal"})
+    ideal = _parse({"backend": "pymunk", "physics": "ideal"})
     assert ideal.robot_radius == 0.0 and ideal.physics_params is None
 
 
 def test_the_clock_bound_allows_for_turning_and_speeding_up():
-    exact = parse_options({"backend": "pymunk", "physics": "ideal"})
-    slow_turns = parse_options({"backend": "pymunk", "physics_params": {"turn_rate": 10.0}})
-    assert exact.max_clock == parse_options({}).max_clock
+    exact = _parse({"backend": "pymunk", "physics": "ideal"})
+    slow_turns = _parse({"backend": "pymunk", "physics_params": {"turn_rate": 10.0}})
+    assert exact.max_clock == _parse({}).max_clock
     assert slow_turns.max_clock >= exact.max_clock + 36 / 4  # a full turn: 36 s = 9 ticks
 
 
@@ -90,5 +96,5 @@ def test_the_clock_bound_allows_for_turning_and_speeding_up():
 ])
 def test_physics_options_are_one_line_config_errors(kwargs, match):
     with pytest.raises(ConfigError, match=match) as err:
-        parse_options(kwargs)
+        _parse(kwargs)
     assert "\n" not in str(err.value)

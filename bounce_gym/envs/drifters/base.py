@@ -3,47 +3,46 @@ planners, rendering, closing and pickling."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
+from typing import ClassVar
 
 from gymnasium import logger
 
 from bounce_gym.cells.drifter import DrifterCells
+from bounce_gym.envs.arguments import TakesArguments, parse
 from bounce_gym.envs.drifters.core import DrifterCore
 from bounce_gym.envs.drifters.model_cache import sampled_model
-from bounce_gym.envs.drifters.options import parse_options
+from bounce_gym.envs.drifters.options import DrifterOptions
 from bounce_gym.envs.drifters.sampled import DEFAULT_SAMPLES, MAX_PARTICLES, MAX_REFINE
-from bounce_gym.envs.render.owner import RendererOwner
+from bounce_gym.envs.render.owner import RENDER_MODES, RendererOwner, checked_render_mode
 from bounce_gym.errors import ConfigError
 from bounce_gym.flows import FlowField
 from bounce_gym.validate import integer
 
-RENDER_MODES = ["human", "rgb_array"]
 FIELD_STYLES = ("arrows", "streamlines")
 #: The cell models `DrifterEnvBase.cell_model` hands planners.
 MODEL_KINDS = ("exact", "sampled")
 
 
-class DrifterEnvBase(RendererOwner):
+class DrifterEnvBase(TakesArguments, RendererOwner):
     """Mixin of `DrifterEnv` and `MultiDrifterEnv`; it comes before the Gymnasium or PettingZoo
     base class so that its ``render``, ``close`` and ``metadata`` win."""
 
     metadata = {"render_modes": RENDER_MODES, "render_fps": 8}
+    options_model: ClassVar[type[DrifterOptions]] = DrifterOptions
 
     def _build(self, kwargs: Mapping, render_mode: str | None, field_style: str,
-               n_drifters: int | None, clock_steps: int | None, start_key: str,
-               defaults: Mapping | None = None, fixed: Sequence[str] = ()) -> None:
-        """Validate the arguments and build the core; ``n_drifters`` and ``clock_steps`` None
-        take them from the options."""
-        if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ConfigError(f"render_mode: expected None or one of {RENDER_MODES}, "
-                              f"got {render_mode!r}")
+               clock_steps: int | None, start_key: str, defaults: Mapping | None = None) -> None:
+        """Validate the arguments (those of `DrifterOptions` this env takes, with its defaults
+        and then ``defaults``: `bounce_gym.envs.arguments.parse`) and build the core;
+        ``clock_steps`` None takes it from the options."""
+        checked_render_mode(render_mode)
         if field_style not in FIELD_STYLES:
             raise ConfigError(f"field_style: expected one of {list(FIELD_STYLES)}, got "
                               f"{field_style!r}")
-        self.options = parse_options(kwargs, defaults, fixed, who=type(self).__name__)
-        n = self.options.n_drifters if n_drifters is None else n_drifters
+        self.options: DrifterOptions = parse(type(self), kwargs, defaults)
         clock = self.options.clock_steps if clock_steps is None else clock_steps
-        self.core = DrifterCore(self.options, n, clock, start_key)
+        self.core = DrifterCore(self.options, self.options.n_drifters, clock, start_key)
         self.core.keep_trails = render_mode is not None  # only drawings read the trails
         self.render_mode = render_mode
         self.field_style = field_style
@@ -53,7 +52,7 @@ class DrifterEnvBase(RendererOwner):
     @property
     def flow(self) -> FlowField:
         """The env's flow field."""
-        return self.options.field
+        return self.options.flow
 
     @property
     def task(self):
@@ -106,7 +105,7 @@ class DrifterEnvBase(RendererOwner):
         from bounce_gym.envs.render.flow_view import FlowRenderer, draw_drifters
 
         if self._renderer is None:
-            self._renderer = FlowRenderer(self.options.field, style=self.field_style)
+            self._renderer = FlowRenderer(self.options.flow, style=self.field_style)
         frame = draw_drifters(self._renderer, self.core, self._render_layer())
         if self.render_mode == "human":
             self._renderer.show(frame, self.metadata["render_fps"])

@@ -50,7 +50,7 @@ class DrifterCore:
     def __init__(self, options: DrifterOptions, n_drifters: int, clock_steps: int,
                  start_key: str) -> None:
         self.options = options
-        field = options.field
+        field = options.flow
         self.model = DrifterCells(field, options.rho, t=options.start_time,
                                   step=options.cell_map)
         if options.backend == "cell":

@@ -9,7 +9,7 @@ from gymnasium import spaces
 from bounce_gym.envs.drifters.base import DrifterEnvBase
 from bounce_gym.envs.drifters.core import action_code
 
-#: arguments of `bounce_gym.envs.drifters.options` that only the multi-drifter env takes
+#: arguments of `bounce_gym.envs.drifters.options.DrifterOptions` only the multi-drifter env takes
 MULTI_ONLY = ("n_drifters", "deploy")
 
 
@@ -69,13 +69,11 @@ class DrifterEnv(DrifterEnvBase, gym.Env):
 
     ## Arguments
 
-    The keyword arguments of `bounce_gym.envs.drifters.options` (``flow``, ``flow_kwargs``,
-    ``backend``, ``rho``, ``cell_map``, ``start_time``, ``step_seconds``, ``substeps``,
-    ``diffusivity``, ``land_rule``, ``illegal_action``, ``observe_fix``, ``observe_pose``,
-    ``clock_steps``, ``task``, ``goal``, ``region``, ``reward``, ``start``); defaults: the
-    ``scb_like`` flow, the cell backend, the reach task with the goal the 3 x 3 surface cells
-    around (j, i) = (5, 5). Plus ``render_mode`` (None, ``"human"``, ``"rgb_array"``) and
-    ``field_style`` (``"arrows"`` or ``"streamlines"``). Planners get the model from
+    ``render_mode`` (None, ``"human"``, ``"rgb_array"``) and ``field_style`` (``"arrows"`` or
+    ``"streamlines"``), then the keyword arguments declared in
+    `bounce_gym.envs.drifters.options.DrifterOptions` but the fleet's ``n_drifters`` and
+    ``deploy`` (type, default and meaning of each: the model, the signature of this class and
+    the "Arguments" table of its docs page). Planners get the model from
     ``env.unwrapped.cell_model()``.
 
     ## Version History
@@ -83,10 +81,12 @@ class DrifterEnv(DrifterEnvBase, gym.Env):
     * v0: initial release.
     """
 
+    option_defaults = {"n_drifters": 1}
+    not_taken = MULTI_ONLY
+
     def __init__(self, render_mode: str | None = None, field_style: str = "arrows",
                  **options: object) -> None:
-        self._build(options, render_mode, field_style, n_drifters=None, clock_steps=None,
-                    start_key="start", defaults={"n_drifters": 1}, fixed=MULTI_ONLY)
+        self._build(options, render_mode, field_style, clock_steps=None, start_key="start")
         self.action_space = spaces.Discrete(3)
         self.observation_space = spaces.Box(self.core.obs_low, self.core.obs_high,
                                             dtype=np.float32)

@@ -36,7 +36,7 @@ FORMAT = 1
 def fingerprint(options: DrifterOptions, samples: int, seed: int, horizon: int,
                 refine: int) -> str:
     """The hex sha256 of everything that defines the sampled model (module docstring)."""
-    field = options.field
+    field = options.flow
     settings = {"format": FORMAT, "backend": options.backend, "start_time": options.start_time,
                 "step_seconds": options.step_seconds, "substeps": options.substeps,
                 "diffusivity": options.diffusivity, "land_rule": options.land_rule,

@@ -31,15 +31,13 @@ All drifters terminate when the whole surface is visited; all are truncated afte
 
 ## Arguments
 
-``n_drifters`` (default 4, or the length of ``deploy``), ``deploy`` (None: each drifter at a
-uniformly random surface cell, distinct while there are enough; or a list with one region per
-drifter, see `bounce_gym.envs.drifters.regions`; per episode with
-``reset(options={"deploy": [...]})``),
-``max_cycles`` (default 500), ``render_mode``, ``field_style``, and the flow, backend and
-sensing arguments of `DrifterEnv` (``flow``, ``flow_kwargs``, ``backend``, ``rho``,
-``cell_map``, ``start_time``, ``step_seconds``, ``substeps``, ``diffusivity``, ``land_rule``,
-``illegal_action``, ``observe_fix``, ``observe_pose``). Each agent's info holds its own
-``cell``, ``state``, ``position``, ``layer``, ``action_mask``, ``illegal_action`` and the
+``max_cycles`` (default 500), ``render_mode``, ``field_style``, then the keyword arguments
+declared in `bounce_gym.envs.drifters.options.DrifterOptions` but the single drifter's task,
+regions and clock (`SINGLE_ONLY`): the flow, backend and sensing arguments of `DrifterEnv`,
+``n_drifters`` (default 4, or the length of a ``deploy`` list) and ``deploy`` (per episode also
+with ``reset(options={"deploy": [...]})``); each argument's type, default and meaning are in
+the signature of the class and the "Arguments" table of its docs page. Each agent's info holds
+its own ``cell``, ``state``, ``position``, ``layer``, ``action_mask``, ``illegal_action`` and the
 shared ``coverage``, ``new_cells``, ``steps``.
 
 ## Version History
@@ -61,7 +59,7 @@ from bounce_gym.envs.drifters.core import PER_DRIFTER, action_code
 from bounce_gym.envs.parallel_step import check_parallel_actions, finish_parallel_step
 from bounce_gym.validate import integer
 
-#: arguments of `bounce_gym.envs.drifters.options` the fleet does not take (it covers the
+#: arguments of `bounce_gym.envs.drifters.options.DrifterOptions` the fleet does not take (it covers the
 #: surface; its clock runs to max_cycles)
 SINGLE_ONLY = ("task", "goal", "region", "reward", "start", "clock_steps")
 
@@ -71,16 +69,16 @@ class MultiDrifterEnv(DrifterEnvBase, ParallelEnv):
 
     metadata = {**DrifterEnvBase.metadata, "name": "multi_drifter_v0",
                 "is_parallelizable": True}
+    option_defaults = {"task": "cover"}
+    not_taken = SINGLE_ONLY
 
     def __init__(self, max_cycles: int = 500, render_mode: str | None = None,
                  field_style: str = "arrows", **options: object) -> None:
         self.max_cycles = integer("max_cycles", max_cycles, 1)
         deploy = options.get("deploy")
-        if "n_drifters" not in options and isinstance(deploy, list | tuple):
-            options = {**options, "n_drifters": len(deploy)}  # one drifter per deploy entry
-        self._build(options, render_mode, field_style, n_drifters=None,
-                    clock_steps=self.max_cycles, start_key="deploy",
-                    defaults={"task": "cover"}, fixed=SINGLE_ONLY)
+        per_entry = {"n_drifters": len(deploy)} if isinstance(deploy, list | tuple) else {}
+        self._build(options, render_mode, field_style, clock_steps=self.max_cycles,
+                    start_key="deploy", defaults=per_entry)  # one drifter per deploy entry
         n = self.options.n_drifters
         self.possible_agents = [f"drifter_{k}" for k in range(n)]
         self.agent_index = {a: k for k, a in enumerate(self.possible_agents)}

@@ -54,7 +54,7 @@ def step_start_times(options: DrifterOptions, horizon: int) -> list[float | None
     that starts before the field's last snapshot (at most ``horizon``), then the first one that
     does not (or the step ``horizon``). The clock advances as the env's does, one substep at a
     time. ``[None]`` for a static field, ``[start_time]`` on the cell backend."""
-    field = options.field
+    field = options.flow
     if options.backend == "cell" or field.time is None:
         return [options.start_time]
     dt = options.step_seconds / options.substeps

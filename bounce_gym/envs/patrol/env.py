@@ -48,18 +48,11 @@ step ``max_cycles``). Nothing is truncated: every episode ends by ``max_cycles``
 
 ## Arguments
 
-``world`` ("patrol_15x15"; a zoo name, map path or World), ``cell_size`` (1.0),
-``corner_rule`` ("strict"), ``n_patrollers`` (2, or the length of ``start``),
-``sensor_range`` (6.0 cells), ``visibility_rule`` ("corners" or "centre"),
-``attack_time`` (20), ``adversary_observes`` ("strategy" or "positions"), ``strategy`` (None:
-the uniform random walk; an n×n row-stochastic matrix over the vertices, moving only along
-edges; per episode with ``reset(options={"strategy": P})``, else the constructor's),
-``start`` (None: distinct vertices drawn uniformly each episode; or one vertex per patroller;
-per episode with ``reset(options={"start": [...]})``, else the constructor's),
-``max_cycles`` (500), ``illegal_action`` ("stay": a move along a missing edge leaves the
-patroller where it is, and an adversary's start after the attack began is a wait, both with
-``info["illegal_action"]``; "error": `ActionError` naming the agent and its legal actions),
-``render_mode`` (None, "rgb_array", "human"). Each agent's info holds ``outcome`` (None,
+``render_mode`` (None, "rgb_array", "human"), then the keyword arguments declared in
+`bounce_gym.envs.patrol.options.PatrolOptions` (type, default and meaning of each: the model,
+the signature of `PatrolEnv` and the "Arguments" table of its docs page); ``strategy`` and
+``start`` also per episode, with ``reset(options={"strategy": P, "start": [...]})``, else the
+constructor's. Each agent's info holds ``outcome`` (None,
 "capture", "success", "deterred"), ``attack_target`` (-1 before the attack),
 ``attack_started`` (its step, or -1), ``attack_elapsed``, ``step``, ``action_mask`` (int8) and
 ``illegal_action``; a patroller's also its ``vertex``.
@@ -72,8 +65,8 @@ patroller where it is, and an adversary's start after the attack began is a wait
 from __future__ import annotations
 
 import hashlib
-import inspect
 from collections.abc import Mapping
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import logger, spaces
@@ -81,11 +74,12 @@ from gymnasium.utils import seeding
 from pettingzoo import ParallelEnv
 
 from bounce_gym import validate
+from bounce_gym.envs.arguments import TakesArguments, parse
 from bounce_gym.envs.parallel_step import check_parallel_actions
 from bounce_gym.envs.patrol import capture
 from bounce_gym.envs.patrol.board import DIRECTIONS
-from bounce_gym.envs.patrol.options import RENDER_MODES, check_start, check_strategy, parse_options
-from bounce_gym.envs.render.owner import RendererOwner
+from bounce_gym.envs.patrol.options import PatrolOptions, check_start, check_strategy
+from bounce_gym.envs.render.owner import RENDER_MODES, RendererOwner, checked_render_mode
 from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.errors import ActionError, ConfigError
 
@@ -95,28 +89,17 @@ RESET_OPTIONS = frozenset({"strategy", "start"})
 CACHE_SIZE = 16
 
 
-class PatrolEnv(RendererOwner, ParallelEnv):
+class PatrolEnv(TakesArguments, RendererOwner, ParallelEnv):
     """The parallel form; see the module docstring."""
 
     metadata = {"render_modes": RENDER_MODES, "render_fps": 4, "name": "patrol_v0",
                 "is_parallelizable": True}
+    options_model: ClassVar[type[PatrolOptions]] = PatrolOptions
 
-    def __init__(self, world: object = "patrol_15x15", cell_size: float = 1.0,
-                 corner_rule: str = "strict", n_patrollers: int | None = None,
-                 sensor_range: float = 6.0, visibility_rule: str = "corners",
-                 attack_time: int = 20, adversary_observes: str = "strategy",
-                 strategy: object = None, start: object = None, max_cycles: int = 500,
-                 illegal_action: str = "stay", render_mode: str | None = None,
-                 **unknown) -> None:
-        if unknown:  # refused as every env refuses one (`bounce_gym.validate.unexpected`)
-            arguments = inspect.signature(PatrolEnv.__init__).parameters
-            raise validate.unexpected("PatrolEnv", next(iter(unknown)),
-                                      [name for name in arguments if name not in ("self", "unknown")])
-        self.options = parse_options(world, cell_size, corner_rule, n_patrollers, sensor_range,
-                                     visibility_rule, attack_time, adversary_observes, strategy,
-                                     start, max_cycles, illegal_action, render_mode)
+    def __init__(self, render_mode: str | None = None, **options: object) -> None:
+        self.render_mode = checked_render_mode(render_mode)
+        self.options: PatrolOptions = parse(type(self), options)
         self.board = self.options.board
-        self.render_mode = self.options.render_mode
         self.max_cycles = self.options.max_cycles
         self.attack_time = self.options.attack_time
         m, n = self.options.n_patrollers, self.board.n
@@ -133,10 +116,10 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         self.agents: list[str] = []
         self.np_random = None
         self.np_random_seed = None
-        self._strategy = self.options.strategy
+        self._strategy = self.options.walk
         self._capture: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
         self._pos = np.zeros(m, dtype=np.int64)
-        self._episode_start = self.options.start
+        self._episode_start = self.options.start_vertices
         self._start_capture = np.zeros(n)
         self._new_episode()
 
@@ -225,9 +208,9 @@ class PatrolEnv(RendererOwner, ParallelEnv):
             self.np_random, self.np_random_seed = seeding.np_random(seed)
         options = checked_reset_options(options, RESET_OPTIONS, strict=False)
         strategy = (check_strategy(options["strategy"], self.board, "options.strategy")
-                    if "strategy" in options else self.options.strategy)
+                    if "strategy" in options else self.options.walk)
         start = (check_start(options["start"], self.board.n, self.n_patrollers, "options.start")
-                 if "start" in options else self.options.start)
+                 if "start" in options else self.options.start_vertices)
         self._strategy, self._episode_start = strategy, start
         if self._episode_start is not None:
             self._pos = self._episode_start.copy()

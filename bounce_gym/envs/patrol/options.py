@@ -1,83 +1,148 @@
-"""The arguments of the patrol environment: their checks (each bad value is a `ConfigError`
-naming the argument and what is allowed), the patrol strategy and the start vertices."""
+"""The keyword arguments of the patrol environment, declared once: `PatrolOptions`, whose
+validation also builds the patrol board and checks the patrol strategy and the start vertices
+against it (each bad value is a `ConfigError` naming the argument and what is allowed).
+`json_schema` gives the JSON Schema of the arguments."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from typing import Annotated, Any, Literal
 
 import numpy as np
+from pydantic import (
+    Field,
+    PrivateAttr,
+    SkipValidation,
+    ValidationInfo,
+    WithJsonSchema,
+    field_validator,
+    model_validator,
+)
 
 from bounce_gym import validate
 from bounce_gym.cells.model import CORNER_RULES
 from bounce_gym.cells.visibility import RULES
+from bounce_gym.envs.arguments import Arguments, Integer, Real, needs
 from bounce_gym.envs.options import resolve_world
 from bounce_gym.envs.patrol.board import PatrolBoard, build_board
 from bounce_gym.errors import ConfigError
+from bounce_gym.worlds import World
 
-ADVERSARY_OBSERVES = ("strategy", "positions")
-ILLEGAL_ACTIONS = ("stay", "error")
-RENDER_MODES = ["human", "rgb_array"]
 #: How far a strategy's rows may be from summing to 1.
 ROW_SUM_TOLERANCE = 1e-8
 #: Default number of patrollers when ``start`` does not fix it.
 DEFAULT_PATROLLERS = 2
 
 
-@dataclass(frozen=True)
-class PatrolOptions:
-    """The validated arguments of `bounce_gym.envs.patrol.env.PatrolEnv`."""
+class PatrolOptions(Arguments):
+    """The validated arguments of `bounce_gym.envs.patrol.env.PatrolEnv`; from them the patrol
+    board (`board`), the strategy as a matrix (`walk`) and the start vertices (`start_vertices`)."""
 
-    board: PatrolBoard
-    n_patrollers: int
-    attack_time: int
-    adversary_observes: str
-    strategy: np.ndarray
-    start: np.ndarray | None
-    max_cycles: int
-    illegal_action: str
-    render_mode: str | None
+    world: Annotated[SkipValidation[str | os.PathLike | World], WithJsonSchema(
+        {"type": "string"}), Field(description=(
+            "The map whose free cells are the graph's vertices: a zoo name, a map file path or "
+            "a `World`."))] = "patrol_15x15"
+    cell_size: Annotated[Real, Field(gt=0.0, description=(
+        "Side of a cell, in world units."))] = 1.0
+    corner_rule: Annotated[Literal[CORNER_RULES], Field(description=(
+        "Which diagonal moves past corners are edges (`bounce_gym.cells.model`; 'strict': no "
+        "corner cutting)."))] = "strict"
+    sensor_range: Annotated[Real, Field(gt=0.0, description=(
+        "Range l of each patroller's omnidirectional sensor, in cells (the limited visibility "
+        "polygon of thesis Eq. 4.1)."))] = 6.0
+    visibility_rule: Annotated[Literal[RULES], Field(description=(
+        "When a cell counts as seen: 'corners' or 'centre' (`bounce_gym.cells.visibility`)."))] = \
+        "corners"
+    max_cycles: Annotated[Integer, Field(ge=1, description=(
+        "Steps after which every episode has ended."))] = 500
+    attack_time: Annotated[Integer, Field(ge=1, description=(
+        "t_a: the steps the adversary needs undetected, at most `max_cycles`."))] = 20
+    adversary_observes: Annotated[Literal["strategy", "positions"], Field(description=(
+        "'strategy': the adversary sees the capture probabilities of the strategy, its attack "
+        "and the clock; 'positions': also which vertices a patroller occupies."))] = "strategy"
+    illegal_action: Annotated[Literal["stay", "error"], Field(description=(
+        "'stay': a move along a missing edge leaves the patroller where it is, and an "
+        "adversary's start after the attack began is a wait (both flagged in "
+        "`info['illegal_action']`); 'error': `ActionError` naming the agent and its legal "
+        "actions."))] = "stay"
+    start: Annotated[SkipValidation[Sequence[int] | None], Field(description=(
+        "One start vertex per patroller (None: distinct vertices drawn uniformly each episode); "
+        "per episode also with reset(options={'start': [...]})."))] = None
+    n_patrollers: Annotated[Integer | None, Field(ge=1, description=(
+        "m, the number of patrollers, on distinct vertices (None: the length of `start`, or "
+        "2)."))] = None
+    strategy: Annotated[SkipValidation[Any], WithJsonSchema(
+        {"type": ["array", "null"], "items": {"type": "array", "items": {"type": "number"}}}),
+        Field(description=(
+            "The patrol strategy: an n x n row-stochastic matrix (dense or scipy-sparse) over "
+            "the vertices that moves only along edges (None: the uniform random walk); per "
+            "episode also with reset(options={'strategy': P})."))] = None
+
+    _board: PatrolBoard = PrivateAttr()
+    _walk: np.ndarray = PrivateAttr()
+    _start: np.ndarray | None = PrivateAttr()
+
+    @field_validator("world")
+    @classmethod
+    def _world(cls, value: object) -> World:
+        return resolve_world(value)
+
+    @field_validator("attack_time")
+    @classmethod
+    def _attack_time(cls, value: int, info: ValidationInfo) -> int:
+        return validate.integer("attack_time", value, 1, *needs(info, "max_cycles"))
+
+    @field_validator("start")
+    @classmethod
+    def _start_list(cls, value: object) -> object:
+        if value is not None and not _is_vector(value):
+            raise ConfigError(f"start: expected None or a list of vertex indices, got {value!r}")
+        return value
+
+    @field_validator("n_patrollers")
+    @classmethod
+    def _patrollers(cls, value: int | None, info: ValidationInfo) -> int:
+        [start] = needs(info, "start")
+        if value is not None:
+            return value
+        return DEFAULT_PATROLLERS if start is None else len(start)
+
+    @model_validator(mode="after")
+    def _on_the_board(self) -> PatrolOptions:
+        """Build the board; the patrollers, start and strategy must fit its graph."""
+        board = build_board(self.world, self.cell_size, self.corner_rule, self.sensor_range,
+                            self.visibility_rule)
+        if self.n_patrollers > board.n:
+            raise ConfigError(f"n_patrollers: expected at most the {board.n} vertices of the "
+                              f"graph (patrollers start on distinct vertices), got "
+                              f"{self.n_patrollers}")
+        self._board = board
+        self._start = None if self.start is None else \
+            check_start(self.start, board.n, self.n_patrollers)
+        self._walk = board.uniform_walk() if self.strategy is None else \
+            check_strategy(self.strategy, board)
+        return self
+
+    @property
+    def board(self) -> PatrolBoard:
+        """The cell graph, its neighbour table and visibility at ``sensor_range``."""
+        return self._board
+
+    @property
+    def walk(self) -> np.ndarray:
+        """The strategy as a read-only (n, n) row-stochastic float64 matrix."""
+        return self._walk
+
+    @property
+    def start_vertices(self) -> np.ndarray | None:
+        """``start`` as an (m,) int64 array of vertices, or None."""
+        return self._start
 
 
-def _choice(field: str, value: object, allowed: Sequence) -> object:
-    if not (value is None or isinstance(value, str)) or value not in allowed:
-        raise ConfigError(f"{field}: expected one of {list(allowed)}, got {value!r}")
-    return value
-
-
-def parse_options(world: object, cell_size: object, corner_rule: object,
-                  n_patrollers: object, sensor_range: object, visibility_rule: object,
-                  attack_time: object, adversary_observes: object, strategy: object,
-                  start: object, max_cycles: object, illegal_action: object,
-                  render_mode: object) -> PatrolOptions:
-    """Check every argument (the cheap ones first) and build the board."""
-    world = resolve_world(world)
-    cell_size = validate.number("cell_size", cell_size, minimum=0.0, strict=True)
-    corner_rule = _choice("corner_rule", corner_rule, CORNER_RULES)
-    sensor_range = validate.number("sensor_range", sensor_range, minimum=0.0, strict=True)
-    visibility_rule = _choice("visibility_rule", visibility_rule, RULES)
-    max_cycles = validate.integer("max_cycles", max_cycles, 1)
-    attack_time = validate.integer("attack_time", attack_time, 1, max_cycles)
-    adversary_observes = _choice("adversary_observes", adversary_observes, ADVERSARY_OBSERVES)
-    illegal_action = _choice("illegal_action", illegal_action, ILLEGAL_ACTIONS)
-    render_mode = _choice("render_mode", render_mode, [None, *RENDER_MODES])
-    if n_patrollers is not None:
-        n_patrollers = validate.integer("n_patrollers", n_patrollers, 1)
-    if start is not None and not _is_vector(start):
-        raise ConfigError(f"start: expected None or a list of vertex indices, got {start!r}")
-    if n_patrollers is None:
-        n_patrollers = DEFAULT_PATROLLERS if start is None else len(start)
-    board = build_board(world, cell_size, corner_rule, sensor_range, visibility_rule)
-    if n_patrollers > board.n:
-        raise ConfigError(f"n_patrollers: expected at most the {board.n} vertices of the graph "
-                          f"(patrollers start on distinct vertices), got {n_patrollers}")
-    if start is not None:
-        start = check_start(start, board.n, n_patrollers)
-    strategy = board.uniform_walk() if strategy is None else check_strategy(strategy, board)
-    return PatrolOptions(board=board, n_patrollers=n_patrollers, attack_time=attack_time,
-                         adversary_observes=adversary_observes, strategy=strategy, start=start,
-                         max_cycles=max_cycles, illegal_action=illegal_action,
-                         render_mode=render_mode)
+def json_schema() -> dict:
+    """The JSON Schema of every argument of `PatrolOptions`."""
+    return PatrolOptions.model_json_schema()
 
 
 def _is_vector(value: object) -> bool:
