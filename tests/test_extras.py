@@ -151,7 +151,7 @@ def test_a_netcdf_flow_without_the_drifters_extra_is_one_line(tmp_path):
         import pettingzoo
         import bounce_gym
         from bounce_gym import flows
-        from bounce_gym.errors import BounceGymError, MissingExtraError
+        from bounce_gym.errors import MissingExtraError
         try:
             flows.load_flow(sys.argv[1])
         except MissingExtraError as exc:
@@ -161,7 +161,7 @@ def test_a_netcdf_flow_without_the_drifters_extra_is_one_line(tmp_path):
                                              flow=sys.argv[1])):
             try:
                 make()
-            except BounceGymError as exc:
+            except MissingExtraError as exc:
                 print(exc)
     """)
     done = _run(code, str(path))

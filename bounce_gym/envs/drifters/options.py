@@ -29,7 +29,7 @@ from bounce_gym import flows
 from bounce_gym.cells.drifter import STEPS
 from bounce_gym.dynamics.advection import LAND_RULES
 from bounce_gym.envs.arguments import Arguments, Flag, Integer, Real, needs
-from bounce_gym.errors import BounceGymError, ConfigError
+from bounce_gym.errors import BounceGymError, ConfigError, MissingExtraError
 from bounce_gym.flows import FlowField
 
 Backend = Literal["cell", "continuous"]
@@ -175,6 +175,8 @@ def resolve_flow(flow: object, flow_kwargs: object) -> FlowField:
                               f"'max_values', got {unknown}")
         try:
             return flows.load_flow(flow, **flow_kwargs)
+        except MissingExtraError as exc:  # the same type: callers can tell what to install
+            raise MissingExtraError(f"flow: {exc}") from None
         except BounceGymError as exc:
             raise ConfigError(f"flow: {exc}") from None
     if isinstance(flow, str):
