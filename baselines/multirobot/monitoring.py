@@ -54,7 +54,7 @@ from bounce_gym.errors import ConfigError
 from bounce_gym.markov.scm import SCMResult, simple_cell_mapping
 
 __all__ = ["MODES", "REJECTED", "MonitoringResult", "default_regions", "joint_successor",
-           "persistent_behavior", "region_indices", "summary"]
+           "joint_monitoring_cycles", "region_indices", "summary"]
 
 MODES = ("visit", "cover", "any")
 #: The label of every cell of a group rejected by SAMEREGION (docs/choices.md, "Algorithm 2's
@@ -64,7 +64,7 @@ REJECTED = -2
 
 @dataclass(eq=False)
 class MonitoringResult:
-    """The output of `persistent_behavior` (Algorithm 2's P and Q, plus bookkeeping).
+    """The output of `joint_monitoring_cycles` (Algorithm 2's P and Q, plus bookkeeping).
 
     Attributes:
         model: the single-robot cell model (both robots use it).
@@ -205,7 +205,7 @@ def joint_successor(model: CellModel, phis: Sequence[float], forbid_swaps: bool 
     return succ, int(collide.sum())
 
 
-def persistent_behavior(
+def joint_monitoring_cycles(
     model: CellModel,
     phis: Sequence[float],
     regions: Sequence[object] | None = None,

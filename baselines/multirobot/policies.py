@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from baselines.multirobot.coverage import CoverageResult, plan_coverage, random_start
-from baselines.multirobot.monitoring import MonitoringResult, persistent_behavior
+from baselines.multirobot.monitoring import MonitoringResult, joint_monitoring_cycles
 from baselines.policy import MultiPolicy
 from bounce_gym.cells import CellModel, JointCellModel
 from bounce_gym.errors import ConfigError
@@ -243,7 +243,7 @@ class MonitoringPlanPolicy(MultiPolicy):
         Regions: the task's polygons (`regions_of`). ``forbid_swaps`` defaults to whether the env's
         robots bounce off each other (a swap on the grid is then a conflict: docs/choices.md,
         "Robot–robot conflicts on the grid"); ``min_sep_cells`` (the cycles' safety margin,
-        `persistent_behavior`) to the env's.
+        `joint_monitoring_cycles`) to the env's.
         """
         env = getattr(env, "unwrapped", env)
         _check_tick_mode(env, "MonitoringPlanPolicy")
@@ -259,7 +259,7 @@ class MonitoringPlanPolicy(MultiPolicy):
             forbid_swaps = env.options.robot_collisions == "bounce"
         if min_sep_cells is None:
             min_sep_cells = env.options.min_sep_cells
-        result = persistent_behavior(model, [math.radians(p) for p in phis], regions_of(env, model),
+        result = joint_monitoring_cycles(model, [math.radians(p) for p in phis], regions_of(env, model),
                                      mode=mode, forbid_swaps=forbid_swaps,
                                      min_sep_cells=min_sep_cells)
         return cls(result, [_angle_index(env, i, p) for i, p in enumerate(phis)])

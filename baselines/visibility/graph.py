@@ -33,7 +33,7 @@ from baselines.visibility.partition import (
 )
 
 __all__ = [
-    "Reachability",
+    "SafeGraphReachability",
     "bvg",
     "entirely_visible",
     "reachability",
@@ -365,7 +365,7 @@ def safe_graph(part: Partition, w_min: float = W_MIN, closed: bool | None = None
 
 
 @dataclass(frozen=True)
-class Reachability:
+class SafeGraphReachability:
     """§7.3–7.4 / Prop. 5 analysis of a G_safe.
 
     Attributes:
@@ -393,11 +393,11 @@ class Reachability:
         return len(self.wccs)
 
 
-def reachability(g: nx.DiGraph, part: Partition) -> Reachability:
+def reachability(g: nx.DiGraph, part: Partition) -> SafeGraphReachability:
     """Unreachable nodes, their perimeter fraction, SCCs, WCCs and sinks of G_safe (§7.3–7.4)."""
     unreachable = sorted(k for k, d in g.in_degree() if d == 0)
     frac = float(part.length[unreachable].sum() / part.perimeter) if unreachable else 0.0
     sccs = sorted(nx.strongly_connected_components(g), key=lambda c: (-len(c), min(c)))
     wccs = sorted(nx.weakly_connected_components(g), key=lambda c: (-len(c), min(c)))
     sinks = sorted(k for k, d in g.out_degree() if d == 0)
-    return Reachability(unreachable, frac, sccs, wccs, sinks, nx.condensation(g, sccs))
+    return SafeGraphReachability(unreachable, frac, sccs, wccs, sinks, nx.condensation(g, sccs))

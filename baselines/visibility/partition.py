@@ -265,11 +265,11 @@ def partition(world: World, closed: bool = True) -> Partition:
         edge.extend([e] * len(cuts))
         inserted.extend([False] + [True] * (len(cuts) - 1))
         reflex.extend([bool(world.reflex[e])] + [False] * (len(cuts) - 1))
-    return assemble(world, start, ring, edge, inserted, reflex, bool(closed),
+    return assemble_partition(world, start, ring, edge, inserted, reflex, bool(closed),
                     VIS_REL * world.diameter)
 
 
-def assemble(world: World, start, ring, edge, inserted, reflex, closed: bool,
+def assemble_partition(world: World, start, ring, edge, inserted, reflex, closed: bool,
              tol: float) -> Partition:
     """A `Partition` from its segments' start points (ring by ring, in boundary order) and
     per-segment flags; ends, successors, tangents and inward normals are derived."""

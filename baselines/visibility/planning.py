@@ -34,7 +34,7 @@ import numpy as np
 
 from baselines.policy import Policy, episode_rng
 from baselines.visibility.dynamics import CompositeCycle, composite_fixed_point, contraction
-from baselines.visibility.partition import Partition, assemble
+from baselines.visibility.partition import Partition, assemble_partition
 from bounce_gym.errors import ConfigError
 
 __all__ = [
@@ -287,7 +287,7 @@ def split_at(part: Partition, points: object) -> Partition:
             edge.append(e)
             inserted.append(flags[e][i][0])
             reflex.append(flags[e][i][1])
-    return assemble(world, start, ring, edge, inserted, reflex, part.closed, part.tol)
+    return assemble_partition(world, start, ring, edge, inserted, reflex, part.closed, part.tol)
 
 
 # -- patrolling (Def. 15) -----------------------------------------------------------------------
@@ -355,7 +355,8 @@ def patrol(g: nx.DiGraph, part: Partition, edge_sequence: Sequence[int], max_len
     cyclic order (docs/choices.md, "Patrolling search").
 
     Args:
-        g, part: G_safe and its partition (node colour = ``part.edge``).
+        g: G_safe.
+        part: its partition (node colour = ``part.edge``).
         edge_sequence: original world edge ids E = (e_1 … e_k).
         max_len: longest cycle (arcs) searched (`networkx.simple_cycles` with ``length_bound``).
         start: if given, the approach is a fewest-bounce plan from this segment to the cycle.

@@ -4,7 +4,7 @@
 listed there); each env names the few it does not take. An unknown argument raises `TypeError`
 naming it; a bad value raises `ConfigError` naming the argument and what is allowed.
 
-* ``flow``: a zoo name (`bounce_gym.flows.names`), the path of a NetCDF file (read with
+* ``flow``: a zoo name (`bounce_gym.flows.flow_names`), the path of a NetCDF file (read with
   `bounce_gym.flows.load_flow`: the file is parsed as data by netCDF4/xarray, nothing in it is
   executed) or a `FlowField`; ``flow_kwargs``: the zoo builder's keyword arguments, or for a
   file ``{"mapping": {...}, "max_values": n}`` (`load_flow`'s variable/dimension mapping and
@@ -143,11 +143,11 @@ def resolve_flow(flow: object, flow_kwargs: object) -> FlowField:
         except BounceGymError as exc:
             raise ConfigError(f"flow: {exc}") from None
     if isinstance(flow, str):
-        if flow not in flows.names():
+        if flow not in flows.flow_names():
             raise ConfigError(f"flow: unknown zoo flow {flow!r}; zoo names are "
-                              f"{flows.names()} (a file path needs its suffix, e.g. .nc)")
+                              f"{flows.flow_names()} (a file path needs its suffix, e.g. .nc)")
         try:
-            return flows.get(flow, **flow_kwargs)
+            return flows.get_flow(flow, **flow_kwargs)
         except BounceGymError as exc:
             raise ConfigError(f"flow_kwargs: {exc}") from None
     raise ConfigError(f"flow: expected a zoo name, a NetCDF path or a FlowField, got "
