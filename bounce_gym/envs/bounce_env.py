@@ -77,7 +77,7 @@ class BounceEnv(EnvBase, gym.Env):
     """
 
     #: the task names this env accepts
-    tasks = SINGLE_ROBOT_TASKS
+    tasks: tuple[str, ...] = SINGLE_ROBOT_TASKS
 
     def __init__(self, render_mode: str | None = None, **options: object) -> None:
         self._build(options, render_mode, self.tasks, fixed=MULTI_ROBOT_ONLY)

@@ -34,7 +34,9 @@ def make(env_id: str, **options):
     keyword arguments ``options``; `ConfigError` where no JAX env reproduces it (saying why)."""
     numpy_env = gym.make(env_id, **options)
     try:
-        env = _build(env_id, numpy_env.unwrapped, numpy_env.spec.max_episode_steps)
+        spec = numpy_env.spec  # gym.make sets it; its horizon may be None
+        env = _build(env_id, numpy_env.unwrapped,
+                     spec.max_episode_steps if spec is not None else None)
     finally:
         numpy_env.close()
     return env, env.default_params
@@ -59,6 +61,7 @@ def _build(env_id: str, numpy_env, max_steps: int | None):
                              _space(numpy_env.observation_space), _space(numpy_env.action_space))
     tables, robots = cell_tables(numpy_env)
     core = numpy_env.core
+    jax_task: CellFreeTask
     if name == "goal_navigation":
         jax_task = CellGoalNavigationTask(task, robots)
     elif name == "navigation":

@@ -131,8 +131,8 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         self._attack = spaces.Discrete(n + 1)
         self.state_space = spaces.Box(0.0, 1.0, (m * n + n + 3,), dtype=np.float32)
         self.agents: list[str] = []
-        self.np_random = None
-        self.np_random_seed = None
+        self.np_random: np.random.Generator | None = None
+        self.np_random_seed: int | None = None
         self._strategy = self.options.strategy
         self._capture: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
         self._pos = np.zeros(m, dtype=np.int64)
@@ -217,17 +217,17 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         """The same (shared) space object on every call, as PettingZoo's API test requires."""
         return self._adversary_obs if agent == ADVERSARY else self._patroller_obs
 
-    def action_space(self, agent: str) -> spaces.Space:
+    def action_space(self, agent: str) -> spaces.Discrete:
         return self._attack if agent == ADVERSARY else self._move
 
     def reset(self, seed: int | None = None, options: dict | None = None):
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
-        options = checked_reset_options(options, RESET_OPTIONS, strict=False)
-        strategy = (check_strategy(options["strategy"], self.board, "options.strategy")
-                    if "strategy" in options else self.options.strategy)
-        start = (check_start(options["start"], self.board.n, self.n_patrollers, "options.start")
-                 if "start" in options else self.options.start)
+        checked = checked_reset_options(options, RESET_OPTIONS, strict=False)
+        strategy = (check_strategy(checked["strategy"], self.board, "options.strategy")
+                    if "strategy" in checked else self.options.strategy)
+        start = (check_start(checked["start"], self.board.n, self.n_patrollers, "options.start")
+                 if "start" in checked else self.options.start)
         self._strategy, self._episode_start = strategy, start
         if self._episode_start is not None:
             self._pos = self._episode_start.copy()
@@ -336,8 +336,8 @@ class PatrolEnv(RendererOwner, ParallelEnv):
         return obs
 
     def _adversary_observation(self) -> np.ndarray:
-        attack = [float(self._target >= 0), self._elapsed / self.attack_time,
-                  self.cycles / self.max_cycles]
+        attack = np.array([float(self._target >= 0), self._elapsed / self.attack_time,
+                           self.cycles / self.max_cycles])
         parts = [self._start_capture, attack]
         if self.options.adversary_observes == "positions":
             occupied = np.zeros(self.board.n)
