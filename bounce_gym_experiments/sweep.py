@@ -37,7 +37,7 @@ from bounce_gym_experiments.provenance import git_state, package_versions
 from bounce_gym_experiments.runner import EpisodeResult, Prepared, prepare_experiment, run_episode
 
 #: seeds per unit: enough episodes to outweigh a unit's overhead, few enough to spread a
-#: 20-seed experiment over several workers (docs/choices.md)
+#: 20-seed experiment over several workers (docs/choices/studies.md)
 SEEDS_PER_UNIT = 10
 
 

@@ -1,7 +1,7 @@
 """Every planner family is invariant to translating and scaling the map (real maps come in metres
 of a projected coordinate system, far from the origin): the same plans on a copy of a zoo map
 shifted by 10⁵ or by (10⁵, −7·10⁴), or scaled by 10⁻³ or 10³ (the cell size scaled with it).
-docs/choices.md, "Tolerances relative to the polygon's size"."""
+docs/choices/visibility.md, "Tolerances relative to the polygon's size"."""
 
 from __future__ import annotations
 

@@ -65,7 +65,7 @@ class NavigationTask(Task):
       continuous geodesic distance.
     * ``"plan_cost"``: minus the papers' plan cost — −w1 per tick and −(w2 − w1) more per change
       of bounce angle — plus ``goal_bonus`` on arrival. Not the default: its optimum depends on
-      the bonus and on the horizon rather than on the goal (docs/choices.md, "The navigation
+      the bonus and on the horizon rather than on the goal (docs/choices/learning_tasks.md, "The navigation
       reward").
 
     Whatever the reward, ``info["plan_cost"]`` is the papers' cost of the trajectory so far,

@@ -1,5 +1,5 @@
 """Persistent monitoring (Alam & Bobadilla 2020, §4.2, Algorithm 2; choices where the article
-is open: docs/choices.md)."""
+is open: docs/choices/multirobot.md)."""
 
 from __future__ import annotations
 
@@ -78,7 +78,7 @@ def test_basins_lead_into_their_group(result):
 
 
 def test_labels_partition_joint_cells(result):
-    """docs/choices.md, "Algorithm 2's bookkeeping": every joint cell, the sink included, ends up
+    """docs/choices/multirobot.md, "Algorithm 2's bookkeeping": every joint cell, the sink included, ends up
     exactly one of accepted-periodic (P_g), accepted-transient (Q_g) or rejected."""
     label, periodic = result.label, result.periodic
     n_joint = result.model.n_cells ** 2 + 1
@@ -160,7 +160,7 @@ def test_swaps_forbidden_is_stricter(model):
 
 
 def test_min_sep_zero_is_same_cell(model):
-    """docs/choices.md, "Robot–robot conflicts on the grid": ``min_sep_cells=0`` is the same-cell
+    """docs/choices/multirobot.md, "Robot–robot conflicts on the grid": ``min_sep_cells=0`` is the same-cell
     rule (the identity matrix) and the default."""
     assert np.array_equal(too_close(model.position_rc, 0), np.eye(model.n_positions, dtype=bool))
     phi = math.radians(90)
@@ -269,7 +269,7 @@ def test_zoo_grid_10x10_r_positive(deg):
 
 
 def test_accepted_cycles_never_cross_diagonally():
-    """docs/choices.md, "Robot–robot conflicts on the grid": two robots whose diagonal moves
+    """docs/choices/multirobot.md, "Robot–robot conflicts on the grid": two robots whose diagonal moves
     cross meet at the shared corner half-way through the tick, so no accepted cycle may contain
     such a step (grid_10x10 at φ = 90° accepted 6 such cycles of 73 before the rule)."""
     from bounce_gym.worlds import get

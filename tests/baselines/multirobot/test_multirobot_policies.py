@@ -1,5 +1,5 @@
 """Algorithm 1 and Algorithm 2 executed in `MultiBounceEnv` (Alam & Bobadilla 2020, §4.1-4.2;
-docs/choices.md, "A neighbour jump is a timed turn").
+docs/choices/multirobot.md, "A neighbour jump is a timed turn").
 
 On the ``cell`` backend the env must follow the plans exactly: the joint cell after every step is
 the plan's, neighbour jumps are turn commands, coverage completes at the predicted step, and a
