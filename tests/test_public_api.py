@@ -116,3 +116,28 @@ def test_the_env_classes_load_on_first_use_only():
 
     with pytest.raises(AttributeError, match="has no attribute 'BounceEnvv'"):
         bounce_gym.envs.BounceEnvv  # noqa: B018
+
+
+#: the packages whose public API `make lint` type-checks (pyproject [tool.mypy] ``files``)
+TYPE_CHECKED = ("bounce_gym", "bounce_gym.envs", "bounce_gym.worlds", "bounce_gym.jax", "baselines")
+
+
+@pytest.mark.parametrize("package", TYPE_CHECKED)
+def test_the_type_checker_covers_the_modules_behind_all(package):
+    """Every class and function in ``__all__`` of these packages is defined in a file that
+    mypy checks (a listed file, or one under a listed folder)."""
+    tomllib = pytest.importorskip("tomllib")  # Python 3.11+
+    files = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))[
+        "tool"]["mypy"]["files"]
+    checked = [(ROOT / f).resolve() for f in files]
+    assert all(p.exists() for p in checked), files
+    module = _import(package)
+    uncovered = []
+    for name in module.__all__:
+        obj = getattr(module, name)
+        if not callable(obj) or not getattr(obj, "__module__", "").startswith(PACKAGES):
+            continue  # constants, submodules, __version__
+        path = Path(importlib.import_module(obj.__module__).__file__).resolve()
+        if not any(path == c or c in path.parents for c in checked):
+            uncovered.append(f"{name} ({obj.__module__})")
+    assert uncovered == []
