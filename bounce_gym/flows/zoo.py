@@ -1,4 +1,4 @@
-"""The flow zoo: seeded, procedural stand-ins for ocean-model output, ``get(name, **kwargs)``.
+"""The flow zoo: seeded, procedural stand-ins for ocean-model output, ``get_flow(name, **kwargs)``.
 
 The thesis' fields come from ROMS predictions for the Southern California Bight (Alam 2018,
 §5.4.1), which are not distributed; these synthetic fields reproduce the structures ch. 5 works
