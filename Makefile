@@ -37,10 +37,13 @@ bench: $(STAMP)
 docs: $(STAMP)
 	SDL_VIDEODRIVER=dummy NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
+# ruff, the import layers (pyproject [tool.importlinter]) and mypy on the public API
+# (pyproject [tool.mypy])
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/lint-imports
+	$(BIN)/mypy
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build dist site *.egg-info
+	rm -rf $(VENV) .pytest_cache .ruff_cache .mypy_cache .hypothesis build dist site *.egg-info
 	find . -name __pycache__ -type d -prune -exec rm -rf {} +

@@ -6,7 +6,7 @@ asserts nothing.
 * The time to compute A (Alg. 3: three GCMs at 65 880 cells = 183 positions x 360 bins,
   Φ = {30°, 75°, 315°}, ε = 5°, r = 0.8) and α (Eq. 5, exact support enumeration).
 * α next to the paper's Table I (Alam, Bobadilla & Shell, IRC 2017; thesis Table 3.1), over the
-  N cells (the paper) and over the 183 positions (docs/choices.md, "Coverage over cells or over
+  N cells (the paper) and over the 183 positions (docs/choices/navigation_coverage.md, "Coverage over cells or over
   positions"). ``lab_complex`` is a reconstruction
   (the paper's geometry is unpublished), so only qualitative agreement is expected.
 * The analytic residuals ‖Aα − b‖² and distances ‖Aα − b‖ (uniform b) of the optimal mixture, of
@@ -17,7 +17,7 @@ asserts nothing.
   (the right α for this metric), the α-mixture over cells (the paper's α) and the uniform mixture,
   each mixture run by `MixturePolicy` (time schedule, epochs of ``--epoch`` bumps). "pooled" is
   the distance of the visit histogram summed over the seeds (random starts), closer to the
-  start-anywhere model ``A α`` than a single run (docs/choices.md, "The limiting distribution starts
+  start-anywhere model ``A α`` than a single run (docs/choices/navigation_coverage.md, "The limiting distribution starts
   anywhere" and "The mixture's coverage is the model A α").
 """
 

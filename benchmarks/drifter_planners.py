@@ -29,7 +29,7 @@ from baselines.drifters import (
     visibility_deployment,
 )
 from bounce_gym.cells import DrifterCells
-from bounce_gym.flows import FlowField, get
+from bounce_gym.flows import FlowField, get_flow
 from bounce_gym.flows.zoo import ekman_layers
 
 
@@ -68,8 +68,8 @@ def bench_value_iteration(n: int, repeats: int) -> float:
 
 def deployment_counts() -> None:
     print("Deployment (Algs. 5.1-5.3), surface layer, d = 6 cells, corners rule")
-    for name, model in (("two_sink", DrifterCells(get("two_sink"))),
-                        ("scb_like 1 h", DrifterCells(get("scb_like"), t=3600.0))):
+    for name, model in (("two_sink", DrifterCells(get_flow("two_sink"))),
+                        ("scb_like 1 h", DrifterCells(get_flow("scb_like"), t=3600.0))):
         start = time.perf_counter()
         b = persistent_behavior(model)
         dep = deployment_locations(b)

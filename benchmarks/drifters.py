@@ -28,7 +28,7 @@ from scipy.ndimage import gaussian_filter
 
 from bounce_gym.cells import DrifterCells
 from bounce_gym.dynamics.advection import Drifters
-from bounce_gym.flows import FlowField, get
+from bounce_gym.flows import FlowField, get_flow
 from bounce_gym.markov.gcm import layer_gcm
 
 
@@ -84,7 +84,7 @@ def bench_gcm(n: int) -> dict:
 def bench_advection(n_particles: int, n_steps: int, repeats: int) -> dict:
     from bounce_gym.flows.parcels_bridge import parcels_advect, to_parcels_fieldset
 
-    field = get("double_gyre")
+    field = get_flow("double_gyre")
     rng = np.random.default_rng(0)
     x, y = rng.uniform(0.05, 1.95, n_particles), rng.uniform(0.05, 0.95, n_particles)
     dt = 0.05

@@ -78,8 +78,8 @@ def main(argv: list[str] | None = None) -> None:
         print(f"{name:<20} {degrees:>4} {model.n_cells:>5} {dfa.n_states:>5} {paper_states:>5} "
               f"{t_dfa * 1e3:>13.2f} {t_all * 1e3:>11.2f} {t_policy * 1e3:>10.2f} "
               f"{t_update * 1e6:>10.3f} {paper_s:>8.0f}", flush=True)
-    print(f"\n(best of {args.repeats}; DFA sizes without the trap state, docs/choices.md; "
-          f"the lab maps are reconstructions, docs/choices.md)")
+    print(f"\n(best of {args.repeats}; DFA sizes without the trap state, docs/choices/localization.md; "
+          f"the lab maps are reconstructions, docs/choices/cell_model.md)")
 
 
 if __name__ == "__main__":

@@ -118,7 +118,7 @@ def monitoring_enumeration() -> None:
 
     import numpy as np
 
-    from baselines.multirobot.monitoring import persistent_behavior
+    from baselines.multirobot.monitoring import joint_monitoring_cycles
     from bounce_gym import worlds
     from bounce_gym.cells import CellModel
 
@@ -126,7 +126,7 @@ def monitoring_enumeration() -> None:
     print(f"\nmonitoring, m = 2, grid_15x15: {model.n_cells ** 2 + 1:,} joint cells (with the sink)")
     for phi in (45, 90, 135):
         start = time.perf_counter()
-        result = persistent_behavior(model, [np.radians(phi)] * 2)
+        result = joint_monitoring_cycles(model, [np.radians(phi)] * 2)
         elapsed = time.perf_counter() - start
         rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
         print(f"  φ = {phi:>3}°: {elapsed:.2f} s, peak RSS {rss:.2f} GiB, accepted groups "

@@ -9,7 +9,7 @@ Run with ``python -m benchmarks.scm_gcm``. Prints one row per measurement; asser
   the peak traced memory of the analysis (tracemalloc; numpy reports its buffers to it) and the
   peak resident memory of the whole process (``ru_maxrss``). Targets: <= 60 s, <= 4 GiB.
 * GCM on ``lab_complex`` at 360 bins (65 880 cells), φ = 30°, ε = 5°, r = 0.8: persistent
-  groups, stationary distributions and the limiting distribution (docs/choices.md, "The limiting
+  groups, stationary distributions and the limiting distribution (docs/choices/navigation_coverage.md, "The limiting
   distribution starts anywhere"), from the
   transition matrix. Target: <= 2 s. The matrix build and the lazy absorption matrix are timed
   on their own rows.

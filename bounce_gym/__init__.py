@@ -7,7 +7,10 @@ are registered on import (``gym.make("bounce_gym/Bounce-v0")``).
 """
 
 from bounce_gym.envs.registration import register_envs
+from bounce_gym.errors import BounceGymError, ConfigError
 
 __version__ = "0.1.0"
+
+__all__ = ["BounceGymError", "ConfigError", "__version__", "register_envs"]
 
 register_envs()

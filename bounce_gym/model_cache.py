@@ -9,7 +9,7 @@ A file holds the model's arrays and a JSON header (a ``uint8`` array named ``hea
 at least ``format`` and ``fingerprint``. It is written atomically (`bounce_gym.files.atomic_file`:
 a crash leaves no file that looks complete) and read as data only: ``allow_pickle=False``, the
 header through `bounce_gym.documents.parse_document`, at most `MAX_BYTES`. A file that is
-missing, unreadable, of another format or for another fingerprint is not used: `load` returns
+missing, unreadable, of another format or for another fingerprint is not used: `load_cached` returns
 None (with a warning when a file was there) and the owner rebuilds and stores the model again.
 """
 
@@ -28,7 +28,7 @@ from bounce_gym.errors import BounceGymError
 from bounce_gym.files import atomic_file
 from bounce_gym.trust import home
 
-__all__ = ["MAX_BYTES", "cache_folder", "load", "store"]
+__all__ = ["MAX_BYTES", "cache_folder", "load_cached", "store"]
 
 #: The largest cache file read (bytes); a larger one is rebuilt.
 MAX_BYTES = 2 << 30
@@ -51,7 +51,7 @@ def store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> None:
         np.savez(fh, **arrays, **{_HEADER: np.frombuffer(text, dtype=np.uint8)})
 
 
-def load(path: Path, fmt: int, key: str) -> tuple[dict, dict[str, np.ndarray]] | None:
+def load_cached(path: Path, fmt: int, key: str) -> tuple[dict, dict[str, np.ndarray]] | None:
     """The header and arrays stored at ``path`` when it holds the model of format ``fmt`` and
     fingerprint ``key``; None when the file is missing or not usable (then a warning says why,
     and the caller rebuilds the model). The owner still checks the arrays' content."""

@@ -76,7 +76,7 @@ from bounce_gym.errors import BounceGymError
 from bounce_gym.extras import from_import_error, require
 
 
-def evaluate(config_path: str | None, progress: bool = True,
+def evaluate_command(config_path: str | None, progress: bool = True,
              flags: Mapping[str, str] | None = None) -> int:
     """Run an evaluation configuration on its executor (``flags``: the executor flags given,
     `executor_from`), print the tables and write the run folder; if units fail for good, say
@@ -196,7 +196,7 @@ def executor_flags(args: argparse.Namespace) -> dict[str, str | None]:
 MAX_TIMESTEPS = "BOUNCE_GYM_MAX_TIMESTEPS"
 
 
-def train(config_path: str, timesteps: int | None = None, resume: bool = False,
+def train_command(config_path: str, timesteps: int | None = None, resume: bool = False,
           progress: bool = True, seeds: list[int] | None = None,
           flags: Mapping[str, str | None] | None = None) -> int:
     """Train (or resume) the agents of a training configuration, one unit per seed on its
@@ -216,7 +216,7 @@ def train(config_path: str, timesteps: int | None = None, resume: bool = False,
         print(f"error: {failure.key} failed after {failure.attempts} attempts: {failure.error}",
               file=sys.stderr)
     if paths:
-        curves(str(paths[0].parent), required=False)
+        curves_command(str(paths[0].parent), required=False)
     return 1 if failures else 0
 
 
@@ -247,7 +247,7 @@ def training_config(config: object, timesteps: int | None = None, resume: bool =
     return config
 
 
-def tune(config_path: str, space: str | None = None, trials: int = 8, metric: str = "return",
+def tune_command(config_path: str, space: str | None = None, trials: int = 8, metric: str = "return",
          scheduler: str = "fifo", seed: int = 0, timesteps: int | None = None,
          resume: bool = False, workers: int | None = None, address: str | None = None,
          progress: bool = True) -> int:
@@ -280,7 +280,7 @@ def tune(config_path: str, space: str | None = None, trials: int = 8, metric: st
     return 0
 
 
-def curves(folder: str, window: int | None = None, required: bool = True) -> int:
+def curves_command(folder: str, window: int | None = None, required: bool = True) -> int:
     """Draw the learning curves of a models folder and print where each run ended (a
     `ConfigError` if no episode has finished yet, unless not ``required``)."""
     from baselines.rl.curves import WINDOW
@@ -299,7 +299,7 @@ def curves(folder: str, window: int | None = None, required: bool = True) -> int
     return 0
 
 
-def trust(paths: list[str]) -> int:
+def trust_command(paths: list[str]) -> int:
     """Add the sha256 of these model files to the user's trusted digests, so that ``--resume``
     unpickles the resume state of checkpoints this user's runs did not sign."""
     from baselines.rl.model_files import trust as trust_file
@@ -428,17 +428,17 @@ def dispatch(args: argparse.Namespace) -> int:
     try:
         require(feature, *COMMAND_MODULES[args.command])
         if args.command == "evaluate":
-            return evaluate(args.config, progress=not args.no_progress,
+            return evaluate_command(args.config, progress=not args.no_progress,
                             flags=executor_flags(args))
         if args.command == "trust":
-            return trust(args.models)
+            return trust_command(args.models)
         if args.command == "curves":
-            return curves(args.folder, args.window)
+            return curves_command(args.folder, args.window)
         if args.command == "tune":
-            return tune(args.config, args.space, args.trials, args.metric, args.scheduler,
+            return tune_command(args.config, args.space, args.trials, args.metric, args.scheduler,
                         args.seed, args.timesteps, args.resume, args.workers, args.address,
                         progress=not args.no_progress)
-        return train(args.config, args.timesteps, args.resume, progress=not args.no_progress,
+        return train_command(args.config, args.timesteps, args.resume, progress=not args.no_progress,
                      seeds=args.seeds, flags=executor_flags(args))
     except BounceGymError as exc:
         print(f"error: {exc}", file=sys.stderr)

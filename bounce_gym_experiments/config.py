@@ -52,7 +52,7 @@ episodes stay the same); ``visibility`` makes a single-robot experiment a safe-p
 (`bounce_gym_experiments.families.visibility`); ``planner_kwargs`` are keyword arguments
 of the planner's ``for_env`` (e.g. ``{phi: 135}``), and for ``bounce_gym/Drifter-v0`` and the
 navigation experiments the planners to run and their options
-(`bounce_gym_experiments.families.drifters.planners`, `bounce_gym_experiments.families.navigation.planners`); ``difficulty`` (``easy``, ``medium`` or
+(`bounce_gym_experiments.families.drifters.drifter_planners`, `bounce_gym_experiments.families.navigation.navigation_planners`); ``difficulty`` (``easy``, ``medium`` or
 ``hard``) labels the experiment in a leaderboard. A top-level ``leaderboard: true`` makes the
 evaluation write ``leaderboard.md`` and ``leaderboard.csv`` (`bounce_gym_experiments.leaderboard`). A
 top-level ``executor: {kind: local|ray, workers: N, address: ..., retries: 2}`` says where the

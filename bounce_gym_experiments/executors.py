@@ -30,7 +30,7 @@ port is in 1..65535. Before Ray connects, `check_ray_cluster` gives the cluster
 `CONNECT_TIMEOUT` (5) seconds to accept a TCP connection and answer as the gRPC (HTTP/2)
 servers of Ray do (not checked on a cluster with ``RAY_USE_TLS`` set): an address where nothing
 listens, or something else does, is a `ConfigError` in one line instead of Ray's minutes of
-retries (docs/choices.md, "A Ray address must answer before Ray connects"); so is any failure of
+retries (docs/choices/worlds.md, "A Ray address must answer before Ray connects"); so is any failure of
 ``ray.init`` itself (`init_ray`).
 
 Every executor keeps at most ``workers`` units in flight, so a pool that breaks or a cluster
@@ -66,7 +66,7 @@ from bounce_gym.validate import integer, unknown_keys
 EXECUTOR_KINDS = ("local", "ray")
 #: how the local pool starts its processes: never a fork of this one (which may hold threads:
 #: tqdm's monitor, torch's pools), but forks of a clean server process, ~1 s faster per pool
-#: than fresh interpreters ("spawn", where there is no forkserver) — docs/choices.md
+#: than fresh interpreters ("spawn", where there is no forkserver) — docs/choices/studies.md
 POOL_START_METHOD = ("forkserver" if "forkserver" in multiprocessing.get_all_start_methods()
                      else "spawn")
 #: what a unit's error says when its process died instead of returning or raising

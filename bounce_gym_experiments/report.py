@@ -85,7 +85,7 @@ def table_rows(summary: list[dict], rows: list[EpisodeResult]) -> tuple[list[dic
     return aggregate_training_seeds(summary, groups)
 
 
-def number(value) -> str:
+def format_number(value) -> str:
     """A plain number as the tables print it."""
     if isinstance(value, float):
         return f"{value:.3f}" if abs(value) < 1000 else f"{value:.0f}"
@@ -107,7 +107,7 @@ def cell(row: dict, column: str) -> str:
         return "-"
     if f"{column}_n" in row:
         return estimate_text(value, row[f"{column}_lo"], row[f"{column}_hi"], row[f"{column}_n"])
-    return number(value)
+    return format_number(value)
 
 
 def tables(summary: list[dict], families: Mapping[str, Family]) -> list[tuple[str, list[str],

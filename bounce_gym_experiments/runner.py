@@ -61,7 +61,7 @@ class EpisodeResult:
         return out
 
 
-def make_env(experiment: Mapping, where: str = "env_kwargs", overrides: Mapping | None = None):
+def make_experiment_env(experiment: Mapping, where: str = "env_kwargs", overrides: Mapping | None = None):
     """The experiment's env with its horizon ``max_steps`` as the env's own limit:
     ``gym.make(..., max_episode_steps=max_steps)``, or for a PettingZoo id the parallel env with
     ``max_cycles = max_steps``. ``overrides`` are env options set over ``env_kwargs``. Bad
@@ -158,7 +158,7 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
     """Build a validated experiment's env, planner setup and policies (loading its models), so
     that every mistake in it is reported before any episode runs; ``where`` names the
     experiment in errors."""
-    env = make_env(experiment, f"{where}.env_kwargs")
+    env = make_experiment_env(experiment, f"{where}.env_kwargs")
     family = family_for(experiment, env)
     unsupported = [k for k in experiment["policies"] if k not in family.policy_kinds]
     if unsupported:
@@ -174,7 +174,7 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
             folder = models_dir / entry["folder"]
             own_env, own_setup = env, setup
             if entry["env_kwargs"]:
-                own_env = make_env(experiment, f"{where}.rl_models[{k}].env_kwargs",
+                own_env = make_experiment_env(experiment, f"{where}.rl_models[{k}].env_kwargs",
                                    entry["env_kwargs"])
                 own_setup = family.prepare(own_env, experiment)
             label = f"{entry['folder']}/" if len(folders) > 1 else ""
@@ -207,9 +207,9 @@ def run(config: Mapping, progress: bool = True, executor: Executor | None = None
     try:
         executor = make_executor(workers=1) if executor is None else executor
         if store is not None:
-            return sweep.evaluate(config, experiments, executor, store, progress)
+            return sweep.run_sweep(config, experiments, executor, store, progress)
         with tempfile.TemporaryDirectory(prefix="bounce-gym-units-") as folder:
-            return sweep.evaluate(config, experiments, executor, UnitStore(Path(folder)),
+            return sweep.run_sweep(config, experiments, executor, UnitStore(Path(folder)),
                                   progress)
     finally:
         sweep.release(experiments)

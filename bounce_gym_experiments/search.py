@@ -50,14 +50,14 @@ import yaml
 
 from baselines.rl.curves import WINDOW
 from baselines.rl.monitor import read_monitor
-from baselines.rl.train import Run, finished, prepare, train_seed
+from baselines.rl.train import RunFiles, finished, prepare, train_seed
 from baselines.rl.train_config import POLICIES
 from bounce_gym.errors import ConfigError
 from bounce_gym.extras import require
 from bounce_gym.files import MAX_NAME_BYTES, atomic_write
 from bounce_gym.validate import integer
 from bounce_gym_experiments.executors import check_ray_cluster, executor_settings, init_ray
-from bounce_gym_experiments.search_space import load_search_space, sample
+from bounce_gym_experiments.search_space import load_search_space, sample_trial
 
 #: The metrics a search maximises, and the monitor columns they average.
 METRICS = {"return": "r", "success": "is_success"}
@@ -107,7 +107,7 @@ def trial_configs(config: dict, space_path: Path, trials: int, seed: int,
     base["seeds"] = seeds[:1] if isinstance(seeds, list) else seeds
     out = []
     for k in range(trials):
-        drawn = sample(space, seed, k)
+        drawn = sample_trial(space, seed, k)
         variant = f"{config['variant']}-trial{k}" if config.get("variant") else f"trial{k}"
         trial = {**base, "variant": variant,
                  "hyperparams": {**config.get("hyperparams", {}), **drawn}}
@@ -170,7 +170,7 @@ def run_trial(params: dict, configs: list[dict], metric: str) -> None:
 
     config = configs[params["trial"]]
     seed = config["seeds"][0]
-    monitor = Run(config, seed).monitor
+    monitor = RunFiles(config, seed).monitor
     every = max(config["total_timesteps"] // REPORTS, 1)
 
     def report(steps: int) -> None:
@@ -249,7 +249,7 @@ def _trial_name(trial) -> str:
 
 def _outcome(k: int, drawn: dict, config: dict, metric: str,
              error: BaseException | None) -> Trial:
-    run = Run(config, config["seeds"][0])
+    run = RunFiles(config, config["seeds"][0])
     value, episodes, steps = final_metric(run.monitor, metric)
     if finished(config, run.seed):
         status = "finished"

@@ -14,7 +14,7 @@ numbers, a ``choice`` has 1 to `MAX_CHOICES` (10,000) values, and every bound an
 of a ``choice`` lies within its hyperparameter's range (`baselines.rl.train_config`, e.g.
 ``gamma`` in (0, 1]), so no draw can leave it. Whether each name is a hyperparameter of the
 algorithm is checked with the training configuration it goes into (`bounce_gym_experiments.search`).
-`sample` draws the hyperparameters of trial ``k`` from its own random stream, seeded with
+`sample_trial` draws the hyperparameters of trial ``k`` from its own random stream, seeded with
 ``(seed, k)``: a search is reproducible, and running more trials leaves the first ones as they
 were.
 """
@@ -81,7 +81,7 @@ def _distribution(field: str, value: object) -> tuple[str, object]:
     return kind, tuple(bounds)
 
 
-def sample(space: dict[str, tuple[str, object]], seed: int, trial: int) -> dict:
+def sample_trial(space: dict[str, tuple[str, object]], seed: int, trial: int) -> dict:
     """The hyperparameters of trial ``trial``: one draw from each distribution, in the file's
     order, from the random stream of ``(seed, trial)``."""
     rng = np.random.default_rng([seed, trial])

@@ -13,7 +13,7 @@ taken out of the worker's copy with the unit's rows (`Family.drain`) and filed w
 process's setup in the canonical order (`Family.absorb`).
 
 Finished units are kept in a `UnitStore` under ``<output>/<name>-units/<fingerprint>/``; the
-fingerprint (`fingerprint`) covers the configuration without its executor, the manifests of its
+fingerprint (`config_fingerprint`) covers the configuration without its executor, the manifests of its
 model folders, the package version and the source commit, so that a sweep started again with
 the same inputs skips the units already done, and one with other inputs starts afresh. Each
 unit's `UnitResult` is kept as a pickle signed with the user's key, by the process that runs
@@ -37,7 +37,7 @@ from bounce_gym_experiments.provenance import git_state, package_versions
 from bounce_gym_experiments.runner import EpisodeResult, Prepared, prepare_experiment, run_episode
 
 #: seeds per unit: enough episodes to outweigh a unit's overhead, few enough to spread a
-#: 20-seed experiment over several workers (docs/choices.md)
+#: 20-seed experiment over several workers (docs/choices/studies.md)
 SEEDS_PER_UNIT = 10
 
 
@@ -152,7 +152,7 @@ def units(config: Mapping, experiments: list[Prepared]) -> tuple[list[Unit], dic
     return out, describe
 
 
-def assemble(experiments: list[Prepared], results: Mapping[str, UnitResult]
+def assemble_results(experiments: list[Prepared], results: Mapping[str, UnitResult]
              ) -> tuple[list[EpisodeResult], dict]:
     """The rows in the canonical order (experiment, seed, policy; then the best fixed angle in
     hindsight) and each experiment's plot data, from every unit's result."""
@@ -193,7 +193,7 @@ def _merge_plot_data(data: dict, part: dict, setup: object) -> None:
             data[key] = value
 
 
-def fingerprint(config: Mapping) -> str:
+def config_fingerprint(config: Mapping) -> str:
     """What decides a validated configuration's results (module docstring), hashed: its
     experiments without the executor, its model folders' manifests, the package version and
     the source commit."""
@@ -212,10 +212,10 @@ def fingerprint(config: Mapping) -> str:
 
 def store_folder(config: Mapping) -> Path:
     """Where a configuration's finished units are kept: ``<output>/<name>-units/<fingerprint>``."""
-    return Path(config["output"]) / f"{config['name']}-units" / fingerprint(config)
+    return Path(config["output"]) / f"{config['name']}-units" / config_fingerprint(config)
 
 
-def evaluate(config: Mapping, experiments: list[Prepared], executor: Executor,
+def run_sweep(config: Mapping, experiments: list[Prepared], executor: Executor,
              store: UnitStore, progress: bool = True) -> tuple[list[EpisodeResult], dict]:
     """Run (or finish) the sweep of a validated configuration and assemble its rows and plot
     data; raise `UnitsFailedError` if units failed for good (the others are kept in ``store``)."""
@@ -223,4 +223,4 @@ def evaluate(config: Mapping, experiments: list[Prepared], executor: Executor,
     results, failures = executor.run(todo, store, progress=progress, desc="evaluating")
     if failures:
         raise UnitsFailedError(failures, len(todo), store.folder, describe)
-    return assemble(experiments, results)
+    return assemble_results(experiments, results)

@@ -24,7 +24,7 @@ import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-from baselines.rl.train import Run, finished, prepare, train_seed
+from baselines.rl.train import RunFiles, finished, prepare, train_seed
 from bounce_gym.errors import ConfigError
 from bounce_gym_experiments.executors import (
     Executor,
@@ -73,13 +73,13 @@ def sweep(config: Mapping, executor: Mapping | None = None, folder: Path | None 
     todo = []
     for seed in config["seeds"]:
         if config["resume"] and finished(config, seed):
-            log(f"{Run(config, seed).stem}: already trained for {config['total_timesteps']} "
-                f"steps ({Run(config, seed).model})")
+            log(f"{RunFiles(config, seed).stem}: already trained for {config['total_timesteps']} "
+                f"steps ({RunFiles(config, seed).model})")
         else:
             todo.append(seed)
     runner = executor_for(executor or executor_settings({}), len(todo))
     live = isinstance(runner, InProcessExecutor)
-    units = [Unit(Run(config, seed).stem, train_unit, (config, seed, live, progress))
+    units = [Unit(RunFiles(config, seed).stem, train_unit, (config, seed, live, progress))
              for seed in todo]
     with tempfile.TemporaryDirectory(prefix="bounce-gym-units-") as store:
         results, failures = runner.run(units, UnitStore(Path(store)),
@@ -91,6 +91,6 @@ def sweep(config: Mapping, executor: Mapping | None = None, folder: Path | None 
     for unit in units:
         if "config_error" in results.get(unit.key, {}):
             raise ConfigError(results[unit.key]["config_error"])
-    paths = [Run(config, seed).model for seed in config["seeds"]]
+    paths = [RunFiles(config, seed).model for seed in config["seeds"]]
     failed = {f.key for f in failures}
     return [p for p in paths if p.name.removesuffix(".zip") not in failed], failures

@@ -1,9 +1,10 @@
 """Train PPO written in JAX on ``bounce_gym/BounceNavigation-v1`` on the CPU, then score it.
 
-Run with ``python examples/jax_ppo_navigation.py`` (``--steps``, ``--episodes``). It trains
+Run with ``python examples/jax_ppo_navigation.py`` (``--steps``, ``--episodes``, ``--out FOLDER``;
+the run is ``FOLDER/jax-ppo-example/``, by default in a fresh temporary folder). It trains
 the ``jax_ppo`` configuration of ``configs/train_navigation_v1_jax_ppo.yaml`` (one seed, the
 hyperparameters of SB3's PPO entry for v1: 8 envs, 128 steps each per rollout, 10 epochs of
-256-transition mini-batches) through ``baselines.rl.train`` into a temporary folder, then plays
+256-transition mini-batches) through ``baselines.rl.train`` into that folder, then plays
 the model's sampled actions (the evaluation's default) on held-out episode seeds (from 10,000)
 of the NumPy env and prints the success rate with its 95 % Wilson interval and the wall time.
 """
@@ -11,6 +12,7 @@ of the NumPy env and prints the success rate with its 95 % Wilson interval and t
 from __future__ import annotations
 
 import argparse
+import contextlib
 import tempfile
 import time
 from pathlib import Path
@@ -40,30 +42,38 @@ def success(path: Path, episodes: int) -> int:
                for seed in seeds)
 
 
-def train_and_score(steps: int = 200_000, episodes: int = 200, seed: int = 0) -> dict:
-    """Train ``steps`` env steps, score on ``episodes`` held-out seeds: the success rate, its
-    Wilson interval and the seconds training took (compiling included)."""
-    with tempfile.TemporaryDirectory() as folder:
+def train_and_score(steps: int = 200_000, episodes: int = 200, seed: int = 0,
+                    out: Path | None = None) -> dict:
+    """Train ``steps`` env steps into the models folder ``out`` (None: a temporary folder,
+    removed afterwards), score on ``episodes`` held-out seeds: the success rate, its Wilson
+    interval, the seconds training took (compiling included) and the model's path."""
+    with contextlib.ExitStack() as stack:
+        folder = out if out is not None else stack.enter_context(tempfile.TemporaryDirectory())
         start = time.perf_counter()
         (path,) = train({"name": "jax-ppo-example", "env": ENV, "algo": "jax_ppo",
                          "hyperparams_file": str(HYPERPARAMS), "total_timesteps": steps,
-                         "seed": seed, "models": folder}, progress=False)
+                         "seed": seed, "models": str(folder)}, progress=False)
         seconds = time.perf_counter() - start
         reached = success(path, episodes)
     return {"success": reached / episodes, "interval": wilson_interval(reached, episodes),
-            "episodes": episodes, "train_seconds": seconds}
+            "episodes": episodes, "train_seconds": seconds, "model": path}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=200_000)
     parser.add_argument("--episodes", type=int, default=200)
+    parser.add_argument("--out", type=Path, default=None,
+                        help="models folder of the run (default: a fresh temporary folder)")
     args = parser.parse_args()
-    out = train_and_score(args.steps, args.episodes)
+    folder = args.out or Path(tempfile.mkdtemp(prefix="jax_ppo_"))
+    folder.mkdir(parents=True, exist_ok=True)
+    out = train_and_score(args.steps, args.episodes, out=folder)
     low, high = out["interval"]
     print(f"jax_ppo on {ENV}: {args.steps} steps in {out['train_seconds']:.1f} s; success "
           f"{out['success']:.3f} [{low:.3f}, {high:.3f}] over {out['episodes']} held-out "
           "episodes (sampled actions)")
+    print(f"model written to {out['model']}")
 
 
 if __name__ == "__main__":

@@ -144,7 +144,7 @@ def _one_line_naming(text: str, extra: str) -> None:
 def test_a_netcdf_flow_without_the_drifters_extra_is_one_line(tmp_path):
     from bounce_gym import flows
 
-    path = flows.save_flow(flows.get("scb_like"), tmp_path / "flow.nc")
+    path = flows.save_flow(flows.get_flow("scb_like"), tmp_path / "flow.nc")
     code = textwrap.dedent("""
         import sys
         import gymnasium as gym

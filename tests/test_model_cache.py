@@ -10,9 +10,9 @@ from bounce_gym import model_cache
 
 def test_round_trip_and_missing_file(tmp_path):
     path = tmp_path / "m" / "k.npz"
-    assert model_cache.load(path, 1, "k") is None  # missing: no warning
+    assert model_cache.load_cached(path, 1, "k") is None  # missing: no warning
     model_cache.store(path, {"format": 1, "fingerprint": "k", "n": 3}, {"a": np.arange(3)})
-    header, arrays = model_cache.load(path, 1, "k")
+    header, arrays = model_cache.load_cached(path, 1, "k")
     assert header == {"format": 1, "fingerprint": "k", "n": 3}
     assert list(arrays) == ["a"] and np.array_equal(arrays["a"], np.arange(3))
     assert [p.name for p in path.parent.iterdir()] == ["k.npz"]  # no temporary left
@@ -23,7 +23,7 @@ def test_other_format_or_fingerprint_is_not_used(tmp_path, fmt, key):
     path = tmp_path / "k.npz"
     model_cache.store(path, {"format": 1, "fingerprint": "k"}, {"a": np.zeros(2)})
     with pytest.warns(UserWarning, match="does not match"):
-        assert model_cache.load(path, fmt, key) is None
+        assert model_cache.load_cached(path, fmt, key) is None
 
 
 @pytest.mark.parametrize("content", [
@@ -39,7 +39,7 @@ def test_damaged_files_are_not_used(tmp_path, content):
     else:
         path.write_bytes(content)
     with pytest.warns(UserWarning, match="unusable"):
-        assert model_cache.load(path, 1, "k") is None
+        assert model_cache.load_cached(path, 1, "k") is None
 
 
 def test_an_array_may_not_shadow_the_header(tmp_path):

@@ -2,7 +2,7 @@
 
 Alam, Bobadilla & Shell, "Minimalist robot navigation and coverage using a dynamical system
 approach" (IRC 2017), §IV-C Alg. 3 POLICYDISTRIBUTION, Eq. 4–5, Table I; thesis §3.3.3, Alg. 3.3,
-Eq. 3.7–3.8, Table 3.1. Choices where the paper is open: docs/choices.md, cited below by heading.
+Eq. 3.7–3.8, Table 3.1. Choices where the paper is open: docs/choices/navigation_coverage.md, cited below by heading.
 
 **Coverage Problem.** Given the environment, a set of bouncing angles Φ, an error range ±ε and a
 target coverage distribution b, find the bouncing-policy distribution α ("time-based switching
@@ -33,7 +33,7 @@ coverage comes closest to b.
 * `MixturePolicy` — runs the mixture in a `bounce_gym` env: it switches among the bounce policies
   in epochs of ``epoch`` bumps so that the fraction of **time** (ticks) under φ_i tracks α_i.
 
-**Caveat (docs/choices.md, "The mixture's coverage is the model A α").** The paper models the
+**Caveat (docs/choices/navigation_coverage.md, "The mixture's coverage is the model A α").** The paper models the
 coverage of the mixture as ``A α``, the convex combination of the single policies' long-run
 distributions. A robot that switches policies runs an inhomogeneous chain: each epoch starts where
 the last one ended (not from "anywhere"), and with several persistent groups a single run settles in
@@ -98,7 +98,7 @@ def policy_distributions(model: CellModel, angles: Sequence[float], eps: float, 
         eps: the error range ε, radians, a whole number of bins (0: exact rotation).
         r: the probability of the nominal (reliable) rotation.
         space: ``"cells"`` (n = N, the paper's Eq. 5) or ``"positions"`` (n = N_pos: π_i summed
-            over the orientation bins; docs/choices.md, "Coverage over cells or over
+            over the orientation bins; docs/choices/navigation_coverage.md, "Coverage over cells or over
             positions").
         mode: the start distribution of the Cesàro limit (`bounce_gym.markov.gcm.MODES` or an (N,)
             probability vector); ``"all"`` is the paper's "starting from any location".

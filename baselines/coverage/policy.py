@@ -36,7 +36,7 @@ class MixturePolicy(Policy):
 
     Deterministic given ``seed``: the generator is created once, so successive episodes of the
     ``"random"`` schedule differ but repeat from run to run; the other schedules use no randomness.
-    Long epochs bring the simulated coverage closer to the model's ``A α`` (docs/choices.md, "The
+    Long epochs bring the simulated coverage closer to the model's ``A α`` (docs/choices/navigation_coverage.md, "The
     mixture's coverage is the model A α") but make the proportions coarser over a short budget; the
     default (50 bumps, a few hundred ticks) is a compromise for budgets of thousands of bumps.
     """

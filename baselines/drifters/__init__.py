@@ -33,7 +33,11 @@ from baselines.drifters.deployment_baselines import (
 from baselines.drifters.fleet import DEPLOYMENT_METHODS, DeploymentPolicy
 from baselines.drifters.horizon_plan import HorizonPlan, HorizonReachPolicy, horizon_plan
 from baselines.drifters.policy import AlwaysDriftPolicy, RandomLayerPolicy, ValueIterationPolicy
-from baselines.drifters.reachability import Reachability, persistent_reachability, three_d_graph
+from baselines.drifters.reachability import (
+    DrifterReachability,
+    persistent_reachability,
+    three_d_graph,
+)
 from baselines.drifters.value_iteration import (
     ValueIterationResult,
     goal_states,
@@ -49,7 +53,7 @@ from baselines.drifters.visibility import (
 
 __all__ = ["DEPLOYMENT_METHODS", "AlwaysDriftPolicy", "Deployment", "DeploymentPolicy",
            "HorizonPlan", "HorizonReachPolicy", "horizon_plan",
-           "PersistentBehavior", "RandomLayerPolicy", "Reachability", "ValueIterationPolicy",
+           "PersistentBehavior", "RandomLayerPolicy", "DrifterReachability", "ValueIterationPolicy",
            "ValueIterationResult", "VisibilityDeployment", "deploy_cells",
            "deployment_locations", "expected_coverage", "goal_states", "greedy_deployment",
            "group_coverage", "persistent_behavior", "persistent_reachability", "policy_matrix",

@@ -5,7 +5,7 @@ The analysis itself is the shared Markov layer's (`bounce_gym.markov.gcm.layer_g
 layer's drift chain of `bounce_gym.cells.DrifterCells`): persistent groups are the **closed**
 communicating classes (the sinks of the condensation; the printed test "every vertex of the
 component communicates with all others" holds for every strongly connected component,
-docs/choices.md "Persistent groups of a drifter layer are closed classes"); transient cells are
+docs/choices/drifters.md "Persistent groups of a drifter layer are closed classes"); transient cells are
 grouped by their set of domiciles (Def. 5.4.2: single-domicile groups B(g), multiple-domicile
 groups B(g, h, ...)); the expected absorption times are a = (I - Q)^-1 1 (Thm 5.4.3, Eq. 5.7).
 The thesis' connectivity matrix C (the transitive closure of the layer's graph) is not formed:
@@ -50,7 +50,7 @@ class PersistentBehavior:
         absorption_time: (n_cells,) expected steps until a persistent group is entered
             (thesis Eq. 5.7); 0 on persistent cells.
         absorption: (n_cells, n_groups) probability of ending in each group; one-hot on
-            persistent cells. Not in the thesis (docs/choices.md).
+            persistent cells. Not in the thesis (docs/choices/drifters.md).
     """
 
     layer: int

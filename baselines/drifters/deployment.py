@@ -5,7 +5,7 @@ One cell is drawn at random (seeded) from each persistent group (Alg. 5.2 line 3
 released there visits every cell of its group with probability 1. MINCELLSINTRANSIENTGROUP
 (line 5) is only described as "descending absorption times and the most connected cells"; we take
 one cell from each **source strongly connected component** of the subgraph induced on each
-transient group (docs/choices.md, "Alg. 5.2: one cell per source component"): the cell with the
+transient group (docs/choices/drifters.md, "Alg. 5.2: one cell per source component"): the cell with the
 largest expected absorption time (Eq. 5.7), ties to the lowest state. (The second key of the
 thesis, the number of cells reached, is the same for every cell of one component.)
 

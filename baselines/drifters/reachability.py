@@ -24,11 +24,11 @@ from bounce_gym import validate
 from bounce_gym.cells import DOWN, DrifterCells
 from bounce_gym.errors import ConfigError
 
-__all__ = ["Reachability", "persistent_reachability", "three_d_graph"]
+__all__ = ["DrifterReachability", "persistent_reachability", "three_d_graph"]
 
 
 @dataclass(frozen=True, eq=False)
-class Reachability:
+class DrifterReachability:
     """The output of Alg. 5.4.
 
     Attributes:
@@ -56,7 +56,7 @@ def three_d_graph(model: DrifterCells):
 
 
 def persistent_reachability(model: DrifterCells, start: int,
-                            vertical_anywhere: bool = False) -> Reachability:
+                            vertical_anywhere: bool = False) -> DrifterReachability:
     """Alg. 5.4 PERSISTENTREACHABILITY(ℰ, ℱ, x_I) with x_I = ``start``, a state of layer 0.
 
     Raises:
@@ -76,5 +76,5 @@ def persistent_reachability(model: DrifterCells, start: int,
         reached = reachable(model.drift_matrix(), column_)
     column_.flags.writeable = False
     reached.flags.writeable = False
-    return Reachability(start=start, column=column_, reached=reached,
+    return DrifterReachability(start=start, column=column_, reached=reached,
                         vertical_anywhere=vertical_anywhere)

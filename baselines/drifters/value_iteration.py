@@ -6,7 +6,7 @@ U(x) ⊆ {drift, up, down} (the legal ones; `DrifterCells.legal`): drift follows
 up and down move deterministically to the cell above or below. Reward (Eq. 5.10): 100 if the
 action leads to x_G, -1 otherwise; under stochastic drift this is the expected reward
 ``r(x, u) = 100 p(x_G | x, u) - (1 - p(x_G | x, u))``. The goal is absorbing with value 0: the
-episode ends there, so nothing is earned by staying (docs/choices.md, "Alg. 5.5: the goal ends
+episode ends there, so nothing is earned by staying (docs/choices/drifters.md, "Alg. 5.5: the goal ends
 the episode"). ``goal`` may be a set of cells (a goal region): entering any of them counts.
 
 **Forms.** ``form="thesis"`` iterates the update as printed (Alg. 5.5 line 7),
@@ -21,7 +21,7 @@ step reward, γ r's for the thesis form): then ``W <- max_u [(g - s / (1 - γ)) 
 γ Σ_y p(y | x, u) W(y)]`` (g the goal reward) has no cancellation, stays exactly 0 where the goal
 cannot be reached, and is positive however small the probability of arriving, so the policy
 picks an action that can arrive wherever one exists. It starts from W = 0, i.e. from
-V = r_min / (1 - γ) rather than the thesis' V = r_min (same fixed point; docs/choices.md,
+V = r_min / (1 - γ) rather than the thesis' V = r_min (same fixed point; docs/choices/drifters.md,
 "Alg. 5.5: iterate above the value of never arriving"), and stops when max |ΔV| < ``tol``.
 Ties between actions go to the lowest code (drift, then up, then down).
 """

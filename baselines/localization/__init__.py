@@ -2,7 +2,7 @@
 
 Alam, Bobadilla & Shell, "Space-efficient filters for mobile robot localization from discrete
 limit cycles", IEEE RA-L 3(1), 2018 (thesis Ch. 2): Sec. III-B (cell mapping, Defs. 1–4), Sec. IV
-(Algorithm 1 and Defs. 5–9). Where the paper is open, the choices are those of docs/choices.md,
+(Algorithm 1 and Defs. 5–9). Where the paper is open, the choices are those of docs/choices/localization.md,
 cited below by heading.
 
 The pipeline after the simple cell mapping (SCM) ``C`` (successor array) and its observation labels
@@ -10,7 +10,7 @@ The pipeline after the simple cell mapping (SCM) ``C`` (successor array) and its
 
 * **I-state graphs** (Def. 5): the functional graph ``z -> C(z)`` with edge label
   ``ℓ(z, C(z)) = bump[z]`` (label 1 iff the orientation bin changes, i.e. the robot bumped and
-  rotated in place: docs/choices.md, "Observation 1 means the orientation bin changed").
+  rotated in place: docs/choices/cell_model.md, "Observation 1 means the orientation bin changed").
   `istate_graph` builds one networkx graph for all cells or for one periodic group, `istate_graphs`
   one per group (the "octopus" graphs of Algorithm 1).
 * **Nondeterministic I-state automaton** (Def. 6): ``N + 1`` states, ``q0`` with ε-moves to every
@@ -19,13 +19,13 @@ The pipeline after the simple cell mapping (SCM) ``C`` (successor array) and its
 * **DFA by lazy subset construction** (Def. 7, Sec. IV-C): `build_dfa`. A state is the set
   of cells consistent with everything observed (stored as a sorted int array); the start state is
   all ``N`` cells (``q0`` itself is omitted); a missing transition goes to the implicit trap,
-  which is not counted in `DFA.n_states` (`DFA.n_states_with_trap` counts it; docs/choices.md,
+  which is not counted in `DFA.n_states` (`DFA.n_states_with_trap` counts it; docs/choices/localization.md,
   "DFA size: the start state is all cells, the trap is not counted").
   Prop. 1: ``|Q'| = O(N²)``; out-degree ≤ 2.
 * **Knowledge cycles**: the strongly connected components of the DFA graph with more than one
   state or a self-loop (a rotation pocket emits 1, 1, 1, …). Each is a simple cycle, every state in
   it has the same ``|S|`` (the cycle's *uncertainty*) and is a subset of the periodic cells.
-* **Colours** (Def. 8/9; docs/choices.md, "Knowledge-cycle colours and numbering"): colour 1 for
+* **Colours** (Def. 8/9; docs/choices/localization.md, "Knowledge-cycle colours and numbering"): colour 1 for
   every state outside a knowledge cycle; cycles numbered 2 … m + 1 in order of their smallest cell
   id; the trap (open world) m + 2.
 * **Filters**: `LocalizationFilter` — closed world (Def. 8, Problem 1: an impossible observation
@@ -52,7 +52,7 @@ Beyond the paper (its Sec. VI future work: switching φ to shrink the uncertaint
   limits can be compared exactly with the fixed-angle DFAs (`final_uncertainties`).
 
 The SCM arrays come from `bounce_gym.cells.CellModel.successor`, which implements the choices of
-docs/choices.md (a bump rotates in place and emits 1, reset to the cell centre every step, free
+docs/choices/cell_model.md (a bump rotates in place and emits 1, reset to the cell centre every step, free
 target cell, king step with the symmetric tie rule, bins centred at k·360°/N_S); here nothing
 depends on the cell iteration order ("Algorithm 1's index errors and order independence"). Cell
 numbering is the model's (0-based ``z = k·N_pos + p``; the papers' ids are ``z + 1``). Angles are in

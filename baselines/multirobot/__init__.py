@@ -3,8 +3,8 @@ persistent monitoring on collision-free joint limit cycles (Algorithm 2), and th
 run both in `bounce_gym.envs.MultiBounceEnv`."""
 
 from baselines.multirobot.coverage import CoverageResult, plan_coverage, random_start
-from baselines.multirobot.monitoring import MonitoringResult, persistent_behavior
+from baselines.multirobot.monitoring import MonitoringResult, joint_monitoring_cycles
 from baselines.multirobot.policies import CoveragePlanPolicy, MonitoringPlanPolicy
 
 __all__ = ["CoveragePlanPolicy", "CoverageResult", "MonitoringPlanPolicy", "MonitoringResult",
-           "persistent_behavior", "plan_coverage", "random_start"]
+           "joint_monitoring_cycles", "plan_coverage", "random_start"]

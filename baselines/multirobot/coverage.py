@@ -1,14 +1,14 @@
 """Multi-robot coverage with bouncing robots: the joint simple cell mapping (Alam & Bobadilla
 2020, §3.2 and §4.1, Eq. 6; thesis Eq. 3.9) and Algorithm 1 / thesis Alg. 3.4 MULTIROBOTCOVERAGE,
-with the choices of docs/choices.md where the article is open.
+with the choices of docs/choices/multirobot.md where the article is open.
 
 **Joint state.** A joint cell is a length-m vector of per-robot cell numbers
 ``z_i = k_i · N_pos + p_i`` of a `bounce_gym.cells.CellModel` (the package's orientation-major
 numbering). Joint cells are never enumerated: batches are ``(batch, m)`` int64 arrays. For small
-m, `JointCellModel.encode` gives the mixed-radix joint index ``Σ_i z_i · N^i`` (docs/choices.md,
+m, `JointCellModel.encode` gives the mixed-radix joint index ``Σ_i z_i · N^i`` (docs/choices/multirobot.md,
 "Joint cell numbering").
 
-**Joint map** (Eq. 6 with docs/choices.md, "Bumps rotate in place and take one tick",
+**Joint map** (Eq. 6 with docs/choices/cell_model.md, "Bumps rotate in place and take one tick",
 "Diagonal moves and the corner rule" and "Robot–robot conflicts on the grid"): every robot proposes
 its king-move target (``CellModel.targets``); an obstacle target blocks it. With ``collisions=True``
 a robot is also blocked, iterated to a fixpoint, when its target is another moving robot's target,
@@ -20,7 +20,7 @@ collision counts once per colliding pair per step. ``min_sep_cells`` = s > 0 (fo
 the robot) widens "the same cell" to "within Chebyshev distance s" in these rules and in the
 validity of joint cells.
 
-**Coverage** (docs/choices.md, "The neighbourhood of a joint cell" to "What 'steps to full
+**Coverage** (docs/choices/multirobot.md, "The neighbourhood of a joint cell" to "What 'steps to full
 coverage' counts"): follow the joint map while the next joint cell is unprocessed; at a
 processed cell, if coverage is incomplete, jump to the best unprocessed neighbour — ±Δθ of one
 robot's heading (``neighbors="rotation"``, 2m) or also ±1 cell in x or y of one robot
@@ -225,6 +225,6 @@ def _best_neighbor(jm, b, mode, processed, keys, covered, lookahead, rng):
 
 
 def random_start(joint_model: JointCellModel, seed: int) -> np.ndarray:
-    """A random initial joint cell (docs/choices.md, "Random initial joint cells"): distinct free
+    """A random initial joint cell (docs/choices/multirobot.md, "Random initial joint cells"): distinct free
     cells, uniform among the 8 bins."""
     return joint_model.random_joint(np.random.default_rng(seed), 1)[0]

@@ -3,7 +3,7 @@
 
 Alam & Bobadilla's Algorithm 2 enumerates the periodic groups (joint limit cycles) of the simple
 cell mapping of m robots and keeps those that monitor the target regions without a robot-robot
-collision. This module does it for **m = 2** robots, with the choices of docs/choices.md
+collision. This module does it for **m = 2** robots, with the choices of docs/choices/multirobot.md
 ("Robot–robot conflicts on the grid", "Monitoring: regions and the collision sink", "Algorithm 2's
 bookkeeping", "Joint cell numbering"):
 
@@ -54,17 +54,17 @@ from bounce_gym.errors import ConfigError
 from bounce_gym.markov.scm import SCMResult, simple_cell_mapping
 
 __all__ = ["MODES", "REJECTED", "MonitoringResult", "default_regions", "joint_successor",
-           "persistent_behavior", "region_indices", "summary"]
+           "joint_monitoring_cycles", "region_indices", "summary"]
 
 MODES = ("visit", "cover", "any")
-#: The label of every cell of a group rejected by SAMEREGION (docs/choices.md, "Algorithm 2's
+#: The label of every cell of a group rejected by SAMEREGION (docs/choices/multirobot.md, "Algorithm 2's
 #: bookkeeping").
 REJECTED = -2
 
 
 @dataclass(eq=False)
 class MonitoringResult:
-    """The output of `persistent_behavior` (Algorithm 2's P and Q, plus bookkeeping).
+    """The output of `joint_monitoring_cycles` (Algorithm 2's P and Q, plus bookkeeping).
 
     Attributes:
         model: the single-robot cell model (both robots use it).
@@ -176,7 +176,7 @@ def default_regions(model: CellModel) -> tuple[np.ndarray, np.ndarray]:
 def joint_successor(model: CellModel, phis: Sequence[float], forbid_swaps: bool = False,
                     min_sep_cells: int = 0) -> tuple[np.ndarray, int]:
     """The joint map of two independent robots with a collision sink, vectorised
-    (docs/choices.md, "Monitoring: regions and the collision sink", "Joint cell numbering").
+    (docs/choices/multirobot.md, "Monitoring: regions and the collision sink", "Joint cell numbering").
 
     Returns ``(successor, n_collision_cells)``: ``successor`` has N1·N2 + 1 entries (the last is
     the sink ⊥, which maps to itself); joint cells that collide — position cells within
@@ -205,7 +205,7 @@ def joint_successor(model: CellModel, phis: Sequence[float], forbid_swaps: bool 
     return succ, int(collide.sum())
 
 
-def persistent_behavior(
+def joint_monitoring_cycles(
     model: CellModel,
     phis: Sequence[float],
     regions: Sequence[object] | None = None,
@@ -222,7 +222,7 @@ def persistent_behavior(
         mode: ``"visit"`` | ``"cover"`` | ``"any"`` (module docstring).
         forbid_swaps: also treat two robots swapping cells in one step as a collision.
         min_sep_cells: collide when the robots' cells are within this Chebyshev distance
-            (docs/choices.md, "Robot–robot conflicts on the grid"; 0 = the same cell only, for cells
+            (docs/choices/multirobot.md, "Robot–robot conflicts on the grid"; 0 = the same cell only, for cells
             smaller than the robot diameter use ≥ 1).
 
     Returns:

@@ -2,7 +2,7 @@
 
 * `CoveragePlanPolicy` — executes the joint trajectory x̃ of Algorithm 1 (MULTIROBOTCOVERAGE,
   `baselines.multirobot.plan_coverage`): on a joint-map edge every robot bounces with its φ_i; on a
-  neighbour jump (one robot's heading ±Δθ; docs/choices.md, "A neighbour jump is a timed turn") the
+  neighbour jump (one robot's heading ±Δθ; docs/choices/multirobot.md, "A neighbour jump is a timed turn") the
   robot gets a clock-timed *turn command* and the others wait one tick (the env's ``turn_angles``).
   After the plan the robots keep bouncing with φ_i. Edges a turn cannot execute — a random restart,
   or a position jump of the ``"full"`` neighbourhood — end the plan there (``executable_steps``);
@@ -15,7 +15,7 @@
 Both are exact on the ``cell`` backend (the papers' grid model) in ``step_mode="tick"``: the env's
 joint cell after step t is the plan's (tests replay whole plans). On the continuous backends they
 run open loop from the grid plan — one tick is then ``step_length`` of driving, a diagonal king
-move is √2 on the grid (docs/choices.md, "Diagonal moves and the corner rule"), so the motion drifts
+move is √2 on the grid (docs/choices/multirobot.md, "Diagonal moves and the corner rule"), so the motion drifts
 from the plan; `evaluate.py` reports how much coverage and how many contacts that costs.
 """
 
@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from baselines.multirobot.coverage import CoverageResult, plan_coverage, random_start
-from baselines.multirobot.monitoring import MonitoringResult, persistent_behavior
+from baselines.multirobot.monitoring import MonitoringResult, joint_monitoring_cycles
 from baselines.policy import MultiPolicy
 from bounce_gym.cells import CellModel, JointCellModel
 from bounce_gym.errors import ConfigError
@@ -86,7 +86,7 @@ class CoveragePlanPolicy(MultiPolicy):
                 corner_rule: str = "no_squeeze") -> CoveragePlanPolicy:
         """The planner for a `MultiBounceEnv` (parallel form, discrete actions, tick mode).
 
-        ``phi``: degrees, one for every robot or one per robot (docs/choices.md, "One fixed bounce
+        ``phi``: degrees, one for every robot or one per robot (docs/choices/multirobot.md, "One fixed bounce
         angle per robot"); each must be in that robot's angle set. The env's ``turn_angles`` must
         hold ±360°/bins for the neighbour jumps. ``max_steps`` defaults to the env's
         ``max_cycles``. The plan is made on ``env.cell_model(cell_bins, corner_rule)``: the cell
@@ -120,7 +120,7 @@ class CoveragePlanPolicy(MultiPolicy):
 
     def start_options(self, env, seed: int) -> dict | None:
         """None on the cell backend (the env's random start is a joint cell); on continuous
-        backends a random joint cell's centres and headings (`random_start`; docs/choices.md,
+        backends a random joint cell's centres and headings (`random_start`; docs/choices/multirobot.md,
         "Random initial joint cells")."""
         env = getattr(env, "unwrapped", env)
         if env.options.backend == "cell":
@@ -241,9 +241,9 @@ class MonitoringPlanPolicy(MultiPolicy):
 
         ``phi``: degrees, one for both robots or a pair (default: each robot's first angle).
         Regions: the task's polygons (`regions_of`). ``forbid_swaps`` defaults to whether the env's
-        robots bounce off each other (a swap on the grid is then a conflict: docs/choices.md,
+        robots bounce off each other (a swap on the grid is then a conflict: docs/choices/multirobot.md,
         "Robot–robot conflicts on the grid"); ``min_sep_cells`` (the cycles' safety margin,
-        `persistent_behavior`) to the env's.
+        `joint_monitoring_cycles`) to the env's.
         """
         env = getattr(env, "unwrapped", env)
         _check_tick_mode(env, "MonitoringPlanPolicy")
@@ -259,7 +259,7 @@ class MonitoringPlanPolicy(MultiPolicy):
             forbid_swaps = env.options.robot_collisions == "bounce"
         if min_sep_cells is None:
             min_sep_cells = env.options.min_sep_cells
-        result = persistent_behavior(model, [math.radians(p) for p in phis], regions_of(env, model),
+        result = joint_monitoring_cycles(model, [math.radians(p) for p in phis], regions_of(env, model),
                                      mode=mode, forbid_swaps=forbid_swaps,
                                      min_sep_cells=min_sep_cells)
         return cls(result, [_angle_index(env, i, p) for i, p in enumerate(phis)])

@@ -5,7 +5,7 @@ robot navigation and coverage using a dynamical system approach" (IEEE IRC 2017;
 3.2), on the deterministic cell model `bounce_gym.cells.CellModel` (ε = 0: the robot rotates
 reliably by the angles of Φ).
 
-**The roadmap is the layered product graph** (docs/choices.md, "The roadmap remembers the current
+**The roadmap is the layered product graph** (docs/choices/navigation_coverage.md, "The roadmap remembers the current
 bounce angle"). The paper (Sec. IV-A)
 takes the union of one graph G_i per policy over the same vertex set, which loses which policy is
 active, so "the bounce changes the angle" (weight w2) cannot be known. Here a node is a pair
@@ -15,7 +15,7 @@ active, so "the bounce changes the angle" (weight w2) cannot be known. Here a no
 * bump edges at a blocked cell: ``(z, i) → (z ⊕ φ_i, i)`` of weight w1 (the angle is kept) and
   ``(z, i) → (z ⊕ φ_k, k)`` of weight w2 for every k ≠ i (the angle changes); ``z ⊕ φ`` is the
   same position with the heading rotated counter-clockwise by φ (a bump rotates in place,
-  docs/choices.md, "Bumps rotate in place and take one tick");
+  docs/choices/cell_model.md, "Bumps rotate in place and take one tick");
 * the first policy is free: a query starts from all layers ``(x_I, i)`` at distance 0 (one
   Dijkstra with several sources and ``min_only=True``, i.e. a super-source) and ends at the best
   layer of ``x_G``.

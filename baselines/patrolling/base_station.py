@@ -4,7 +4,7 @@ comm-region cells stay as the overlap ring through which a robot reaches b's lin
 
 Cells are the free cells of a `CellVisibility`, given as their (row, col) with row 0 at the
 bottom; geometry is in cell units with y up, on cell centres (x = col + 1/2, y = row + 1/2).
-The rules where the thesis is open are in docs/choices.md, "Stochastic patrolling: visibility
+The rules where the thesis is open are in docs/choices/patrolling.md, "Stochastic patrolling: visibility
 policies".
 """
 

@@ -20,7 +20,7 @@ per adversary response (scipy HiGHS) and keeps the first response, in index orde
 strictly the best; or, with ``method="dobss"``, the DOBSS mixed-integer program of Paruchuri et
 al. (2008) for a single adversary type (scipy `milp`), followed by a second one that picks the
 lowest-index response within ``_MILP_TIE`` of its value, so both methods give the same value and,
-up to that tolerance, the same response (docs/choices.md, "DOBSS and its tie-break"). The
+up to that tolerance, the same response (docs/choices/patrolling.md, "DOBSS and its tie-break"). The
 optimal mixture is often not unique (on Table 4.2 any α_7 in [2/7, 73/81] with α_9 = 1 - α_7 is
 optimal); ties go to the lexicographically largest mixture (as much weight as possible on the
 lowest-index strategy, then the next, ...), which gives Table 4.3.

@@ -9,7 +9,7 @@ chains and their weights, exactly; for `PerimeterPatrolPolicy` the vertex chain 
 trained patrollers (`LearnedPatrollers`) the chain their policy induces alone at each vertex.
 The best response of `BestResponseAdversary` is exact against Markov chains and their mixtures
 only. Each also ``announced``: the one chain the env is told (its ``strategy``, what a trained
-adversary observes). docs/choices.md, "The patrol evaluation", gives the reasons.
+adversary observes). docs/choices/patrolling.md, "The patrol evaluation", gives the reasons.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ consecutive vertices of Q (for Q = {i, j, k}: SP(i, j) ∪ SP(j, k) ∪ SP(k, i)
 the objective of eq. 4.3 and the simplex of problem 4.4 over all edges of the graph and adds that
 the cycle's edges g carry at least the share h of the weight: ``sum_{e in g} w_e >= h``.
 
-Where the thesis is open (docs/choices.md, "The subset problem's share h = 0.8" and
+Where the thesis is open (docs/choices/patrolling.md, "The subset problem's share h = 0.8" and
 "ShortestCycle of more than three vertices, and ties between shortest paths"):
 
 * h is not given; the default 0.8 ranks the vertices of the thesis's small graph as the Clique

@@ -7,7 +7,7 @@ The target's own row gets 1 for each of its edges, once. The rows are normalised
 leads to i, but the chain is generally reducible: vertices that no path to i passes through are
 never reached again, and their hitting times are ``inf`` (`markov.hitting_times`).
 
-The thesis gives no k; the default is 3 (docs/choices.md, "Alg. 4.1: k = 3 shortest paths" and
+The thesis gives no k; the default is 3 (docs/choices/patrolling.md, "Alg. 4.1: k = 3 shortest paths" and
 "Alg. 4.1: the target's row").
 Paths use the edge attribute ``length`` (1 where missing); networkx's Yen implementation
 (`shortest_simple_paths`) orders equally long paths. Matrices are row-stochastic over the

@@ -6,7 +6,7 @@ Both return the subsets Q_i of Eq. 4.5 as vertex indices of the `cell_graph` num
 the free-cell numbering of `CellVisibility`; the chains themselves are solved elsewhere (on the
 full graph, as the thesis does: Table 4.5 has n = 188 for every policy). Geometry is done in
 cell units on the integer grid, so a plan does not depend on where the map lies or on its scale.
-The choices where the thesis is open are in docs/choices.md, "Stochastic patrolling: visibility
+The choices where the thesis is open are in docs/choices/patrolling.md, "Stochastic patrolling: visibility
 policies".
 """
 

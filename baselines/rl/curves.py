@@ -33,7 +33,7 @@ METRICS = {"r": "return", "is_success": "success", "localized": "localized",
 
 
 @dataclass
-class Run:
+class RunCurves:
     """One run's curves: per seed, the env steps and each smoothed metric."""
 
     name: str
@@ -77,14 +77,14 @@ def smoothed(values: np.ndarray, window: int) -> np.ndarray:
     return (sums[ends] - sums[ends - counts]) / counts
 
 
-def learning_curves(folder: Path, window: int = WINDOW) -> list[Run]:
+def learning_curves(folder: Path, window: int = WINDOW) -> list[RunCurves]:
     """The runs of a models folder, each with its seeds' smoothed curves (seeds whose monitor
     file has no finished episode yet are left out)."""
     if window < 1:
         raise ConfigError(f"window: expected an integer >= 1, got {window}")
     if not folder.is_dir():
         raise ConfigError(f"curves: {str(folder)!r} is not a folder")
-    runs: dict[str, Run] = {}
+    runs: dict[str, RunCurves] = {}
     for path in sorted(folder.iterdir()):
         match = _MONITOR.fullmatch(path.name)
         if not match or not path.is_file():  # not a pipe or a folder of that name
@@ -96,7 +96,7 @@ def learning_curves(folder: Path, window: int = WINDOW) -> list[Run]:
         for key, metric in METRICS.items():
             if key in columns:
                 curves[metric] = smoothed(columns[key], window)
-        run = runs.setdefault(match.group("run"), Run(match.group("run")))
+        run = runs.setdefault(match.group("run"), RunCurves(match.group("run")))
         run.seeds[int(match.group("seed"))] = curves
     for run in runs.values():
         run.seeds = dict(sorted(run.seeds.items()))

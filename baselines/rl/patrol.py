@@ -27,7 +27,7 @@ one side learns while the other plays a fixed policy inside a wrapper.
 Both report ``info["is_success"]`` for the side that learns (patrollers: capture or deterred;
 adversary: success), which the training monitor logs (`baselines.rl.train_env.MONITOR_KEYS`).
 Illegal patroller moves are the env's documented no-op (``illegal_action="stay"``): plain PPO,
-no action masks (docs/choices.md, "Patrol game: plain PPO without action masks").
+no action masks (docs/choices/rl_training.md, "Patrol game: plain PPO without action masks").
 
 Seeding: ``reset(seed=s)`` resets the env with s and restarts the wrapper's own stream (the
 adversary's plan, the patrollers' draws) from ``[s, STREAM]``, a stream apart from the env's.

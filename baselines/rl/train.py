@@ -111,7 +111,7 @@ from bounce_gym.errors import ConfigError
 from bounce_gym.extras import require
 from bounce_gym.files import check_writable, refuse_links
 
-__all__ = ["Run", "finished", "make_train_env", "prepare", "train", "train_seed",
+__all__ = ["RunFiles", "finished", "make_train_env", "prepare", "train", "train_seed",
            "validate_train_config"]
 
 #: Keys a resumed run may change: the budget, checkpointing, logging, and which seeds run.
@@ -119,7 +119,7 @@ RESUMABLE_CHANGES = ("total_timesteps", "checkpoint_every", "tensorboard", "resu
                      "torch_threads", "models", "hyperparams_file")
 
 
-class Run:
+class RunFiles:
     """The files of one seed's run of a validated configuration."""
 
     def __init__(self, config: Mapping, seed: int) -> None:
@@ -167,7 +167,7 @@ def prepare(config: Mapping, folder: Path | None = None) -> dict:
     hyperparameters and the action space. Its seeds may then train in any order or at once
     (`train_seed`; a sweep over processes, `bounce_gym_experiments.training`)."""
     config = validate_train_config(config, folder)  # the quick checks first, before torch
-    runs = [Run(config, seed) for seed in config["seeds"]]
+    runs = [RunFiles(config, seed) for seed in config["seeds"]]
     check_writable("config.models", runs[0].folder)
     for run in runs:
         run.check_links()
@@ -196,14 +196,14 @@ def train_seed(config: Mapping, seed: int, progress: bool = True, callbacks: Seq
     if config["algo"] in JAX_ALGOS:
         from baselines.rl.jaxrl.runner import train_run
 
-        return train_run(Run(config, seed), log or (lambda line: None))
+        return train_run(RunFiles(config, seed), log or (lambda line: None))
     import torch
 
     threads = torch.get_num_threads()
     # small MLPs on tiny batches: more intra-op threads only contend with the env processes
     torch.set_num_threads(config["torch_threads"])
     try:
-        return _train_run(Run(config, seed), progress, list(callbacks),
+        return _train_run(RunFiles(config, seed), progress, list(callbacks),
                           log or (lambda line: None))
     finally:
         torch.set_num_threads(threads)
@@ -214,7 +214,7 @@ def finished(config: Mapping, seed: int) -> bool:
     readable model file (unchanged since saved, `baselines.rl.model_files.read_model`), trained
     with this configuration (`RESUMABLE_CHANGES` aside) for exactly its ``total_timesteps``. A
     sweep started again skips such seeds."""
-    run = Run(config, seed)
+    run = RunFiles(config, seed)
     if not run.model.is_file():
         return False
     try:
@@ -225,7 +225,7 @@ def finished(config: Mapping, seed: int) -> bool:
         _comparable(saved) == _comparable(run.config)
 
 
-def _check_checkpoints(config: Mapping, runs: list[Run]) -> None:
+def _check_checkpoints(config: Mapping, runs: list[RunFiles]) -> None:
     """Resume only from checkpoints of this configuration, and never start afresh over one."""
     found = {run.stem: run.checkpoints() for run in runs}
     folder = runs[0].checkpoint_folder
@@ -247,11 +247,11 @@ def _check_action_space(config: Mapping) -> None:
     """DQN needs discrete actions (a multi-robot env trains PPO only)."""
     import gymnasium as gym
 
-    from baselines.rl.train_env import make_env
+    from baselines.rl.train_env import make_config_env
 
     if config["algo"] != "dqn":
         return
-    space = make_env(config).action_space
+    space = make_config_env(config).action_space
     if not isinstance(space, gym.spaces.Discrete):
         raise ConfigError(f"config.algo: dqn needs discrete actions, but the env's are {space} "
                           "(set env_kwargs.action_type: discrete, or use ppo or recurrentppo)")
@@ -272,9 +272,9 @@ def _check_same_config(saved: Mapping, config: Mapping, path: Path) -> None:
                           "resume with the configuration it was trained with")
 
 
-def _train_run(run: Run, progress: bool, extra_callbacks: list, log) -> Path:
+def _train_run(run: RunFiles, progress: bool, extra_callbacks: list, log) -> Path:
     from baselines.rl.resume import capture, checkpoint_callback
-    from baselines.rl.wrappers import describe
+    from baselines.rl.wrappers import describe_wrappers
 
     config = run.config
     env = make_train_env(config, run.seed)
@@ -283,7 +283,7 @@ def _train_run(run: Run, progress: bool, extra_callbacks: list, log) -> Path:
         model = _resumed(run, env, found, log) if found else _fresh(run, env, log)
 
         def metadata() -> dict:
-            return {"config": config, "wrappers": describe(env)}
+            return {"config": config, "wrappers": describe_wrappers(env)}
 
         def save_checkpoint(model) -> None:
             run.check_links()  # also a link made since the run started
@@ -303,11 +303,11 @@ def _train_run(run: Run, progress: bool, extra_callbacks: list, log) -> Path:
     return run.model
 
 
-def _log_dir(run: Run) -> str | None:
+def _log_dir(run: RunFiles) -> str | None:
     return str(run.folder / "tensorboard") if run.config["tensorboard"] else None
 
 
-def _fresh(run: Run, env, log):
+def _fresh(run: RunFiles, env, log):
     """A new model of the run's algorithm on ``env``, its monitor file started."""
     config = run.config
     kwargs = algo_kwargs(config["hyperparams"])
@@ -322,7 +322,7 @@ def _fresh(run: Run, env, log):
     return model
 
 
-def _resumed(run: Run, env, found: dict[int, Path], log):
+def _resumed(run: RunFiles, env, found: dict[int, Path], log):
     """The model of the newest checkpoint in ``found``, with everything restored into it and
     into ``env``, its monitor file cut back to the checkpoint. The resume state is unpickled
     only once vouched for (`baselines.rl.model_files.ModelFile.resume_state`), before the

@@ -48,7 +48,7 @@ class SnapshotEnv(gym.Wrapper):
         self.env = pickle.loads(data)  # noqa: S301
 
 
-def make_env(config: Mapping):
+def make_config_env(config: Mapping):
     """One env of a validated configuration: a PettingZoo parallel env when its robots share the
     policy (`baselines.rl.train_config.is_multi`), a Gymnasium env otherwise."""
     from baselines.rl.train_config import is_multi
@@ -72,7 +72,7 @@ class _CopyMaker:
         self.config = {key: config.get(key) for key in ("env", "env_kwargs", "role")}
 
     def __call__(self) -> gym.Env:
-        return SnapshotEnv(make_env(self.config))
+        return SnapshotEnv(make_config_env(self.config))
 
 
 def base_env(config: Mapping):
@@ -83,7 +83,7 @@ def base_env(config: Mapping):
     if is_multi(config):
         from baselines.rl.parallel_vec_env import ParallelToVecEnv
 
-        return ParallelToVecEnv(make_env(config))
+        return ParallelToVecEnv(make_config_env(config))
     with config_errors("config.env_kwargs"):
         if config["vec_env"] == "native":
             from baselines.rl.vector_vec_env import VectorToVecEnv
@@ -101,7 +101,7 @@ def monitor_keys(config: Mapping) -> tuple[str, ...]:
     """The `MONITOR_KEYS` that the env of ``config`` reports in every step's ``info``."""
     from baselines.rl.train_config import is_multi
 
-    env = make_env(config)
+    env = make_config_env(config)
     with config_errors("config.env_kwargs"):
         env.reset(seed=0)
         if is_multi(config):

@@ -2,7 +2,7 @@
 evaluation.
 
 Training may stack frames (``VecFrameStack``) and normalise observations (``VecNormalize``;
-`baselines.rl.train_env`); the policy only ever saw the wrapped observations. `describe` records
+`baselines.rl.train_env`); the policy only ever saw the wrapped observations. `describe_wrappers` records
 what the evaluation needs — the stack size and the normalisation statistics, as JSON numbers
 (float64, exact) — in the model file's metadata (`baselines.rl.model_files.METADATA_ENTRY`,
 JSON, never a pickle). `ObservationPipeline` rebuilds the same SB3 wrappers,
@@ -25,7 +25,7 @@ from bounce_gym.errors import ConfigError
 _NORMALIZE_NUMBERS = ("clip_obs", "clip_reward", "gamma", "epsilon")
 
 
-def describe(env) -> dict:
+def describe_wrappers(env) -> dict:
     """The wrappers of a training VecEnv as JSON: ``{"n_stack": n, "normalize": None | {...}}``."""
     out: dict[str, Any] = {"n_stack": 1, "normalize": None}
     layer = env
@@ -87,7 +87,7 @@ class Feed(VecEnv):
 
 
 class ObservationPipeline:
-    """The wrappers described by ``wrappers`` (`describe`), frozen, over single observations of
+    """The wrappers described by ``wrappers`` (`describe_wrappers`), frozen, over single observations of
     ``observation_space``: `first` at the start of an episode, `next` after every step; both
     return the batch of one observation the model acts on. ``path`` names the model file in
     errors."""

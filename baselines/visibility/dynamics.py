@@ -14,7 +14,7 @@ start (the paper's "clockwise endpoint" v_i). `edge_segment` turns a world edge 
 met at ``μ(s, θ) = cross(p − v_j, d) / cross(t_j, d)`` (distance from ``v_j``). It is affine in
 ``s`` with slope ``∂μ/∂s = sin θ / sin(θ − γ) = −C`` (γ = direction of ``t_j`` relative to ``t_i``):
 every transition reverses orientation, and ``C = |sin θ / sin(θ − γ)|`` (Def. 11, unified form:
-docs/choices.md, "Contraction for non-adjacent edges") is independent of the position. `transition`,
+docs/choices/visibility.md, "Contraction for non-adjacent edges") is independent of the position. `transition`,
 `slope`, `interval_image`, `contraction`, `is_contracting`, `lemma2_threshold`, `contracting_range`
 and `composite_contraction` (Def. 12) implement this; `composite_fixed_point` gives the fixed point
 ``μ* = A / (1 − (−1)^m C(F))`` of any closed edge sequence with per-stage actions.
@@ -22,7 +22,7 @@ and `composite_contraction` (Def. 12) implement this; `composite_fixed_point` gi
 **Fixed rule in convex polygons.** `lemma3_bound` (Lemma 3), `fixed_rule_cycle` (Theorem 1: the
 fixed point ``d_FP`` on ``e_0`` and all contacts of the period-n limit cycle), the closed forms
 `regular_ngon_fixed_point` and `rectangle_fixed_point`, `cor3_bound` and `iterations_to`
-(Cor. 4, the paper's conservative ``⌈log(ε/(2ℓ))/log C⌉``; docs/choices.md,
+(Cor. 4, the paper's conservative ``⌈log(ε/(2ℓ))/log C⌉``; docs/choices/visibility.md,
 "Corollary 4 is conservative"). `simulate_fixed_rule` runs the
 exact point-robot fixed rule with `World.first_hit`, to check the analytic results.
 """
@@ -110,7 +110,7 @@ def transition_side(seg_i: object, seg_j: object, tol: float = SIDE_TOL) -> str:
     """``"right"`` (γ ∈ (0, π): e_j is reached by turning toward the counter-clockwise-next side,
     small θ, as for the next edge of a convex polygon), ``"left"`` (γ ∈ (−π, 0)) or
     ``"parallel"`` (γ ∈ {0, π}: Def. 11's classification is undefined;
-    docs/choices.md, "Contraction for non-adjacent edges"). Parallel means |sin γ| ≤ ``tol``, the
+    docs/choices/visibility.md, "Contraction for non-adjacent edges"). Parallel means |sin γ| ≤ ``tol``, the
     partition's sidedness tolerance: tangents of a polygon far from the origin carry rounding
     errors far above 1e-12."""
     gamma = relative_direction(seg_i, seg_j)
@@ -192,7 +192,7 @@ def interval_image(seg_from: object, seg_to: object, s_range: object,
 # -- contraction (Def. 10–12, Lemma 2) ----------------------------------------------------------
 
 def contraction(seg_i: object, seg_j: object, theta: object) -> np.ndarray:
-    """Def. 11 in the unified form C = |sin θ / sin(θ − γ)| (§6; docs/choices.md,
+    """Def. 11 in the unified form C = |sin θ / sin(θ − γ)| (§6; docs/choices/visibility.md,
     "Contraction for non-adjacent edges"); parallel facing edges
     give C = 1. Broadcast over θ."""
     return np.abs(slope(seg_i, seg_j, theta))
@@ -427,7 +427,7 @@ def cor3_bound(coefficient: float, length: float, k: int) -> float:
 
 def iterations_to(eps: float, coefficient: float, length: float) -> int:
     """Cor. 4: laps after which the set of possible positions is smaller than ε,
-    ``⌈log(ε/(2ℓ)) / log C⌉``. Conservative (docs/choices.md, "Corollary 4 is conservative"): the
+    ``⌈log(ε/(2ℓ)) / log C⌉``. Conservative (docs/choices/visibility.md, "Corollary 4 is conservative"): the
     set diameter is only ≤ C^k ℓ, so fewer laps often suffice (the WAFR version used ε/ℓ). Returns 0
     if ε ≥ 2ℓ already."""
     if not 0.0 < coefficient < 1.0:

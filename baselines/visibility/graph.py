@@ -3,15 +3,15 @@
 
 * `entirely_visible` / `visibility_matrix`: Def. 6. Two segments are entirely visible iff the
   convex hull of their union lies in P (the hull is the union of all segments joining them), which
-  also rejects holes inside the hull (docs/choices.md, "Holes inside the convex hull"). Each segment
+  also rejects holes inside the hull (docs/choices/visibility.md, "Holes inside the convex hull"). Each segment
   must face the other (closed left side of the other's supporting line); segments on one supporting
-  line are never adjacent. ``closed=True`` (default; docs/choices.md, "Closed visibility"): grazing
+  line are never adjacent. ``closed=True`` (default; docs/choices/visibility.md, "Closed visibility"): grazing
   a vertex or sliding along collinear boundary counts as visible. ``closed=False``: no vertex of P'
   other than the four end points may touch the hull.
 * `safe_interval`: Prop. 2 with ``atan2`` angles; θ_r = 0 for a shared vertex v_{i+1} = v_j and
   θ_l = π for v_{j+1} = v_i.
 * `bvg`, `safe_graph`: `networkx.DiGraph` over segment ids; G_safe arcs carry ``lo``, ``hi``,
-  ``width`` and drop intervals narrower than ``w_min`` (docs/choices.md, "Tiny safe intervals are
+  ``width`` and drop intervals narrower than ``w_min`` (docs/choices/visibility.md, "Tiny safe intervals are
   dropped").
 * `reachability`: the §7.3–7.4 analysis (Prop. 5 unreachable nodes, SCCs, WCCs, sinks).
 """
@@ -33,7 +33,7 @@ from baselines.visibility.partition import (
 )
 
 __all__ = [
-    "Reachability",
+    "SafeGraphReachability",
     "bvg",
     "entirely_visible",
     "reachability",
@@ -327,7 +327,7 @@ def bvg(part: Partition, closed: bool = False) -> nx.DiGraph:
     """Bounce visibility graph: the directed edge visibility graph of P' (Def. 5).
 
     Arcs i -> j and j -> i for every pair of segments with some line of sight between them
-    (`weak_visibility_matrix`). The arcs carry no guarantee (docs/choices.md, "The BVG's arcs carry
+    (`weak_visibility_matrix`). The arcs carry no guarantee (docs/choices/visibility.md, "The BVG's arcs carry
     no guarantee"); plan with `safe_graph`,
     whose arcs need entire visibility (Def. 6).
 
@@ -347,7 +347,7 @@ def safe_graph(part: Partition, w_min: float = W_MIN, closed: bool | None = None
     """G_safe: BVG arcs with a non-empty safe interval of width >= ``w_min``.
 
     Arc attributes: ``lo`` = θ_r, ``hi`` = θ_l, ``width`` = θ_l − θ_r (radians). Intervals are
-    stored closed; their end rays hit vertices, so sample strictly inside (docs/choices.md,
+    stored closed; their end rays hit vertices, so sample strictly inside (docs/choices/visibility.md,
     "Sample strictly inside a safe interval").
     """
     vis = visibility_matrix(part, closed)
@@ -365,7 +365,7 @@ def safe_graph(part: Partition, w_min: float = W_MIN, closed: bool | None = None
 
 
 @dataclass(frozen=True)
-class Reachability:
+class SafeGraphReachability:
     """§7.3–7.4 / Prop. 5 analysis of a G_safe.
 
     Attributes:
@@ -393,11 +393,11 @@ class Reachability:
         return len(self.wccs)
 
 
-def reachability(g: nx.DiGraph, part: Partition) -> Reachability:
+def reachability(g: nx.DiGraph, part: Partition) -> SafeGraphReachability:
     """Unreachable nodes, their perimeter fraction, SCCs, WCCs and sinks of G_safe (§7.3–7.4)."""
     unreachable = sorted(k for k, d in g.in_degree() if d == 0)
     frac = float(part.length[unreachable].sum() / part.perimeter) if unreachable else 0.0
     sccs = sorted(nx.strongly_connected_components(g), key=lambda c: (-len(c), min(c)))
     wccs = sorted(nx.weakly_connected_components(g), key=lambda c: (-len(c), min(c)))
     sinks = sorted(k for k, d in g.out_degree() if d == 0)
-    return Reachability(unreachable, frac, sccs, wccs, sinks, nx.condensation(g, sccs))
+    return SafeGraphReachability(unreachable, frac, sccs, wccs, sinks, nx.condensation(g, sccs))

@@ -4,7 +4,7 @@ Nilles et al. 2021, §4. For every reflex vertex ``r`` and every vertex ``v`` th
 ray from ``v`` through ``r`` is continued beyond ``r`` when the line grazes ``r`` (rule (a)); the
 two neighbours of ``r`` are always used, so the extensions of ``r``'s incident edges are shot
 (rule (b)). First hits are inserted into ∂P unless they coincide with an existing vertex, and
-coincident hits are merged, both with scale-relative tolerances (rule (c); docs/choices.md,
+coincident hits are merged, both with scale-relative tolerances (rule (c); docs/choices/visibility.md,
 "Tolerances relative to the polygon's size"). Reflexness is
 taken with respect to free space, which with the World's ring orientation (outer CCW, holes CW)
 is the same cross-product test on every ring (rule (d)). Inserted vertices shoot nothing.
@@ -28,7 +28,7 @@ from bounce_gym.worlds.world import World
 __all__ = ["Partition", "closed_region", "partition", "visible_pairs"]
 
 #: Merge / vertex-coincidence tolerance for inserted points, times the world's diameter
-#: (docs/choices.md, "Tolerances relative to the polygon's size").
+#: (docs/choices/visibility.md, "Tolerances relative to the polygon's size").
 SNAP_REL = 1e-9
 #: Slack of the closed-visibility predicates, times the world's diameter.
 VIS_REL = 1e-9
@@ -50,7 +50,7 @@ class Partition:
         reflex: (m,) vertex ``k`` is a reflex vertex of P.
         inserted: (m,) vertex ``k`` was inserted by Algorithm 1 (interior angle π).
         succ, pred: (m,) index of the next / previous segment on the same ring.
-        closed: the visibility semantics used (True: closed, grazing counts; docs/choices.md,
+        closed: the visibility semantics used (True: closed, grazing counts; docs/choices/visibility.md,
             "Closed visibility").
         tol: absolute length tolerance used for snapping and the predicates.
     """
@@ -137,7 +137,7 @@ def visible_pairs(world: World, a: np.ndarray, b: np.ndarray, closed: bool = Tru
     closed=True: the closed segment lies in the closed free space (grazing a vertex or running
     along the boundary counts). closed=False: additionally no vertex of ``exclude_points``
     (default: the world's vertices) other than the segment's own end points lies on it, i.e.
-    the open segment avoids ∂P (docs/choices.md, "Closed visibility"; valid for segments with end
+    the open segment avoids ∂P (docs/choices/visibility.md, "Closed visibility"; valid for segments with end
     points on ∂P).
     """
     a = np.asarray(a, dtype=np.float64).reshape(-1, 2)
@@ -242,7 +242,7 @@ def partition(world: World, closed: bool = True) -> Partition:
     Args:
         world: the polygon (holes allowed).
         closed: visibility semantics for "v is visible from r" (True: grazing counts;
-            docs/choices.md, "Closed visibility").
+            docs/choices/visibility.md, "Closed visibility").
     """
     snap = SNAP_REL * world.diameter
     edges, points = event_points(world, closed)
@@ -265,11 +265,11 @@ def partition(world: World, closed: bool = True) -> Partition:
         edge.extend([e] * len(cuts))
         inserted.extend([False] + [True] * (len(cuts) - 1))
         reflex.extend([bool(world.reflex[e])] + [False] * (len(cuts) - 1))
-    return assemble(world, start, ring, edge, inserted, reflex, bool(closed),
+    return assemble_partition(world, start, ring, edge, inserted, reflex, bool(closed),
                     VIS_REL * world.diameter)
 
 
-def assemble(world: World, start, ring, edge, inserted, reflex, closed: bool,
+def assemble_partition(world: World, start, ring, edge, inserted, reflex, closed: bool,
              tol: float) -> Partition:
     """A `Partition` from its segments' start points (ring by ring, in boundary order) and
     per-segment flags; ends, successors, tangents and inward normals are derived."""

@@ -3,8 +3,8 @@
 * `constant_strategy`: Alg. 2 SafeConstantFixedNavigate / SearchConstantFixedStrats. A BFS over
   states (set of current segments, θ̃) starting from θ̃ = (0, π); each arc intersects θ̃ with its
   safe interval and empty intersections are pruned (§7.1.1). With a start *set* of several segments
-  every segment follows one arc at each stage with the same θ̃ (docs/choices.md, "Start and goal
-  sets split the partition"). Tie-break (docs/choices.md, "Ties among shortest safe plans"):
+  every segment follows one arc at each stage with the same θ̃ (docs/choices/visibility.md, "Start and goal
+  sets split the partition"). Tie-break (docs/choices/visibility.md, "Ties among shortest safe plans"):
   ``order="shortest"`` (default) takes the widest θ̃ among the shortest feasible paths, which is
   the paper's published answer; ``order="widest"`` takes the widest θ̃ among all paths of at most
   ``max_arcs`` arcs, then the fewest arcs.
@@ -12,15 +12,15 @@
   (the paper's answer) or by the widest minimum interval (``tie="widest"``); every stage uses its own arc's interval (no intersection across stages).
 * `bottleneck_plan`: among paths of at most ``max_arcs`` arcs, the largest minimum interval width
   (then the fewest arcs).
-* `split_at`: refine P' at the end points of S and G (docs/choices.md, "Start and goal sets split
+* `split_at`: refine P' at the end points of S and G (docs/choices/visibility.md, "Start and goal sets split
   the partition").
-* `patrol`: Def. 15 (§7.2) searched as in docs/choices.md, "Patrolling search" (colour = original
+* `patrol`: Def. 15 (§7.2) searched as in docs/choices/visibility.md, "Patrolling search" (colour = original
   edge).
 * `PlanPolicy`: executes a `VisibilityPlan` in `BounceEnv` (fixed rule, continuous actions).
 * `monte_carlo`: success rate of a plan under exact ray casting (`World.first_hit`).
 
 Intervals are stored closed but their end rays hit vertices, so every sampler draws strictly
-inside them (docs/choices.md, "Sample strictly inside a safe interval").
+inside them (docs/choices/visibility.md, "Sample strictly inside a safe interval").
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ import numpy as np
 
 from baselines.policy import Policy, episode_rng
 from baselines.visibility.dynamics import CompositeCycle, composite_fixed_point, contraction
-from baselines.visibility.partition import Partition, assemble
+from baselines.visibility.partition import Partition, assemble_partition
 from bounce_gym.errors import ConfigError
 
 __all__ = [
@@ -242,11 +242,11 @@ def bottleneck_plan(g: nx.DiGraph, start: int, goal: int | Iterable[int],
     return _plan_from_path(g, best[2], "bottleneck", goal_set)
 
 
-# -- refinement of P' (docs/choices.md, "Start and goal sets split the partition") ----------
+# -- refinement of P' (docs/choices/visibility.md, "Start and goal sets split the partition") ----------
 
 def split_at(part: Partition, points: object) -> Partition:
     """P' refined at ``points`` (each on ∂P, e.g. the end points of S and G;
-    docs/choices.md, "Start and goal sets split the partition").
+    docs/choices/visibility.md, "Start and goal sets split the partition").
 
     Sub-segments of an entirely visible pair stay entirely visible, so Prop. 2 still applies to
     the refined partition. Points within the partition's snapping tolerance of an existing vertex
@@ -287,7 +287,7 @@ def split_at(part: Partition, points: object) -> Partition:
             edge.append(e)
             inserted.append(flags[e][i][0])
             reflex.append(flags[e][i][1])
-    return assemble(world, start, ring, edge, inserted, reflex, part.closed, part.tol)
+    return assemble_partition(world, start, ring, edge, inserted, reflex, part.closed, part.tol)
 
 
 # -- patrolling (Def. 15) -----------------------------------------------------------------------
@@ -352,10 +352,11 @@ def patrol(g: nx.DiGraph, part: Partition, edge_sequence: Sequence[int], max_len
            start: int | None = None, theta: float | None = None, strict: bool = False,
            margin: float = 0.05, select: str = "coefficient") -> PatrolPlan | None:
     """Def. 15: a contracting cycle of G_safe visiting the original edges ``edge_sequence`` in
-    cyclic order (docs/choices.md, "Patrolling search").
+    cyclic order (docs/choices/visibility.md, "Patrolling search").
 
     Args:
-        g, part: G_safe and its partition (node colour = ``part.edge``).
+        g: G_safe.
+        part: its partition (node colour = ``part.edge``).
         edge_sequence: original world edge ids E = (e_1 … e_k).
         max_len: longest cycle (arcs) searched (`networkx.simple_cycles` with ``length_bound``).
         start: if given, the approach is a fewest-bounce plan from this segment to the cycle.

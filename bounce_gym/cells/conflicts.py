@@ -1,5 +1,5 @@
 """Robot–robot conflicts on the cell grid (thesis Eq. 3.9; the rules are a choice
-where Alam & Bobadilla 2020 is silent: docs/choices.md, "Robot–robot conflicts on the grid").
+where Alam & Bobadilla 2020 is silent: docs/choices/multirobot.md, "Robot–robot conflicts on the grid").
 
 Each robot proposes its target cell (−1 if an obstacle blocks it). A robot that wants to move is
 also blocked when its target is another moving robot's target, when two robots would swap cells,

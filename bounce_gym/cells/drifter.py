@@ -7,7 +7,7 @@ profiling drifter.
 where k counts the water cells of the layer in (j, i) order, j along y (north), i along x (east).
 ``cells[state] = (layer, j, i)``; ``index[layer, j, i]`` is the inverse (-1 on land).
 
-**Drift** (thesis Eq. 5.3 and §5.4.3, with the choices of docs/choices.md, "Drifter cell map: one
+**Drift** (thesis Eq. 5.3 and §5.4.3, with the choices of docs/choices/drifters.md, "Drifter cell map: one
 cell per step", "The uncertainty set is the target's neighbourhood" and "Drifter boundary
 cells"):
 
@@ -61,7 +61,7 @@ class DrifterCells:
 
     Args:
         field: the flow.
-        rho: perfect-motion probability ρ in (0, 1] (docs/choices.md, "Perfect-motion
+        rho: perfect-motion probability ρ in (0, 1] (docs/choices/drifters.md, "Perfect-motion
             probability ρ = 0.8").
         t: time of the snapshot in seconds (linear between the field's snapshots); None for a
             static field.
@@ -69,7 +69,7 @@ class DrifterCells:
         step: the cell map: ``"euler"`` (default, thesis Eq. 5.3: one cell along the local flow
             direction) or ``"flowline"`` (the end of the snapshot's flow line after the same
             time Δt = cell size / |F|, integrated with RK4, nearest node clamped to the
-            3 x 3 neighbourhood; docs/choices.md, "Drifter cell map: one cell per step").
+            3 x 3 neighbourhood; docs/choices/drifters.md, "Drifter cell map: one cell per step").
 
     Attributes:
         field, rho, t, step: as given.

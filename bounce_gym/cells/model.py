@@ -1,7 +1,7 @@
 """The discrete cell-to-cell model of the bouncing robot (Alam, Bobadilla & Shell).
 
 State space: free position cells x orientation bins. A position cell is free iff its centre lies in
-the free space (or, for a disk robot, its configuration space; docs/choices.md, "Free cells and the
+the free space (or, for a disk robot, its configuration space; docs/choices/cell_model.md, "Free cells and the
 endpoint test"). Bins are centred at θ_k = k·Δθ, Δθ = 360° / n_bins, counter-clockwise from East.
 
 **Numbering** (consistent with the cell ids of thesis §3.5.1, e.g. cell 104 of the 48-position lab
@@ -10,7 +10,7 @@ faces North): orientation-major, East layer first,
 bottom-left (y up). Indices are 0-based inside the package; the papers' 1-based ids are ``z + 1``.
 
 **Next cell** (thesis Eq. 2.4 / Alam, Bobadilla & Shell 2018, Eq. 4, with the choices of
-docs/choices.md "Bumps rotate in place and take one tick", "The state resets to the cell centre
+docs/choices/cell_model.md "Bumps rotate in place and take one tick", "The state resets to the cell centre
 every step" and "Unit steps are king moves, with a symmetric tie rule"):
 
 * from the centre of the cell, step (cos θ, sin θ): on a unit grid this always lands in one of the
@@ -22,7 +22,7 @@ every step" and "Unit steps are king moves, with a symmetric tie rule"):
 * otherwise it stays and rotates counter-clockwise by φ — a bump, observation 1. Cells outside the
   grid count as blocked. The position resets to the cell centre every step.
 
-``corner_rule`` (docs/choices.md, "Diagonal moves and the corner rule"): ``"target_only"`` (default;
+``corner_rule`` (docs/choices/multirobot.md, "Diagonal moves and the corner rule"): ``"target_only"`` (default;
 the localization and navigation papers' endpoint test, corner cutting allowed), ``"no_squeeze"`` (a
 diagonal move is blocked when both side cells are blocked), ``"strict"`` (blocked when either side
 cell is).

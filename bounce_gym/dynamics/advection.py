@@ -9,7 +9,7 @@ Each step of ``dt`` seconds (`Drifters.step`):
    per axis (K = ``diffusivity`` in m^2/s, Euler-Maruyama), drawn from the drifters' own seeded
    generator;
 3. **land rule** for a drifter whose new position is on land or off the grid (a point is in the
-   cell of its nearest node; docs/choices.md, "Drifters at the coast"):
+   cell of its nearest node; docs/choices/drifters.md, "Drifters at the coast"):
    ``"stay"`` keeps it where it was; ``"slide"`` keeps the part of the move along the coast:
    the move along x alone if that ends in water, else the move along y alone, else it stays.
 

@@ -68,7 +68,7 @@ def monotonic_u(alpha: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """Monotonic fixed rule: θ or π − θ, whichever keeps the sign of travel along the tangent.
 
     u = θ if sign(cos θ) = −sign(cos α), else π − θ. At α = π/2 (head-on) the paper leaves the
-    choice open; we use θ (docs/choices.md, "Relative rule: keep rotating until free").
+    choice open; we use θ (docs/choices/visibility.md, "Relative rule: keep rotating until free").
     """
     alpha = np.asarray(alpha, dtype=np.float64)
     theta = np.broadcast_to(np.asarray(theta, dtype=np.float64), alpha.shape)
@@ -82,7 +82,7 @@ def nilles_relative_u(alpha: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """Nilles' relative rule: u = (α − kθ) mod 2π for the smallest k ≥ 1 with u ∈ (0, π).
 
     A result exactly on 0 or π (grazing the wall) keeps rotating (a choice where Nilles et al. 2021,
-    §3 is open: docs/choices.md, "Relative rule: keep rotating until free").
+    §3 is open: docs/choices/visibility.md, "Relative rule: keep rotating until free").
     """
     alpha = np.asarray(alpha, dtype=np.float64)
     theta = np.broadcast_to(np.asarray(theta, dtype=np.float64), alpha.shape)

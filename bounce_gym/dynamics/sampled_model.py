@@ -6,7 +6,7 @@ angle, from one seeded generator. The estimate states its convergence: the total
 distance between the next-state distributions of two independent halves of the samples, mean
 and largest over the (state, angle) pairs (`SampledModel.convergence`).
 
-**Cache.** The result depends only on what is fingerprinted (`fingerprint`: the world's
+**Cache.** The result depends only on what is fingerprinted (`model_fingerprint`: the world's
 geometry, the cell grid, the dynamics — backend, physics and its parameters, rule, noise, radius,
 step length —, Φ, the samples, the seed, the heading offset, the re-sampling rounds and
 `FORMAT`); it is stored as
@@ -89,7 +89,7 @@ class SampledModel:
                               self.dynamics, self.max_ticks)
 
 
-def fingerprint(model: CellModel, dynamics: dict, angles: np.ndarray, samples: int, seed: int,
+def model_fingerprint(model: CellModel, dynamics: dict, angles: np.ndarray, samples: int, seed: int,
                 offset: float | None, max_ticks: int) -> str:
     """The sha256 (hex) of everything that defines a sampled model."""
     described = {
@@ -126,7 +126,7 @@ def sampled_model(model: CellModel, dynamics: dict, angles: np.ndarray,
         raise ConfigError(f"seed: expected an integer >= 0, got {seed!r}")
     if max_ticks is None:
         max_ticks = default_max_ticks(dynamics)
-    key = fingerprint(model, dynamics, angles, samples, seed, offset, max_ticks)
+    key = model_fingerprint(model, dynamics, angles, samples, seed, offset, max_ticks)
     path = None
     if cache is not False:
         path = Path(default_cache() if cache is None or cache is True else cache) / f"{key}.npz"
@@ -154,7 +154,7 @@ def _store(path: Path, outcomes: BumpOutcomes, key: str, convergence: dict) -> N
 def _load(path: Path, model: CellModel, key: str) -> tuple[BumpOutcomes, dict] | None:
     """The stored outcomes and convergence at ``path``, or None when it is missing, unreadable,
     inconsistent or stale (`bounce_gym.model_cache`)."""
-    stored = model_cache.load(path, FORMAT, key)
+    stored = model_cache.load_cached(path, FORMAT, key)
     if stored is None:
         return None
     header, arrays = stored

@@ -1,7 +1,7 @@
 """`BounceDynamics`: m bouncing robots in a world — bounce rule, noise and a motion backend.
 
 The tick (the papers' clock unit, thesis Eq. 2.4; bumps rotate in place, a choice where the papers
-are open: docs/choices.md, "Bumps rotate in place and take one tick"):
+are open: docs/choices/cell_model.md, "Bumps rotate in place and take one tick"):
 every robot does one of two things per tick,
 
 * a robot that is **blocked** (touching a wall or robot it faces) spends the tick rotating by its
@@ -225,7 +225,7 @@ class BounceDynamics:
 
     def turn(self, turns: np.ndarray) -> np.ndarray:
         """A *command tick*: a clock-timed turn (Algorithm 1's neighbour jump, Alam & Bobadilla
-        2020, §4.1; docs/choices.md, "A neighbour jump is a timed turn").
+        2020, §4.1; docs/choices/multirobot.md, "A neighbour jump is a timed turn").
 
         Robots with a finite entry in ``turns`` (m,) rotate in place by it (radians,
         counter-clockwise positive; the noise model perturbs the executed heading as for a

@@ -76,7 +76,7 @@ class BounceEnv(EnvBase, gym.Env):
     """
 
     #: the task names this env accepts
-    tasks = SINGLE_ROBOT_TASKS
+    tasks: tuple[str, ...] = SINGLE_ROBOT_TASKS
     not_taken = MULTI_ROBOT_ONLY
 
     def __init__(self, render_mode: str | None = None, **options: object) -> None:

@@ -20,7 +20,7 @@ robot that bumps; once every blocked robot has chosen, the world runs until the 
 **Turn commands** (parallel form, discrete actions): with ``turn_angles=[45, -45]`` each robot
 has ``len(turn_angles)`` extra actions after its angles — index ``len(Φ_i) + j`` is a
 clock-timed turn in place by ``turn_angles[j]`` degrees (CCW positive), the one-robot ±Δθ
-"neighbour jump" of Alam & Bobadilla's Algorithm 1 (2020, §4.1; docs/choices.md, "A neighbour jump
+"neighbour jump" of Alam & Bobadilla's Algorithm 1 (2020, §4.1; docs/choices/multirobot.md, "A neighbour jump
 is a timed turn"). If any robot picks a turn,
 the step is one *command tick*: the robots that picked a turn turn, every other robot waits in
 place (`bounce_gym.dynamics.BounceDynamics.turn`); no bump happens and every clock advances by
@@ -40,7 +40,7 @@ AEC: each robot is truncated after ``max_cycles`` decisions of its own.
 
 ``max_cycles`` (default 500) and ``render_mode``, then every keyword argument declared in
 `bounce_gym.envs.options.EnvOptions` — those of `BounceEnv` plus ``n_robots``,
-``robot_collisions``, ``turn_angles`` and ``min_sep_cells`` (docs/choices.md, "Robot–robot
+``robot_collisions``, ``turn_angles`` and ``min_sep_cells`` (docs/choices/multirobot.md, "Robot–robot
 conflicts on the grid") — with this env's own defaults (`_MultiBase.option_defaults`: the
 ``grid_15x15`` world, 4 robots of radius 0.3, collisions on); each argument's type, default and
 meaning are in the signature of the class and the "Arguments" table of its docs page. Planners
@@ -105,8 +105,8 @@ class _MultiBase(EnvBase):
             np.tile([0.0, 0.0, -1.0, -1.0], m).astype(np.float32),
             np.ones(4 * m, dtype=np.float32), dtype=np.float32,
         )
-        self.np_random = None
-        self.np_random_seed = None
+        self.np_random: np.random.Generator | None = None
+        self.np_random_seed: int | None = None
         self._check_form()
 
     def _check_form(self) -> None:
@@ -119,9 +119,11 @@ class _MultiBase(EnvBase):
     def action_space(self, agent: str) -> spaces.Space:
         return self._action_spaces[agent]
 
-    def _seed(self, seed: int | None) -> None:
+    def _seed(self, seed: int | None) -> np.random.Generator:
+        """The episode's generator: a new one when ``seed`` is given or none exists yet."""
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
+        return self.np_random
 
     def _angle(self, agent: str, action: object) -> float:
         """The radians an action selects: a bounce angle of Φ_i or, past Φ_i, a turn command."""
@@ -157,8 +159,7 @@ class MultiBounceEnv(_MultiBase, ParallelEnv):
     """The parallel form; see the module docstring."""
 
     def reset(self, seed: int | None = None, options: dict | None = None):
-        self._seed(seed)
-        obs, info = self.core.reset(self.np_random, options, strict=False)
+        obs, info = self.core.reset(self._seed(seed), options, strict=False)
         self.agents = list(self.possible_agents)
         self.cycles = 0
         if self.render_mode == "human":
@@ -201,8 +202,7 @@ class MultiBounceAEC(_MultiBase, AECEnv):
                               "asks only robots that bump)")
 
     def reset(self, seed: int | None = None, options: dict | None = None) -> None:
-        self._seed(seed)
-        obs, info = self.core.reset(self.np_random, options, strict=False)
+        obs, info = self.core.reset(self._seed(seed), options, strict=False)
         self._obs = obs
         self.agents = list(self.possible_agents)
         self.rewards = dict.fromkeys(self.agents, 0.0)

@@ -6,7 +6,7 @@ are in the model (and in the "Arguments" table of every env page of the docs); a
 a few defaults and leaves out the arguments it does not take (`bounce_gym.envs.arguments`).
 Angles enter in **degrees** (this is the configuration edge of the package) and are stored in
 radians. An unknown argument raises `TypeError` naming it; every bad value raises `ConfigError`
-naming the argument and what is allowed. `json_schema` gives the JSON Schema of the arguments.
+naming the argument and what is allowed. `bounce_gym.envs.arguments.json_schema` gives an env's JSON Schema.
 """
 
 from __future__ import annotations
@@ -282,10 +282,6 @@ class EnvOptions(Arguments):
                 "noise": self.noise, "radius": self.robot_radius,
                 "step_length": self.step_length, "backend_options": self.backend_options}
 
-
-def json_schema() -> dict:
-    """The JSON Schema of every argument of `EnvOptions` (the single-robot env's defaults)."""
-    return EnvOptions.model_json_schema()
 
 
 def resolve_world(world: object) -> World:

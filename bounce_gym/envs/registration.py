@@ -84,7 +84,7 @@ import warnings
 import gymnasium as gym
 import pettingzoo
 
-GYM_ENVS = {
+GYM_ENVS: dict[str, tuple[dict[str, object], int]] = {
     "bounce_gym/Bounce-v0": ({"world": "two_rooms", "task": "free"}, 500),
     "bounce_gym/BounceNavigation-v0": (
         {"world": "lab_navigation", "task": "navigation", "history": 4}, 200),
@@ -169,10 +169,10 @@ def register_envs() -> None:
             gym.register(env_id, entry_point=entry_point, max_episode_steps=steps)
     for env_type, registry in (("parallel", pettingzoo.parallel_registry),
                                ("aec", pettingzoo.aec_registry)):
-        for env_id, kwargs in PETTINGZOO_ENVS.items():
+        for env_id, env_kwargs in PETTINGZOO_ENVS.items():
             if env_id not in registry:
                 pettingzoo.register(env_type, env_id, entry_point=_ENTRY[env_type],
-                                    max_cycles=500, kwargs=kwargs)
+                                    max_cycles=500, kwargs=env_kwargs)
         for env_id, module in {**DRIFTER_PETTINGZOO_ENVS, **PATROL_PETTINGZOO_ENVS}.items():
             if env_id not in registry:
                 function = "parallel_env" if env_type == "parallel" else "env"

@@ -30,7 +30,9 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from bounce_gym.cells.geodesic import GridGeodesic
 from bounce_gym.dynamics import BounceDynamics, RobotState
+from bounce_gym.dynamics.backends.kinematic import KinematicBackend
 from bounce_gym.dynamics.noise import Exact
 from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.reset_options import checked_reset_options
@@ -68,7 +70,7 @@ class BounceVectorEnv(VectorEnv):
         if render_mode is not None:
             raise ConfigError("render_mode: the batched env does not render; render one "
                               "gym.make env instead")
-        self.single = BounceEnv(**options)  # validates the options; resets run its core
+        self.single = BounceEnv(None, **options)  # validates the options; resets run its core
         opts = self.options = self.single.options
         task = self.single.core.task
         reason = _unbatchable(opts, task)
@@ -141,6 +143,7 @@ class BounceVectorEnv(VectorEnv):
             if self.state is None and not mask.all():
                 raise ConfigError("options['reset_mask']: the first reset resets every env")
             rows = np.flatnonzero(mask)
+        seeds: list[int | None]
         if seed is None:
             seeds = [None] * n
         elif isinstance(seed, int | np.integer):
@@ -161,16 +164,16 @@ class BounceVectorEnv(VectorEnv):
         generator with ``options`` (an autoreset passes none) as a single env's reset draws them;
         then the rows are placed, driven to their first contact and handed to the task at once."""
         core = self.single.core
-        options = checked_reset_options(options, core.option_keys)
+        checked = checked_reset_options(options, core.option_keys)
         robots = self.cell_robots
-        if robots is not None and not options and self.task.draws_cells:
+        if robots is not None and not checked and self.task.draws_cells:
             cells = self.task.draw_cells([self._rngs[i] for i in rows.tolist()], rows)
             self._ticks[rows] = robots.place(rows, *cells)
         else:
             m = len(rows)
             position, heading = np.empty((m, 2)), np.empty(m)
             for j, i in enumerate(rows.tolist()):
-                position[j], heading[j] = (x[0] for x in core.draw_start(self._rngs[i], options))
+                position[j], heading[j] = (x[0] for x in core.draw_start(self._rngs[i], checked))
                 self.task.drawn(i, core.task)
             if robots is not None:
                 self._ticks[rows] = robots.place(rows, *robots.cells_of(position, heading))
@@ -195,14 +198,21 @@ class BounceVectorEnv(VectorEnv):
             fresh = RobotState.at(position, heading)
             for name in _STATE_FIELDS:
                 getattr(state, name)[rows] = getattr(fresh, name)
-            self.dynamics.backend.place(state, rows)
+            backend = self.dynamics.backend
+            assert isinstance(backend, KinematicBackend)  # `_unbatchable`: no pymunk backend
+            backend.place(state, rows)
         # every robot not reset ended its last step in contact: only the rows drive
         return self.dynamics.backend.drive_each(state)[rows]
 
-    def step(self, actions):
+    def _started(self) -> RobotState:
+        """The robots' state, once a reset has placed them."""
         state = self.state
         if state is None:
             raise ConfigError("call reset() before step()")
+        return state
+
+    def step(self, actions):
+        state = self._started()
         angles, choices = self._angles(actions)
         opts = self.options
         start = state.position.copy()
@@ -295,7 +305,7 @@ class BounceVectorEnv(VectorEnv):
         """(N, d) float32 observations in one fresh array, the values `BounceCore.observation`
         concatenates, cast the same way: `_kept_obs` with the clock and any privileged pose
         written in."""
-        state = self.state
+        state = self._started()
         opts = self.options
         core = self.single.core
         obs = self._kept_obs.copy()
@@ -316,7 +326,7 @@ class BounceVectorEnv(VectorEnv):
     def _robot_values(self, rows: np.ndarray | None = None) -> dict:
         """The info values of the robots themselves (fresh arrays) for envs ``rows`` (None:
         every env)."""
-        state = self.state
+        state = self._started()
         arrays = {"ticks": self._ticks, "position": state.position, "heading": state.heading,
                   "clock": state.clock, "bumps": state.bumps, "contact_edge": state.contact_edge}
         if rows is None:
@@ -384,8 +394,9 @@ class BounceVectorEnv(VectorEnv):
     def _info_cells(self, position: np.ndarray, rows: np.ndarray | slice = _EVERY) -> np.ndarray:
         """``info["cell"]`` of robots ``rows`` at positions ``position`` (their rows of the
         state): on the cell backend looked up by position index."""
-        if self._cell_rc is not None:
-            return self._cell_rc.take(self.cell_robots.p[rows], axis=0)
+        robots = self.cell_robots
+        if self._cell_rc is not None and robots is not None:
+            return self._cell_rc.take(robots.p[rows], axis=0)
         return self._cells(position)
 
     def _cells(self, position: np.ndarray) -> np.ndarray:
@@ -524,10 +535,11 @@ class _NavigationBatch(_FreeBatch):
         from the flat array: several times faster than two-axis fancy indexing)."""
         return self.potentials.reshape(-1).take(rows * self.potentials.shape[1] + nodes)
 
-    def _nodes(self, position: np.ndarray, positions: np.ndarray | None) -> np.ndarray:
+    def _nodes(self, geodesic: GridGeodesic, position: np.ndarray,
+               positions: np.ndarray | None) -> np.ndarray:
         """The grid nodes of robots at ``position``, or at position indices ``positions``."""
-        if positions is None:
-            return self.single.geodesic.node_of(position)
+        if positions is None or self.node_of_position is None:
+            return geodesic.node_of(position)
         return self.node_of_position.take(positions)
 
     def drawn(self, i, task):
@@ -548,7 +560,7 @@ class _NavigationBatch(_FreeBatch):
             self.potentials[rows] = [single.goal_potentials(goal)
                                      for goal in self.goal_node[rows].tolist()]
             self.potential_now[rows] = self._potentials_at(rows, self._nodes(
-                state.position[rows], None if positions is None else positions[rows]))
+                single.geodesic, state.position[rows], None if positions is None else positions[rows]))
 
     def info(self, state, rows=_EVERY):
         goal = self.goal_position[rows]  # a copy where ``rows`` is an array
@@ -597,7 +609,8 @@ class _NavigationBatch(_FreeBatch):
         before = after = None
         if single.geodesic is not None:
             before = self.potential_now
-            after = self._potentials_at(self.rows, self._nodes(events.end, positions))
+            after = self._potentials_at(self.rows, self._nodes(single.geodesic, events.end,
+                                                                    positions))
             self.potential_now = np.where(hit, 0.0, after)
         reward = single.step_rewards(spent, changed, hit, before, after)
         self.plan_cost = self.plan_cost + single.plan_cost_of(spent, changed)

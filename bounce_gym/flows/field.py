@@ -6,7 +6,7 @@ Layout (the order of CF files from ROMS, HYCOM or Copernicus after choosing one 
   y (northing or latitude), x (easting or longitude). A static field has ``time is None`` and
   ``T == 1``; it is given as ``(L, Ny, Nx)`` arrays.
 * ``depth``: (L,) metres, positive down, strictly increasing: **layer 0 is the surface** (the
-  thesis counts layers from 1; docs/choices.md, "Drifter layers count from the surface").
+  thesis counts layers from 1; docs/choices/drifters.md, "Drifter layers count from the surface").
 * ``x`` (Nx,), ``y`` (Ny,): strictly increasing node coordinates, metres (``crs="xy"``) or
   degrees east / north (``crs="lonlat"``: latitudes in [-90, 90], longitudes in [-360, 360]
   spanning at most 360°). Node (j, i) is the centre of grid cell (j, i).

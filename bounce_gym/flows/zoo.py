@@ -1,4 +1,4 @@
-"""The flow zoo: seeded, procedural stand-ins for ocean-model output, ``get(name, **kwargs)``.
+"""The flow zoo: seeded, procedural stand-ins for ocean-model output, ``get_flow(name, **kwargs)``.
 
 The thesis' fields come from ROMS predictions for the Southern California Bight (Alam 2018,
 §5.4.1), which are not distributed; these synthetic fields reproduce the structures ch. 5 works
@@ -37,7 +37,7 @@ from bounce_gym import validate
 from bounce_gym.errors import ConfigError, InvalidFlowError
 from bounce_gym.flows.field import FlowField
 
-__all__ = ["BASINS", "double_gyre", "ekman_layers", "get", "names", "scb_like", "solid_body",
+__all__ = ["BASINS", "double_gyre", "ekman_layers", "flow_names", "get_flow", "scb_like", "solid_body",
            "two_sink", "two_sink_land", "uniform"]
 
 #: Land layouts of ``solid_body`` and ``uniform``.
@@ -47,12 +47,12 @@ _M2_HOURS = 12.42
 _K1_HOURS = 23.93
 
 
-def names() -> list[str]:
+def flow_names() -> list[str]:
     """Sorted names of the zoo fields."""
     return sorted(_FIELDS)
 
 
-def get(name: str, **kwargs) -> FlowField:
+def get_flow(name: str, **kwargs) -> FlowField:
     """The zoo field ``name`` built with ``kwargs`` (see each builder's signature).
 
     Raises:
@@ -60,7 +60,7 @@ def get(name: str, **kwargs) -> FlowField:
         ConfigError: an argument of the wrong type or range.
     """
     if not isinstance(name, str) or name not in _FIELDS:
-        raise InvalidFlowError(f"unknown flow {name!r}; available: {', '.join(names())}")
+        raise InvalidFlowError(f"unknown flow {name!r}; available: {', '.join(flow_names())}")
     builder = _FIELDS[name]
     allowed = list(inspect.signature(builder).parameters)
     for key in kwargs:

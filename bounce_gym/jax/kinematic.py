@@ -41,8 +41,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from bounce_gym.jax.environment import Environment
-from bounce_gym.jax.kinematic_tasks import FreeTask, KinematicStep, NavigationTask
-from bounce_gym.jax.kinematic_world import FreeSpace, free_space, sample
+from bounce_gym.jax.kinematic_tasks import KinematicFreeTask, KinematicNavigationTask, KinematicStep
+from bounce_gym.jax.kinematic_world import FreeSpace, free_space, sample_free_point
 from bounce_gym.jax.raycast import Walls, cast, walls
 
 #: the bounce rules the kinematic JAX env runs
@@ -147,7 +147,7 @@ class KinematicEnv(Environment):
                                       params.angles.dtype)
 
         def sample_pose(i):
-            return sample(uniforms[i, :-1], params.free), uniforms[i, -1] * TWO_PI
+            return sample_free_point(uniforms[i, :-1], params.free), uniforms[i, -1] * TWO_PI
 
         position, heading, drawn = self.task.draw(params.task, sample_pose)
         return self._start(position, heading, drawn, params)
@@ -279,7 +279,7 @@ def kinematic_env(env_id: str, numpy_env, max_steps: int, observation_space,
     opts = numpy_env.options
     core = numpy_env.core
     name = core.task.name
-    task = NavigationTask(core.task, opts) if name == "navigation" else FreeTask()
+    task = KinematicNavigationTask(core.task, opts) if name == "navigation" else KinematicFreeTask()
     return KinematicEnv(env_id, opts, task, opts.max_clock, core.obs_low, core.obs_high,
                         max_steps, observation_space, action_space)
 

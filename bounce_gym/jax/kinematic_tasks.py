@@ -17,7 +17,7 @@ import numpy as np
 
 from bounce_gym.errors import ConfigError
 
-#: the most grid nodes whose potential table (nodes × nodes) `NavigationTask` keeps
+#: the most grid nodes whose potential table (nodes × nodes) `KinematicNavigationTask` keeps
 MAX_POTENTIAL_NODES = 4096
 
 
@@ -38,7 +38,7 @@ class KinematicStep(NamedTuple):
 PoseSampler = Callable[[int], tuple[jax.Array, jax.Array]]
 
 
-class FreeTask:
+class KinematicFreeTask:
     """No reward, never terminates, no features (the ``free`` task)."""
 
     name = "free"
@@ -75,7 +75,7 @@ class FreeTask:
         return None
 
 
-class NavigationParams(NamedTuple):
+class KinematicNavigationParams(NamedTuple):
     reward: jax.Array  # (w1, w2, goal_bonus, tick_cost, gamma)
     goal_radius: jax.Array
     heading_tolerance: jax.Array
@@ -88,7 +88,7 @@ class NavigationParams(NamedTuple):
     span: jax.Array
 
 
-class NavigationState(NamedTuple):
+class KinematicNavigationState(NamedTuple):
     start_position: jax.Array
     start_heading: jax.Array
     goal_position: jax.Array
@@ -99,7 +99,7 @@ class NavigationState(NamedTuple):
     potential: jax.Array  # Φ now
 
 
-class NavigationTask(FreeTask):
+class KinematicNavigationTask(KinematicFreeTask):
     """Navigation v0 (`bounce_gym.envs.tasks.navigation.NavigationTask`, the configured
     ``task`` of the NumPy env with `EnvOptions` ``options``) on the kinematic backend.
 
@@ -148,10 +148,10 @@ class NavigationTask(FreeTask):
             "span": [xmax - xmin, ymax - ymin]}
         self._node_of_cell = node_of_cell
 
-    def params(self, dtype) -> NavigationParams:
+    def params(self, dtype) -> KinematicNavigationParams:
         reals = {k: jnp.asarray(np.asarray(v, dtype=np.float64), dtype)
                  for k, v in self._numbers.items()}
-        return NavigationParams(node_of_cell=jnp.asarray(self._node_of_cell, jnp.int32), **reals)
+        return KinematicNavigationParams(node_of_cell=jnp.asarray(self._node_of_cell, jnp.int32), **reals)
 
     # -- episodes ---------------------------------------------------------------------------
     poses_drawn = 2
@@ -169,7 +169,7 @@ class NavigationTask(FreeTask):
     def start(self, drawn, position, heading, z_position, ticks, params):
         goal_position, goal_heading = drawn
         goal_node = self._node(goal_position, params)
-        return NavigationState(
+        return KinematicNavigationState(
             start_position=position, start_heading=heading, goal_position=goal_position,
             goal_heading=goal_heading, goal_node=goal_node, reached=jnp.bool_(False),
             plan_cost=params.reward[0] * ticks.astype(params.reward.dtype),

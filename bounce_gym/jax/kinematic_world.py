@@ -2,7 +2,7 @@
 
 The NumPy envs draw a start uniformly from the free space more than the robot's radius (and the
 world's tolerance) from the boundary (`World.sample_free`, rejection sampling with as many rounds
-as it takes). A jitted function needs a fixed amount of work, so `sample` draws a fixed number
+as it takes). A jitted function needs a fixed amount of work, so `sample_free_point` draws a fixed number
 ``candidates`` of points at once and keeps the first that passes the same test as
 `World.sample_free`'s (inside the polygon, even–odd rule over every ring; distance to the nearest
 edge > radius + tol). The candidates are uniform in the polygonal C-space `World.eroded` (a
@@ -39,7 +39,7 @@ ESTIMATE = 4096
 
 
 class FreeSpace(NamedTuple):
-    """A world's edges and its C-space's triangles, for `inside` and `sample`."""
+    """A world's edges and its C-space's triangles, for `inside` and `sample_free_point`."""
 
     start: jax.Array  # (E, 2) edge starts
     vector: jax.Array  # (E, 2) edge vectors
@@ -100,7 +100,7 @@ def inside(space: FreeSpace, points: jax.Array) -> jax.Array:
     return (crossings % 2 == 1) & (distance > space.clearance)
 
 
-def sample(uniforms: jax.Array, space: FreeSpace) -> jax.Array:
+def sample_free_point(uniforms: jax.Array, space: FreeSpace) -> jax.Array:
     """A uniform point (2,) of the free space (module docstring), from 3 × candidates uniforms
     in [0, 1) (drawn with the reset's others in one call: each call costs as much as a cell
     env's step)."""

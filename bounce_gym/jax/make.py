@@ -12,18 +12,18 @@ import gymnasium as gym
 import numpy as np
 
 from bounce_gym.dynamics.noise import Exact
-from bounce_gym.envs.tasks.goal_navigation import GoalNavigationTask as NumpyGoalTask
+from bounce_gym.envs.tasks.goal_navigation import GoalNavigationTask
 from bounce_gym.errors import ConfigError
 from bounce_gym.jax import spaces
 from bounce_gym.jax.cell_env import CellEnv
 from bounce_gym.jax.cell_tables import cell_tables
 from bounce_gym.jax.kinematic import kinematic_env
 from bounce_gym.jax.kinematic import unsupported as kinematic_unsupported
-from bounce_gym.jax.tasks.base import FreeTask
-from bounce_gym.jax.tasks.coverage import CoverageTask
-from bounce_gym.jax.tasks.goal_navigation import GoalNavigationTask
-from bounce_gym.jax.tasks.localization import LocalizationTask
-from bounce_gym.jax.tasks.navigation import NavigationTask
+from bounce_gym.jax.tasks.base import CellFreeTask
+from bounce_gym.jax.tasks.coverage import CellCoverageTask
+from bounce_gym.jax.tasks.goal_navigation import CellGoalNavigationTask
+from bounce_gym.jax.tasks.localization import CellLocalizationTask
+from bounce_gym.jax.tasks.navigation import CellNavigationTask
 
 #: the tasks of the cell env, by the NumPy task's name
 CELL_TASKS = ("free", "navigation", "goal_navigation", "localization", "coverage")
@@ -34,7 +34,9 @@ def make(env_id: str, **options):
     keyword arguments ``options``; `ConfigError` where no JAX env reproduces it (saying why)."""
     numpy_env = gym.make(env_id, **options)
     try:
-        env = _build(env_id, numpy_env.unwrapped, numpy_env.spec.max_episode_steps)
+        spec = numpy_env.spec  # gym.make sets it; its horizon may be None
+        env = _build(env_id, numpy_env.unwrapped,
+                     spec.max_episode_steps if spec is not None else None)
     finally:
         numpy_env.close()
     return env, env.default_params
@@ -46,7 +48,7 @@ def _build(env_id: str, numpy_env, max_steps: int | None):
         raise ConfigError(f"bounce_gym.jax: {env_id!r} has no JAX env (only the single-robot "
                           "bouncing envs do)")
     task = numpy_env.core.task
-    name = "goal_navigation" if isinstance(task, NumpyGoalTask) else task.name
+    name = "goal_navigation" if isinstance(task, GoalNavigationTask) else task.name
     reason = _unsupported(opts, name)
     if reason:
         raise ConfigError(f"bounce_gym.jax: {env_id!r} with these options has no JAX env: "
@@ -59,16 +61,17 @@ def _build(env_id: str, numpy_env, max_steps: int | None):
                              _space(numpy_env.observation_space), _space(numpy_env.action_space))
     tables, robots = cell_tables(numpy_env)
     core = numpy_env.core
+    jax_task: CellFreeTask
     if name == "goal_navigation":
-        jax_task = GoalNavigationTask(task, robots)
+        jax_task = CellGoalNavigationTask(task, robots)
     elif name == "navigation":
-        jax_task = NavigationTask(task, robots, core.obs_low, core.obs_high)
+        jax_task = CellNavigationTask(task, robots, core.obs_low, core.obs_high)
     elif name == "localization":
-        jax_task = LocalizationTask(task, robots, opts.angles[0])
+        jax_task = CellLocalizationTask(task, robots, opts.angles[0])
     elif name == "coverage":
-        jax_task = CoverageTask(task, robots)
+        jax_task = CellCoverageTask(task, robots)
     else:
-        jax_task = FreeTask()
+        jax_task = CellFreeTask()
     return CellEnv(env_id, robots.model, tables, jax_task, len(opts.angles[0]), opts.history,
                    opts.privileged, int(max_steps), _space(numpy_env.observation_space),
                    _space(numpy_env.action_space))

@@ -107,7 +107,7 @@ def istate_graph(successor, bump, group: int | None = None) -> nx.DiGraph:
     """The I-state graph with 0/1 edge labels (Def. 5; BUILD-STATEGRAPH of Algorithm 1).
 
     Vertices are cells (node attributes ``periodic`` and ``group``), edges ``(z, C(z))`` with the
-    attribute ``label`` = 1 for a bump tick, 0 for a forward tick (docs/choices.md,
+    attribute ``label`` = 1 for a bump tick, 0 for a forward tick (docs/choices/cell_model.md,
     "Observation 1 means the orientation bin changed"). Without ``group`` the graph
     holds all N cells (the disjoint union of the groups' graphs, ``|G.V| = N``); with ``group = j``
     only periodic group j (numbered as in `periodic_groups`) and its transient trajectories.
@@ -196,14 +196,14 @@ class DFA:
 
     Attributes:
         states: the states as sorted cell-id arrays; state 0 is the start state (all N cells;
-            docs/choices.md, "DFA size: the start state is all cells, the trap is not counted").
+            docs/choices/localization.md, "DFA size: the start state is all cells, the trap is not counted").
         delta: (n_states, 2) next state on 0 and on 1; `TRAP` (−1) where the transition is missing.
         n_cells: N.
         periodic: periodic cells of the SCM (None for a closed-loop `build_policy_dfa`).
         cycles: the knowledge cycles, each the state indices in transition order starting at the
             state holding the cycle's smallest cell id; numbered by (smallest cell id, first state).
         cycle_of: knowledge cycle index of every state, −1 outside the cycles.
-        colour: colour of every state (docs/choices.md, "Knowledge-cycle colours and
+        colour: colour of every state (docs/choices/localization.md, "Knowledge-cycle colours and
             numbering"): 1 outside the cycles, 2 + cycle index inside.
         bump_angle: for `build_policy_dfa`, the angle (radians) used on a 1 in every state
             (NaN where a 1 is impossible); None for a fixed-angle DFA.
@@ -223,7 +223,7 @@ class DFA:
 
     start = 0
 
-    # -- sizes and bookkeeping (docs/choices.md, "DFA size: ...") --
+    # -- sizes and bookkeeping (docs/choices/localization.md, "DFA size: ...") --
     @property
     def n_states(self) -> int:
         """|Q'| without the implicit trap (the count reported next to Table I)."""
@@ -252,7 +252,7 @@ class DFA:
     @property
     def final(self) -> np.ndarray | None:
         """F' = {S : S ∩ F ≠ ∅} as a boolean mask over states (kept for completeness:
-        docs/choices.md, "Final states are kept but unused")."""
+        docs/choices/localization.md, "Final states are kept but unused")."""
         if self.periodic is None:
             return None
         return np.array([bool(self.periodic[s].any()) for s in self.states])
@@ -261,7 +261,7 @@ class DFA:
     def out_degree(self) -> np.ndarray:
         return (self.delta != TRAP).sum(axis=1)
 
-    # -- knowledge cycles and colours (Defs. 8-9; docs/choices.md) --
+    # -- knowledge cycles and colours (Defs. 8-9; docs/choices/localization.md) --
     @property
     def n_cycles(self) -> int:
         return len(self.cycles)
@@ -287,7 +287,7 @@ class DFA:
 
     @property
     def trap_colour(self) -> int:
-        """Colour of the open-world trap q_t: #cycles + 2 (docs/choices.md, "Knowledge-cycle colours
+        """Colour of the open-world trap q_t: #cycles + 2 (docs/choices/localization.md, "Knowledge-cycle colours
         and numbering")."""
         return self.n_cycles + 2
 

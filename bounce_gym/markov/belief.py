@@ -57,7 +57,9 @@ class BeliefFilter:
     Args:
         outcomes: the sampled GCM (P(z', t | z, a) is ``outcomes.transitions()``).
         prior: (N,) the initial belief b₀; None: uniform over the states that have samples.
-        slack, tolerance, restart: η, τ and ρ of the module docstring.
+        slack: η of the module docstring.
+        tolerance: τ of the module docstring.
+        restart: ρ of the module docstring.
 
     ``reset(prior)``, ``update(action, ticks)``; ``belief`` (read-only), ``most_likely``,
     ``mass_of(states)``, ``max_mass``, ``entropy``, ``expected_entropy()``.

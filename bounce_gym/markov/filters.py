@@ -35,12 +35,12 @@ class LocalizationFilter:
     Attributes (read-only properties):
         state: current DFA state index (`TRAP` once trapped).
         candidates: the cells consistent with every observation so far (sorted ids; empty when
-            trapped); valid before convergence too (docs/choices.md, "Knowledge-cycle colours
+            trapped); valid before convergence too (docs/choices/localization.md, "Knowledge-cycle colours
             and numbering").
         size: ``len(candidates)``; once in a knowledge cycle, the uncertainty.
         colour: 1 outside knowledge cycles, 2 … m + 1 in cycle k, m + 2 in the trap (Defs. 8–9;
         numbering:
-            docs/choices.md, "Knowledge-cycle colours and numbering").
+            docs/choices/localization.md, "Knowledge-cycle colours and numbering").
         localized: True once in a knowledge cycle (absorbing in the closed world).
         trapped: open world only — the observation string is impossible in this world ("not in
             E"). A closed-world filter raises `ImpossibleObservationError` instead and keeps its
@@ -76,7 +76,7 @@ class LocalizationFilter:
         """The filter of a world (or zoo name) discretised as in `bounce_gym.cells.CellModel`.
 
         ``phi`` is the bounce angle in radians (a multiple of 360° / ``n_bins``;
-        docs/choices.md, "Orientation bins and bounce angles").
+        docs/choices/cell_model.md, "Orientation bins and bounce angles").
         """
         if isinstance(world, str):
             world = get_world(world)

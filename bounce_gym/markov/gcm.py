@@ -4,7 +4,7 @@ The GCM of the bouncing robot with unreliable rotation (Alam, Bobadilla & Shell,
 navigation and coverage using a dynamical system approach", IRC 2017, Alg. 3
 POLICYDISTRIBUTION; thesis §3.3.3 and Alg. 3.3, §5 Alg. 5.1) is a finite Markov chain on the
 cells. ``P`` is **row-stochastic**: ``P[i, j] = Pr(i -> j)`` and distributions are row vectors,
-``p(n+1) = p(n) P`` (the papers' ``p(n+1) = 𝒫 p(n)`` with the same p_ij; docs/choices.md, "The chain
+``p(n+1) = p(n) P`` (the papers' ``p(n+1) = 𝒫 p(n)`` with the same p_ij; docs/choices/navigation_coverage.md, "The chain
 is a row-vector chain").
 
 Definitions (Hsu; thesis Defs. 3.3.1-3.3.3 and §5.4):
@@ -17,14 +17,14 @@ Definitions (Hsu; thesis Defs. 3.3.1-3.3.3 and §5.4):
   leaves it) and in which every cell communicates with every other: an irreducible sub-chain.
   These are the strongly connected components with no outgoing edge (sinks of the condensation),
   **not** every strongly connected component (the papers' "reachable from all other vertices"
-  test holds for every SCC; Alam, Bobadilla & Shell 2017, Sec. IV-C, thesis §5.4.3; docs/choices.md,
+  test holds for every SCC; Alam, Bobadilla & Shell 2017, Sec. IV-C, thesis §5.4.3; docs/choices/navigation_coverage.md,
   "Persistent groups without a transitive closure");
 * **domicile** of a transient cell: a persistent group it leads to; single- and
   multiple-domicile cells (thesis §5.4);
 * **absorption probabilities** ``a = (I - Q)^-1 R`` (transient block Q, R summed per group) and
   **expected absorption times** ``t = (I - Q)^-1 1`` (Isaacson & Madsen; thesis Thm 5.4.3).
 
-Limiting distribution (docs/choices.md, "The limiting distribution starts anywhere"). A chain with
+Limiting distribution (docs/choices/navigation_coverage.md, "The limiting distribution starts anywhere"). A chain with
 several persistent groups, or a periodic one, has no plain limit of p(0) P^n, so the coverage is the
 **Cesàro limit** ``π = lim (1/n) Σ_{k<n} p(0) P^k = Σ_g w_g π_g`` where π_g is the stationary
 distribution of group g (π_g P_g = π_g, Σ π_g = 1; unique because P_g is irreducible, periodic or
@@ -281,7 +281,7 @@ def generalized_cell_mapping(P, mode: str | np.ndarray = "all",
     Args:
         P: (N, N) row-stochastic matrix (scipy sparse, or a dense array for small cases).
         mode: initial distribution of ``weights`` / ``limiting``: ``"all"`` (uniform over all
-            cells, docs/choices.md, "The limiting distribution starts anywhere"), ``"persistent"``,
+            cells, docs/choices/navigation_coverage.md, "The limiting distribution starts anywhere"), ``"persistent"``,
             ``"group"``, or an (N,) probability vector.
         order: optional permutation of the N cells to eliminate I - Q in (a fill-reducing
             order such as `bounce_gym.markov.ordering.grid_dissection` of cells on a grid);

@@ -2,7 +2,7 @@
 
 This is Algorithm 1, MODIFIEDSIMPLECELLMAPPING, of Alam, Bobadilla & Shell, "Space-efficient
 filters for mobile robot localization from discrete limit cycles" (IEEE RA-L 2018; thesis
-Algorithm 2.1), with its index errors fixed (docs/choices.md, "Algorithm 1's index errors and order
+Algorithm 2.1), with its index errors fixed (docs/choices/cell_model.md, "Algorithm 1's index errors and order
 independence") and the cell loop replaced by whole-array
 operations, so that the paper's simulation scale (200 x 125 positions x 360 bins, about 9 M cells)
 is analysed in seconds.
@@ -20,7 +20,7 @@ e(i+1) = C(e(i)) given by ``successor[z] = C(z)``:
 
 In Hsu's SCM every cell has exactly one domicile, its group ``group[z]``.
 
-How the index errors are resolved (docs/choices.md, "Algorithm 1's index errors and order
+How the index errors are resolved (docs/choices/cell_model.md, "Algorithm 1's index errors and order
 independence"):
 
 * the walk of lines 7-12 uses its own cursor, never the loop variable ``i``;
@@ -78,7 +78,7 @@ class SCMResult:
             starting at its smallest cell, so ``successor[cycles[g][j]] == cycles[g][j + 1]``.
         periods: (r,) the period K of each group (``len(cycles[g])``).
         max_transient: max_z s_z, the longest transient trajectory (Sec. V-A;
-            docs/choices.md, "Longest transient trajectory").
+            docs/choices/cell_model.md, "Longest transient trajectory").
         bump: (N,) bool or None, the observation of each step (True = bump, label 1) when known.
     """
 

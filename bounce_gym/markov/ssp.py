@@ -38,7 +38,8 @@ class ReachPlan:
         miss: per angle, the (N, N) sub-stochastic matrix of the next bump state, goal missed.
         cost: (N, |Φ|) expected ticks of the step.
         horizon: H, the most steps.
-        w1, w2: the plan-cost weights (w2 replaces w1 for a bump that changes the angle).
+        w1: the plan-cost weight of a step.
+        w2: the plan-cost weight that replaces w1 for a bump that changes the angle.
     """
 
     def __init__(self, hit: np.ndarray, miss: list[sp.csr_matrix], cost: np.ndarray,

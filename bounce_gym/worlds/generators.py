@@ -261,7 +261,7 @@ def _real_arg(label: str, value: object, positive: bool = False) -> float:
     if (
         isinstance(value, bool)
         or not isinstance(value, Real)
-        or not np.isfinite(value)
+        or not np.isfinite(float(value))
         or value < 0
         or (positive and value == 0)
     ):

@@ -165,7 +165,7 @@ def from_dict(d: Mapping, *, source: str = "map") -> World:
     if (
         isinstance(cell_size, bool)
         or not isinstance(cell_size, Real)
-        or not np.isfinite(cell_size)
+        or not np.isfinite(float(cell_size))
         or cell_size <= 0
     ):
         raise MapFormatError(f"{source}: 'cell_size' must be a finite number > 0, got {cell_size!r}")

@@ -61,6 +61,18 @@ class World:
         "tol",
         "__dict__",  # cached_property storage (derived, never part of identity)
     )
+    # the slots' types (set once in __init__ through object.__setattr__)
+    name: str
+    outer: np.ndarray
+    holes: tuple[np.ndarray, ...]
+    edge_start: np.ndarray
+    edge_end: np.ndarray
+    edge_ring: np.ndarray
+    tangents: np.ndarray
+    normals: np.ndarray
+    lengths: np.ndarray
+    reflex: np.ndarray
+    tol: float
 
     def __init__(
         self,

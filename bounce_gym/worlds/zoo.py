@@ -89,7 +89,7 @@ def _regular_size(name: str) -> int | None:
 
 
 def _map_file(name: str):
-    return resources.files(_MAPS_PACKAGE).joinpath(_MAPS_DIR, f"{name}.yaml")
+    return resources.files(_MAPS_PACKAGE).joinpath(_MAPS_DIR).joinpath(f"{name}.yaml")
 
 
 @lru_cache(maxsize=1)

@@ -132,7 +132,7 @@ class DrifterReach(DrifterFamily):
 
     def policies(self, kind, env, experiment, setup):
         if kind == "planner":
-            return planners(experiment)
+            return drifter_planners(experiment)
         if kind == "random":
             return [RandomLayerPolicy()]
         return [AlwaysDriftPolicy()]  # fixed: the one fixed action that is always legal
@@ -164,7 +164,7 @@ class DrifterReach(DrifterFamily):
 PLANNER_MODELS = ("cell", "sampled")
 
 
-def planners(experiment: Mapping) -> list[Policy]:
+def drifter_planners(experiment: Mapping) -> list[Policy]:
     """The planner rows of a reach experiment (module docstring): Alg. 5.5 on the cell model
     and/or the finite-horizon plan on the sampled GCM."""
     kwargs = dict(experiment.get("planner_kwargs", {}))

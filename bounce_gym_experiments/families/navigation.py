@@ -116,7 +116,7 @@ class Navigation(SingleRobotFamily):
     planner_attributes = ("predicted_success", "predicted_ticks", "predicted_weight")
 
     def prepare(self, env, experiment):
-        planners(experiment)  # planner_kwargs checked whichever policies run
+        navigation_planners(experiment)  # planner_kwargs checked whichever policies run
         options = env.unwrapped.options
         if options.action_type != "discrete" or options.step_mode != "bounce":
             return None
@@ -127,13 +127,13 @@ class Navigation(SingleRobotFamily):
             return super().policies(kind, env, experiment, setup)
         if env.unwrapped.options.action_type != "discrete":
             return []
-        return planners(experiment)
+        return navigation_planners(experiment)
 
     def episode(self, env, policy, setup):
         return NavigationEpisode(env, setup)
 
 
-def planners(experiment: Mapping) -> list[Policy]:
+def navigation_planners(experiment: Mapping) -> list[Policy]:
     """The planner rows of a navigation experiment (module docstring), checked before any
     episode runs."""
     from baselines.navigation import NavigationPlanner

@@ -13,7 +13,7 @@ strategy, ``best_response_positions`` — told the patrollers' positions at step
 adversary``, sampling its actions, and the same model greedy (``... (greedy)``). Trained
 patrollers sample. Every patroller meets every adversary, one row each (``<patrollers> vs
 <adversary>``). ``planner_kwargs`` set the equilibrium's strategy set (`PatrolSetup`). The
-choices are in docs/choices.md, "The patrol evaluation".
+choices are in docs/choices/patrolling.md, "The patrol evaluation".
 
 Per episode: ``captured`` (the attack was caught, thesis §4.3.5), ``deterred`` (the adversary
 never attacked), ``outcome``, ``attack_target`` (vertex, -1 for none), ``detection_time`` (steps

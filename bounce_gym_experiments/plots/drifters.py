@@ -16,8 +16,8 @@ import numpy as np
 
 from baselines.drifters import (
     Deployment,
+    DrifterReachability,
     PersistentBehavior,
-    Reachability,
     ValueIterationResult,
     VisibilityDeployment,
 )
@@ -200,7 +200,7 @@ def plot_visibility_deployment(model: DrifterCells, result: VisibilityDeployment
     return save_figure(fig, path)
 
 
-def plot_reachability(model: DrifterCells, reach: Reachability, path: Path | str,
+def plot_reachability(model: DrifterCells, reach: DrifterReachability, path: Path | str,
                       title: str | None = None) -> Path:
     """The reachable set ℛ in every layer (light blue) from the release cell x_I and its
     column (green) (thesis Figs. 5.11, 5.13, 5.15)."""

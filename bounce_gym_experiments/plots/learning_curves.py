@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from baselines.rl.curves import WINDOW, Run, learning_curves
+from baselines.rl.curves import WINDOW, RunCurves, learning_curves
 from bounce_gym.files import atomic_write
 from bounce_gym_experiments.plots.figures import pyplot, save_figure
 
@@ -30,7 +30,7 @@ def write_learning_curves(folder: Path, window: int = WINDOW) -> tuple[list[Path
              write_end_points(runs, folder / "learning_curves.csv")], summary_lines(runs))
 
 
-def plot_learning_curves(runs: list[Run], path: Path, window: int) -> Path:
+def plot_learning_curves(runs: list[RunCurves], path: Path, window: int) -> Path:
     plt = pyplot()
     metrics = list(dict.fromkeys(m for run in runs for m in run.metrics))
     fig, axes = plt.subplots(1, len(metrics), figsize=(5.5 * len(metrics), 4), squeeze=False)
@@ -57,7 +57,7 @@ def plot_learning_curves(runs: list[Run], path: Path, window: int) -> Path:
     return save_figure(fig, path)
 
 
-def write_end_points(runs: list[Run], path: Path) -> Path:
+def write_end_points(runs: list[RunCurves], path: Path) -> Path:
     metrics = list(dict.fromkeys(m for run in runs for m in run.metrics))
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
@@ -71,7 +71,7 @@ def write_end_points(runs: list[Run], path: Path) -> Path:
     return path
 
 
-def summary_lines(runs: list[Run]) -> list[str]:
+def summary_lines(runs: list[RunCurves]) -> list[str]:
     lines = []
     for run in runs:
         parts = []

@@ -1,7 +1,7 @@
 """Every planner family is invariant to translating and scaling the map (real maps come in metres
 of a projected coordinate system, far from the origin): the same plans on a copy of a zoo map
 shifted by 10⁵ or by (10⁵, −7·10⁴), or scaled by 10⁻³ or 10³ (the cell size scaled with it).
-docs/choices.md, "Tolerances relative to the polygon's size"."""
+docs/choices/visibility.md, "Tolerances relative to the polygon's size"."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pytest
 from baselines.coverage.mixture import coverage_mixture
 from baselines.localization.planner import AngleSwitchPlanner, build_policy_dfa
 from baselines.multirobot.coverage import plan_coverage
-from baselines.multirobot.monitoring import persistent_behavior
+from baselines.multirobot.monitoring import joint_monitoring_cycles
 from baselines.navigation.roadmap import Roadmap, goal_cells
 from baselines.visibility import planning as P
 from baselines.visibility.graph import bvg, safe_graph
@@ -146,6 +146,6 @@ def test_multirobot_coverage_and_monitoring(scale, shift):
     assert res2.steps_to_full == res.steps_to_full and res2.collisions == res.collisions
     assert np.array_equal(np.array(res2.trajectory), np.array(res.trajectory))
     phi = math.radians(90)
-    mon, mon2 = (persistent_behavior(m, [phi, phi]) for m in (model, model2))
+    mon, mon2 = (joint_monitoring_cycles(m, [phi, phi]) for m in (model, model2))
     assert mon2.r == mon.r
     assert np.array_equal(mon2.accepted, mon.accepted) and np.array_equal(mon2.label, mon.label)

@@ -7,7 +7,7 @@ import yaml
 from baselines.seeds import EVALUATION_SEEDS_START
 from bounce_gym.errors import ConfigError
 from bounce_gym_experiments.config import load_config, registered_horizon, validate_config
-from bounce_gym_experiments.runner import make_env
+from bounce_gym_experiments.runner import make_experiment_env
 
 NAV = "bounce_gym/BounceNavigation-v0"
 COVERAGE = "bounce_gym/MultiBounceCoverage-v0"
@@ -50,7 +50,7 @@ def test_the_horizon_is_the_registered_one_unless_a_reason_is_given():
     assert _one(max_steps=200)["max_steps"] == 200
     exp = _one(max_steps=50, horizon_reason="a shorter study")
     assert exp["max_steps"] == 50
-    assert make_env(exp).spec.max_episode_steps == 50  # the env stops where the loop does
+    assert make_experiment_env(exp).spec.max_episode_steps == 50  # the env stops where the loop does
     multi = validate_config({"experiments": [{"name": "m", "env": COVERAGE}]})["experiments"][0]
     assert multi["max_steps"] == 500
 

@@ -21,7 +21,7 @@ from baselines.drifters import (
 )
 from bounce_gym.cells import DrifterCells
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 from bounce_gym_experiments import stats
 from bounce_gym_experiments.config import configs_folder, load_config, validate_config, world_name
 from bounce_gym_experiments.families import drifter_deployment, drifters
@@ -134,7 +134,7 @@ def test_the_deployments_use_alg_5_2s_fleet_size_and_their_predicted_coverage(tm
         by_policy.setdefault(r.policy, []).append(r)
     assert set(by_policy) == {"Alg. 5.2 deployment", "greedy deployment (H=500)",
                               "random deployment"}
-    model = DrifterCells(get("two_sink"))
+    model = DrifterCells(get_flow("two_sink"))
     n_cells = len(model.layer_states(0))
     setup = plots["deploy"]["setup"]
     for policy, mine in by_policy.items():
@@ -162,7 +162,7 @@ def test_alg_5_2_reaches_every_surface_cell_eventually_and_its_groups_surely():
     and the cells of a persistent group with probability 1 by the drifter released in it.
     Positive is not likely: the expected share of cells the fleet ever visits is small, which
     the evaluation measures (the env's coverage is the model's, tested above)."""
-    model = DrifterCells(get("two_sink"))
+    model = DrifterCells(get_flow("two_sink"))
     behavior = persistent_behavior(model, 0)
     ever = visit_probabilities(behavior, None)
     chosen = deployment_locations(behavior, seed=0).states - behavior.offset
@@ -237,7 +237,7 @@ def test_a_relative_flow_file_is_read_next_to_the_config(tmp_path):
     from bounce_gym.flows import save_flow
 
     (tmp_path / "fields").mkdir()
-    save_flow(get("two_sink"), tmp_path / "fields" / "basin.nc")
+    save_flow(get_flow("two_sink"), tmp_path / "fields" / "basin.nc")
     exp = {**reach(count=1), "env_kwargs": {"flow": "fields/basin.nc", "goal": (0, 10, 10)},
            "policies": ["planner"]}
     path = tmp_path / "c.yaml"

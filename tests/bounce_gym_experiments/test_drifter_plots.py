@@ -14,13 +14,13 @@ from baselines.drifters import (
     visibility_deployment,
 )
 from bounce_gym.cells import DrifterCells
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 from bounce_gym_experiments import stats
 from bounce_gym_experiments.plots import drifters as plots
 
 
 def test_every_drifter_figure_is_written(tmp_path):
-    model = DrifterCells(get("two_sink", n_layers=2))
+    model = DrifterCells(get_flow("two_sink", n_layers=2))
     b = persistent_behavior(model)
     dep = deployment_locations(b)
     goal = int(model.state_of(1, 10, 10))

@@ -19,7 +19,7 @@ from bounce_gym_experiments.config import validate_config
 from bounce_gym_experiments.families import multirobot_coverage, multirobot_monitoring
 from bounce_gym_experiments.oracle import ORACLE_NAME
 from bounce_gym_experiments.report import format_table, summarise
-from bounce_gym_experiments.runner import EpisodeResult, make_env, run, run_episode
+from bounce_gym_experiments.runner import EpisodeResult, make_experiment_env, run, run_episode
 
 ROOT = Path(__file__).parents[2]
 sys.path.insert(0, str(ROOT))
@@ -158,7 +158,7 @@ def test_steps_to_full_matches_a_hand_run_episode():
     exp = coverage_exp(m=3, seeds=[10_005], policies=["fixed"])
     rows, _ = run({"experiments": [exp]}, progress=False)
     row = next(r for r in rows if r.policy == "fixed 135°")
-    env = make_env(validate_config({"experiments": [exp]})["experiments"][0])
+    env = make_experiment_env(validate_config({"experiments": [exp]})["experiments"][0])
     env.reset(seed=10_005)
     first, contacts = None, 0
     for step in range(1, 3001):

@@ -21,7 +21,7 @@ from bounce_gym.errors import ConfigError
 from bounce_gym_experiments import stats
 from bounce_gym_experiments.config import validate_config
 from bounce_gym_experiments.families import patrolling
-from bounce_gym_experiments.runner import make_env, prepare_experiment, run, run_episode
+from bounce_gym_experiments.runner import make_experiment_env, prepare_experiment, run, run_episode
 
 ROOT = Path(__file__).parents[2]
 sys.path.insert(0, str(ROOT))
@@ -102,7 +102,7 @@ def test_the_best_response_is_caught_against_maect_as_often_as_the_env_predicts(
     kwargs = {**SMALL, "sensor_range": 3.0, "attack_time": 10}
     exp = validate_config({"experiments": [patrol(policies=["random"], env_kwargs=kwargs)]}
                           )["experiments"][0]
-    env = make_env(exp)
+    env = make_experiment_env(exp)
     maect = solve_maect(env.unwrapped.graph).transition
     adversary = BestResponseAdversary("strategy")
     policy = JointPatrolPolicy(MarkovPatrolPolicy([maect], name="MAECT"), adversary)
@@ -133,7 +133,7 @@ class FixedTarget(BestResponseAdversary):
 
 def test_detection_time_is_zero_when_a_patroller_watches_the_target_at_the_start():
     exp = validate_config({"experiments": [patrol(policies=["random"])]})["experiments"][0]
-    env = make_env(exp)
+    env = make_experiment_env(exp)
     inner = env.unwrapped
 
     class Placed(MarkovPatrolPolicy):
@@ -225,7 +225,7 @@ def test_trained_patrollers_and_adversaries_meet_every_opponent(tmp_path):
         "rl patrol-patrollers/ppo vs rl patrol-adversary/ppo (greedy)"
     assert all(r.metrics["outcome"] in ("capture", "success", "deterred") for r in rows)
     learned = next(e for e in plots["learned"]["setup"].learned_patrollers)[0]
-    env = make_env(validate_config(config(tmp_path, exp))["experiments"][0])
+    env = make_experiment_env(validate_config(config(tmp_path, exp))["experiments"][0])
     (weight, told), = learned.told(env)
     announced = learned.announced(env)
     for chain in (told, announced):

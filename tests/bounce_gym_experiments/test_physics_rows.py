@@ -12,8 +12,8 @@ import yaml
 
 from baselines.policy import Policy
 from bounce_gym_experiments.config import load_config, validate_config
-from bounce_gym_experiments.families.navigation import planners
-from bounce_gym_experiments.runner import make_env, run_episode
+from bounce_gym_experiments.families.navigation import navigation_planners
+from bounce_gym_experiments.runner import make_experiment_env, run_episode
 
 ROOT = Path(__file__).parents[2]
 sys.path.insert(0, str(ROOT))
@@ -150,8 +150,8 @@ def test_the_sampled_planner_reads_no_info_in_the_evaluation():
     (exp,) = (dict(e, planner_kwargs={**e["planner_kwargs"], **TINY, "models": ["sampled"]},
                    max_steps=8, horizon_reason="a quick test")
               for e in _experiments("eval_physics.yaml") if e["name"] == SAMPLED_ROWS[0])
-    env = make_env(exp)
-    (planner,) = planners(exp)
+    env = make_experiment_env(exp)
+    (planner,) = navigation_planners(exp)
     seen, _ = run_episode(env, planner, 10_000, exp["max_steps"], record=True)
     blind, _ = run_episode(env, Blind(planner), 10_000, exp["max_steps"], record=True)
     assert seen["steps"] == blind["steps"] and seen["ticks"] == blind["ticks"]

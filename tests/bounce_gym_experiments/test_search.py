@@ -14,7 +14,7 @@ from baselines.rl.model_files import read_model
 from baselines.rl.train_config import validate_train_config
 from bounce_gym.errors import ConfigError
 from bounce_gym_experiments.search import trial_configs
-from bounce_gym_experiments.search_space import load_search_space, sample
+from bounce_gym_experiments.search_space import load_search_space, sample_trial
 
 ROOT = Path(__file__).parents[2]
 sys.path.insert(0, str(ROOT))
@@ -60,9 +60,9 @@ def test_a_missing_space_file_and_a_non_hyperparameter_are_refused(tmp_path):
 
 def test_draws_are_reproducible_and_within_their_bounds(tmp_path):
     space = load_search_space(_space(tmp_path, SPACE))
-    draws = [sample(space, 7, k) for k in range(20)]
-    assert draws == [sample(space, 7, k) for k in range(20)]
-    assert draws[0] != sample(space, 8, 0)
+    draws = [sample_trial(space, 7, k) for k in range(20)]
+    assert draws == [sample_trial(space, 7, k) for k in range(20)]
+    assert draws[0] != sample_trial(space, 8, 0)
     assert all(1.0e-4 <= d["learning_rate"] <= 1.0e-3 and 0.9 <= d["gamma"] <= 0.99 and
                d["n_epochs"] in (1, 2, 3) and d["batch_size"] in (32, 64) for d in draws)
     assert {d["n_epochs"] for d in draws} == {1, 2, 3}
@@ -109,7 +109,7 @@ def test_a_tiny_search_on_a_local_ray_writes_ordinary_runs_a_table_and_the_best_
 def test_draws_reach_the_ends_of_int64_without_overflow(tmp_path):
     space = load_search_space(_space(tmp_path, {"seed_like": {"randint": [2**63 - 2,
                                                                           2**63 - 1]}}))
-    assert {sample(space, 0, k)["seed_like"] for k in range(40)} == {2**63 - 2, 2**63 - 1}
+    assert {sample_trial(space, 0, k)["seed_like"] for k in range(40)} == {2**63 - 2, 2**63 - 1}
 
 
 @pytest.mark.parametrize("space, message", [

@@ -1,4 +1,4 @@
-"""Robot–robot conflicts on the grid (docs/choices.md, "Robot–robot conflicts on the grid"):
+"""Robot–robot conflicts on the grid (docs/choices/multirobot.md, "Robot–robot conflicts on the grid"):
 crossing diagonal moves, shared by the env's cell backend and the joint cell model."""
 
 import numpy as np

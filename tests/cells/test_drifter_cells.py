@@ -8,7 +8,7 @@ import pytest
 
 from bounce_gym.cells import DOWN, DRIFT, UP, DrifterCells
 from bounce_gym.errors import ActionError, ConfigError, InvalidFlowError
-from bounce_gym.flows import FlowField, get
+from bounce_gym.flows import FlowField, get_flow
 
 
 def uniform_field(u, v, shape=(5, 6), crs="xy", y=None, land=None):
@@ -20,7 +20,7 @@ def uniform_field(u, v, shape=(5, 6), crs="xy", y=None, land=None):
 
 
 def test_state_numbering_is_layer_major_then_row_major():
-    f = get("scb_like")
+    f = get_flow("scb_like")
     m = DrifterCells(f, t=3600.0)
     assert m.n_states == int(f.water.sum()) and m.n_layers == 3
     assert np.array_equal(m.offsets, np.concatenate(([0], np.cumsum(f.water.sum(axis=(1, 2))))))
@@ -98,7 +98,7 @@ def test_boundary_cells_are_uniform_over_themselves_and_water_neighbours():
 
 
 def test_vertical_actions_and_legal_mask():
-    f = get("scb_like")
+    f = get_flow("scb_like")
     m = DrifterCells(f, t=0.0)
     lay, j, i = m.cells.T
     assert not m.legal[lay == 0, UP].any() and not m.legal[lay == 2, DOWN].any()
@@ -119,7 +119,7 @@ def test_vertical_actions_and_legal_mask():
 
 
 def test_sampling_follows_the_rows_and_is_seeded():
-    m = DrifterCells(get("two_sink"), rho=0.8)
+    m = DrifterCells(get_flow("two_sink"), rho=0.8)
     z = int(np.flatnonzero(~m.boundary)[100])
     states = np.full(40_000, z)
     draws = m.sample(states, np.zeros_like(states), np.random.default_rng(1))
@@ -130,7 +130,7 @@ def test_sampling_follows_the_rows_and_is_seeded():
 
 
 def test_sampling_vertical_moves_and_errors():
-    m = DrifterCells(get("scb_like"), t=0.0)
+    m = DrifterCells(get_flow("scb_like"), t=0.0)
     s = int(np.flatnonzero(m.legal[:, DOWN])[0])
     rng = np.random.default_rng(0)
     assert m.sample([s], [DOWN], rng)[0] == m.vertical[s, DOWN]
@@ -143,7 +143,7 @@ def test_sampling_vertical_moves_and_errors():
 
 
 def test_time_picks_the_snapshot():
-    f = get("scb_like")
+    f = get_flow("scb_like")
     a, b = DrifterCells(f, t=3600.0), DrifterCells(f, t=12 * 3600.0)
     assert not np.array_equal(a.mapped, b.mapped)
     with pytest.raises(InvalidFlowError, match="^t: expected a finite time"):
@@ -155,7 +155,7 @@ def test_time_picks_the_snapshot():
 
 
 def test_constructor_checks():
-    f = get("two_sink")
+    f = get_flow("two_sink")
     with pytest.raises(ConfigError, match="rho"):
         DrifterCells(f, rho=0.0)
     with pytest.raises(ConfigError, match="rho"):
@@ -169,7 +169,7 @@ def test_constructor_checks():
 
 
 def test_sample_one_draws_what_sample_draws():
-    model = DrifterCells(get("two_sink", n_layers=3), rho=0.7)
+    model = DrifterCells(get_flow("two_sink", n_layers=3), rho=0.7)
     rng = np.random.default_rng(0)
     states = rng.integers(model.n_states, size=400)
     actions = np.array([rng.choice(np.flatnonzero(model.legal[s])) for s in states])

@@ -11,11 +11,11 @@ import pytest
 from bounce_gym.cells import DOWN, DRIFT, UP
 from bounce_gym.dynamics.advection import Drifters
 from bounce_gym.errors import ActionError, ConfigError, InvalidFlowError
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 
 
 def test_solid_body_orbits_close_after_one_period():
-    f = get("solid_body", period=86400.0, basin="open")
+    f = get_flow("solid_body", period=86400.0, basin="open")
     cx, cy = f.x.mean(), f.y.mean()
     r = np.array([2e3, 5e3, 8e3])
     d = Drifters(f, cx + r, np.full(3, cy))
@@ -30,11 +30,11 @@ def test_solid_body_orbits_close_after_one_period():
 
 
 def test_uniform_flow_moves_exactly_and_lonlat_converts_metres_to_degrees():
-    f = get("uniform", u=0.2, v=-0.1, basin="open")
+    f = get_flow("uniform", u=0.2, v=-0.1, basin="open")
     d = Drifters(f, [5e3], [15e3])
     d.run(100.0, 50)
     assert d.x[0] == pytest.approx(5e3 + 0.2 * 5000) and d.y[0] == pytest.approx(15e3 - 500)
-    g = get("scb_like", mean_speed=0.0, eddy_speed=0.0)  # tides and convergence only
+    g = get_flow("scb_like", mean_speed=0.0, eddy_speed=0.0)  # tides and convergence only
     lon, lat = -118.0, 33.4
     d = Drifters(g, [lon], [lat], t=0.0)
     u, v = g.velocity([lon], [lat], [0], 0.0)
@@ -45,7 +45,7 @@ def test_uniform_flow_moves_exactly_and_lonlat_converts_metres_to_degrees():
 
 
 def test_diffusion_spreads_with_variance_2kt_and_is_seeded():
-    f = get("uniform", u=0.0, v=0.0, basin="open")
+    f = get_flow("uniform", u=0.0, v=0.0, basin="open")
     n, k, dt, steps = 4000, 0.5, 10.0, 50
     start = np.full(n, 14e3), np.full(n, 10e3)
     d = Drifters(f, *start, diffusivity=k, rng=3)
@@ -62,7 +62,7 @@ def test_diffusion_spreads_with_variance_2kt_and_is_seeded():
 
 
 def test_land_rule_stay_stops_at_the_coast():
-    f = get("uniform", u=0.3, v=0.1)  # towards the land strip east of column 25
+    f = get_flow("uniform", u=0.3, v=0.1)  # towards the land strip east of column 25
     d = Drifters(f, np.full(5, 20e3), np.linspace(2e3, 10e3, 5), land_rule="stay")
     held = np.zeros(5, dtype=bool)
     for _ in range(100):
@@ -75,7 +75,7 @@ def test_land_rule_stay_stops_at_the_coast():
 
 
 def test_land_rule_slide_keeps_the_move_along_the_coast():
-    f = get("uniform", u=0.3, v=0.1)
+    f = get_flow("uniform", u=0.3, v=0.1)
     d = Drifters(f, np.full(5, 20e3), np.linspace(2e3, 10e3, 5), land_rule="slide")
     for _ in range(100):
         d.step(300.0)
@@ -89,7 +89,7 @@ def test_land_rule_slide_keeps_the_move_along_the_coast():
 
 
 def test_drifters_never_leave_the_water_with_noise():
-    f = get("scb_like")
+    f = get_flow("scb_like")
     rng = np.random.default_rng(0)
     j, i = np.nonzero(f.water[1])
     k = rng.choice(len(j), 200)
@@ -101,7 +101,7 @@ def test_drifters_never_leave_the_water_with_noise():
 
 
 def test_profiling_drifters_change_layer():
-    f = get("scb_like")
+    f = get_flow("scb_like")
     land_below = np.argwhere(f.water[0] & f.land[1])[0]
     x = f.x[[land_below[1], 3]]
     y = f.y[[land_below[0], 3]]
@@ -121,7 +121,7 @@ def test_profiling_drifters_change_layer():
 
 
 def test_input_checks():
-    f = get("two_sink")
+    f = get_flow("two_sink")
     with pytest.raises(ConfigError, match="drifter 0 .* not in water"):
         Drifters(f, [27e3], [5e3])
     with pytest.raises(ConfigError, match="land_rule"):
@@ -132,7 +132,7 @@ def test_input_checks():
         Drifters(f, [5e3], [5e3], layer=1)
     with pytest.raises(ConfigError, match="dt"):
         Drifters(f, [5e3], [5e3]).step(0.0)
-    g = get("scb_like")
+    g = get_flow("scb_like")
     d = Drifters(g, [-118.2], [33.35], t=24 * 3600.0)
     with pytest.raises(InvalidFlowError, match="outside the field's time range"):
         d.step(600.0)

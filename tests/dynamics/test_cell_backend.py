@@ -16,7 +16,7 @@ deg = np.radians
 
 def test_king_moves_and_the_tie_rule():
     """Eq. 3 steps (Alam, Bobadilla & Shell 2017) and the symmetric tie rule at 30°, 60°, …
-    (docs/choices.md, "Unit steps are king moves, with a symmetric tie rule")."""
+    (docs/choices/cell_model.md, "Unit steps are king moves, with a symmetric tie rule")."""
     dcol, drow = king_offset(deg([0, 45, 90, 30, 60, 120, 150, 210, 240, 300, 330]))
     assert list(zip(dcol.tolist(), drow.tolist(), strict=True)) == [
         (1, 0), (1, 1), (0, 1), (1, 1), (1, 1), (-1, 1), (-1, 1), (-1, -1), (-1, -1), (1, -1),
@@ -87,7 +87,7 @@ def test_reliable_noise_follows_the_gcm_rows():
 
 
 def test_multi_robot_grid_rules():
-    """docs/choices.md, "Robot–robot conflicts on the grid": same-target, swap and
+    """docs/choices/multirobot.md, "Robot–robot conflicts on the grid": same-target, swap and
     occupied-by-a-stayer conflicts block robots."""
     corridor = World([(0, 0), (8, 0), (8, 1), (0, 1)])
     env = MultiBounceEnv(world=corridor, n_robots=2, backend="cell", robot_radius=0.0,

@@ -64,7 +64,7 @@ def test_every_field_is_described_and_the_schema_is_json(family):
                  if name.endswith("Options") and hasattr(value, "model_fields"))
     for name, field in model.model_fields.items():
         assert field.description and len(field.description) > 20, name
-    schema = json.loads(json.dumps(family.json_schema()))
+    schema = json.loads(json.dumps(model.model_json_schema()))
     assert list(schema["properties"]) == list(model.model_fields)
     assert schema["additionalProperties"] is False
 

@@ -15,7 +15,7 @@ from bounce_gym.cells import DOWN, DRIFT, UP
 from bounce_gym.dynamics import Drifters
 from bounce_gym.envs.drifters.env import DrifterEnv
 from bounce_gym.errors import ActionError, ConfigError
-from bounce_gym.flows import get, save_flow
+from bounce_gym.flows import get_flow, save_flow
 from bounce_gym.markov.gcm import layer_gcm
 
 #: three layers of the two-sink basin: small, static, with up and down moves everywhere
@@ -186,7 +186,7 @@ def test_cell_backend_success_of_a_layer_switching_policy_matches_the_model():
 # -- the continuous backend is `Drifters` ----------------------------------------------------
 @pytest.mark.parametrize("diffusivity", [0.0, 30.0])
 def test_continuous_backend_follows_the_rk4_drifters_exactly(diffusivity):
-    field = get("two_sink", n_layers=3)
+    field = get_flow("two_sink", n_layers=3)
     env = DrifterEnv(flow=field, backend="continuous", step_seconds=3000.0, substeps=3,
                      diffusivity=diffusivity, illegal_action="error")
     start = (7321.5, 12044.0)
@@ -204,7 +204,7 @@ def test_continuous_backend_follows_the_rk4_drifters_exactly(diffusivity):
 
 
 def test_continuous_default_step_is_the_median_crossing_time():
-    field = get("uniform", u=0.25, v=0.0)
+    field = get_flow("uniform", u=0.25, v=0.0)
     env = DrifterEnv(flow=field, backend="continuous")
     assert env.options.step_seconds == pytest.approx(1000.0 / 0.25)
 
@@ -332,7 +332,7 @@ def test_cover_counts_new_region_cells():
 
 # -- flows from files and objects ------------------------------------------------------------
 def test_flow_from_a_netcdf_file_equals_the_zoo_field(tmp_path):
-    path = save_flow(get("two_sink", n_layers=3), tmp_path / "basin.nc")
+    path = save_flow(get_flow("two_sink", n_layers=3), tmp_path / "basin.nc")
     a = _rollout(DrifterEnv(flow=str(path)), 1, 60)
     b = _rollout(DrifterEnv(**THREE), 1, 60)
     assert data_equivalence(a, b, exact=True)
@@ -352,7 +352,7 @@ def test_time_dependent_flow_continuous_clock_and_hold():
     (dict(flow="missing.nc"), "flow"),
     (dict(flow="two_sink", flow_kwargs={"swril": 0.1}), "flow_kwargs"),
     (dict(flow="two_sink", flow_kwargs={"n_layers": 0}), "flow_kwargs"),
-    (dict(flow=get("two_sink"), flow_kwargs={"n_layers": 2}), "flow_kwargs"),
+    (dict(flow=get_flow("two_sink"), flow_kwargs={"n_layers": 2}), "flow_kwargs"),
     (dict(backend="grid"), "backend"),
     (dict(rho=0.0), "rho"),
     (dict(rho=1.5), "rho"),
@@ -399,7 +399,7 @@ def test_unreadable_flow_file_is_a_config_error(tmp_path):
 
 
 def test_a_flow_file_is_capped_by_flow_kwargs(tmp_path):
-    path = save_flow(get("two_sink", n_layers=3), tmp_path / "basin.nc")
+    path = save_flow(get_flow("two_sink", n_layers=3), tmp_path / "basin.nc")
     with pytest.raises(ConfigError, match=r"^flow: .*basin.nc: u \('u'\): declares [\d,]+ values "
                                           r".*at most 100 are read"):
         DrifterEnv(flow=path, flow_kwargs={"max_values": 100})

@@ -6,10 +6,10 @@ import pytest
 from bounce_gym.cells import DrifterCells
 from bounce_gym.envs.drifters.regions import parse_region
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import METRES_PER_DEGREE, get
+from bounce_gym.flows import METRES_PER_DEGREE, get_flow
 
-BASIN = DrifterCells(get("two_sink", n_layers=2))  # 1 km cells, land east of column 25
-BIGHT = DrifterCells(get("scb_like"), t=0.0)  # 0.02 degree cells
+BASIN = DrifterCells(get_flow("two_sink", n_layers=2))  # 1 km cells, land east of column 25
+BIGHT = DrifterCells(get_flow("scb_like"), t=0.0)  # 0.02 degree cells
 
 
 def cells(region, model=BASIN):

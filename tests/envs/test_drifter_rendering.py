@@ -14,7 +14,7 @@ from bounce_gym.envs.drifters.env import DrifterEnv
 from bounce_gym.envs.drifters.multi_env import MultiDrifterEnv
 from bounce_gym.envs.render.flow_view import LAND, WATER, FlowRenderer
 from bounce_gym.envs.render.renderer import robot_colour
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 
 THREE = dict(flow="two_sink", flow_kwargs={"n_layers": 3})
 
@@ -79,7 +79,7 @@ def test_visited_cells_are_shaded():
 
 
 def test_lonlat_map_keeps_its_shape():
-    field = get("scb_like")
+    field = get_flow("scb_like")
     r = FlowRenderer(field, width=640, margin=0)
     # 0.56 degrees of longitude at 33.5 N against 0.40 degrees of latitude (+ half cells)
     width_m = (0.56 + 0.02) * np.cos(np.radians(33.5))

@@ -74,7 +74,7 @@ def test_time_dependent_field_has_one_matrix_per_step_until_its_last_snapshot():
 def test_cache_reloads_and_rebuilds_a_corrupt_or_stale_file():
     env = _one_cell_env()
     first = env.cell_model(kind="sampled", samples=4, seed=3)
-    key = model_cache.fingerprint(env.options, 4, 3, env.core.clock_steps, 1)
+    key = model_cache.drifter_model_fingerprint(env.options, 4, 3, env.core.clock_steps, 1)
     path = model_cache.cache_path(key)
     assert path.is_file()
     stamp = path.stat().st_mtime_ns
@@ -87,14 +87,14 @@ def test_cache_reloads_and_rebuilds_a_corrupt_or_stale_file():
             rebuilt = _one_cell_env().cell_model(kind="sampled", samples=4, seed=3)
         assert all((a != b).nnz == 0 for a, b in zip(first.drifts, rebuilt.drifts, strict=True))
     # a valid file of another model under this name is stale: rebuilt
-    other = model_cache.cache_path(model_cache.fingerprint(env.options, 4, 4,
+    other = model_cache.cache_path(model_cache.drifter_model_fingerprint(env.options, 4, 4,
                                                            env.core.clock_steps, 1))
     _one_cell_env().cell_model(kind="sampled", samples=4, seed=4)
     path.write_bytes(other.read_bytes())
     with pytest.warns(UserWarning, match="does not match"):
         rebuilt = _one_cell_env().cell_model(kind="sampled", samples=4, seed=3)
     assert rebuilt.seed == 3
-    header, _ = stored_models.load(path, model_cache.FORMAT, key)  # the file was replaced
+    header, _ = stored_models.load_cached(path, model_cache.FORMAT, key)  # the file was replaced
     assert header["seed"] == 3
 
 

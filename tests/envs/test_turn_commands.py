@@ -1,6 +1,6 @@
 """Clock-timed turn commands of the multi-robot env (Algorithm 1's neighbour jump, Alam &
 Bobadilla 2020, §4.1, is a ±Δθ turn of one robot, executed as a timed command, not a bounce:
-docs/choices.md, "A neighbour jump is a timed turn")."""
+docs/choices/multirobot.md, "A neighbour jump is a timed turn")."""
 
 import math
 import pickle

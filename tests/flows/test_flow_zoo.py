@@ -9,16 +9,16 @@ import numpy as np
 import pytest
 
 from bounce_gym.errors import ConfigError, InvalidFlowError
-from bounce_gym.flows import ekman_layers, get, load_flow, names, save_flow, two_sink_land
+from bounce_gym.flows import ekman_layers, flow_names, get_flow, load_flow, save_flow, two_sink_land
 
 
 def test_names():
-    assert names() == ["double_gyre", "scb_like", "solid_body", "two_sink", "uniform"]
+    assert flow_names() == ["double_gyre", "scb_like", "solid_body", "two_sink", "uniform"]
 
 
-@pytest.mark.parametrize("name", names())
+@pytest.mark.parametrize("name", flow_names())
 def test_every_zoo_field_round_trips_through_netcdf(tmp_path, name):
-    f = get(name)
+    f = get_flow(name)
     g = load_flow(save_flow(f, tmp_path / f"{name}.nc"))
     for key in ("u", "v", "x", "y", "depth", "land"):
         assert np.array_equal(getattr(f, key), getattr(g, key)), key
@@ -28,17 +28,17 @@ def test_every_zoo_field_round_trips_through_netcdf(tmp_path, name):
 
 def test_unknown_names_and_arguments():
     with pytest.raises(InvalidFlowError, match="unknown flow 'gulf'; available: double_gyre"):
-        get("gulf")
+        get_flow("gulf")
     with pytest.raises(InvalidFlowError, match="two_sink: unknown argument 'seed'"):
-        get("two_sink", seed=1)
+        get_flow("two_sink", seed=1)
     with pytest.raises(ConfigError, match="speed"):
-        get("two_sink", speed=-1.0)
+        get_flow("two_sink", speed=-1.0)
     with pytest.raises(ConfigError, match="basin"):
-        get("uniform", basin="lake")
+        get_flow("uniform", basin="lake")
 
 
 def test_two_sink_basin_and_wells():
-    f = get("two_sink")
+    f = get_flow("two_sink")
     land = two_sink_land()
     assert f.shape == (21, 29) and int(f.water.sum()) == 522
     assert land[:, 26:].all() and land[17:, 20:].all() and land.sum() == 609 - 522
@@ -53,7 +53,7 @@ def test_two_sink_basin_and_wells():
 
 
 def test_two_sink_layers_turn_and_decay():
-    f = get("two_sink", n_layers=3)
+    f = get_flow("two_sink", n_layers=3)
     assert f.depth.tolist() == [0.0, 5.0, 10.0]
     a, s = math.radians(-40.0), math.exp(-10.0 / 20.0)
     u0, v0 = f.u[0, 0], f.v[0, 0]
@@ -69,7 +69,7 @@ def test_ekman_layers_keep_the_surface():
 
 
 def test_scb_like_region_layers_tides_and_seed():
-    f = get("scb_like")
+    f = get_flow("scb_like")
     assert f.crs == "lonlat" and f.shape == (21, 29) and f.depth.tolist() == [0.0, 5.0, 10.0]
     assert f.y[0] == pytest.approx(33.30) and f.y[-1] == pytest.approx(33.70)
     assert f.x[0] == pytest.approx(-118.26) and f.x[-1] == pytest.approx(-117.70)
@@ -83,13 +83,13 @@ def test_scb_like_region_layers_tides_and_seed():
     a, s = math.radians(-20.0), math.exp(-5.0 / 20.0)
     assert np.allclose(f.u[1, 7], s * (math.cos(a) * f.u[0, 7] - math.sin(a) * f.v[0, 7])
                        * ~f.land[1])
-    same, other = get("scb_like", seed=0), get("scb_like", seed=1)
+    same, other = get_flow("scb_like", seed=0), get_flow("scb_like", seed=1)
     assert np.array_equal(same.u, f.u) and not np.allclose(other.u, f.u)
-    assert get("scb_like", island=False).land[0].sum() < f.land[0].sum()
+    assert get_flow("scb_like", island=False).land[0].sum() < f.land[0].sum()
 
 
 def test_double_gyre_matches_shadden_formula():
-    f = get("double_gyre")
+    f = get_flow("double_gyre")
     assert f.x[0] == 0 and f.x[-1] == 2 and f.y[-1] == 1 and f.time[-1] == 20.0
     A, eps, omega = 0.1, 0.25, 2 * math.pi / 10
     k, j, i = 7, 13, 61
@@ -105,10 +105,10 @@ def test_double_gyre_matches_shadden_formula():
 
 
 def test_solid_body_and_uniform():
-    f = get("solid_body", period=1000.0, basin="open")
+    f = get_flow("solid_body", period=1000.0, basin="open")
     omega = 2 * math.pi / 1000.0
     xx, yy = np.meshgrid(f.x - f.x.mean(), f.y - f.y.mean())
     assert np.allclose(f.u[0, 0], -omega * yy) and np.allclose(f.v[0, 0], omega * xx)
-    assert not f.land.any() and get("solid_body").water.sum() == 522
-    g = get("uniform", u=0.1, v=-0.2)
+    assert not f.land.any() and get_flow("solid_body").water.sum() == 522
+    g = get_flow("uniform", u=0.1, v=-0.2)
     assert np.all(g.u[g.water[:, None]] == 0.1) and np.all(g.v[g.water[:, None]] == -0.2)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from bounce_gym.dynamics.advection import Drifters
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 from bounce_gym.flows.parcels_bridge import parcels_advect
 
 TOLERANCE = 1e-9  # of the domain's extent
@@ -43,20 +43,20 @@ def check(field, x, y, layer, dt, n_steps, t=None, min_clear=20):
 
 def test_double_gyre_trajectories_agree_with_parcels():
     rng = np.random.default_rng(0)
-    f = get("double_gyre")
+    f = get_flow("double_gyre")
     check(f, rng.uniform(0.1, 1.9, 50), rng.uniform(0.1, 0.9, 50), 0, 0.1, 100)
 
 
 def test_two_sink_trajectories_agree_with_parcels():
     rng = np.random.default_rng(1)
-    f = get("two_sink")
+    f = get_flow("two_sink")
     check(f, rng.uniform(2e3, 18e3, 50), rng.uniform(3e3, 15e3, 50), 0, 600.0, 40)
 
 
 @pytest.mark.parametrize("layer", [0, 2])
 def test_scb_like_lonlat_tidal_trajectories_agree_with_parcels(layer):
     rng = np.random.default_rng(2)
-    f = get("scb_like")
+    f = get_flow("scb_like")
     j, i = np.nonzero(f.water[layer])
     k = rng.choice(len(j), 60, replace=False)
     check(f, f.x[i[k]] + 0.003, f.y[j[k]] + 0.004, layer, 600.0, 40, t=1800.0)
@@ -69,4 +69,4 @@ def test_missing_parcels_is_reported_with_the_extra_to_install(monkeypatch):
 
     monkeypatch.setitem(sys.modules, "parcels", None)  # makes `import parcels` fail
     with pytest.raises(ConfigError, match=r"bounce-gym\[drifters-check\]"):
-        parcels_advect(get("two_sink"), [5e3], [5e3], 0, 60.0, 1)
+        parcels_advect(get_flow("two_sink"), [5e3], [5e3], 0, 60.0, 1)

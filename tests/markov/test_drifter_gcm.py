@@ -11,14 +11,14 @@ from scipy.sparse.csgraph import connected_components
 
 from bounce_gym.cells import DrifterCells
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 from bounce_gym.markov.gcm import generalized_cell_mapping, layer_gcm
 from bounce_gym.markov.ordering import grid_dissection
 
 
 @pytest.mark.parametrize("rho", [0.6, 0.8, 0.9])
 def test_two_sink_has_two_persistent_and_three_transient_groups(rho):
-    res = layer_gcm(DrifterCells(get("two_sink"), rho=rho), 0)
+    res = layer_gcm(DrifterCells(get_flow("two_sink"), rho=rho), 0)
     assert sorted(res.sizes.tolist()) == [20, 25]
     big = int(np.argmax(res.sizes))
     groups = res.domicile_groups()
@@ -30,11 +30,11 @@ def test_two_sink_has_two_persistent_and_three_transient_groups(rho):
 
 
 MODELS = {
-    "two_sink": lambda: DrifterCells(get("two_sink", n_layers=3)),
-    "scb_like": lambda: DrifterCells(get("scb_like"), t=3600.0),
-    "double_gyre": lambda: DrifterCells(get("double_gyre", spacing=0.05), t=2.0),
-    "solid_body": lambda: DrifterCells(get("solid_body"), step="flowline"),
-    "uniform": lambda: DrifterCells(get("uniform", v=0.1)),
+    "two_sink": lambda: DrifterCells(get_flow("two_sink", n_layers=3)),
+    "scb_like": lambda: DrifterCells(get_flow("scb_like"), t=3600.0),
+    "double_gyre": lambda: DrifterCells(get_flow("double_gyre", spacing=0.05), t=2.0),
+    "solid_body": lambda: DrifterCells(get_flow("solid_body"), step="flowline"),
+    "uniform": lambda: DrifterCells(get_flow("uniform", v=0.1)),
 }
 
 
@@ -70,7 +70,7 @@ def chains_until_absorbed(model, res, starts, rng, max_steps=10_000):
 
 
 def test_absorption_times_and_probabilities_match_monte_carlo():
-    model = DrifterCells(get("two_sink"), rho=0.8)
+    model = DrifterCells(get_flow("two_sink"), rho=0.8)
     res = layer_gcm(model, 0)
     rng = np.random.default_rng(7)
     groups = res.domicile_groups()
@@ -93,7 +93,7 @@ def test_absorption_times_and_probabilities_match_monte_carlo():
 @pytest.mark.parametrize("name", ["solid_body", "uniform"])
 @pytest.mark.parametrize("step", ["euler", "flowline"])
 def test_with_noise_rotation_and_uniform_flow_are_one_persistent_group(name, step):
-    res = layer_gcm(DrifterCells(get(name), rho=0.8, step=step), 0)
+    res = layer_gcm(DrifterCells(get_flow(name), rho=0.8, step=step), 0)
     assert res.sizes.tolist() == [522] and len(res.transient) == 0
 
 
@@ -105,7 +105,7 @@ def cycle_groups(model, res):
 
 
 def test_solid_body_flow_lines_close_into_persistent_cycles():
-    model = DrifterCells(get("solid_body", basin="open"), rho=1.0, step="flowline")
+    model = DrifterCells(get_flow("solid_body", basin="open"), rho=1.0, step="flowline")
     res = layer_gcm(model, 0)
     cycles = [g for g in cycle_groups(model, res) if len(g) > 1]
     assert len(cycles) >= 5 and len(cycles) == res.n_groups - 1  # plus the centre, fixed
@@ -122,14 +122,14 @@ def test_solid_body_flow_lines_close_into_persistent_cycles():
 def test_solid_body_euler_unit_steps_spiral_out_to_the_boundary():
     """The explicit Euler step gains radius on every rotation (|1 + i ω Δt| > 1): only the
     centre stays on a closed orbit."""
-    model = DrifterCells(get("solid_body", basin="open"), rho=1.0, step="euler")
+    model = DrifterCells(get_flow("solid_body", basin="open"), rho=1.0, step="euler")
     res = layer_gcm(model, 0)
     assert [len(g) for g in cycle_groups(model, res)] == [1]
     assert res.n_groups == 2 and model.boundary[res.groups[int(np.argmax(res.sizes))]].any()
 
 
 def test_uniform_flow_drains_to_the_downstream_boundary():
-    model = DrifterCells(get("uniform", u=0.2, v=0.0, basin="open"), rho=0.8)
+    model = DrifterCells(get_flow("uniform", u=0.2, v=0.0, basin="open"), rho=0.8)
     # make the boundary absorbing: where does the flow deliver the interior cells?
     P = model.transition_matrix(0).tolil()
     for z in np.flatnonzero(model.boundary):
@@ -156,7 +156,7 @@ def test_grid_dissection_is_a_permutation_with_separators_last():
 
 @pytest.mark.parametrize("name, layer", [("two_sink", 0), ("scb_like", 2)])
 def test_the_elimination_order_changes_no_result(name, layer):
-    model = DrifterCells(get(name), t=None if name == "two_sink" else 3600.0)
+    model = DrifterCells(get_flow(name), t=None if name == "two_sink" else 3600.0)
     ordered = layer_gcm(model, layer)
     assert ordered.order is not None
     plain = generalized_cell_mapping(model.transition_matrix(layer))
@@ -168,7 +168,7 @@ def test_the_elimination_order_changes_no_result(name, layer):
 
 
 def test_domicile_groups_match_the_rows_of_the_domicile_matrix():
-    res = layer_gcm(DrifterCells(get("scb_like"), t=12 * 3600.0), 0)
+    res = layer_gcm(DrifterCells(get_flow("scb_like"), t=12 * 3600.0), 0)
     d = res.domiciles.tolil()
     expected: dict[frozenset, list[int]] = {}
     for i, cell in enumerate(res.transient):

@@ -2,7 +2,7 @@
 
 Sources: Alam, Bobadilla & Shell 2018, Sec. III-B and IV-A (Defs. 1-4, Algorithm 1); Alam, Bobadilla
 & Shell 2017, Sec. III-B and IV-C (GCM, Alg. 3); thesis Defs. 2.3.1-2.3.4, §3.3.3 and §5.4 (GCM
-groups and domiciles); choices where the papers are open: docs/choices.md.
+groups and domiciles); choices where the papers are open: docs/choices/index.md.
 Coordinates are (column, row) with the origin bottom-left; bins count counter-clockwise from East.
 """
 
@@ -37,7 +37,7 @@ def cell(model: CellModel, col: int, row: int, k: int) -> int:
 
 def algorithm1(succ: np.ndarray, order) -> tuple[np.ndarray, np.ndarray, int]:
     """The paper's sequential MODIFIEDSIMPLECELLMAPPING with its index errors fixed
-    (docs/choices.md, "Algorithm 1's index errors and order independence")
+    (docs/choices/cell_model.md, "Algorithm 1's index errors and order independence")
     (separate cursor, d = first index of z in the walk, line 27 into T_{g_z}), visiting the cells
     in ``order``. Returns (group 0-based, s, r)."""
     n = len(succ)
@@ -192,7 +192,7 @@ def test_scm_on_random_functional_graphs(seed):
 
 @pytest.mark.parametrize("seed", range(3))
 def test_scm_invariant_to_cell_relabelling(seed):
-    """docs/choices.md, "Algorithm 1's index errors and order independence": results must not depend
+    """docs/choices/cell_model.md, "Algorithm 1's index errors and order independence": results must not depend
     on the cell iteration order. Relabelling the cells by a permutation σ (C' = σ C σ^-1) permutes
     periodic flags, steps, periods and groups alike."""
     rng = np.random.default_rng(10 + seed)
@@ -310,7 +310,7 @@ def test_eight_bins_empty_6x4(phi_deg, periods):
     ("lab_localization_a", 135, 1), ("lab_localization_b", 45, 1)])
 def test_lab_localization_maps(name, phi_deg, r):
     """Paper Tables I/II structure on the reconstructed 19-cell lab maps (zoo descriptions; the
-    layouts are reconstructions, so only the structure is claimed, docs/choices.md): N = 19 x 8 =
+    layouts are reconstructions, so only the structure is claimed, docs/choices/cell_model.md): N = 19 x 8 =
     152 cells, an NFA of N + 1 = 153 states; map a has r = 1 at 45°, map b has r = 2 at 135°
     (and the reconstructions give r = 1 at the other angle)."""
     model = CellModel(get(name), n_bins=8)
@@ -356,7 +356,7 @@ def test_boundary_cycle_5x4():
 
 
 def test_gcm_rows_one_degree_bins():
-    """Alam, Bobadilla & Shell 2017, Sec. III-B / thesis §3.3.3 (docs/choices.md, "ε counts
+    """Alam, Bobadilla & Shell 2017, Sec. III-B / thesis §3.3.3 (docs/choices/navigation_coverage.md, "ε counts
     orientation bins"): rows sum to 1; with ε = 5°, 1° bins and r = 0.8 a bump row
     has 0.8 on the nominal bin and 0.02 on each of the 10 others; forward rows a single 1."""
     model = rect(6, 4, 360)
@@ -428,7 +428,7 @@ def test_gcm_lab_complex_360_bins():
 @pytest.mark.parametrize(("name", "phi_deg"), [("lab_localization_a", 45),
                                                ("lab_localization_b", 135), ("lab_fig1", 90)])
 def test_gcm_groups_are_attracting_components(name, phi_deg):
-    """Alg. 3 (docs/choices.md, "Persistent groups without a transitive closure"): persistent groups
+    """Alg. 3 (docs/choices/navigation_coverage.md, "Persistent groups without a transitive closure"): persistent groups
     are the closed SCCs = nx.attracting_components, and the transient cells are everything else (8
     bins, ε = 45°, r = 0.8)."""
     model = CellModel(get(name), n_bins=8)
@@ -441,7 +441,7 @@ def test_gcm_groups_are_attracting_components(name, phi_deg):
 
 
 def test_open_scc_is_transient():
-    """Thesis §5.4.3 (docs/choices.md, "Persistent groups without a transitive closure"): a strongly
+    """Thesis §5.4.3 (docs/choices/navigation_coverage.md, "Persistent groups without a transitive closure"): a strongly
     connected set that probability can leave is transient (persistence is closedness, not mutual
     reachability). Cells 0 <-> 1 form an SCC leaking into the absorbing cell 2."""
     P = sp.csr_matrix(np.array([[0.0, 0.9, 0.1], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
@@ -535,7 +535,7 @@ def test_absorption_matches_monte_carlo(seed):
 
 @pytest.mark.parametrize("seed", range(2))
 def test_limiting_distribution_is_the_cesaro_limit(seed):
-    """docs/choices.md, "The limiting distribution starts anywhere": the limiting distribution is
+    """docs/choices/navigation_coverage.md, "The limiting distribution starts anywhere": the limiting distribution is
     the Cesàro limit of p(0) P^n (it exists for the period-3 group, where P^n does not converge):
     uniform p(0) over all N cells by default, w_g = (|g| + Σ_t a_tg) / N; the alternative modes
     (uniform over persistent cells, equal weight per group) and a custom p(0) match their own Cesàro
@@ -601,7 +601,7 @@ def test_domicile_sets_two_sinks():
     (np.ones((2, 3)) / 3, "square"),
     (np.array([[np.nan, 1.0], [0.0, 1.0]]), "finite")])
 def test_gcm_rejects_non_stochastic(matrix, match):
-    """P must be a square row-stochastic matrix (docs/choices.md, "The chain is a row-vector
+    """P must be a square row-stochastic matrix (docs/choices/navigation_coverage.md, "The chain is a row-vector
     chain")."""
     with pytest.raises(ConfigError, match=match):
         generalized_cell_mapping(sp.csr_matrix(matrix))

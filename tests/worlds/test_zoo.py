@@ -111,7 +111,7 @@ def test_grid_maps_are_exact_grid_worlds(name):
 
 
 def test_lab_navigation_is_our_reconstruction():
-    # docs/choices.md, "The lab maps are reconstructions": 14 x 7; blocked = columns 1-6 x rows 1-5
+    # docs/choices/cell_model.md, "The lab maps are reconstructions": 14 x 7; blocked = columns 1-6 x rows 1-5
     # and columns 8-12 x rows 0-3.
     free = get("lab_navigation").occupancy(1.0)
     expected = np.ones((7, 14), dtype=bool)

@@ -16,3 +16,6 @@ rows and checkpoints (`baselines.rl.jaxrl.runner`). The modules, each with one j
 * `runner` — the host loop of one seed: chunks, monitor file, checkpoints, the model file;
 * `policy` — a saved JAX model as a `baselines.policy.Policy` for the evaluation.
 """
+
+#: the package itself exports nothing: its modules are the interface (import them)
+__all__: list[str] = []

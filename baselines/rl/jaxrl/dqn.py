@@ -49,7 +49,7 @@ class DQNState(NamedTuple):
     timesteps: jax.Array
 
 
-def network_sizes(n_inputs: int, n_actions: int, arch: dict[str, list[int]]) -> dict:
+def q_network_sizes(n_inputs: int, n_actions: int, arch: dict[str, list[int]]) -> dict:
     """The layer sizes of the Q-network (``q``)."""
     return {"q": [n_inputs, *arch["q"], n_actions]}
 
@@ -83,7 +83,7 @@ class DQN:
                               f"n_envs = {self.capacity} transitions per env, fewer than one "
                               f"episode of {self.horizon} steps")
         self.activation = activation(self.algo, settings)
-        self.sizes = network_sizes(observation_size(observation_space), self.n_actions,
+        self.sizes = q_network_sizes(observation_size(observation_space), self.n_actions,
                                    net_arch(self.algo, settings))
         self.steps_per_iteration = settings["train_freq"] * n_envs
         self.iterations = -(-total_timesteps // self.steps_per_iteration)
@@ -167,7 +167,7 @@ class DQN:
     def _batch(self, buffer: replay.Buffer, key: jax.Array):
         """``(x, action, reward, terminated, x_next)`` of a sampled mini-batch, relabelled."""
         k_sample, k_goal = jax.random.split(key)
-        env, slot = replay.sample(buffer, k_sample, self.settings["batch_size"],
+        env, slot = replay.sample_transitions(buffer, k_sample, self.settings["batch_size"],
                                   self.her_ratio > 0)
         get = {k: v[env, slot] for k, v in buffer.data.items()}
         if not self.goals:

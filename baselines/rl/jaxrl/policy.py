@@ -34,7 +34,7 @@ from baselines.rl.model_files import read_model
 from baselines.rl.policies import GREEDY_SUFFIX
 from bounce_gym.errors import ConfigError
 
-_SIZES = {"jax_ppo": ppo.network_sizes, "jax_dqn": dqn.network_sizes}
+_SIZES = {"jax_ppo": ppo.actor_critic_sizes, "jax_dqn": dqn.q_network_sizes}
 _HEADS = {"jax_ppo": "pi", "jax_dqn": "q"}
 
 

@@ -53,7 +53,7 @@ class Transition(NamedTuple):
     final_x: jax.Array
 
 
-def network_sizes(n_inputs: int, n_actions: int, arch: dict[str, list[int]]) -> dict:
+def actor_critic_sizes(n_inputs: int, n_actions: int, arch: dict[str, list[int]]) -> dict:
     """The layer sizes of the policy (``pi``) and value (``vf``) MLPs."""
     return {"pi": [n_inputs, *arch["pi"], n_actions], "vf": [n_inputs, *arch["vf"], 1]}
 
@@ -83,7 +83,7 @@ class PPO:
             raise ConfigError(f"config.env: jax_ppo needs discrete actions, the env's are {space}")
         self.n_actions = int(space.n)
         self.activation = activation(self.algo, settings)
-        self.sizes = network_sizes(observation_size(env.observation_space(env_params)),
+        self.sizes = actor_critic_sizes(observation_size(env.observation_space(env_params)),
                                    self.n_actions, net_arch(self.algo, settings))
         self.iterations = -(-total_timesteps // self.steps_per_iteration)
         self.monitor_keys = monitor_keys

@@ -65,7 +65,7 @@ def ready(buffer: Buffer, closed_only: bool) -> jax.Array:
     return _finished(buffer, closed_only).sum() > 0
 
 
-def sample(buffer: Buffer, key: jax.Array, size: int, closed_only: bool) -> tuple:
+def sample_transitions(buffer: Buffer, key: jax.Array, size: int, closed_only: bool) -> tuple:
     """``(env, slot)`` index arrays of ``size`` transitions drawn uniformly among those that may
     be sampled (`ready` must hold)."""
     capacity = buffer.to_end.shape[1]

@@ -79,7 +79,7 @@ def write_rows(writer, records: dict, keys: tuple[str, ...], seconds: float) -> 
 
 
 def train_run(run, log) -> Path:
-    """Train the seed of ``run`` (a `baselines.rl.train.Run`); returns the model path."""
+    """Train the seed of ``run`` (a `baselines.rl.train.RunFiles`); returns the model path."""
     config = run.config
     agent = learner(config)
     state = agent.init(jax.random.PRNGKey(run.seed))

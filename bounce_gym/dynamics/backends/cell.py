@@ -8,7 +8,7 @@ exactly the simple cell mapping C of `CellModel.successor`, so analytic plans an
 exactly; with `Reliable` noise the bump rows follow the GCM matrix.
 
 Several robots: the grid conflict rules of `bounce_gym.cells.conflicts` (thesis Eq. 3.9 and
-docs/choices.md, "Robot–robot conflicts on the grid"), the same function the multi-robot planners
+docs/choices/multirobot.md, "Robot–robot conflicts on the grid"), the same function the multi-robot planners
 use, with its ``min_sep_cells`` option.
 """
 

@@ -11,7 +11,7 @@ from gymnasium import logger
 from bounce_gym.cells.drifter import DrifterCells
 from bounce_gym.envs.arguments import TakesArguments, parse
 from bounce_gym.envs.drifters.core import DrifterCore
-from bounce_gym.envs.drifters.model_cache import sampled_model
+from bounce_gym.envs.drifters.model_cache import sampled_drifter_model
 from bounce_gym.envs.drifters.options import DrifterOptions
 from bounce_gym.envs.drifters.sampled import DEFAULT_SAMPLES, MAX_PARTICLES, MAX_REFINE
 from bounce_gym.envs.render.owner import RENDER_MODES, RendererOwner, checked_render_mode
@@ -90,7 +90,7 @@ class DrifterEnvBase(TakesArguments, RendererOwner):
         refine = integer("refine", 1 if refine is None else refine, 1, MAX_REFINE)
         key = (samples, seed, horizon, refine)
         if key not in self._sampled:
-            self._sampled[key] = sampled_model(self.core.model, self.options, samples, seed,
+            self._sampled[key] = sampled_drifter_model(self.core.model, self.options, samples, seed,
                                                horizon, refine)
         return self._sampled[key]
 

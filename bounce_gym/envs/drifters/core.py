@@ -26,7 +26,7 @@ from bounce_gym.cells.drifter import ACTIONS, DRIFT, DrifterCells
 from bounce_gym.envs.drifters.backends import CellFleet, ContinuousFleet
 from bounce_gym.envs.drifters.options import DrifterOptions
 from bounce_gym.envs.drifters.regions import parse_region
-from bounce_gym.envs.drifters.tasks import make_task
+from bounce_gym.envs.drifters.tasks import make_drifter_task
 from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.errors import ActionError, ConfigError
 
@@ -65,7 +65,7 @@ class DrifterCore:
         self._lo = np.array([_edge(field.x, 0), _edge(field.y, 0)])
         self._span = np.array([_edge(field.x, -1), _edge(field.y, -1)]) - self._lo
         self._top = max(self.model.n_layers - 1, 1)  # the layer that observes as 1
-        self.task = make_task(options, self.model, self.normalise)
+        self.task = make_drifter_task(options, self.model, self.normalise)
         self.default_start = options.start if start_key == "start" else options.deploy
         self._check_placement(self.default_start, start_key)
         size = 2 + 3 * options.observe_fix + 2 * options.observe_pose

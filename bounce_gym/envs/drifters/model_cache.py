@@ -27,13 +27,13 @@ from bounce_gym.cells.sampled_drifter import SampledDrifterCells
 from bounce_gym.envs.drifters.options import DrifterOptions
 from bounce_gym.envs.drifters.sampled import build_sampled_model, grid_model
 
-__all__ = ["FORMAT", "cache_path", "fingerprint", "sampled_model"]
+__all__ = ["FORMAT", "cache_path", "drifter_model_fingerprint", "sampled_drifter_model"]
 
 #: The file format; a change makes every older file stale.
 FORMAT = 1
 
 
-def fingerprint(options: DrifterOptions, samples: int, seed: int, horizon: int,
+def drifter_model_fingerprint(options: DrifterOptions, samples: int, seed: int, horizon: int,
                 refine: int) -> str:
     """The hex sha256 of everything that defines the sampled model (module docstring)."""
     field = options.flow
@@ -54,12 +54,12 @@ def cache_path(key: str) -> Path:
     return model_cache.cache_folder("drifter_gcm") / f"{key}.npz"
 
 
-def sampled_model(model: DrifterCells, options: DrifterOptions, samples: int, seed: int,
+def sampled_drifter_model(model: DrifterCells, options: DrifterOptions, samples: int, seed: int,
                   horizon: int, refine: int = 1) -> SampledDrifterCells:
     """The sampled model from the cache, built and stored if missing, stale or corrupt."""
-    key = fingerprint(options, samples, seed, horizon, refine)
+    key = drifter_model_fingerprint(options, samples, seed, horizon, refine)
     path = cache_path(key)
-    stored = model_cache.load(path, FORMAT, key)
+    stored = model_cache.load_cached(path, FORMAT, key)
     if stored is not None:
         try:
             return _read(*stored, grid_model(model, refine))

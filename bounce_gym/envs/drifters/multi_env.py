@@ -86,8 +86,8 @@ class MultiDrifterEnv(DrifterEnvBase, ParallelEnv):
         self._action_space = spaces.Discrete(3)
         self.state_space = spaces.Box(0.0, 1.0, (3 * n,), dtype=np.float32)
         self.agents: list[str] = []
-        self.np_random = None
-        self.np_random_seed = None
+        self.np_random: np.random.Generator | None = None
+        self.np_random_seed: int | None = None
 
     def observation_space(self, agent: str) -> spaces.Space:
         """The same (shared) space object on every call, as PettingZoo's API test requires."""
@@ -109,6 +109,7 @@ class MultiDrifterEnv(DrifterEnvBase, ParallelEnv):
     def step(self, actions: Mapping):
         check_parallel_actions(self, actions)
         codes = np.array([action_code(actions[a], f"action of {a}") for a in self.possible_agents])
+        assert self.np_random is not None  # check_parallel_actions: reset() came first
         obs, rewards, terminated, info = self.core.step(codes, self.np_random)
         return finish_parallel_step(self, obs, rewards, terminated, info)
 

@@ -4,8 +4,8 @@
 each field's type, default and meaning are in the model (and in the "Arguments" table of the
 env pages of the docs); each env leaves out the few it does not take and replaces a default or
 two (`bounce_gym.envs.arguments`). An unknown argument raises `TypeError` naming it; a bad value
-raises `ConfigError` naming the argument and what is allowed. `json_schema` gives the JSON
-Schema of the arguments.
+raises `ConfigError` naming the argument and what is allowed. `bounce_gym.envs.arguments.json_schema`
+gives an env's JSON Schema.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ class DrifterOptions(Arguments):
 
     flow: Annotated[SkipValidation[str | os.PathLike | FlowField], WithJsonSchema(
         {"type": "string"}), Field(description=(
-            "The current: a zoo name (`bounce_gym.flows.names()`), the path of a NetCDF file "
+            "The current: a zoo name (`bounce_gym.flows.flow_names()`), the path of a NetCDF file "
             "(read as data by netCDF4/xarray with `bounce_gym.flows.load_flow`; nothing in it is "
             "executed) or a `FlowField`."))] = "scb_like"
     flow_kwargs: Annotated[SkipValidation[dict[str, Any] | None], Field(description=(
@@ -150,11 +150,6 @@ class DrifterOptions(Arguments):
         return self
 
 
-def json_schema() -> dict:
-    """The JSON Schema of every argument of `DrifterOptions` (the single-drifter env's
-    defaults but ``n_drifters``)."""
-    return DrifterOptions.model_json_schema()
-
 
 def resolve_flow(flow: object, flow_kwargs: object) -> FlowField:
     """A `FlowField` from a zoo name, a NetCDF path or a field (see the module docstring)."""
@@ -180,11 +175,11 @@ def resolve_flow(flow: object, flow_kwargs: object) -> FlowField:
         except BounceGymError as exc:
             raise ConfigError(f"flow: {exc}") from None
     if isinstance(flow, str):
-        if flow not in flows.names():
+        if flow not in flows.flow_names():
             raise ConfigError(f"flow: unknown zoo flow {flow!r}; zoo names are "
-                              f"{flows.names()} (a file path needs its suffix, e.g. .nc)")
+                              f"{flows.flow_names()} (a file path needs its suffix, e.g. .nc)")
         try:
-            return flows.get(flow, **flow_kwargs)
+            return flows.get_flow(flow, **flow_kwargs)
         except BounceGymError as exc:
             raise ConfigError(f"flow_kwargs: {exc}") from None
     raise ConfigError(f"flow: expected a zoo name, a NetCDF path or a FlowField, got "

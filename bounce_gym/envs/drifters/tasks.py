@@ -173,7 +173,7 @@ class CoverTask(DrifterTask):
         return {"coverage": self.covered / self.size, "new_cells": new}
 
 
-def make_task(options, model: DrifterCells, normalise) -> DrifterTask:
+def make_drifter_task(options, model: DrifterCells, normalise) -> DrifterTask:
     """The task the options name, bound to ``model``; ``normalise(x, y)`` maps positions to
     [0, 1] for the observed region centroids."""
     if options.task == "reach":

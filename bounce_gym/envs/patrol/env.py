@@ -114,8 +114,8 @@ class PatrolEnv(TakesArguments, RendererOwner, ParallelEnv):
         self._attack = spaces.Discrete(n + 1)
         self.state_space = spaces.Box(0.0, 1.0, (m * n + n + 3,), dtype=np.float32)
         self.agents: list[str] = []
-        self.np_random = None
-        self.np_random_seed = None
+        self.np_random: np.random.Generator | None = None
+        self.np_random_seed: int | None = None
         self._strategy = self.options.walk
         self._capture: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
         self._pos = np.zeros(m, dtype=np.int64)
@@ -200,7 +200,7 @@ class PatrolEnv(TakesArguments, RendererOwner, ParallelEnv):
         """The same (shared) space object on every call, as PettingZoo's API test requires."""
         return self._adversary_obs if agent == ADVERSARY else self._patroller_obs
 
-    def action_space(self, agent: str) -> spaces.Space:
+    def action_space(self, agent: str) -> spaces.Discrete:
         return self._attack if agent == ADVERSARY else self._move
 
     def reset(self, seed: int | None = None, options: dict | None = None):
@@ -319,8 +319,8 @@ class PatrolEnv(TakesArguments, RendererOwner, ParallelEnv):
         return obs
 
     def _adversary_observation(self) -> np.ndarray:
-        attack = [float(self._target >= 0), self._elapsed / self.attack_time,
-                  self.cycles / self.max_cycles]
+        attack = np.array([float(self._target >= 0), self._elapsed / self.attack_time,
+                           self.cycles / self.max_cycles])
         parts = [self._start_capture, attack]
         if self.options.adversary_observes == "positions":
             occupied = np.zeros(self.board.n)

@@ -1,7 +1,7 @@
 """The keyword arguments of the patrol environment, declared once: `PatrolOptions`, whose
 validation also builds the patrol board and checks the patrol strategy and the start vertices
 against it (each bad value is a `ConfigError` naming the argument and what is allowed).
-`json_schema` gives the JSON Schema of the arguments."""
+`bounce_gym.envs.arguments.json_schema` gives an env's JSON Schema."""
 
 from __future__ import annotations
 
@@ -139,10 +139,6 @@ class PatrolOptions(Arguments):
         """``start`` as an (m,) int64 array of vertices, or None."""
         return self._start
 
-
-def json_schema() -> dict:
-    """The JSON Schema of every argument of `PatrolOptions`."""
-    return PatrolOptions.model_json_schema()
 
 
 def _is_vector(value: object) -> bool:

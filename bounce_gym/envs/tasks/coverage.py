@@ -17,8 +17,9 @@ class CoverageTask(Task):
             (the layout of `World.occupancy`), or a path to a ``.npy`` file of that array.
             Non-negative, positive total, zero on blocked cells; it is normalised to sum 1.
         cell_size: grid cell size (default: the step length, the cell of the papers' model).
-        coverage_weight, distance_weight: reward = coverage_weight × (fraction of free cells
-            newly visited) + distance_weight × (decrease of the L2 distance to the target).
+        coverage_weight: reward = coverage_weight × (fraction of free cells newly visited)
+            + distance_weight × (decrease of the L2 distance to the target).
+        distance_weight: see ``coverage_weight``.
 
     ``info`` reports ``coverage`` (fraction of free cells visited), ``distance`` (L2 between the
     normalised visit histogram — time spent per cell — and the target) and ``tv_distance``.

@@ -53,14 +53,16 @@ class GoalNavigationTask(NavigationTask):
     """Reach a goal pose of the cell model (module docstring).
 
     Args:
-        start, goal: fixed poses ``{"position": [x, y], "heading": radians}`` (or per episode
+        start: a fixed pose ``{"position": [x, y], "heading": radians}`` (or per episode
             through ``reset(options=...)``), each snapped to the pose of the cell model that
-            holds it (cell centre, nearest bin heading); the goal must be a decision pose.
-            None draws them (``draw``).
+            holds it (cell centre, nearest bin heading).
+            None draws it (``draw``).
+        goal: as ``start``; the goal must be a decision pose.
         draw: ``"reachable"`` (default) or ``"any"`` (module docstring).
         heading_tolerance_deg: in (0, half a bin) (default 10°).
         goal_bonus: the reward on arrival (default 1).
-        w1, w2: the plan-cost weights of ``info["plan_cost"]``, as in `NavigationTask`.
+        w1: the plan-cost weight per tick of ``info["plan_cost"]``, as in `NavigationTask`.
+        w2: the weight instead of w1 for a bump that changes the angle, as in `NavigationTask`.
     """
 
     option_keys = frozenset({"start", "goal"})

@@ -24,9 +24,10 @@ class NavigationTask(Task):
     """Reach a goal pose: within ``goal_radius`` of the goal point, heading within tolerance.
 
     Args:
-        start, goal: ``{"position": [x, y], "heading": radians}``; None draws one per episode
+        start: ``{"position": [x, y], "heading": radians}``; None draws one per episode
             (uniformly in the free space, or — on the cell backend — a random cell centre and
             bin heading).
+        goal: as ``start``.
             Both can also be given per episode through ``reset(options={"start": ..., "goal": ...})``.
         goal_radius: size of the goal region (default: one step length).
         heading_tolerance_deg: heading tolerance at the goal (default 22.5°, half a 45° bin).
@@ -37,10 +38,10 @@ class NavigationTask(Task):
         gamma: ``progress`` only: the discount γ of the shaping term, in (0, 1] (default 1:
             the shaping is exact for the undiscounted episode return, which evaluation reports;
             an agent's own discount makes it exact for that agent's discounted return instead).
-        w1, w2: the plan-cost weights of Alam, Bobadilla & Shell (2017), Sec. IV-A, Alg. 1
-            (thesis §3.4.1, Alg. 3.1): w1 per tick, w2 instead of w1 for a bump that changes the
-            bounce angle; the first angle is free. Defaults are the papers' w1 = 1, w2 = 100
-            (Sec. V-A).
+        w1: the plan-cost weight per tick of Alam, Bobadilla & Shell (2017), Sec. IV-A, Alg. 1
+            (thesis §3.4.1, Alg. 3.1); default 1, as in the papers (Sec. V-A).
+        w2: the weight instead of w1 for a bump that changes the bounce angle; the first angle
+            is free. Default 100, as in the papers (Sec. V-A).
         observe_task: append the start and goal poses (normalised) to the observation — the
             planners of the papers know both, so a fair RL agent needs them too.
 
@@ -64,7 +65,7 @@ class NavigationTask(Task):
       continuous geodesic distance.
     * ``"plan_cost"``: minus the papers' plan cost — −w1 per tick and −(w2 − w1) more per change
       of bounce angle — plus ``goal_bonus`` on arrival. Not the default: its optimum depends on
-      the bonus and on the horizon rather than on the goal (docs/choices.md, "The navigation
+      the bonus and on the horizon rather than on the goal (docs/choices/learning_tasks.md, "The navigation
       reward").
 
     Whatever the reward, ``info["plan_cost"]`` is the papers' cost of the trajectory so far,

@@ -27,7 +27,7 @@ class CellStep(NamedTuple):
     changed: jax.Array  # the bounce angle differs from the last one used
 
 
-class FreeTask:
+class CellFreeTask:
     """No reward, never terminates, no features (the ``free`` task)."""
 
     name = "free"

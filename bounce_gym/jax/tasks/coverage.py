@@ -18,7 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from bounce_gym.envs.tasks.base import StepEvents, path_samples, tick_length
-from bounce_gym.jax.tasks.base import FreeTask
+from bounce_gym.jax.tasks.base import CellFreeTask
 
 
 class CoverageParams(NamedTuple):
@@ -36,7 +36,7 @@ class CoverageState(NamedTuple):
     distance: jax.Array  # float32 L2 distance of the normalised histogram to the target
 
 
-class CoverageTask(FreeTask):
+class CellCoverageTask(CellFreeTask):
     """The coverage task of ``task`` (a configured NumPy `CoverageTask`) for the robots of
     ``robots`` (`CellRobots`, whose per (cell, action) steps it tabulates)."""
 

@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from bounce_gym.jax import draws
-from bounce_gym.jax.tasks.base import FreeTask
+from bounce_gym.jax.tasks.base import CellFreeTask
 
 
 class GoalParams(NamedTuple):
@@ -33,7 +33,7 @@ class GoalState(NamedTuple):
     optimal_bounces: jax.Array
 
 
-class GoalNavigationTask(FreeTask):
+class CellGoalNavigationTask(CellFreeTask):
     """The v1 task of ``task`` (a configured NumPy `GoalNavigationTask`)."""
 
     name = "goal_navigation"

@@ -26,7 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from bounce_gym.errors import ConfigError
-from bounce_gym.jax.tasks.base import FreeTask
+from bounce_gym.jax.tasks.base import CellFreeTask
 from bounce_gym.markov.automata import future_classes, periodic_cells
 
 
@@ -48,7 +48,7 @@ class LocalizationState(NamedTuple):
     wrong_claim: jax.Array
 
 
-class LocalizationTask(FreeTask):
+class CellLocalizationTask(CellFreeTask):
     """The localization task of ``task`` (a configured NumPy `LocalizationTask` with the
     combinatorial filter) on the cell model of ``robots`` (`CellRobots`); ``angles``: the
     actions' bounce angles (radians)."""

@@ -19,13 +19,13 @@ import numpy as np
 from bounce_gym.envs.tasks.base import StepEvents
 from bounce_gym.errors import ConfigError
 from bounce_gym.jax import draws
-from bounce_gym.jax.tasks.base import FreeTask
+from bounce_gym.jax.tasks.base import CellFreeTask
 
 #: drives whose nearby goals are found at once
 _BLOCK = 256
 
 
-class NavigationParams(NamedTuple):
+class CellNavigationParams(NamedTuple):
     near_position: jax.Array  # (n_cells, L) goal positions a drive from each cell comes near (−1)
     near_tick: jax.Array  # (n_cells, L) the step's tick at which it enters their goal region
     aligned: jax.Array  # (n_bins, n_bins) heading bin within tolerance of goal bin
@@ -35,7 +35,7 @@ class NavigationParams(NamedTuple):
     reward: jax.Array  # (w1, w2, goal_bonus, tick_cost, gamma)
 
 
-class NavigationState(NamedTuple):
+class CellNavigationState(NamedTuple):
     start: jax.Array  # start cell (before the reset drive)
     goal: jax.Array  # goal cell
     reached: jax.Array
@@ -43,7 +43,7 @@ class NavigationState(NamedTuple):
     potential: jax.Array  # Φ now
 
 
-class NavigationTask(FreeTask):
+class CellNavigationTask(CellFreeTask):
     """The v0 navigation task of ``task`` (a configured NumPy `NavigationTask`) on the cell
     model of ``robots`` (`CellRobots`)."""
 
@@ -60,10 +60,10 @@ class NavigationTask(FreeTask):
         self.observation_size = task.observation_size
         self._params = self._tables(task, robots, obs_low, obs_high)
 
-    def params(self) -> NavigationParams:
+    def params(self) -> CellNavigationParams:
         return self._params
 
-    def _tables(self, task, robots, low, high) -> NavigationParams:
+    def _tables(self, task, robots, low, high) -> CellNavigationParams:
         model = self.model
         z = np.arange(model.n_cells)
         p, k = model.decode(z)
@@ -81,7 +81,7 @@ class NavigationTask(FreeTask):
         lo, hi = low[first:], high[first:]
         start_features = np.minimum(np.maximum(pose, lo[:4]), hi[:4])
         goal_features = np.minimum(np.maximum(pose, lo[4:]), hi[4:])
-        return NavigationParams(
+        return CellNavigationParams(
             near_position=jnp.asarray(near_position, jnp.int32),
             near_tick=jnp.asarray(near_tick, jnp.int32),
             aligned=jnp.asarray(aligned), potential=jnp.asarray(potential, jnp.float32),
@@ -103,7 +103,7 @@ class NavigationTask(FreeTask):
     def start(self, drawn, start, z, ticks, params):
         goal = drawn
         potential = params.potential[goal % self.n_positions, z % self.n_positions]
-        return NavigationState(start=start, goal=goal, reached=jnp.bool_(False),
+        return CellNavigationState(start=start, goal=goal, reached=jnp.bool_(False),
                                plan_cost=params.reward[0] * ticks.astype(jnp.float32),
                                potential=potential)
 

@@ -2,7 +2,7 @@
 
 Sources: Alam, Bobadilla & Shell 2017, Sec. III-C (Coverage Problem), Sec. IV-C (Alg. 3, Eq. 4–5)
 and Sec. V-C (Table I); thesis §3.4.3 (Eq. 3.7–3.8) and §3.5.3 (Table 3.1); choices where the
-paper is open: docs/choices.md.
+paper is open: docs/choices/navigation_coverage.md.
 The Table I geometry is unpublished: ``lab_complex`` is a reconstruction with the paper's 183 free
 positions, so only structural and qualitative properties are asserted; the numbers are printed
 (``pytest -s``).
@@ -77,7 +77,7 @@ def slsqp_reference(A: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def check_valid(res, m: int) -> None:
-    """Eq. 5 (docs/choices.md, "Solving Eq. 5 exactly"): α >= 0, Σ α = 1, and the KKT certificate
+    """Eq. 5 (docs/choices/navigation_coverage.md, "Solving Eq. 5 exactly"): α >= 0, Σ α = 1, and the KKT certificate
     holds."""
     assert res.alpha.shape == (m,)
     assert np.all(res.alpha >= 0)
@@ -88,7 +88,7 @@ def check_valid(res, m: int) -> None:
     assert res.residual == pytest.approx(mixture_residual(res.A, res.b, res.alpha), rel=1e-12)
 
 
-# -- the solver (docs/choices.md, "Solving Eq. 5 exactly") ----------------------------------------
+# -- the solver (docs/choices/navigation_coverage.md, "Solving Eq. 5 exactly") ----------------------------------------
 @pytest.mark.parametrize("n, m", [(5, 2), (40, 3), (7, 7), (30, 5), (4, 6), (200, 8)])
 def test_solution_is_feasible_and_beats_vertices_and_random_mixtures(n, m):
     rng = np.random.default_rng(100 * n + m)
@@ -208,7 +208,7 @@ def test_bad_method_and_too_many_policies_raise():
     np.testing.assert_allclose(res.alpha, np.ones(m) / m, atol=1e-6)
 
 
-# -- Alg. 3 and the targets (Sec. IV-C; docs/choices.md, "Coverage over cells or over positions")
+# -- Alg. 3 and the targets (Sec. IV-C; docs/choices/navigation_coverage.md, "Coverage over cells or over positions")
 def test_policy_distributions_are_limiting_distributions():
     model = CellModel(world_from_grid(np.ones((4, 5), dtype=bool)), n_bins=8)
     angles = np.radians([90.0, 135.0])
@@ -278,7 +278,7 @@ def test_table1_setting(lab, table1):
     assert pos.dual[0] > 0
 
 
-# -- the mixture in the env (docs/choices.md, "The mixture's coverage is the model A α") --------
+# -- the mixture in the env (docs/choices/navigation_coverage.md, "The mixture's coverage is the model A α") --------
 def fake_env(n_actions: int = 3) -> SimpleNamespace:
     return SimpleNamespace(action_space=SimpleNamespace(n=n_actions))
 

@@ -9,12 +9,12 @@ import pytest
 from baselines.drifters import persistent_behavior
 from bounce_gym.cells import DrifterCells
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 
 
 @pytest.mark.parametrize("rho", [0.6, 0.8, 0.9])
 def test_two_sink_structure(rho):
-    b = persistent_behavior(DrifterCells(get("two_sink"), rho=rho))
+    b = persistent_behavior(DrifterCells(get_flow("two_sink"), rho=rho))
     assert sorted(len(g) for g in b.groups) == [20, 25]
     big = int(np.argmax([len(g) for g in b.groups]))
     sizes = {tuple(sorted(k)): len(v) for k, v in b.transient_groups.items()}
@@ -25,7 +25,7 @@ def test_two_sink_structure(rho):
 
 
 def test_plain_data_partitions_the_layer_and_is_consistent():
-    model = DrifterCells(get("two_sink", n_layers=3))
+    model = DrifterCells(get_flow("two_sink", n_layers=3))
     b = persistent_behavior(model, layer=1)
     assert b.offset == model.offsets[1] and np.array_equal(b.states, model.layer_states(1))
     parts = np.sort(np.concatenate(list(b.groups) + list(b.transient_groups.values())))
@@ -47,11 +47,11 @@ def test_plain_data_partitions_the_layer_and_is_consistent():
 
 
 def test_bad_input_is_refused():
-    model = DrifterCells(get("two_sink"))
+    model = DrifterCells(get_flow("two_sink"))
     with pytest.raises(ConfigError, match="layer"):
         persistent_behavior(model, layer=1)
     with pytest.raises(ConfigError, match="model"):
-        persistent_behavior(get("two_sink"))
+        persistent_behavior(get_flow("two_sink"))
     with pytest.raises(ConfigError, match="states"):
         persistent_behavior(model).reach([522])
 
@@ -59,14 +59,14 @@ def test_bad_input_is_refused():
 # -- analytic flows, as the cell model has them (phase 1) -------------------------------------
 @pytest.mark.parametrize("name", ["solid_body", "uniform"])
 def test_with_noise_rotation_and_uniform_flow_mix_the_whole_basin(name):
-    b = persistent_behavior(DrifterCells(get(name), rho=0.8))
+    b = persistent_behavior(DrifterCells(get_flow(name), rho=0.8))
     assert [len(g) for g in b.groups] == [522] and not b.transient_groups
 
 
 def test_solid_body_flow_lines_are_persistent_cycles_and_euler_steps_spiral_out():
-    orbit = persistent_behavior(DrifterCells(get("solid_body", basin="open"), rho=1.0,
+    orbit = persistent_behavior(DrifterCells(get_flow("solid_body", basin="open"), rho=1.0,
                                              step="flowline"))
-    euler = persistent_behavior(DrifterCells(get("solid_body", basin="open"), rho=1.0))
+    euler = persistent_behavior(DrifterCells(get_flow("solid_body", basin="open"), rho=1.0))
     cycles = [g for g in orbit.groups
               if len(g) > 1 and (orbit.graph[g][:, g].getnnz(axis=1) == 1).all()]
     assert len(cycles) >= 5

@@ -20,7 +20,7 @@ from baselines.drifters import (
 from baselines.drifters.graph import source_components
 from bounce_gym.cells import DrifterCells
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import FlowField, get
+from bounce_gym.flows import FlowField, get_flow
 
 
 def small_field(seed: int, ny: int = 6, nx: int = 7) -> FlowField:
@@ -38,7 +38,7 @@ def own_group_reach(b) -> np.ndarray:
 
 
 def test_two_sink_deployment_covers_the_surface_with_one_cell_per_persistent_group():
-    model = DrifterCells(get("two_sink"))
+    model = DrifterCells(get_flow("two_sink"))
     b = persistent_behavior(model)
     dep = deployment_locations(b, seed=3)
     assert len(dep) == 5  # 2 persistent groups + one source component per transient group
@@ -74,7 +74,7 @@ def test_alg_5_2_is_minimal_by_brute_force(seed):
 
 
 def test_baselines_have_the_requested_size_and_are_seeded():
-    b = persistent_behavior(DrifterCells(get("two_sink")))
+    b = persistent_behavior(DrifterCells(get_flow("two_sink")))
     r = random_deployment(b, 5, seed=1)
     assert len(np.unique(r.states)) == 5 and np.array_equal(
         r.states, random_deployment(b, 5, seed=1).states)
@@ -92,7 +92,7 @@ def expected_coverage(hit: np.ndarray, cells) -> float:
 
 
 def test_visit_probabilities_match_monte_carlo():
-    model = DrifterCells(get("two_sink"), rho=0.8)
+    model = DrifterCells(get_flow("two_sink"), rho=0.8)
     b = persistent_behavior(model)
     hit = visit_probabilities(b, 12)
     z = int(model.state_of(0, 10, 5))

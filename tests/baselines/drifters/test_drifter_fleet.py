@@ -18,12 +18,12 @@ from baselines.drifters import (
 )
 from bounce_gym.cells import DRIFT, DrifterCells
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 
 
 @pytest.fixture(scope="module")
 def behavior():
-    return persistent_behavior(DrifterCells(get("two_sink")), 0)
+    return persistent_behavior(DrifterCells(get_flow("two_sink")), 0)
 
 
 def fleet(n: int):

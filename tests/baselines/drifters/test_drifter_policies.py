@@ -17,11 +17,11 @@ from baselines.drifters import (
 )
 from bounce_gym.cells import DRIFT, DrifterCells
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 
 
 def test_value_iteration_policy_executes_its_predicted_success_on_the_cell_model():
-    model = DrifterCells(get("scb_like"), t=0.0)
+    model = DrifterCells(get_flow("scb_like"), t=0.0)
     goal = model.state_of(0, [1, 2, 3], [25, 25, 25])
     policy = ValueIterationPolicy()
     res = policy.plan(model, goal)
@@ -44,7 +44,7 @@ def test_policies_refuse_what_they_cannot_act_on():
     with pytest.raises(ConfigError, match="reset"):
         ValueIterationPolicy().act(None, {"state": 0})
     policy = ValueIterationPolicy()
-    policy.plan(DrifterCells(get("two_sink")), 5)
+    policy.plan(DrifterCells(get_flow("two_sink")), 5)
     with pytest.raises(ConfigError, match="state"):
         policy.act(None, {})
     with pytest.raises(ConfigError, match="action_mask"):
@@ -64,7 +64,7 @@ def test_random_layer_policy_acts_legally_and_is_seeded():
 
 
 def test_deploy_cells_are_the_deployment_cells():
-    model = DrifterCells(get("two_sink"))
+    model = DrifterCells(get_flow("two_sink"))
     dep = deployment_locations(persistent_behavior(model))
     cells = deploy_cells(model, dep.states)
     assert len(cells) == len(dep)

@@ -8,12 +8,12 @@ import pytest
 from baselines.drifters import persistent_behavior, persistent_reachability
 from bounce_gym.cells import DOWN, DrifterCells
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 
 
 @pytest.fixture(scope="module")
 def scb():
-    return DrifterCells(get("scb_like"), t=3600.0)
+    return DrifterCells(get_flow("scb_like"), t=3600.0)
 
 
 def test_column_then_drift_equals_the_union_of_the_layers_reach(scb):
@@ -36,7 +36,7 @@ def test_column_then_drift_equals_the_union_of_the_layers_reach(scb):
 
 
 def test_single_layer_reach_is_the_descendants():
-    model = DrifterCells(get("two_sink"))
+    model = DrifterCells(get_flow("two_sink"))
     b = persistent_behavior(model)
     start = int(b.groups[0][0])
     res = persistent_reachability(model, start)
@@ -46,7 +46,7 @@ def test_single_layer_reach_is_the_descendants():
 
 
 def test_vertical_anywhere_can_leave_a_closed_group():
-    model = DrifterCells(get("two_sink", n_layers=3))
+    model = DrifterCells(get_flow("two_sink", n_layers=3))
     b = persistent_behavior(model)
     start = int(b.groups[0][0])
     only_here = persistent_reachability(model, start)

@@ -15,12 +15,12 @@ from baselines.drifters import (
 from baselines.drifters.graph import reachable
 from bounce_gym.cells import DOWN, DRIFT, UP, DrifterCells
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 
 
 @pytest.fixture(scope="module")
 def scb():
-    return DrifterCells(get("scb_like"), t=3600.0)
+    return DrifterCells(get_flow("scb_like"), t=3600.0)
 
 
 @pytest.fixture(scope="module")
@@ -76,10 +76,10 @@ def test_uses_up_down_and_drift_on_scb_like(scb, scb_goal):
 @pytest.mark.parametrize("name", ["scb_like", "two_sink"])
 def test_the_policy_reaches_the_goal_wherever_the_3d_graph_can(name):
     if name == "scb_like":
-        model = DrifterCells(get("scb_like"), t=12 * 3600.0)
+        model = DrifterCells(get_flow("scb_like"), t=12 * 3600.0)
         goal = int(model.state_of(0, 15, 4))
     else:  # one layer: the cells that only lead to the other persistent group cannot arrive
-        model = DrifterCells(get("two_sink"))
+        model = DrifterCells(get_flow("two_sink"))
         goal = int(model.state_of(0, 13, 10))
     res = value_iteration(model, goal)
     can = reachable(three_d_graph(model), [goal], reverse=True)

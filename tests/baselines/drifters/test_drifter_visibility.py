@@ -9,11 +9,11 @@ import pytest
 from baselines.drifters import persistent_behavior, visibility_deployment, visible_cells
 from bounce_gym.cells import DrifterCells
 from bounce_gym.errors import ConfigError
-from bounce_gym.flows import get
+from bounce_gym.flows import get_flow
 
 
 def test_visible_cells_are_a_disk_of_whole_cells():
-    model = DrifterCells(get("uniform", basin="open"))
+    model = DrifterCells(get_flow("uniform", basin="open"))
     centre = int(model.state_of(0, 10, 14))
     for rule, d, expected in [("corners", 6, None), ("centre", 6, None), ("corners", 0.7, 0)]:
         seen = visible_cells(model, d, rule=rule)[centre].indices
@@ -40,7 +40,7 @@ def test_visible_cells_are_a_disk_of_whole_cells():
 @pytest.mark.parametrize("rule", ["corners", "centre"])
 @pytest.mark.parametrize("d", [2, 6])
 def test_cover_sees_the_whole_seafloor_and_keeps_one_cell_per_persistent_group(rule, d):
-    model = DrifterCells(get("two_sink"))
+    model = DrifterCells(get_flow("two_sink"))
     b = persistent_behavior(model)
     res = visibility_deployment(model, b, d, rule=rule)
     seen = visible_cells(model, d, rule=rule)
@@ -60,7 +60,7 @@ def test_cover_sees_the_whole_seafloor_and_keeps_one_cell_per_persistent_group(r
 
 
 def test_greedy_picks_the_largest_gain_first():
-    model = DrifterCells(get("two_sink"))
+    model = DrifterCells(get_flow("two_sink"))
     b = persistent_behavior(model)
     res = visibility_deployment(model, b, 6)
     counts = np.asarray(visible_cells(model, 6).sum(axis=1)).ravel()
@@ -69,7 +69,7 @@ def test_greedy_picks_the_largest_gain_first():
 
 
 def test_three_layers_look_down_on_the_deepest():
-    model = DrifterCells(get("scb_like"), t=3600.0)
+    model = DrifterCells(get_flow("scb_like"), t=3600.0)
     b = persistent_behavior(model)
     res = visibility_deployment(model, b, 4)
     floor = model.n_layers - 1
@@ -81,7 +81,7 @@ def test_three_layers_look_down_on_the_deepest():
 
 
 def test_bad_range_is_refused():
-    model = DrifterCells(get("two_sink"))
+    model = DrifterCells(get_flow("two_sink"))
     b = persistent_behavior(model)
     with pytest.raises(ConfigError, match="d: 522 seafloor cells"):
         visibility_deployment(model, b, 0.5)

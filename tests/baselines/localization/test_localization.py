@@ -1,7 +1,7 @@
 """Combinatorial localization filters (baselines.localization, issue 4).
 
 References: Alam, Bobadilla & Shell 2018 (Sec. IV, Defs. 5–9 and Prop. 1; Sec. V, Tables I/II) and
-thesis §2.4–2.5 (Tables 2.1/2.2); choices where the paper is open: docs/choices.md. Room examples
+thesis §2.4–2.5 (Tables 2.1/2.2); choices where the paper is open: docs/choices/localization.md. Room examples
 with exact DFA sizes are derived by hand or by an independent prototype, not taken from the paper.
 Coordinates of obstacle cells are (column, row) with the origin bottom-left.
 """
@@ -91,7 +91,7 @@ LAB_CASES = [  # (map, φ°, paper Table I DFA states, paper Table II (min, max)
     ("lab_localization_b", 45, 147, (1, 2)),
     ("lab_localization_b", 135, 202, (1, 1)),
 ]
-# Our reconstructions (maps published only as photographs; docs/choices.md,
+# Our reconstructions (maps published only as photographs; docs/choices/cell_model.md,
 # "The lab maps are reconstructions"): DFA states without / with
 # the trap, knowledge cycles as (length, uncertainty), periodic groups r.
 RECONSTRUCTED = {
@@ -217,7 +217,7 @@ def _case(case):
 def test_dfa_structure(case):
     """Sec. IV-C/D: the start state is all cells; out-degree ≤ 2 and both transitions partition S;
     |Q'| ≤ (N+1)²; knowledge cycles are simple cycles of subsets of the periodic cells with
-    constant |S| and out-degree 1; no other SCC is non-trivial; colours per docs/choices.md,
+    constant |S| and out-degree 1; no other SCC is non-trivial; colours per docs/choices/localization.md,
     "Knowledge-cycle colours and numbering"."""
     model, degrees = _case(case)
     succ, bump, dfa = scm(model, degrees)
@@ -248,7 +248,7 @@ def test_dfa_structure(case):
     in_cycle = dfa.cycle_of >= 0
     assert (dfa.colour[~in_cycle] == 1).all()
     assert dfa.trap_colour == dfa.n_cycles + 2
-    # cycles are numbered by their smallest cell id (docs/choices.md)
+    # cycles are numbered by their smallest cell id (docs/choices/localization.md)
     firsts = [min(int(dfa.states[s][0]) for s in c) for c in dfa.cycles]
     assert firsts == sorted(firsts)
     # every other SCC of the DFA graph is trivial, and the final states F' are S ∩ V_P ≠ ∅
@@ -429,7 +429,7 @@ def test_lab_maps_against_tables_1_and_2(name, degrees, paper_states, paper_limi
     """Tables I/II (thesis Tables 2.1/2.2): NFA 153 states exactly; DFA 124–202 states, minimum
     uncertainty 1 ("strongest possible localization"), maximum 1–4; r = 1 for Fig. 8 at 45° and
     r = 2 for Fig. 9 at 135°. The lab maps are reconstructions of maps published only as
-    photographs (docs/choices.md), so the DFA sizes are ranges, not equalities:
+    photographs (docs/choices/cell_model.md), so the DFA sizes are ranges, not equalities:
 
     ======================  ===  ==========  ================  =============  ==============
     map                     φ    paper DFA   ours (with trap)  paper min/max  ours min/max

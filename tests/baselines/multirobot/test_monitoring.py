@@ -1,5 +1,5 @@
 """Persistent monitoring (Alam & Bobadilla 2020, §4.2, Algorithm 2; choices where the article
-is open: docs/choices.md)."""
+is open: docs/choices/multirobot.md)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import pytest
 from baselines.multirobot.monitoring import (
     REJECTED,
     default_regions,
+    joint_monitoring_cycles,
     joint_successor,
-    persistent_behavior,
     region_indices,
 )
 from bounce_gym.cells import CellModel, too_close
@@ -32,7 +32,7 @@ def model():
 @pytest.fixture(scope="module", params=[45, 90])
 def result(request, model):
     phi = math.radians(request.param)
-    return persistent_behavior(model, [phi, phi])
+    return joint_monitoring_cycles(model, [phi, phi])
 
 
 def test_r_positive_for_45_and_90(result):
@@ -78,7 +78,7 @@ def test_basins_lead_into_their_group(result):
 
 
 def test_labels_partition_joint_cells(result):
-    """docs/choices.md, "Algorithm 2's bookkeeping": every joint cell, the sink included, ends up
+    """docs/choices/multirobot.md, "Algorithm 2's bookkeeping": every joint cell, the sink included, ends up
     exactly one of accepted-periodic (P_g), accepted-transient (Q_g) or rejected."""
     label, periodic = result.label, result.periodic
     n_joint = result.model.n_cells ** 2 + 1
@@ -130,7 +130,7 @@ def test_sink_is_absorbing(model):
     assert np.all(succ[:sink][same | cross] == sink)
     assert np.all(succ[:sink][~(same | cross)] < sink)
     # the sink is a period-1 group that is rejected
-    res = persistent_behavior(model, [phi, phi])
+    res = joint_monitoring_cycles(model, [phi, phi])
     assert res.scm.periods[res.scm.group[sink]] == 1
     assert res.scm.group[sink] not in res.accepted
 
@@ -145,7 +145,7 @@ def test_product_structure_without_collisions(model):
                       for _ in range(math.gcd(int(a), int(b))))
     product = simple_cell_mapping((s1[:, None] * model.n_cells + s2[None, :]).ravel())
     assert sorted(product.periods.tolist()) == expected
-    res = persistent_behavior(model, [phi1, phi2], mode="any")
+    res = joint_monitoring_cycles(model, [phi1, phi2], mode="any")
     assert res.n_groups - 1 <= len(expected)  # minus the sink
     # in this room every 90°/45° pair of cycles meets: no accepted group (a true negative)
     assert res.r == 0 and res.n_groups == 1
@@ -153,14 +153,14 @@ def test_product_structure_without_collisions(model):
 
 def test_swaps_forbidden_is_stricter(model):
     phi = math.radians(45)
-    loose = persistent_behavior(model, [phi, phi])
-    strict = persistent_behavior(model, [phi, phi], forbid_swaps=True)
+    loose = joint_monitoring_cycles(model, [phi, phi])
+    strict = joint_monitoring_cycles(model, [phi, phi], forbid_swaps=True)
     assert strict.r <= loose.r
     assert strict.n_collision_cells >= loose.n_collision_cells
 
 
 def test_min_sep_zero_is_same_cell(model):
-    """docs/choices.md, "Robot–robot conflicts on the grid": ``min_sep_cells=0`` is the same-cell
+    """docs/choices/multirobot.md, "Robot–robot conflicts on the grid": ``min_sep_cells=0`` is the same-cell
     rule (the identity matrix) and the default."""
     assert np.array_equal(too_close(model.position_rc, 0), np.eye(model.n_positions, dtype=bool))
     phi = math.radians(90)
@@ -168,8 +168,8 @@ def test_min_sep_zero_is_same_cell(model):
         succ, n_coll = joint_successor(model, [phi, phi], swaps)
         succ0, n_coll0 = joint_successor(model, [phi, phi], swaps, min_sep_cells=0)
         assert np.array_equal(succ, succ0) and n_coll == n_coll0
-        a = persistent_behavior(model, [phi, phi], forbid_swaps=swaps)
-        b = persistent_behavior(model, [phi, phi], forbid_swaps=swaps, min_sep_cells=0)
+        a = joint_monitoring_cycles(model, [phi, phi], forbid_swaps=swaps)
+        b = joint_monitoring_cycles(model, [phi, phi], forbid_swaps=swaps, min_sep_cells=0)
         assert np.array_equal(a.accepted, b.accepted) and np.array_equal(a.label, b.label)
 
 
@@ -179,7 +179,7 @@ def test_min_sep_cells_shrinks_accepted_set(model, deg):
     an accepted cycle at k - 1 and r is non-increasing; every accepted cycle keeps Chebyshev
     separation > k at every step."""
     phi = math.radians(deg)
-    results = [persistent_behavior(model, [phi, phi], min_sep_cells=k) for k in (0, 1, 2)]
+    results = [joint_monitoring_cycles(model, [phi, phi], min_sep_cells=k) for k in (0, 1, 2)]
     rs = [res.r for res in results]
     assert rs[0] > rs[1] > 0 and rs[1] >= rs[2]
     for k, res in enumerate(results):
@@ -197,24 +197,24 @@ def test_min_sep_cells_shrinks_accepted_set(model, deg):
 def test_min_sep_cells_rejects_bad_values(model, bad):
     phi = math.radians(90)
     with pytest.raises(ConfigError, match="min_sep_cells"):
-        persistent_behavior(model, [phi, phi], min_sep_cells=bad)
+        joint_monitoring_cycles(model, [phi, phi], min_sep_cells=bad)
     with pytest.raises(ConfigError, match="min_sep_cells"):
         joint_successor(model, [phi, phi], min_sep_cells=bad)
 
 
 def test_modes(model):
     phi = math.radians(90)
-    visit = persistent_behavior(model, [phi, phi], mode="visit")
-    anyr = persistent_behavior(model, [phi, phi], mode="any")
+    visit = joint_monitoring_cycles(model, [phi, phi], mode="visit")
+    anyr = joint_monitoring_cycles(model, [phi, phi], mode="any")
     assert set(visit.accepted.tolist()) <= set(anyr.accepted.tolist())
     # "cover" with regions taken from an accepted cycle accepts that cycle
     cyc = visit.cycles[0]
     z1, z2 = visit.split(cyc)
     f1, f2 = np.unique(model.decode(z1)[0]), np.unique(model.decode(z2)[0])
-    cover = persistent_behavior(model, [phi, phi], regions=[f1, f2], mode="cover")
+    cover = joint_monitoring_cycles(model, [phi, phi], regions=[f1, f2], mode="cover")
     assert visit.accepted[0] in cover.accepted
     with pytest.raises(ConfigError):
-        persistent_behavior(model, [phi, phi], mode="bogus")
+        joint_monitoring_cycles(model, [phi, phi], mode="bogus")
 
 
 def test_regions(model):
@@ -231,7 +231,7 @@ def test_replay_in_env(model, deg):
     """Every accepted cycle, replayed in the cell backend, repeats with its period, never puts both
     robots in one cell and visits each robot's region every period."""
     phi = math.radians(deg)
-    res = persistent_behavior(model, [phi, phi])
+    res = joint_monitoring_cycles(model, [phi, phi])
     env = MultiBounceEnv(world=ROOM, n_robots=2, backend="cell", robot_radius=0.0,
                          robot_collisions="ignore", angles=[[deg], [deg]], step_mode="tick",
                          max_cycles=10_000)
@@ -261,7 +261,7 @@ def test_zoo_grid_10x10_r_positive(deg):
 
     model = CellModel(get("grid_10x10"))
     phi = math.radians(deg)
-    res = persistent_behavior(model, [phi, phi])
+    res = joint_monitoring_cycles(model, [phi, phi])
     assert res.r > 0
     for cyc in res.cycles:
         z1, z2 = res.split(cyc)
@@ -269,14 +269,14 @@ def test_zoo_grid_10x10_r_positive(deg):
 
 
 def test_accepted_cycles_never_cross_diagonally():
-    """docs/choices.md, "Robot–robot conflicts on the grid": two robots whose diagonal moves
+    """docs/choices/multirobot.md, "Robot–robot conflicts on the grid": two robots whose diagonal moves
     cross meet at the shared corner half-way through the tick, so no accepted cycle may contain
     such a step (grid_10x10 at φ = 90° accepted 6 such cycles of 73 before the rule)."""
     from bounce_gym.worlds import get
 
     model = CellModel(get("grid_10x10"))
     phi = math.radians(90)
-    res = persistent_behavior(model, [phi, phi])
+    res = joint_monitoring_cycles(model, [phi, phi])
     rc = model.position_rc
     for cyc in res.cycles:
         z1, z2 = res.split(cyc)

@@ -1,5 +1,5 @@
 """The joint cell map and multi-robot coverage (Alam & Bobadilla 2020, §3.2 and §4.1:
-Eq. 6, Algorithm 1; choices where the article is open: docs/choices.md)."""
+Eq. 6, Algorithm 1; choices where the article is open: docs/choices/multirobot.md)."""
 
 import math
 
@@ -258,7 +258,7 @@ def test_min_sep_zero_is_the_same_cell_rule(grid10):
 
 @pytest.mark.parametrize("sep", [1, 2])
 def test_min_sep_cells_keeps_robots_apart(grid10, sep):
-    """docs/choices.md, "Robot–robot conflicts on the grid", option: robots never come within
+    """docs/choices/multirobot.md, "Robot–robot conflicts on the grid", option: robots never come within
     Chebyshev distance min_sep_cells."""
     jm = JointCellModel(grid10, [135] * 4, min_sep_cells=sep)
     x = jm.random_joint(np.random.default_rng(0), 32)

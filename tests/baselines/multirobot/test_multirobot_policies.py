@@ -1,5 +1,5 @@
 """Algorithm 1 and Algorithm 2 executed in `MultiBounceEnv` (Alam & Bobadilla 2020, §4.1-4.2;
-docs/choices.md, "A neighbour jump is a timed turn").
+docs/choices/multirobot.md, "A neighbour jump is a timed turn").
 
 On the ``cell`` backend the env must follow the plans exactly: the joint cell after every step is
 the plan's, neighbour jumps are turn commands, coverage completes at the predicted step, and a
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from baselines.multirobot import CoverageResult
-from baselines.multirobot.monitoring import persistent_behavior
+from baselines.multirobot.monitoring import joint_monitoring_cycles
 from baselines.multirobot.policies import (
     CoveragePlanPolicy,
     MonitoringPlanPolicy,
@@ -166,7 +166,7 @@ def test_monitoring_contacts_are_zero_on_the_cycle_and_groups_match_algorithm_2(
     env = MultiBounceEnv(**{**MONITOR, "robot_collisions": "bounce"})
     policy = MonitoringPlanPolicy.for_env(env, phi=90)
     model = env.cell_model()
-    direct = persistent_behavior(model, [math.radians(90)] * 2, regions_of(env, model),
+    direct = joint_monitoring_cycles(model, [math.radians(90)] * 2, regions_of(env, model),
                                  forbid_swaps=True)
     assert policy.r == direct.r > 0
     obs, infos = env.reset(seed=1, options=policy.start_options(env, 1))

@@ -2,7 +2,7 @@
 
 Sources: Alam, Bobadilla & Shell 2017, Sec. III-C (Problems 1-2), Sec. IV-A/B (Algs. 1-2) and
 Sec. V-A/B; thesis §3.4.1-3.4.2 and §3.5.1-3.5.2; choices where the paper is open:
-docs/choices.md. Cells are 0-based here (``z = k·N_pos + p``); the papers' ids are ``z + 1``.
+docs/choices/navigation_coverage.md. Cells are 0-based here (``z = k·N_pos + p``); the papers' ids are ``z + 1``.
 Coordinates are (column, row), origin bottom-left; bins count counter-clockwise from East.
 """
 
@@ -72,7 +72,7 @@ def out_edges(roadmap: Roadmap, node: int) -> list[tuple[int, float, int, int]]:
 
 def test_eq3_steps_and_the_blocked_step_are_roadmap_edges():
     """Eq. 3: from an open centroid θ = 0 → (c+1, r), 45° → (c+1, r+1), 90° → (c, r+1),
-    as forward edges (symbol 0) that keep the bin. A bump (docs/choices.md, "Bumps rotate in place
+    as forward edges (symbol 0) that keep the bin. A bump (docs/choices/cell_model.md, "Bumps rotate in place
     and take one tick"): at the East wall facing East with
     φ = 90° the robot stays and faces North; the plan's symbol is 90."""
     model = rect(5, 4)
@@ -88,7 +88,7 @@ def test_eq3_steps_and_the_blocked_step_are_roadmap_edges():
 
 
 def test_layered_out_degrees(lab):
-    """The layered roadmap (docs/choices.md, "The roadmap remembers the current bounce angle"):
+    """The layered roadmap (docs/choices/navigation_coverage.md, "The roadmap remembers the current bounce angle"):
     a bump cell has out-degree |Φ| in every layer, one w1 edge that keeps the
     layer and |Φ| − 1 w2 edges into the other layers; a forward cell has out-degree 1 (w1,
     same layer, same bin)."""
@@ -286,7 +286,7 @@ def test_all_pairs_match_an_independent_networkx_roadmap(small):
 
 
 def test_all_pairs_runs_exactly_n_dijkstras(monkeypatch, lab):
-    """Alg. 2 on the layered graph (docs/choices.md, "The roadmap remembers the current bounce
+    """Alg. 2 on the layered graph (docs/choices/navigation_coverage.md, "The roadmap remembers the current bounce
     angle") makes exactly N single-source Dijkstra calls (one per
     start cell, all its layers as sources), not N² pair queries."""
     calls = []

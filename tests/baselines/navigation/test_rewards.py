@@ -1,7 +1,7 @@
 """The navigation rewards against the roadmap planner (Alam, Bobadilla & Shell 2017, Alg. 1):
 the progress and sparse rewards score every success of the planner above every failure of a
 fixed bounce angle on the same episode; the papers' plan cost as a reward does not, which is why
-it is no longer the default (docs/choices.md, "The navigation reward"). Episodes run in
+it is no longer the default (docs/choices/learning_tasks.md, "The navigation reward"). Episodes run in
 ``BounceNavigation-v0`` on the cell backend, with its registered horizon of 200 steps."""
 
 from __future__ import annotations

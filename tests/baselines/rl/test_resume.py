@@ -21,7 +21,7 @@ pytest.importorskip("stable_baselines3")
 from stable_baselines3.common.callbacks import BaseCallback  # noqa: E402
 
 from baselines.rl.model_files import CHECKPOINT_NAME, read_model, save_model  # noqa: E402
-from baselines.rl.train import Run, train, validate_train_config  # noqa: E402
+from baselines.rl.train import RunFiles, train, validate_train_config  # noqa: E402
 from bounce_gym.errors import ConfigError  # noqa: E402
 
 ROOT = Path(__file__).parents[3]
@@ -173,7 +173,7 @@ def test_refused_resumes_and_overwrites(tmp_path):
         train({**config, "resume": True}, progress=False)
     assert not (tmp_path / "n").exists()
     (path,) = train(config, progress=False)
-    checkpoint = Run(validate_train_config(config), 0).checkpoint(64)
+    checkpoint = RunFiles(validate_train_config(config), 0).checkpoint(64)
     data = checkpoint.read_bytes()
     with pytest.raises(ConfigError, match=r"already holds checkpoints of ppo_seed0 \(the newest "
                                           r"at 64 steps\); pass --resume"):

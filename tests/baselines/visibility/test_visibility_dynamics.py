@@ -294,7 +294,7 @@ def test_theorem1_flags_invalid_and_unstable_cycles():
 # -- Corollary 4 (§6.2) ---------------------------------------------------------------------------
 
 def test_corollary4_square():
-    """Corollary 4 (docs/choices.md, "Corollary 4 is conservative"): square θ = π/8, ℓ = 1, ε =
+    """Corollary 4 (docs/choices/visibility.md, "Corollary 4 is conservative"): square θ = π/8, ℓ = 1, ε =
     1e-3: k = ⌈2.156⌉ = 3 (conservative); two laps already shrink the whole edge to a diameter of
     8.7e-4 (simulated)."""
     world = unit_square()

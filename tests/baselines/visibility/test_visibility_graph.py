@@ -279,7 +279,7 @@ def test_mirror_maps_graph_to_mirrored_graph(name):
     assert {(index[a], index[b]) for a, b in bvg(part).edges} == set(bvg(mpart).edges)
 
 
-# -- holes (§4; docs/choices.md, "Holes inside the convex hull") ----------------------------------
+# -- holes (§4; docs/choices/visibility.md, "Holes inside the convex hull") ----------------------------------
 def test_square_with_hole():
     world = World([(0, 0), (10, 0), (10, 10), (0, 10)],
                   holes=[[(4, 4), (6, 4), (6, 6), (4, 6)]])

@@ -1,5 +1,5 @@
 """Safe planning, patrolling, plan execution and figures (Nilles et al. 2021, §7.1–7.2
-and §7.1.2; choices in docs/choices.md)."""
+and §7.1.2; choices in docs/choices/visibility.md)."""
 
 from __future__ import annotations
 
@@ -58,7 +58,7 @@ def _assert_safe(world, part, plan, g, n=300, seed=0):
 # -- §7.1.2 published two-room numbers ------------------------------------------------------------
 
 def test_constant_strategy_e5_e4(two_rooms):
-    """§7.1.2: θ̃ = (0.0363, 0.1767) along 5→6→12→16→4 (widest tie-break: docs/choices.md, "Ties
+    """§7.1.2: θ̃ = (0.0363, 0.1767) along 5→6→12→16→4 (widest tie-break: docs/choices/visibility.md, "Ties
     among shortest safe plans")."""
     world, part, g = two_rooms
     for order in ("shortest", "widest"):
@@ -109,7 +109,7 @@ def test_unreachable_goal_returns_none(two_rooms):
 
 
 def test_split_and_start_set(two_rooms):
-    """docs/choices.md, "Start and goal sets split the partition": refine P' at S's end points; a
+    """docs/choices/visibility.md, "Start and goal sets split the partition": refine P' at S's end points; a
     start set spanning several segments runs the BFS over (set of segments, θ̃)."""
     world, part, _ = two_rooms
     mid = 0.5 * (part.start[5] + part.end[5])
