@@ -31,11 +31,11 @@ import numpy as np
 
 from baselines.policy import Policy, is_parallel_env
 from bounce_gym.envs.registration import is_pettingzoo_id
-from bounce_gym.errors import ConfigError, config_errors
+from bounce_gym.errors import config_errors
 from bounce_gym_experiments.config import validate_config
 from bounce_gym_experiments.executors import Executor, UnitStore, make_executor
 from bounce_gym_experiments.families.base import Episode, Family
-from bounce_gym_experiments.registry import family_for
+from bounce_gym_experiments.registry import family_of
 
 
 @dataclass
@@ -158,13 +158,8 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
     """Build a validated experiment's env, planner setup and policies (loading its models), so
     that every mistake in it is reported before any episode runs; ``where`` names the
     experiment in errors."""
+    family = family_of(experiment, where)
     env = make_env(experiment, f"{where}.env_kwargs")
-    family = family_for(experiment, env)
-    unsupported = [k for k in experiment["policies"] if k not in family.policy_kinds]
-    if unsupported:
-        env.close()
-        raise ConfigError(f"{where}.policies: {family.name} experiments run "
-                          f"{list(family.policy_kinds)}, not {unsupported}")
     setup = family.prepare(env, experiment)
     entrants = [Entrant(p, env, setup) for p in policies_for(experiment, env, family, setup)]
     notes = []

@@ -23,8 +23,9 @@ from bounce_gym.cells import DrifterCells
 from bounce_gym.errors import ConfigError
 from bounce_gym.flows import get
 from bounce_gym_experiments import stats
-from bounce_gym_experiments.config import configs_folder, load_config, validate_config, world_name
+from bounce_gym_experiments.config import configs_folder, load_config, validate_config
 from bounce_gym_experiments.families import drifter_deployment, drifters
+from bounce_gym_experiments.registry import world_name
 from bounce_gym_experiments.report import families_of, summarise
 from bounce_gym_experiments.runner import prepare_experiment, run
 
