@@ -96,7 +96,8 @@ class SeedRange(ConfigModel):
     @model_validator(mode="before")
     @classmethod
     def _range(cls, data: Any, info: ValidationInfo) -> Any:
-        if isinstance(data, Mapping) and "start" in data and "count" in data:
+        if isinstance(data, Mapping) and isinstance(data.get("start"), int) \
+                and isinstance(data.get("count"), int):  # else pydantic's type error
             start = integer(located(info, "start"), data["start"],
                             minimum=EVALUATION_SEEDS_START, maximum=MAX_SEED)
             integer(located(info, "count"), data["count"], minimum=1,
@@ -132,7 +133,8 @@ class ModelFolder(ConfigModel):
 
 
 class ExecutorSettings(ConfigModel):
-    """Where the evaluation's units run (`bounce_gym_experiments.executors`); the flags
+    """Where the evaluation's units run (`bounce_gym_experiments.executors`, whose
+    `executor_settings` checks it, the flags' values too); the flags
     ``--executor``, ``--workers`` and ``--address`` override it. It does not change the
     results."""
 
@@ -146,11 +148,6 @@ class ExecutorSettings(ConfigModel):
                                             "ray://host:port); only with kind: ray.")
     retries: int = Field(default=EXECUTOR_DEFAULTS["retries"], ge=0, le=MAX_RETRIES,
                          description="How often a failed unit runs again.")
-
-    @model_validator(mode="before")
-    @classmethod
-    def _settings(cls, data: Any, info: ValidationInfo) -> Any:
-        return executor_settings(data, where(info))
 
 
 class Experiment(ConfigModel):
@@ -288,6 +285,11 @@ class EvaluationConfig(ConfigModel):
         check_path_text(located(info), value)
         return value
 
+    @field_validator("executor", mode="before")
+    @classmethod
+    def _executor(cls, value: Any, info: ValidationInfo) -> Any:
+        return None if value is None else executor_settings(value, located(info))
+
     @field_validator("experiments", mode="before")
     @classmethod
     def _experiments(cls, value: Any, info: ValidationInfo) -> Any:
@@ -349,9 +351,9 @@ def validate_experiment(item: object, at: str) -> dict:
     """One experiment (`Experiment`) checked, then by its family (`Family.validate`, which also
     fills in the family's defaults), with its ``rl_models`` (default: the folder of its name)
     when anything of it is ``rl``; ``at`` locates it in errors."""
+    experiment = Experiment.check(item, at).model_dump(exclude_none=True)
     from bounce_gym_experiments.registry import family_of  # the families import this module
 
-    experiment = Experiment.check(item, at).model_dump(exclude_none=True)
     family = family_of(experiment, at)
     try:
         family.validate(experiment)

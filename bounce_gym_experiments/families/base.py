@@ -105,9 +105,10 @@ class Family:
     def claims(self, experiment: Mapping) -> bool:
         """Whether an experiment (checked by `bounce_gym_experiments.config.Experiment`) is one
         of this family's: default, its env is parallel (PettingZoo) or not as the family, and
-        runs the family's task (`env_task`), without a ``visibility`` block."""
+        runs the family's task (`env_task`). Families are asked in the registry's order, so a
+        family claims what the ones before it left (e.g. the safe-plan scenarios)."""
         return (is_pettingzoo_id(experiment["env"]) == self.parallel
-                and "visibility" not in experiment and env_task(experiment) == self.task)
+                and env_task(experiment) == self.task)
 
     def validate(self, experiment: dict) -> None:
         """Check the keys of an experiment that this family reads, and fill in their defaults

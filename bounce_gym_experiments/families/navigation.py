@@ -120,8 +120,7 @@ class Navigation(SingleRobotFamily):
     tasks = ("navigation", "goal_navigation")
 
     def claims(self, experiment):
-        return (not is_pettingzoo_id(experiment["env"]) and "visibility" not in experiment
-                and env_task(experiment) in self.tasks)
+        return not is_pettingzoo_id(experiment["env"]) and env_task(experiment) in self.tasks
 
     def validate(self, experiment):
         super().validate(experiment)
