@@ -186,11 +186,11 @@ class Experiment(ConfigModel):
                                   "have them (the patrol game); each once.")
     visibility: dict[str, Any] | None = Field(
         default=None, description="Makes a single-robot experiment a safe-plan scenario: the "
-                                  "scenario's options (docs: Visibility).")
+                                  "scenario's options (docs: Evaluation).")
     planner_kwargs: dict[str, Any] | None = Field(
         default=None, description="Options of the family's planners, for the families that "
-                                  "take them (e.g. {phi: 135} for the multi-robot planners, "
-                                  "{models: [...]} for navigation and drifters).")
+                                  "take them (e.g. {phi: 135}, or which planners run: {models: "
+                                  "[...]}; docs: Evaluation).")
     rl_models: str | list[str | ModelFolder] | None = Field(
         default=None,
         description="The folders of the models folder whose models rl runs (default: the "
@@ -229,7 +229,9 @@ class Experiment(ConfigModel):
     @field_validator("max_steps", mode="before")
     @classmethod
     def _steps(cls, value: Any, info: ValidationInfo) -> Any:
-        return None if value is None else integer(located(info), value, 1, MAX_STEPS)
+        if not isinstance(value, int):
+            return value  # pydantic's type error
+        return integer(located(info), value, 1, MAX_STEPS)
 
     @field_validator("policies", "adversaries")
     @classmethod
@@ -288,7 +290,9 @@ class EvaluationConfig(ConfigModel):
     @field_validator("executor", mode="before")
     @classmethod
     def _executor(cls, value: Any, info: ValidationInfo) -> Any:
-        return None if value is None else executor_settings(value, located(info))
+        if not isinstance(value, Mapping):
+            return value  # pydantic's type error
+        return executor_settings(value, located(info))
 
     @field_validator("experiments", mode="before")
     @classmethod

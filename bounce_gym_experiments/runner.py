@@ -7,7 +7,7 @@ policy (the env is reset with the seed, and each policy restarts its own random 
 `start_options`, so an episode never depends on the ones before it). The experiment's family
 (`bounce_gym_experiments.registry`) supplies the policies of each kind (the planner, the random and fixed
 baselines), follows the episode for its metrics and clock, and collects the first seed's plot
-data; nothing here assumes bouncing robots. Results are one `EpisodeResult` per (experiment,
+data; nothing here assumes one kind of robot or task. Results are one `EpisodeResult` per (experiment,
 policy, seed): steps, ticks, the return (summed over robots) and the family's metrics; with two
 or more fixed angles, also the best of them per seed in hindsight (`bounce_gym_experiments.oracle`).
 
