@@ -159,7 +159,7 @@ class Experiment(ConfigModel):
     name: str = Field(description="Names the experiment's rows and plot files (one plain path "
                                   "component: no /, \\, control characters or leading '.', at "
                                   "most 100 bytes); also the default folder of its rl models.")
-    env: str = Field(description=f"A registered environment id: {list(ENV_IDS)}.",
+    env: str = Field(description="A registered environment id (docs: Environments).",
                      json_schema_extra={"enum": list(ENV_IDS)})
     env_kwargs: dict[str, Any] = Field(default_factory=dict, description=ENV_KWARGS_DESCRIPTION)
     seeds: list[int] | SeedRange = Field(
