@@ -60,8 +60,6 @@ from bounce_gym_experiments.executors import (
     executor_settings,
 )
 
-#: the kinds of policy most families run (a family may run others: its ``policy_kinds``)
-POLICY_KINDS = ("planner", "random", "fixed", "rl")
 DIFFICULTIES = ("easy", "medium", "hard")
 DEFAULT_CONFIG_NAME = "eval_default.yaml"
 #: Most evaluation seeds of one experiment (episodes per policy), and the largest seed.

@@ -11,7 +11,11 @@ from pathlib import Path
 from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError
-from bounce_gym_experiments.config import POLICY_KINDS, registered_kwargs
+from bounce_gym_experiments.config import registered_kwargs
+
+#: the kinds of policy most families run (``planner``, ``random``, ``fixed``, ``rl``;
+#: `Family.policies`); a family may run others (its ``policy_kinds``)
+POLICY_KINDS = ("planner", "random", "fixed", "rl")
 
 
 class Episode:
@@ -70,9 +74,9 @@ class Family:
     A family owns the checks of the keys it reads (`validate`): which ``policies`` it runs
     (and their default, all of ``policy_kinds``), whether it takes ``planner_kwargs``
     (``takes_planner_kwargs``; then the default is ``{}``), ``adversaries`` (``adversary_kinds``;
-    none by default) and ``visibility`` (none by default). `claims` recognises its experiments
-    from the configuration alone (the env id, its registered or overridden ``task``), before
-    any env is built.
+    none by default) and ``visibility`` (``takes_visibility``; none by default). `claims`
+    recognises its experiments from the configuration alone (the env id, its registered or
+    overridden ``task``), before any env is built.
     """
 
     name = "family"
