@@ -8,7 +8,7 @@ PYTEST_ARGS ?=
 # runs only those. CI runs both.
 PYTEST_MARK ?= not slow
 
-.PHONY: install test test-slow demo bench lint docs clean
+.PHONY: install test test-slow demo bench lint docs schema clean
 
 install: $(STAMP)
 
@@ -36,6 +36,11 @@ bench: $(STAMP)
 # does not render) fails the build.
 docs: $(STAMP)
 	SDL_VIDEODRIVER=dummy NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
+# The JSON Schemas of the configurations (configs/schema/), regenerated from their models after a
+# change to a configuration key (a test fails while a shipped schema is stale).
+schema: $(STAMP)
+	$(BIN)/bounce-gym schema --write
 
 # ruff, the import layers (pyproject [tool.importlinter]) and mypy on the public API
 # (pyproject [tool.mypy])

@@ -107,3 +107,14 @@ def did_you_mean(names: Iterable[object], valid: Iterable[object]) -> str:
     if len(names) == 1:
         return f"did you mean {pairs[0][1]!r}?"
     return "did you mean " + ", ".join(f"{match!r} for {name!r}" for name, match in pairs) + "?"
+
+
+def field_path(loc: Iterable[str | int], at: str = "") -> str:
+    """A validation error's location as the package's field path: ``("angles", 2)`` ->
+    ``angles[2]``, ``("physics_params", "friction")`` -> ``physics_params.friction``; below
+    ``at`` when given (``config.experiments`` + ``(2, "seeds")`` ->
+    ``config.experiments[2].seeds``)."""
+    text = at
+    for part in loc:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text

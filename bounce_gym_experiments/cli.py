@@ -8,6 +8,7 @@
                     [--scheduler fifo|asha] [--workers N] [--address ADDR] ...
     bounce-gym curves models/<name> [--window EPISODES]
     bounce-gym trust models/<name>/checkpoints/<algo>_seed<N>_<steps>_steps.zip ...
+    bounce-gym schema evaluation|training | --write
 
 ``evaluate`` prints tables (per experiment and policy, every cell with its 95% interval and
 count) and writes ``episodes.csv``, ``summary.csv``, ``results.json``, plots and, for a
@@ -51,6 +52,10 @@ seeds whose model is saved and continues the others from their checkpoints. A se
 for good is ``error: <run>_seed<N> failed after ...`` (status 1) once the others are saved.
 ``tune`` searches hyperparameters with Ray Tune (`bounce_gym_experiments.search`): trials are training runs
 in ``models/<name>-tune/``, summarised in ``trials.csv`` and ``best_hyperparams.yaml``.
+
+``schema`` prints the JSON Schema of the evaluation or the training configuration, generated
+from their models (`bounce_gym_experiments.schema`); ``schema --write`` writes both into the
+shipped ``configs/schema/``, where editors find them.
 
 ``bounce-gym --version`` (and ``train.py --version``, ``evaluate.py --version``) prints the
 installed distribution's version, ``bounce-gym <version>``. Flags are never abbreviated:
@@ -310,6 +315,22 @@ def trust_command(paths: list[str]) -> int:
     return 0
 
 
+def schema_command(name: str | None, write: bool) -> int:
+    """Print the JSON Schema of configuration ``name``, or write every schema where they
+    ship."""
+    from bounce_gym.errors import ConfigError
+    from bounce_gym_experiments.schema import schema_text, write_schemas
+
+    if write == (name is not None):
+        raise ConfigError("schema: give a configuration (evaluation or training) to print its "
+                          "schema, or --write to write them all")
+    if write:
+        print("\n".join(f"wrote {path}" for path in write_schemas()))
+    else:
+        print(schema_text(name), end="")
+    return 0
+
+
 class Parser(argparse.ArgumentParser):
     """argparse's parser, whose usage mistakes (an unknown flag, a value of the wrong type or
     not among the choices) are one line ``error: ...`` and exit status 2, as every mistake of
@@ -416,7 +437,16 @@ COMMAND_MODULES = {
     "tune": ("ray", "stable_baselines3", "sb3_contrib", "torch", "rich", "tqdm", "matplotlib"),
     "curves": ("matplotlib",),
     "trust": (),
+    "schema": (),
 }
+
+
+def schema_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("name", nargs="?", choices=("evaluation", "training"),
+                        help="the configuration whose schema to print")
+    parser.add_argument("--write", action="store_true",
+                        help="write every schema into configs/schema/")
+    return parser
 
 
 def dispatch(args: argparse.Namespace) -> int:
@@ -434,6 +464,8 @@ def dispatch(args: argparse.Namespace) -> int:
             return trust_command(args.models)
         if args.command == "curves":
             return curves_command(args.folder, args.window)
+        if args.command == "schema":
+            return schema_command(args.name, args.write)
         if args.command == "tune":
             return tune_command(args.config, args.space, args.trials, args.metric, args.scheduler,
                         args.seed, args.timesteps, args.resume, args.workers, args.address,
@@ -471,6 +503,8 @@ def main(argv: list[str] | None = None) -> int:
                                                      "agents"))
     trust_parser(commands.add_parser("trust", help="trust checkpoints from elsewhere for "
                                                    "--resume (user-level, by sha256)"))
+    schema_parser(commands.add_parser("schema", help="the JSON Schema of the configuration "
+                                                     "files"))
     return dispatch(parser.parse_args(argv))
 
 

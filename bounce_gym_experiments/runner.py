@@ -7,7 +7,7 @@ policy (the env is reset with the seed, and each policy restarts its own random 
 `start_options`, so an episode never depends on the ones before it). The experiment's family
 (`bounce_gym_experiments.registry`) supplies the policies of each kind (the planner, the random and fixed
 baselines), follows the episode for its metrics and clock, and collects the first seed's plot
-data; nothing here assumes bouncing robots. Results are one `EpisodeResult` per (experiment,
+data; nothing here assumes one kind of robot or task. Results are one `EpisodeResult` per (experiment,
 policy, seed): steps, ticks, the return (summed over robots) and the family's metrics; with two
 or more fixed angles, also the best of them per seed in hindsight (`bounce_gym_experiments.oracle`).
 
@@ -31,11 +31,11 @@ import numpy as np
 
 from baselines.policy import Policy, is_parallel_env
 from bounce_gym.envs.registration import is_pettingzoo_id
-from bounce_gym.errors import ConfigError, config_errors
+from bounce_gym.errors import config_errors
 from bounce_gym_experiments.config import validate_config
 from bounce_gym_experiments.executors import Executor, UnitStore, make_executor
 from bounce_gym_experiments.families.base import Episode, Family
-from bounce_gym_experiments.registry import family_for
+from bounce_gym_experiments.registry import family_of
 
 
 @dataclass
@@ -158,13 +158,8 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
     """Build a validated experiment's env, planner setup and policies (loading its models), so
     that every mistake in it is reported before any episode runs; ``where`` names the
     experiment in errors."""
+    family = family_of(experiment, where)
     env = make_experiment_env(experiment, f"{where}.env_kwargs")
-    family = family_for(experiment, env)
-    unsupported = [k for k in experiment["policies"] if k not in family.policy_kinds]
-    if unsupported:
-        env.close()
-        raise ConfigError(f"{where}.policies: {family.name} experiments run "
-                          f"{list(family.policy_kinds)}, not {unsupported}")
     setup = family.prepare(env, experiment)
     entrants = [Entrant(p, env, setup) for p in policies_for(experiment, env, family, setup)]
     notes = []

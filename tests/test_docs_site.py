@@ -93,3 +93,23 @@ def test_every_docs_page_and_reference_page_is_built(site):
     assert len(reference) >= 5
     for folder in reference:
         assert len(_article(folder / "index.html")) > 100, folder.name
+
+
+def test_the_configuration_reference_lists_every_key_of_every_model(site):
+    from baselines.rl.train_config import TrainingConfig
+    from bounce_gym_experiments.config import (
+        EvaluationConfig,
+        ExecutorSettings,
+        Experiment,
+        ModelFolder,
+        SeedRange,
+    )
+
+    text = _article(site / "configuration" / "index.html")
+    assert "yaml-language-server: $schema=schema/evaluation.schema.json" in text
+    for model in (EvaluationConfig, Experiment, SeedRange, ModelFolder, ExecutorSettings,
+                  TrainingConfig):
+        table = text.split(f"{model.__name__} ", 1)[1]
+        for key, field in model.model_fields.items():
+            assert f"{key} " in table and " ".join(field.description.split())[:40] in table, \
+                (model.__name__, key)

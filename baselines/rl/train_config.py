@@ -1,7 +1,9 @@
 """Training configurations: keys, defaults, hyperparameter files and their checks.
 
-A configuration is a mapping (YAML; format in `baselines.rl.train`). `validate_train_config`
-checks it, merges the hyperparameter file it names and fills in the defaults, so training starts
+A configuration is a mapping (YAML; format in `baselines.rl.train`) whose keys — type, default
+and meaning — are declared once, in `TrainingConfig` (a pydantic model, from which the docs'
+configuration reference and the shipped JSON Schema ``configs/schema/training.schema.json`` are
+generated). `validate_train_config` checks it, merges the hyperparameter file it names and fills in the defaults, so training starts
 only from a complete configuration; every mistake is a `ConfigError` naming the key.
 
 **Hyperparameter files** (``hyperparams_file``) follow rl-baselines3-zoo's layout: one YAML file
@@ -43,10 +45,14 @@ import os
 import re
 from collections.abc import Mapping
 from pathlib import Path
+from types import NoneType, UnionType
+from typing import Any, Literal, Union, get_args, get_origin
 
 import gymnasium as gym
+from pydantic import BaseModel, Field
 
 import bounce_gym  # noqa: F401  (registers the environments)
+from baselines.config_model import ConfigModel
 from baselines.rl.jaxrl.settings import hyperparameters as jax_hyperparameters
 from baselines.rl.model_files import ALGOS, JAX_ALGOS, VARIANT, check_folder_name
 from baselines.rl.patrol import PATROL_ID, ROLES
@@ -84,11 +90,6 @@ ACTIVATIONS = {"tanh": "Tanh", "relu": "ReLU", "elu": "ELU", "leaky_relu": "Leak
                "gelu": "GELU"}
 NORMALIZE_DEFAULTS = {"norm_obs": True, "norm_reward": True, "clip_obs": 10.0,
                       "clip_reward": 10.0}
-_KEYS = {"name": str, "env": str, "env_kwargs": dict, "algo": str, "variant": str,
-         "total_timesteps": int, "seed": int, "seeds": list, "n_envs": int, "n_stack": int,
-         "normalize": (bool, dict), "hyperparams_file": str, "hyperparams": dict,
-         "checkpoint_every": int, "tensorboard": bool, "models": str, "resume": bool,
-         "vec_env": str, "torch_threads": int, "role": str}
 #: rl-zoo keys of a hyperparameter file entry, and the configuration keys they fill.
 _FILE_KEYS = {"n_timesteps": "total_timesteps", "n_envs": "n_envs", "frame_stack": "n_stack",
               "normalize": "normalize"}
@@ -132,14 +133,113 @@ HYPERPARAM_RANGES = {
 }
 #: The same for the sizes in ``policy_kwargs`` (`MAX_WIDTH` units, `MAX_LAYERS` layers).
 _POLICY_SIZES = {"lstm_hidden_size": MAX_WIDTH, "n_lstm_layers": MAX_LAYERS}
+#: the registered ids a configuration may train on
+ENV_IDS = (*GYMNASIUM_IDS, *PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS, PATROL_ID)
 
 
-def _kind_name(kind) -> str:
-    return " or ".join(k.__name__ for k in kind) if isinstance(kind, tuple) else kind.__name__
+class Normalize(ConfigModel):
+    """VecNormalize's settings (``normalize: true`` is all of them at their defaults)."""
+
+    norm_obs: bool = Field(default=NORMALIZE_DEFAULTS["norm_obs"],
+                           description="Normalise the observations by their running mean and "
+                                       "deviation.")
+    norm_reward: bool = Field(default=NORMALIZE_DEFAULTS["norm_reward"],
+                              description="Scale the rewards by the running deviation of the "
+                                          "return.")
+    clip_obs: float = Field(default=NORMALIZE_DEFAULTS["clip_obs"], gt=0,
+                            description="Clip normalised observations to ± this.")
+    clip_reward: float = Field(default=NORMALIZE_DEFAULTS["clip_reward"], gt=0,
+                               description="Clip normalised rewards to ± this.")
 
 
-def _is_kind(value: object, kind) -> bool:
-    return isinstance(value, kind) and not (kind is int and isinstance(value, bool))
+class TrainingConfig(ConfigModel):
+    """A training configuration (``bounce-gym train config.yaml``): one model per seed, saved as
+    ``<models>/<name>/<algo>_seed<N>.zip``. ``validate_train_config`` checks it (the ranges of
+    the module docstring) and fills in the defaults."""
+
+    name: str = Field(description="The models' folder in the models folder (one path "
+                                  "component); evaluation's rl_models names it.")
+    env: str = Field(description="The registered id to train on.",
+                     json_schema_extra={"enum": list(ENV_IDS)})
+    env_kwargs: dict[str, Any] = Field(default_factory=dict,
+                                       description="Keyword arguments of the env over the ones "
+                                                   "its id registers (docs: Environments).")
+    algo: str = Field(description="The learner: PPO, DQN, RecurrentPPO (sb3-contrib) or the "
+                                  "JAX learners.", json_schema_extra={"enum": list(ALGOS)})
+    variant: str | None = Field(default=None, description="A label of the run in the model "
+                                                          "file names (<algo>-<variant>_seed<N>),"
+                                                          " e.g. stack4: lower-case letters and "
+                                                          "digits in parts joined by '-'.")
+    total_timesteps: int | None = Field(
+        default=None, ge=1, le=MAX_TIMESTEPS,
+        description="Env steps per seed. Required unless the hyperparameter file's entry gives "
+                    "n_timesteps.")
+    seed: int | None = Field(default=None, ge=0, description="One run's seed (default 0); not "
+                                                             "with seeds.")
+    seeds: list[int] | None = Field(default=None, min_length=1,
+                                    description="Several runs' distinct seeds (>= 0); env i of "
+                                                "a run is seeded seed + i, below 10000.")
+    n_envs: int | None = Field(default=None, ge=1, le=MAX_ENVS,
+                               description="Envs stepped together (default: 4; 1 for DQN and "
+                                           "multi-robot envs).")
+    n_stack: int = Field(default=1, ge=1, le=MAX_STACK, description="Frames stacked in the "
+                                                                    "observation.")
+    normalize: bool | Normalize = Field(default=False, description="VecNormalize: true, or its "
+                                                                   "settings.")
+    hyperparams_file: str | None = Field(
+        default=None, description="An rl-zoo style hyperparameter file (relative: to the "
+                                  "configuration file's folder); its entry for the env is "
+                                  "merged in, the configuration's own keys winning.")
+    hyperparams: dict[str, Any] = Field(
+        default_factory=dict, description="Keyword arguments of the algorithm (ranges: docs, "
+                                          "Learning); lin_<x> is a linear decay from x.")
+    checkpoint_every: int = Field(default=0, ge=0, le=MAX_TIMESTEPS,
+                                  description="Save a checkpoint every this many steps (0: "
+                                              "never).")
+    tensorboard: bool = Field(default=False, description="Write TensorBoard logs.")
+    models: str = Field(default="models", description="The folder of the models' folders.")
+    resume: bool = Field(default=False, description="Continue the seeds from their checkpoints "
+                                                    "(also the flag --resume).")
+    vec_env: Literal[VEC_ENVS] | None = Field(  # type: ignore[valid-type]
+        default=None, description="How the envs are stepped: native (the env's own batched "
+                                  "version, the default where there is one), sync or subproc.")
+    torch_threads: int = Field(default=1, ge=1, description="Threads torch may use (at most 4 "
+                                                            "per core).")
+    role: Literal[ROLES] | None = Field(  # type: ignore[valid-type]
+        default=None, description=f"Which side of {PATROL_ID} to train (only there).")
+
+
+def _kinds(annotation: object) -> tuple[type, ...]:
+    """The Python types a value of a `TrainingConfig` field may have (a model: a mapping)."""
+    out: list[type] = []
+    members = get_args(annotation) if get_origin(annotation) in (Union, UnionType) \
+        else (annotation,)
+    for member in members:
+        origin = get_origin(member) or member
+        if origin is Literal:
+            out.extend(type(value) for value in get_args(member))
+        elif isinstance(origin, type) and issubclass(origin, BaseModel):
+            out.append(dict)
+        elif origin is not NoneType:
+            out.append(origin)
+    return tuple(dict.fromkeys(out))
+
+
+#: each key's types (`TrainingConfig`)
+_KEYS = {key: _kinds(field.annotation) for key, field in TrainingConfig.model_fields.items()}
+#: the defaults filled in whatever the configuration (the others depend on it, or stay unset)
+_DEFAULTS = {"variant": None, **{
+    key: field.get_default(call_default_factory=True)
+    for key, field in TrainingConfig.model_fields.items()
+    if not field.is_required() and field.get_default(call_default_factory=True) is not None}}
+
+
+def _kind_name(kind: tuple[type, ...]) -> str:
+    return " or ".join(k.__name__ for k in kind)
+
+
+def _is_kind(value: object, kind: tuple[type, ...]) -> bool:
+    return isinstance(value, kind) and not (kind == (int,) and isinstance(value, bool))
 
 
 def _check_types(config: Mapping) -> None:
@@ -193,10 +293,9 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     if "variant" in config and not VARIANT.fullmatch(config["variant"]):
         raise ConfigError(f"config.variant: expected lower-case letters and digits in parts "
                           f"joined by '-' (e.g. stack4), got {config['variant']!r}")
-    defaults = {"vec_env": "native" if native else "sync", "env_kwargs": {}, "variant": None,
-                "n_envs": 1 if multi or config["algo"] in ("dqn", "jax_dqn") else 4, "n_stack": 1,
-                "normalize": False, "hyperparams": {}, "checkpoint_every": 0,
-                "tensorboard": False, "models": "models", "resume": False, "torch_threads": 1}
+    defaults = {"vec_env": "native" if native else "sync",
+                "n_envs": 1 if multi or config["algo"] in ("dqn", "jax_dqn") else 4,
+                **_DEFAULTS}
     for key, value in defaults.items():
         config.setdefault(key, value)
     check_path_text("config.models", config["models"])

@@ -38,7 +38,7 @@ from pydantic import (
 from pydantic_core import to_jsonable_python
 
 from bounce_gym.errors import BounceGymError, ConfigError
-from bounce_gym.validate import unexpected
+from bounce_gym.validate import field_path, unexpected
 
 
 def _python_scalar(value: object) -> object:
@@ -61,12 +61,30 @@ Real = Annotated[float, BeforeValidator(_python_scalar), AllowInfNan(False)]
 Flag = Annotated[bool, BeforeValidator(_python_scalar)]
 
 
+#: JSON Schema's names of the bounds a field declares (pydantic writes a bound that follows a
+#: validator, as those of `Integer` and `Real` do, under its own name)
+_JSON_BOUNDS = {"ge": "minimum", "le": "maximum", "gt": "exclusiveMinimum",
+                "lt": "exclusiveMaximum"}
+
+
+def _standard_bounds(schema: dict, model: type | None = None) -> None:
+    """Rename the bounds of every (nested) field schema of ``schema`` to JSON Schema's names."""
+    for key in [key for key in schema if key in _JSON_BOUNDS]:
+        schema[_JSON_BOUNDS[key]] = schema.pop(key)
+    for value in schema.values():
+        for item in value.values() if isinstance(value, dict) else (
+                value if isinstance(value, list) else ()):
+            if isinstance(item, dict):
+                _standard_bounds(item)
+
+
 class Arguments(BaseModel):
     """Base of the argument models: strict types, no unknown fields, every default validated
     (defaults are normalised like given values)."""
 
     model_config = ConfigDict(strict=True, extra="forbid", arbitrary_types_allowed=True,
-                              validate_default=True, frozen=True)
+                              validate_default=True, frozen=True,
+                              json_schema_extra=_standard_bounds)
 
 
 class TakesArguments:
@@ -133,11 +151,9 @@ def config_error(model: type[Arguments], exc: ValidationError) -> ConfigError:
 
 
 def location(loc: Sequence[str | int]) -> str:
-    """A pydantic error location as a field path: ``("angles", 2)`` -> ``angles[2]``."""
-    text = ""
-    for part in loc:
-        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
-    return text or "arguments"
+    """A pydantic error location as a field path (`bounce_gym.validate.field_path`):
+    ``("angles", 2)`` -> ``angles[2]``; the arguments as a whole when empty."""
+    return field_path(loc) or "arguments"
 
 
 def _allowed(model: type[Arguments], error: Mapping) -> str:

@@ -8,9 +8,14 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
+from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError
 from bounce_gym.extras import require
-from bounce_gym_experiments.config import POLICY_KINDS
+from bounce_gym_experiments.config import registered_kwargs
+
+#: the kinds of policy most families run (``planner``, ``random``, ``fixed``, ``rl``;
+#: `Family.policies`); a family may run others (its ``policy_kinds``)
+POLICY_KINDS = ("planner", "random", "fixed", "rl")
 
 
 class Episode:
@@ -65,6 +70,13 @@ class Family:
     copied into its rows when set. ``policy_kinds`` are the kinds of policy of a
     configuration's ``policies`` (`bounce_gym_experiments.config`) the family runs; `policies` builds
     them (``rl``: the runner loads the trained models).
+
+    A family owns the checks of the keys it reads (`validate`): which ``policies`` it runs
+    (and their default, all of ``policy_kinds``), whether it takes ``planner_kwargs``
+    (``takes_planner_kwargs``; then the default is ``{}``), ``adversaries`` (``adversary_kinds``;
+    none by default) and ``visibility`` (``takes_visibility``; none by default). `claims`
+    recognises its experiments from the configuration alone (the env id, its registered or
+    overridden ``task``), before any env is built.
     """
 
     name = "family"
@@ -79,6 +91,9 @@ class Family:
     higher_is_better = True
     planner_attributes: tuple[str, ...] = ()
     policy_kinds: tuple[str, ...] = POLICY_KINDS
+    adversary_kinds: tuple[str, ...] = ()
+    takes_planner_kwargs = False
+    takes_visibility = False
 
     @property
     def heading(self) -> str:
@@ -91,9 +106,53 @@ class Family:
         score = float(row[self.score])
         return (score if self.higher_is_better else -score, -row["ticks"])
 
-    def recognises(self, experiment: Mapping, env) -> bool:
-        return (is_parallel_env(env) == self.parallel and "visibility" not in experiment
-                and env.unwrapped.task.name == self.task)
+    def claims(self, experiment: Mapping) -> bool:
+        """Whether an experiment (checked by `bounce_gym_experiments.config.Experiment`) is one
+        of this family's: default, its env is parallel (PettingZoo) or not as the family, and
+        runs the family's task (`env_task`). Families are asked in the registry's order, so a
+        family claims what the ones before it left (e.g. the safe-plan scenarios)."""
+        return (is_pettingzoo_id(experiment["env"]) == self.parallel
+                and env_task(experiment) == self.task)
+
+    def validate(self, experiment: dict) -> None:
+        """Check the keys of an experiment that this family reads, and fill in their defaults
+        (in place); a mistake raises `ConfigError` naming the key within the experiment
+        (``policies: ...``). Default: ``policies`` among `policy_kinds` (default: all of them),
+        `adversaries` among ``adversary_kinds`` (only if there are any; default: all but
+        ``rl``), ``planner_kwargs`` only if the family ``takes_planner_kwargs``, no
+        ``visibility``."""
+        experiment.setdefault("policies", list(self.policy_kinds))
+        self.check_kinds("policies", experiment["policies"], self.policy_kinds)
+        if not self.adversary_kinds and "adversaries" in experiment:
+            raise ConfigError(f"adversaries: {self.name} experiments have no adversaries")
+        if self.adversary_kinds:
+            experiment.setdefault("adversaries",
+                                  [k for k in self.adversary_kinds if k != "rl"])
+            self.check_kinds("adversaries", experiment["adversaries"], self.adversary_kinds)
+        if self.takes_planner_kwargs:
+            experiment.setdefault("planner_kwargs", {})
+        elif "planner_kwargs" in experiment:
+            raise ConfigError(f"planner_kwargs: {self.name} experiments take no planner options")
+        if "visibility" in experiment and not self.takes_visibility:
+            raise ConfigError("visibility: only for single-robot experiments" if self.parallel
+                              else f"visibility: {self.name} experiments have no safe-plan "
+                                   "scenario")
+
+    def check_kinds(self, key: str, given: list, kinds: tuple[str, ...]) -> None:
+        """``given`` (the list of ``key``) is a non-empty list of ``kinds``."""
+        unknown = [k for k in given if k not in kinds]
+        if unknown:
+            raise ConfigError(f"{key}: unknown {unknown}; {self.name} experiments run "
+                              f"{list(kinds)}")
+        if not given:
+            raise ConfigError(f"{key}: expected a non-empty list of {list(kinds)}")
+
+    def world_name(self, experiment: Mapping) -> str:
+        """The world an experiment runs on: its ``env_kwargs.world`` (a map file by its file
+        name) or the one its env id registers."""
+        world = experiment["env_kwargs"].get("world",
+                                             registered_kwargs(experiment["env"]).get("world", "?"))
+        return Path(world).name if isinstance(world, str) else getattr(world, "name", str(world))
 
     def prepare(self, env, experiment: Mapping) -> object:
         """Per-experiment set-up on a fresh env, handed to `planner` and `episode`."""
@@ -189,6 +248,12 @@ class Family:
     def summary_plots(self, folder: Path, plots: Mapping, summary: list[dict]) -> list[Path]:
         """Plots across the family's experiments (called once per family that ran)."""
         return []
+
+
+def env_task(experiment: Mapping) -> object:
+    """The task an experiment's env runs: its ``env_kwargs.task`` or the one its env id
+    registers (``None``: none registered)."""
+    return experiment["env_kwargs"].get("task", registered_kwargs(experiment["env"]).get("task"))
 
 
 class SingleRobotFamily(Family):

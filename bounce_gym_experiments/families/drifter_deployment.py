@@ -92,6 +92,7 @@ class DrifterDeployment(DrifterFamily):
     labels = frozenset({"drifters"})
     score = "coverage"
     policy_kinds = ("planner", "random")
+    takes_planner_kwargs = True
 
     def prepare(self, env, experiment: Mapping):
         setup = DeploymentSetup(env, experiment["max_steps"])

@@ -23,6 +23,7 @@ them is how far the model is from the currents. The clock of a drifter env is it
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 
 import numpy as np
 
@@ -33,9 +34,9 @@ from baselines.drifters import (
     ValueIterationPolicy,
     reach_probability,
 )
-from baselines.policy import Policy, is_parallel_env
+from baselines.policy import Policy
 from bounce_gym.cells import DRIFT, DrifterCells
-from bounce_gym.envs.drifters.base import DrifterEnvBase
+from bounce_gym.envs.registration import DRIFTER_GYM_ENVS, DRIFTER_PETTINGZOO_ENVS
 from bounce_gym.errors import ConfigError
 from bounce_gym_experiments.families.base import Episode, Family
 
@@ -48,11 +49,24 @@ class DrifterEpisode(Episode):
 
 
 class DrifterFamily(Family):
-    """What the drifter families share: recognised by their env, drawn on their flow's map."""
+    """What the drifter families share: recognised by their env ids (a drifter id, Gymnasium or
+    PettingZoo as the family) and task, drawn on their flow's map; they take
+    ``planner_kwargs``."""
 
-    def recognises(self, experiment, env):
-        return (isinstance(env.unwrapped, DrifterEnvBase) and is_parallel_env(env) == self.parallel
-                and env.unwrapped.task.name == self.task)
+    takes_planner_kwargs = True
+
+    def claims(self, experiment):
+        ids = DRIFTER_PETTINGZOO_ENVS if self.parallel else DRIFTER_GYM_ENVS
+        return (experiment["env"] in ids
+                and experiment["env_kwargs"].get("task", self.task) == self.task)
+
+    def world_name(self, experiment):
+        """The flow (``env_kwargs.flow``: a zoo name, a NetCDF file by its file name or a field
+        by its name; else the env's default)."""
+        from bounce_gym.envs.drifters.options import DrifterOptions  # only if needed
+
+        world = experiment["env_kwargs"].get("flow", DrifterOptions.model_fields["flow"].default)
+        return Path(world).name if isinstance(world, str) else getattr(world, "name", "?")
 
     def world(self, env):
         return env.unwrapped.flow
@@ -127,6 +141,10 @@ class DrifterReach(DrifterFamily):
                "steps_to_goal", "return")
     score = "success"
 
+    def validate(self, experiment):
+        super().validate(experiment)
+        planner_options(experiment)
+
     def prepare(self, env, experiment: Mapping):
         return ReachPrediction(experiment["max_steps"])
 
@@ -167,6 +185,18 @@ PLANNER_MODELS = ("cell", "sampled")
 def drifter_planners(experiment: Mapping) -> list[Policy]:
     """The planner rows of a reach experiment (module docstring): Alg. 5.5 on the cell model
     and/or the finite-horizon plan on the sampled GCM."""
+    models, sampled = planner_options(experiment)
+    out: list[Policy] = []
+    if "cell" in models:
+        out.append(ValueIterationPolicy())
+    if "sampled" in models:
+        out.append(HorizonReachPolicy(experiment["max_steps"], **sampled))
+    return out
+
+
+def planner_options(experiment: Mapping) -> tuple[list[str], dict]:
+    """The planners ``planner_kwargs.models`` names (default: the cell model's) and the
+    options of the sampled one, checked."""
     kwargs = dict(experiment.get("planner_kwargs", {}))
     models = kwargs.pop("models", ["cell"])
     sampled = {key: kwargs.pop(key) for key in ("samples", "seed", "refine") if key in kwargs}
@@ -177,12 +207,7 @@ def drifter_planners(experiment: Mapping) -> list[Policy]:
                                                          for m in models):
         raise ConfigError(f"planner_kwargs.models: expected a non-empty list of "
                           f"{list(PLANNER_MODELS)}, got {models!r}")
-    out: list[Policy] = []
-    if "cell" in models:
-        out.append(ValueIterationPolicy())
-    if "sampled" in models:
-        out.append(HorizonReachPolicy(experiment["max_steps"], **sampled))
-    return out
+    return models, sampled
 
 
 FAMILY = DrifterReach()

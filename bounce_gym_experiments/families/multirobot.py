@@ -39,6 +39,7 @@ class MultiRobot(Family):
     table = "multi-robot bouncing"
     columns = ("experiment", "policy", "robots", "episodes", "seeds", "robot_contacts", "ticks")
     labels = frozenset({"robots"})
+    takes_planner_kwargs = True
     #: the planner's class in `baselines.multirobot.policies`
     planner_class = ""
 

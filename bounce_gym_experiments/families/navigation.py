@@ -43,8 +43,9 @@ import numpy as np
 
 from baselines.policy import Policy
 from bounce_gym import validate
+from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError
-from bounce_gym_experiments.families.base import Episode, SingleRobotFamily
+from bounce_gym_experiments.families.base import Episode, SingleRobotFamily, env_task
 
 #: the planners ``planner_kwargs.models`` may name
 PLANNER_MODELS = ("roadmap", "roadmap_pose", "sampled")
@@ -114,9 +115,18 @@ class Navigation(SingleRobotFamily):
                "plan_cost", "predicted_ticks", "predicted_weight")
     score = "success"
     planner_attributes = ("predicted_success", "predicted_ticks", "predicted_weight")
+    takes_planner_kwargs = True
+    #: the tasks of the navigation ids (v0, and v1's goal-conditioned one)
+    tasks = ("navigation", "goal_navigation")
+
+    def claims(self, experiment):
+        return not is_pettingzoo_id(experiment["env"]) and env_task(experiment) in self.tasks
+
+    def validate(self, experiment):
+        super().validate(experiment)
+        planner_options(experiment)
 
     def prepare(self, env, experiment):
-        navigation_planners(experiment)  # planner_kwargs checked whichever policies run
         options = env.unwrapped.options
         if options.action_type != "discrete" or options.step_mode != "bounce":
             return None
@@ -139,6 +149,24 @@ def navigation_planners(experiment: Mapping) -> list[Policy]:
     from baselines.navigation import NavigationPlanner
     from baselines.navigation.sampled import SampledNavigationPlanner
 
+    models, kwargs = planner_options(experiment)
+    out: list[Policy] = []
+    if "roadmap" in models:
+        out.append(NavigationPlanner())
+    if "roadmap_pose" in models:
+        privileged = NavigationPlanner(replan_from_info=True)
+        privileged.name = POSE_NAME
+        out.append(privileged)
+    if "sampled" in models:
+        sampled = SampledNavigationPlanner(horizon=experiment["max_steps"], **kwargs)
+        sampled.name = SAMPLED_NAME
+        out.append(sampled)
+    return out
+
+
+def planner_options(experiment: Mapping) -> tuple[list[str], dict]:
+    """The planners ``planner_kwargs.models`` names (default: the roadmap planner) and the
+    sampled planner's options, checked before any env is built."""
     kwargs = dict(experiment.get("planner_kwargs", {}))
     models = kwargs.pop("models", ["roadmap"])
     unknown = sorted(key for key in kwargs if key not in SAMPLED_OPTIONS)
@@ -152,19 +180,7 @@ def navigation_planners(experiment: Mapping) -> list[Policy]:
     if kwargs and "sampled" not in models:
         raise ConfigError(f"planner_kwargs: {sorted(kwargs)} are options of the sampled planner; "
                           "add 'sampled' to planner_kwargs.models")
-    out: list[Policy] = []
-    if "roadmap" in models:
-        out.append(NavigationPlanner())
-    if "roadmap_pose" in models:
-        privileged = NavigationPlanner(replan_from_info=True)
-        privileged.name = POSE_NAME
-        out.append(privileged)
-    if "sampled" in models:
-        sampled = SampledNavigationPlanner(horizon=experiment["max_steps"],
-                                           **_sampled_options(kwargs))
-        sampled.name = SAMPLED_NAME
-        out.append(sampled)
-    return out
+    return models, _sampled_options(kwargs)
 
 
 def _sampled_options(kwargs: Mapping) -> dict:

@@ -55,11 +55,16 @@ from baselines.patrolling.vulnerability import (
 )
 from bounce_gym import validate
 from bounce_gym.envs.patrol import capture
-from bounce_gym.envs.patrol.env import PatrolEnv
+from bounce_gym.envs.registration import PATROL_PETTINGZOO_ENVS
 from bounce_gym.errors import ConfigError, config_errors
 from bounce_gym_experiments import stats
-from bounce_gym_experiments.config import PATROL_POLICY_KINDS
 from bounce_gym_experiments.families.base import Episode, Family
+
+#: the patrollers' policy kinds (module docstring)
+PATROL_POLICY_KINDS = ("planner", "random", "perimeter", "rl")
+#: the adversaries: the Stackelberg best response told the strategy, or also the patrollers'
+#: positions, and trained models (default: the first two)
+ADVERSARY_KINDS = ("best_response", "best_response_positions", "rl")
 
 #: the best-response modes of the adversary kinds
 _MODES = {"best_response": "strategy", "best_response_positions": "positions"}
@@ -159,10 +164,12 @@ class Patrolling(Family):
     score = "captured"
     planner_attributes = ("predicted_capture",)
     policy_kinds = PATROL_POLICY_KINDS
+    adversary_kinds = ADVERSARY_KINDS
+    takes_planner_kwargs = True
     record_paths = False
 
-    def recognises(self, experiment, env):
-        return isinstance(env.unwrapped, PatrolEnv)
+    def claims(self, experiment):
+        return experiment["env"] in PATROL_PETTINGZOO_ENVS
 
     def world(self, env):
         return env.unwrapped.board.world

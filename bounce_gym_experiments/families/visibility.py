@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym_experiments.families.base import Episode, Family
 
 
@@ -35,9 +36,10 @@ class Visibility(Family):
     name = "visibility"
     columns = (*Family.columns, "success")
     score = "success"
+    takes_visibility = True
 
-    def recognises(self, experiment, env):
-        return "visibility" in experiment
+    def claims(self, experiment):
+        return "visibility" in experiment and not is_pettingzoo_id(experiment["env"])
 
     def prepare(self, env, experiment):
         from baselines.visibility.scenario import VisibilityScenario

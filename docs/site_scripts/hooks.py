@@ -53,15 +53,29 @@ REFERENCE = (
 WITH_SUBMODULES = ("baselines.rl", "bounce_gym_experiments")
 
 
-def _env_pages() -> dict[str, str]:
-    """Page path -> Markdown of every registered id (imported here, not at module import, so
-    that the checkout's own package is the one documented)."""
+def _on_path() -> None:
+    """Make the checkout's package and the page generators beside this file importable (at
+    build time, not at module import, so that the checkout's own package is documented)."""
     for folder in (ROOT, Path(__file__).parent):  # the checkout's package, then site_pages
         if str(folder) not in sys.path:
             sys.path.insert(0, str(folder))
+
+
+def _env_pages() -> dict[str, str]:
+    """Page path -> Markdown of every registered id."""
+    _on_path()
     from site_pages import env_pages
 
     return env_pages()
+
+
+def _config_pages() -> dict[str, str]:
+    """The configuration reference, generated from the configuration models
+    (`config_pages`)."""
+    _on_path()
+    from config_pages import config_pages
+
+    return config_pages()
 
 
 def _reference_pages() -> dict[str, str]:
@@ -80,6 +94,7 @@ def on_config(config):
     ``Environments: envs/`` and ``API reference: reference/``."""
     _PAGES.clear()
     _PAGES.update(_env_pages())
+    _PAGES.update(_config_pages())
     _PAGES.update(_reference_pages())
     _fill(config["nav"])
     return config

@@ -410,12 +410,12 @@ def _config_content() -> list[Case]:
         ("a policy twice", evaluation(experiment(policies=["random", "random"])),
          f"{x}.policies: each policy once"),
         ("policy a mapping", evaluation(experiment(policies=[{"rl": 1}])),
-         f"{x}.policies: unknown"),
+         f"{x}.policies[0]: expected str, got dict"),
         ("adversaries without patrol", evaluation(experiment(adversaries=["rl"])),
-         f"{x}.adversaries: only for bounce_gym/Patrol-v0 experiments"),
+         f"{x}.adversaries: navigation experiments have no adversaries"),
         ("patrol adversary unknown", evaluation(experiment(
             env="bounce_gym/Patrol-v0", env_kwargs={}, max_steps=None, horizon_reason=None,
-            policies=["random"], adversaries=["god"])), f"{x}.adversaries: expected"),
+            policies=["random"], adversaries=["god"])), f"{x}.adversaries: unknown ['god']"),
         ("patrol adversary twice", evaluation(experiment(
             env="bounce_gym/Patrol-v0", env_kwargs={}, max_steps=None, horizon_reason=None,
             policies=["random"], adversaries=["best_response"] * 2)),
@@ -424,7 +424,7 @@ def _config_content() -> list[Case]:
          f"{x}.difficulty: expected one of ('easy', 'medium', 'hard')"),
         ("planner_kwargs on one robot", evaluation(experiment(
             env="bounce_gym/Bounce-v0", env_kwargs={}, planner_kwargs={"phi": 1})),
-         f"{x}.planner_kwargs: only for multi-robot experiments"),
+         f"{x}.planner_kwargs: bouncing experiments take no planner options"),
         ("navigation planner_kwargs unknown", evaluation(experiment(planner_kwargs={"phi": 1})),
          "planner_kwargs: unknown ['phi']"),
         ("visibility on several robots", evaluation(experiment(

@@ -67,7 +67,7 @@ def _write(path: Path, data: dict) -> Path:
     [
         ({"name": "a", "env": "bounce_gym/MultiBounceNope-v0"}, r"\.env: unknown environment"),
         ({"name": "a", "env": "bounce_gym/Bounce-v0", "planner_kwargs": {"phi": 90}},
-         r"\.planner_kwargs: only for multi-robot"),
+         r"\.planner_kwargs: bouncing experiments take no planner options"),
         (coverage_exp(planner_kwargs=[135]), r"\.planner_kwargs: expected dict"),
         (coverage_exp(rl_models="../elsewhere"), r"\.rl_models: expected the name of a folder"),
         (coverage_exp(rl_models=3), r"\.rl_models: expected str or list"),

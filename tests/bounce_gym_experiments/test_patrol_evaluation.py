@@ -152,13 +152,14 @@ def test_detection_time_is_zero_when_a_patroller_watches_the_target_at_the_start
 @pytest.mark.parametrize(
     ("exp", "message"),
     [
-        (patrol(adversaries=["oracle"]), r"experiments\[0\]\.adversaries: expected a non-empty"),
+        (patrol(adversaries=["oracle"]), r"experiments\[0\]\.adversaries: unknown \['oracle'\]; "
+                                         r"patrolling experiments run \['best_response', "),
         (patrol(adversaries=[]), r"experiments\[0\]\.adversaries: expected a non-empty"),
         (patrol(adversaries=["best_response", "best_response"]), r"\.adversaries: each"),
         (patrol(adversaries="best_response"), r"\.adversaries: expected list"),
         (patrol(policies=["fixed"]), r"experiments\[0\]\.policies: unknown \['fixed'\]"),
         ({"name": "a", "env": "bounce_gym/Bounce-v0", "adversaries": ["best_response"]},
-         r"experiments\[0\]\.adversaries: only for bounce_gym/Patrol-v0"),
+         r"experiments\[0\]\.adversaries: bouncing experiments have no adversaries"),
         ({"name": "a", "env": "bounce_gym/Bounce-v0", "policies": ["perimeter"]},
          r"experiments\[0\]\.policies: unknown \['perimeter'\]"),
     ],
