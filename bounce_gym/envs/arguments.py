@@ -24,7 +24,8 @@ import operator
 import types
 import typing
 from collections.abc import Mapping, Sequence
-from typing import Annotated, Any, ClassVar, Literal
+from dataclasses import dataclass
+from typing import Annotated, Any, ClassVar, Generic, Literal, TypeVar
 
 import numpy as np
 from pydantic import (
@@ -32,10 +33,12 @@ from pydantic import (
     BaseModel,
     BeforeValidator,
     ConfigDict,
+    GetCoreSchemaHandler,
     ValidationError,
     ValidationInfo,
 )
-from pydantic_core import to_jsonable_python
+from pydantic.fields import FieldInfo
+from pydantic_core import CoreSchema, to_jsonable_python
 
 from bounce_gym.errors import BounceGymError, ConfigError
 from bounce_gym.validate import field_path, unexpected
@@ -78,6 +81,29 @@ def _standard_bounds(schema: dict, model: type | None = None) -> None:
                 _standard_bounds(item)
 
 
+@dataclass(frozen=True)
+class Accepts:
+    """Field metadata: what a user may pass for a field whose annotation is the type of the
+    value validation stores (``world: Annotated[World, Accepts(str | PathLike | World)]``: a
+    name or path in, a `World` stored). The input is checked as ``input_type`` (pydantic's type
+    and range checks, then the field's validators, which normalise it), and ``input_type`` is
+    what the JSON Schema, the signature and the docs' table show."""
+
+    input_type: Any
+
+    def __get_pydantic_core_schema__(self, source: object,
+                                     handler: GetCoreSchemaHandler) -> CoreSchema:
+        return handler.generate_schema(self.input_type)
+
+
+def accepted(field: FieldInfo) -> object:
+    """The type a field accepts: its `Accepts` input type, else its annotation."""
+    for item in field.metadata:
+        if isinstance(item, Accepts):
+            return item.input_type
+    return field.annotation
+
+
 class Arguments(BaseModel):
     """Base of the argument models: strict types, no unknown fields, every default validated
     (defaults are normalised like given values)."""
@@ -87,12 +113,16 @@ class Arguments(BaseModel):
                               json_schema_extra=_standard_bounds)
 
 
-class TakesArguments:
+ModelT = TypeVar("ModelT", bound=Arguments)
+
+
+class TakesArguments(Generic[ModelT]):
     """Mixin of an env class whose keyword arguments are those of ``options_model`` minus
     ``not_taken`` (they keep the model's default), with ``option_defaults`` replacing some of
     the model's defaults. Every subclass gets a ``__signature__`` derived from them."""
 
-    options_model: ClassVar[type[Arguments]]
+    #: the model (a class attribute; not a ClassVar only because a ClassVar cannot be generic)
+    options_model: type[ModelT]
     option_defaults: ClassVar[Mapping[str, object]] = {}
     not_taken: ClassVar[tuple[str, ...]] = ()
 
@@ -116,8 +146,8 @@ def needs(info: ValidationInfo, *names: str) -> list:
     return [info.data[name] for name in names]
 
 
-def parse(cls: type[TakesArguments], kwargs: Mapping[str, object],
-          defaults: Mapping[str, object] | None = None) -> Arguments:
+def parse(cls: type[TakesArguments[ModelT]], kwargs: Mapping[str, object],
+          defaults: Mapping[str, object] | None = None) -> ModelT:
     """``kwargs`` of an env of class ``cls`` validated into its model (``defaults``: values
     that replace the class's defaults for this one call)."""
     taken = cls.taken()
@@ -127,7 +157,7 @@ def parse(cls: type[TakesArguments], kwargs: Mapping[str, object],
     return validated(cls.options_model, {**cls.option_defaults, **(defaults or {}), **kwargs})
 
 
-def validated(model: type[Arguments], values: Mapping[str, object]) -> Arguments:
+def validated(model: type[ModelT], values: Mapping[str, object]) -> ModelT:
     """``values`` validated into ``model``; a bad one is a `ConfigError` (`config_error`)."""
     try:
         return model.model_validate(dict(values))
@@ -161,11 +191,11 @@ def _allowed(model: type[Arguments], error: Mapping) -> str:
     kind, ctx = error["type"], error.get("ctx", {})
     field = model.model_fields.get(error["loc"][0]) if len(error["loc"]) == 1 else None
     if kind == "literal_error":
-        choices = _literals(field.annotation) if field is not None else None
+        choices = _literals(accepted(field)) if field is not None else None
         return f"expected one of {choices}" if choices else f"expected {ctx['expected']}"
     if kind == "bool_type":
         return "expected True or False"
-    integer = kind.startswith("int_") or (field is not None and _is_int(field.annotation))
+    integer = kind.startswith("int_") or (field is not None and _is_int(accepted(field)))
     if kind == "finite_number":
         return "expected a finite number"
     if kind.startswith(("int_", "float_", "greater_", "less_")):
@@ -223,7 +253,7 @@ def signature(cls: type[TakesArguments]) -> inspect.Signature:
     fields = cls.options_model.model_fields
     declared = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY,
                                   default=cls.option_defaults.get(name, fields[name].default),
-                                  annotation=bare(fields[name].annotation))
+                                  annotation=bare(accepted(fields[name])))
                 for name in cls.taken()]
     return inspect.Signature([*own, *declared])
 
@@ -263,7 +293,7 @@ def arguments_table(cls: type[TakesArguments]) -> list[str]:
         default = cls.option_defaults.get(name, fields[name].default)
         description = " ".join((fields[name].description or "").split()).replace("|", "\\|")
         # a pipe inside a code span does not split a cell (Python-Markdown's tables)
-        lines.append(f"| `{name}` | `{type_name(fields[name].annotation)}` | `{default!r}` | "
+        lines.append(f"| `{name}` | `{type_name(accepted(fields[name]))}` | `{default!r}` | "
                      f"{description} |")
     return lines
 

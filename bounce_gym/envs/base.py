@@ -5,7 +5,6 @@ and pickling."""
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import ClassVar
 
 from gymnasium import logger
 
@@ -19,12 +18,12 @@ from bounce_gym.envs.tasks import make_task
 from bounce_gym.errors import ConfigError
 
 
-class EnvBase(TakesArguments, RendererOwner):
+class EnvBase(TakesArguments[EnvOptions], RendererOwner):
     """Mixin of `BounceEnv` and the multi-robot envs; it comes before the Gymnasium or
     PettingZoo base class so that its ``render``, ``close`` and ``metadata`` win."""
 
     metadata = {"render_modes": RENDER_MODES, "render_fps": 10}
-    options_model: ClassVar[type[EnvOptions]] = EnvOptions
+    options_model = EnvOptions
 
     def _build(self, kwargs: Mapping, render_mode: str | None, tasks: Sequence[str]) -> None:
         """Validate ``render_mode`` and the keyword arguments (those of `EnvOptions` this env

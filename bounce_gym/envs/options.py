@@ -35,7 +35,7 @@ from bounce_gym.dynamics.noise import NoiseModel, make_noise
 from bounce_gym.dynamics.platform import PLATFORM_RADIUS, PhysicsParams, physics_params
 from bounce_gym.dynamics.rules import RULES, check_parameters
 from bounce_gym.dynamics.simulator import PHYSICS
-from bounce_gym.envs.arguments import Arguments, Flag, Integer, Real, needs
+from bounce_gym.envs.arguments import Accepts, Arguments, Flag, Integer, Real, needs
 from bounce_gym.envs.tasks.base import Task
 from bounce_gym.errors import ConfigError, InvalidWorldError
 from bounce_gym.validate import number
@@ -44,6 +44,7 @@ from bounce_gym.worlds import World
 Backend = Literal["kinematic", "pymunk", "cell"]
 StepMode = Literal["bounce", "tick"]
 ActionType = Literal["discrete", "continuous"]
+Physics = Literal[PHYSICS]
 BACKENDS = Backend.__args__
 STEP_MODES = StepMode.__args__
 ACTION_TYPES = ActionType.__args__
@@ -63,7 +64,7 @@ class EnvOptions(Arguments):
     """The arguments of the bouncing-robot envs, validated and normalised (angles in radians,
     one entry per robot; the world, noise model and physical parameters as objects)."""
 
-    world: Annotated[SkipValidation[str | os.PathLike | World], WithJsonSchema(
+    world: Annotated[World, Accepts(SkipValidation[str | os.PathLike | World]), WithJsonSchema(
         {"type": "string"}), Field(description=(
             "The map: a zoo name (`bounce_gym.worlds.names()`), the path of a map file, or a "
             "`World`."))] = "two_rooms"
@@ -82,12 +83,13 @@ class EnvOptions(Arguments):
         "`step_length`, `cell_bins` orientation bins, Alam's relative rule and discrete actions "
         "whose angles are whole bins; one tick is one cell step or one rotation)."))] = \
         "kinematic"
-    physics: Annotated[Literal[PHYSICS] | None, Field(description=(
+    physics: Annotated[Physics, Accepts(Physics | None), Field(description=(
         "'ideal' (the papers' model: straight drives at `step_length` per tick, turns within "
         "a tick) or 'dynamic' (rigid bodies with mass, motors of bounded acceleration and turn "
         "rate, a bumper, friction and restitution; pymunk only). None: 'dynamic' on pymunk, "
         "'ideal' on the other backends, which have only that."))] = None
-    physics_params: Annotated[SkipValidation[dict[str, float] | PhysicsParams | None], Field(
+    physics_params: Annotated[PhysicsParams | None, Accepts(
+        SkipValidation[dict[str, float] | PhysicsParams | None]), Field(
         description=(
             "With physics='dynamic': physical parameters of "
             "`bounce_gym.dynamics.platform.PhysicsParams` to change (SI units, angles in "
@@ -97,21 +99,24 @@ class EnvOptions(Arguments):
         "How an angle turns the robot at a bump: 'relative' (Alam: relative to the heading), "
         "'fixed', 'specular', 'monotonic', 'nilles_relative' (Nilles: relative to the wall)."
     ))] = "relative"
-    angles: Annotated[SkipValidation[AngleSets], Field(description=(
+    angles: Annotated[tuple[np.ndarray, ...], Accepts(SkipValidation[AngleSets]), Field(
+        description=(
         "The set of bounce angles Φ, in degrees: distinct, within the rule's range. Several "
         "robots: one set for all, a list with one set per robot, or a {'robot_<i>': set} "
         "dict."))] = (45.0, 90.0, 135.0)
-    angle_range: Annotated[SkipValidation[AngleRanges | None], Field(description=(
+    angle_range: Annotated[tuple[tuple[float, float], ...], Accepts(
+        SkipValidation[AngleRanges | None]), Field(description=(
         "(low, high) in degrees, the angles continuous actions map onto: 0 < low < high < 360 "
         "(relative rule) or < 180. None: the smallest and largest of `angles` (10-350 or "
         "5-175 for a single angle). Per robot like `angles`."))] = None
-    noise: Annotated[SkipValidation[dict[str, Any] | NoiseModel | None], WithJsonSchema(
+    noise: Annotated[NoiseModel, Accepts(SkipValidation[dict[str, Any] | NoiseModel | None]),
+                     WithJsonSchema(
         {"type": ["object", "null"]}), Field(description=(
             "Actuation noise of the bounce angle: None (exact), {'type': 'reliable', 'r': "
             "0.8, 'eps_deg': 5} (the commanded angle with probability r, else off by up to "
             "eps) or {'type': 'interval', 'lo_deg': -5, 'hi_deg': 5} (off by a uniform "
             "amount in the interval)."))] = None
-    robot_radius: Annotated[Real | None, Field(ge=0.0, description=(
+    robot_radius: Annotated[float, Accepts(Real | None), Field(ge=0.0, description=(
         "Robot radius in world units, less than the world's diameter. None: a point, or with "
         "physics='dynamic' (where a body has a size) the Create 2's 0.17 m, i.e. 0.17 / "
         "world_scale."))] = None
@@ -139,7 +144,8 @@ class EnvOptions(Arguments):
     robot_collisions: Annotated[Literal[ROBOT_COLLISIONS], Field(description=(
         "'bounce': robots bump into each other and both turn; 'ignore': they pass through "
         "each other."))] = "ignore"
-    turn_angles: Annotated[SkipValidation[Sequence[float]], Field(description=(
+    turn_angles: Annotated[np.ndarray, Accepts(SkipValidation[Sequence[float]]), Field(
+        description=(
         "Degrees (counter-clockwise positive): extra discrete actions that turn a robot in "
         "place in one tick, after its angles (parallel multi-robot form only); distinct, not "
         "multiples of 360, whole bins on the cell backend."))] = ()
@@ -154,7 +160,7 @@ class EnvOptions(Arguments):
 
     @field_validator("physics")
     @classmethod
-    def _physics(cls, value: str | None, info: ValidationInfo) -> str | None:
+    def _physics(cls, value: Physics | None, info: ValidationInfo) -> Physics:
         [backend] = needs(info, "backend")
         if value is None:
             return "dynamic" if backend == "pymunk" else "ideal"

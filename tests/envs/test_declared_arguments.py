@@ -9,12 +9,20 @@ import pydoc
 
 import numpy as np
 import pytest
-from pydantic import ValidationError
+from pydantic import ConfigDict, TypeAdapter, ValidationError
 
 import bounce_gym  # noqa: F401 - registers the ids
 from bounce_gym.envs import options as bounce_options
 from bounce_gym.envs import registration
-from bounce_gym.envs.arguments import arguments_table, json_schema, location, registered_env
+from bounce_gym.envs.arguments import (
+    Accepts,
+    arguments_table,
+    bare,
+    json_schema,
+    location,
+    registered_env,
+    validated,
+)
 from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.drifters import options as drifter_options
 from bounce_gym.envs.drifters.env import DrifterEnv
@@ -67,6 +75,34 @@ def test_every_field_is_described_and_the_schema_is_json(family):
     schema = json.loads(json.dumps(model.model_json_schema()))
     assert list(schema["properties"]) == list(model.model_fields)
     assert schema["additionalProperties"] is False
+
+
+@pytest.mark.parametrize(("model", "values"), [
+    (bounce_options.EnvOptions, {}),
+    (bounce_options.EnvOptions, {"n_robots": 3, "angles": [[30, 60], [90], [120, 150, 170]],
+                                 "backend": "pymunk", "noise": {"type": "reliable", "r": 0.8,
+                                                                "eps_deg": 5},
+                                 "turn_angles": [90]}),
+    (patrol_options.PatrolOptions, {"start": [0, 1, 2]}),
+    (drifter_options.DrifterOptions, {}),
+], ids=["bounce-defaults", "bounce-per-robot", "patrol", "drifter-defaults"])
+def test_a_field_holds_its_annotated_type_and_accepts_what_the_signature_shows(model, values):
+    """The annotation is the type of the normalised value the envs read (what mypy checks);
+    the input type (`Accepts`) is what signatures, tables and the JSON Schema show."""
+    options = validated(model, values)
+    check = ConfigDict(arbitrary_types_allowed=True, strict=True)
+    accepting = {name: item.input_type for name, field in model.model_fields.items()
+                 for item in field.metadata if isinstance(item, Accepts)}
+    assert {"world", "flow"} & accepting.keys()
+    for name, field in model.model_fields.items():
+        TypeAdapter(field.annotation, config=check).validate_python(getattr(options, name))
+    cls = {bounce_options.EnvOptions: MultiBounceEnv, patrol_options.PatrolOptions: PatrolEnv,
+           drifter_options.DrifterOptions: DrifterEnv}[model]
+    parameters = inspect.signature(cls).parameters
+    for name, input_type in accepting.items():
+        if name in parameters:
+            assert parameters[name].annotation == bare(input_type), name
+            assert parameters[name].annotation != model.model_fields[name].annotation, name
 
 
 @pytest.mark.parametrize("cls", ENV_CLASSES, ids=lambda cls: cls.__name__)

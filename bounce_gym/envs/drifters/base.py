@@ -4,7 +4,6 @@ planners, rendering, closing and pickling."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import ClassVar
 
 from gymnasium import logger
 
@@ -24,12 +23,12 @@ FIELD_STYLES = ("arrows", "streamlines")
 MODEL_KINDS = ("exact", "sampled")
 
 
-class DrifterEnvBase(TakesArguments, RendererOwner):
+class DrifterEnvBase(TakesArguments[DrifterOptions], RendererOwner):
     """Mixin of `DrifterEnv` and `MultiDrifterEnv`; it comes before the Gymnasium or PettingZoo
     base class so that its ``render``, ``close`` and ``metadata`` win."""
 
     metadata = {"render_modes": RENDER_MODES, "render_fps": 8}
-    options_model: ClassVar[type[DrifterOptions]] = DrifterOptions
+    options_model = DrifterOptions
 
     def _build(self, kwargs: Mapping, render_mode: str | None, field_style: str,
                clock_steps: int | None, start_key: str, defaults: Mapping | None = None) -> None:

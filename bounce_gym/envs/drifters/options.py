@@ -28,7 +28,7 @@ from pydantic import (
 from bounce_gym import flows
 from bounce_gym.cells.drifter import STEPS
 from bounce_gym.dynamics.advection import LAND_RULES
-from bounce_gym.envs.arguments import Arguments, Flag, Integer, Real, needs
+from bounce_gym.envs.arguments import Accepts, Arguments, Flag, Integer, Real, needs
 from bounce_gym.errors import BounceGymError, ConfigError, MissingExtraError
 from bounce_gym.flows import FlowField
 
@@ -50,7 +50,8 @@ class DrifterOptions(Arguments):
     and step duration resolved; the regions stay as given: the core resolves them on its
     model)."""
 
-    flow: Annotated[SkipValidation[str | os.PathLike | FlowField], WithJsonSchema(
+    flow: Annotated[FlowField, Accepts(SkipValidation[str | os.PathLike | FlowField]),
+                    WithJsonSchema(
         {"type": "string"}), Field(description=(
             "The current: a zoo name (`bounce_gym.flows.flow_names()`), the path of a NetCDF file "
             "(read as data by netCDF4/xarray with `bounce_gym.flows.load_flow`; nothing in it is "

@@ -66,7 +66,6 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Mapping
-from typing import ClassVar
 
 import numpy as np
 from gymnasium import logger, spaces
@@ -89,12 +88,12 @@ RESET_OPTIONS = frozenset({"strategy", "start"})
 CACHE_SIZE = 16
 
 
-class PatrolEnv(TakesArguments, RendererOwner, ParallelEnv):
+class PatrolEnv(TakesArguments[PatrolOptions], RendererOwner, ParallelEnv):
     """The parallel form; see the module docstring."""
 
     metadata = {"render_modes": RENDER_MODES, "render_fps": 4, "name": "patrol_v0",
                 "is_parallelizable": True}
-    options_model: ClassVar[type[PatrolOptions]] = PatrolOptions
+    options_model = PatrolOptions
 
     def __init__(self, render_mode: str | None = None, **options: object) -> None:
         self.render_mode = checked_render_mode(render_mode)
@@ -206,11 +205,11 @@ class PatrolEnv(TakesArguments, RendererOwner, ParallelEnv):
     def reset(self, seed: int | None = None, options: dict | None = None):
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
-        options = checked_reset_options(options, RESET_OPTIONS, strict=False)
-        strategy = (check_strategy(options["strategy"], self.board, "options.strategy")
-                    if "strategy" in options else self.options.walk)
-        start = (check_start(options["start"], self.board.n, self.n_patrollers, "options.start")
-                 if "start" in options else self.options.start_vertices)
+        given = checked_reset_options(options, RESET_OPTIONS, strict=False)
+        strategy = (check_strategy(given["strategy"], self.board, "options.strategy")
+                    if "strategy" in given else self.options.walk)
+        start = (check_start(given["start"], self.board.n, self.n_patrollers, "options.start")
+                 if "start" in given else self.options.start_vertices)
         self._strategy, self._episode_start = strategy, start
         if self._episode_start is not None:
             self._pos = self._episode_start.copy()

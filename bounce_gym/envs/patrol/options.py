@@ -23,7 +23,7 @@ from pydantic import (
 from bounce_gym import validate
 from bounce_gym.cells.model import CORNER_RULES
 from bounce_gym.cells.visibility import RULES
-from bounce_gym.envs.arguments import Arguments, Integer, Real, needs
+from bounce_gym.envs.arguments import Accepts, Arguments, Integer, Real, needs
 from bounce_gym.envs.options import resolve_world
 from bounce_gym.envs.patrol.board import PatrolBoard, build_board
 from bounce_gym.errors import ConfigError
@@ -39,7 +39,7 @@ class PatrolOptions(Arguments):
     """The validated arguments of `bounce_gym.envs.patrol.env.PatrolEnv`; from them the patrol
     board (`board`), the strategy as a matrix (`walk`) and the start vertices (`start_vertices`)."""
 
-    world: Annotated[SkipValidation[str | os.PathLike | World], WithJsonSchema(
+    world: Annotated[World, Accepts(SkipValidation[str | os.PathLike | World]), WithJsonSchema(
         {"type": "string"}), Field(description=(
             "The map whose free cells are the graph's vertices: a zoo name, a map file path or "
             "a `World`."))] = "patrol_15x15"
@@ -69,7 +69,7 @@ class PatrolOptions(Arguments):
     start: Annotated[SkipValidation[Sequence[int] | None], Field(description=(
         "One start vertex per patroller (None: distinct vertices drawn uniformly each episode); "
         "per episode also with reset(options={'start': [...]})."))] = None
-    n_patrollers: Annotated[Integer | None, Field(ge=1, description=(
+    n_patrollers: Annotated[int, Accepts(Integer | None), Field(ge=1, description=(
         "m, the number of patrollers, on distinct vertices (None: the length of `start`, or "
         "2)."))] = None
     strategy: Annotated[SkipValidation[Any], WithJsonSchema(
