@@ -113,3 +113,13 @@ def test_the_configuration_reference_lists_every_key_of_every_model(site):
         for key, field in model.model_fields.items():
             assert f"{key} " in table and " ".join(field.description.split())[:40] in table, \
                 (model.__name__, key)
+
+
+def test_every_id_page_shows_its_description_before_its_spaces(site):
+    for env_id, about in registration.ABOUT.items():
+        text = _article(site / "envs" / env_id.split("/")[-1] / "index.html")
+        # the article's text without spaces: code spans split the text into separate parts
+        flat, words = "".join(text.split()), "".join(about.replace("`", "").split())
+        assert "Aboutthisid" in flat and words in flat, env_id
+        assert flat.index("Aboutthisid") < flat.index(words) < flat.index("Observationspace"), \
+            env_id

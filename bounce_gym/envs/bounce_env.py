@@ -49,7 +49,8 @@ class BounceEnv(EnvBase, gym.Env):
     ``coverage`` — newly covered cells and the decrease of the L2 distance between visit
     histogram and target; ``localization`` — the drop in log2(candidate configurations) minus
     ``tick_cost`` per tick until localized, when a filter is plugged in, else 0. Each registered
-    id's observation, reward and horizon: `bounce_gym.envs.registration`.
+    id's observation, reward and horizon: its page of the docs site ("About this id", from
+    `bounce_gym.envs.registration.ABOUT`).
 
     ## Starting State
 

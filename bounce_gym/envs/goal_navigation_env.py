@@ -55,8 +55,8 @@ class GoalNavigationEnv(BounceEnv):
 
     ## Episode End
 
-    Terminated on reaching the goal. Truncated by the registered horizon, 42 bounces: three
-    times the longest optimal plan of the lab map (14 bounces; the mean is 4.7).
+    Terminated on reaching the goal. Truncated by the registered horizon (``max_episode_steps``;
+    `bounce_gym.envs.registration.ABOUT` says how it was chosen).
 
     ## Arguments
 

@@ -1,8 +1,9 @@
 """The environment pages of the docs site, generated from the registration and the envs.
 
 `env_pages` builds every registered id with its registered arguments and writes, per id: how to
-make it, the registration (entry point, arguments, horizon), the spaces the env reports — a
-Box's bounds per index, runs of equal bounds joined — the table of the keyword arguments the env
+make it, what the id is (its description, `bounce_gym.envs.registration.ABOUT`), the
+registration (entry point, arguments, horizon), the spaces the env reports — a Box's bounds per
+index, runs of equal bounds joined — the table of the keyword arguments the env
 class takes, generated from their declaration (`bounce_gym.envs.arguments.arguments_table`), and
 the sections of the env class's docstring (or of its module's, where the class points there).
 Plus an overview page.
@@ -55,8 +56,8 @@ def _overview(rows: list[tuple[str, ...]]) -> str:
         "# Environments",
         "",
         "Every id that `import bounce_gym` registers (`bounce_gym.envs.registration`), built "
-        "with its registered arguments when this site was built. Each page gives the id's "
-        "registration, the spaces the env reports and its class's documentation.",
+        "with its registered arguments when this site was built. Each page gives what the id "
+        "is, its registration, the spaces the env reports and its class's documentation.",
         "",
         "| id | API | class | horizon | observation space | action space |",
         "|---|---|---|---|---|---|",
@@ -83,6 +84,7 @@ def _gymnasium_page(env_id: str, env: gym.Env) -> tuple[str, tuple[str, ...]]:
         f'env = gym.make("{env_id}")',
         "```",
         "",
+        *_about(env_id),
         "## Registration",
         "",
         "| | |",
@@ -122,6 +124,7 @@ def _pettingzoo_page(env_id: str, env) -> tuple[str, tuple[str, ...]]:
         f'env = pettingzoo.make("parallel", "{env_id}")  # or "aec"',
         "```",
         "",
+        *_about(env_id),
         "## Registration",
         "",
         "| | |",
@@ -143,6 +146,12 @@ def _pettingzoo_page(env_id: str, env) -> tuple[str, tuple[str, ...]]:
            _per_agent(env.possible_agents, env.observation_space),
            _per_agent(env.possible_agents, env.action_space))
     return "\n".join(lines) + "\n", row
+
+
+def _about(env_id: str) -> list[str]:
+    """The "About this id" section: the id's description, stored with its registration
+    (`bounce_gym.envs.registration.ABOUT`)."""
+    return ["## About this id", "", registration.ABOUT[env_id], ""]
 
 
 def _groups(agents, space_of) -> list[tuple[list[str], gym.Space]]:

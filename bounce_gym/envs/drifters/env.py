@@ -57,7 +57,7 @@ class DrifterEnv(DrifterEnvBase, gym.Env):
     ## Episode End
 
     Terminated when the drifter reaches the goal (reach; the goal is absorbing) or has visited
-    the whole region (cover). Truncated by the registered ``max_episode_steps`` (200).
+    the whole region (cover). Truncated by the registered ``max_episode_steps``.
 
     ## Info
 
