@@ -47,7 +47,7 @@ class ConfigModel(BaseModel):
         try:
             return cls.model_validate(dict(data), context={"where": at})
         except ValidationError as exc:
-            raise config_error(exc, at) from None
+            raise configuration_error(exc, at) from None
 
 
 def where(info: ValidationInfo) -> str:
@@ -61,7 +61,7 @@ def located(info: ValidationInfo, key: str | None = None) -> str:
     return f"{where(info)}.{key or info.field_name}"
 
 
-def config_error(exc: ValidationError, at: str) -> ConfigError:
+def configuration_error(exc: ValidationError, at: str) -> ConfigError:
     """The first mistake of a pydantic ``ValidationError`` as the package's one-line
     `ConfigError` (a `ConfigError` a validator raised, unchanged)."""
     error = exc.errors()[0]

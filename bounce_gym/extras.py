@@ -2,7 +2,7 @@
 feature whose extra is missing.
 
 ``pip install bounce-gym`` installs the core: every Gymnasium and PettingZoo env of the package
-(made, reset and stepped), the planners and the baselines. What needs more is an extra,
+(made, reset and stepped) and the planners. What needs more is an extra,
 ``pip install 'bounce-gym[<extra>]'``; `MODULE_EXTRAS` says which extra installs which
 importable module. A feature checks its modules with `require` before it starts, and a missing
 one is a `MissingExtraError` of one line:

@@ -143,7 +143,7 @@ class DrifterReach(DrifterFamily):
 
     def validate(self, experiment):
         super().validate(experiment)
-        planner_options(experiment)
+        drifter_planner_options(experiment)
 
     def prepare(self, env, experiment: Mapping):
         return ReachPrediction(experiment["max_steps"])
@@ -185,7 +185,7 @@ PLANNER_MODELS = ("cell", "sampled")
 def drifter_planners(experiment: Mapping) -> list[Policy]:
     """The planner rows of a reach experiment (module docstring): Alg. 5.5 on the cell model
     and/or the finite-horizon plan on the sampled GCM."""
-    models, sampled = planner_options(experiment)
+    models, sampled = drifter_planner_options(experiment)
     out: list[Policy] = []
     if "cell" in models:
         out.append(ValueIterationPolicy())
@@ -194,7 +194,7 @@ def drifter_planners(experiment: Mapping) -> list[Policy]:
     return out
 
 
-def planner_options(experiment: Mapping) -> tuple[list[str], dict]:
+def drifter_planner_options(experiment: Mapping) -> tuple[list[str], dict]:
     """The planners ``planner_kwargs.models`` names (default: the cell model's) and the
     options of the sampled one, checked."""
     kwargs = dict(experiment.get("planner_kwargs", {}))

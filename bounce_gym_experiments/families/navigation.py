@@ -124,7 +124,7 @@ class Navigation(SingleRobotFamily):
 
     def validate(self, experiment):
         super().validate(experiment)
-        planner_options(experiment)
+        navigation_planner_options(experiment)
 
     def prepare(self, env, experiment):
         options = env.unwrapped.options
@@ -149,7 +149,7 @@ def navigation_planners(experiment: Mapping) -> list[Policy]:
     from baselines.navigation import NavigationPlanner
     from baselines.navigation.sampled import SampledNavigationPlanner
 
-    models, kwargs = planner_options(experiment)
+    models, kwargs = navigation_planner_options(experiment)
     out: list[Policy] = []
     if "roadmap" in models:
         out.append(NavigationPlanner())
@@ -164,7 +164,7 @@ def navigation_planners(experiment: Mapping) -> list[Policy]:
     return out
 
 
-def planner_options(experiment: Mapping) -> tuple[list[str], dict]:
+def navigation_planner_options(experiment: Mapping) -> tuple[list[str], dict]:
     """The planners ``planner_kwargs.models`` names (default: the roadmap planner) and the
     sampled planner's options, checked before any env is built."""
     kwargs = dict(experiment.get("planner_kwargs", {}))

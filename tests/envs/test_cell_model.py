@@ -123,7 +123,9 @@ def test_the_package_never_names_the_planners():
     package = Path(bounce_gym.__file__).parent
     for path in package.rglob("*"):
         if path.is_file() and "__pycache__" not in path.parts:
-            assert b"baselines" not in path.read_bytes().lower(), path
+            # stable_baselines3: the third-party module `bounce_gym.extras` maps to its extra
+            text = path.read_bytes().lower().replace(b"stable_baselines3", b"")
+            assert b"baselines" not in text, path
 
 
 # -- the localization task's built-in filter ----------------------------------------------------

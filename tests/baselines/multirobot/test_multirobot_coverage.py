@@ -287,8 +287,8 @@ def test_min_sep_cells_in_the_env_agrees_with_the_joint_map():
 
 @pytest.mark.parametrize("kwargs, message", [
     (dict(min_sep_cells=1, backend="kinematic", robot_radius=0.3), "only the cell backend"),
-    (dict(min_sep_cells=-1), "min_sep_cells: expected a non-negative integer"),
-    (dict(min_sep_cells=1.5), "min_sep_cells: expected a non-negative integer"),
+    (dict(min_sep_cells=-1), "min_sep_cells: expected an integer >= 0, got -1"),
+    (dict(min_sep_cells=1.5), "min_sep_cells: expected an integer >= 0, got 1.5"),
 ])
 def test_min_sep_cells_bad_arguments(kwargs, message):
     with pytest.raises(ConfigError, match=message):
