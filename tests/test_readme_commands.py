@@ -18,7 +18,7 @@ ROOT = Path(__file__).parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 #: the README and the docs pages, where training commands are shown
 PAGES = "\n".join([README, *(page.read_text(encoding="utf-8")
-                              for page in sorted((ROOT / "docs").glob("*.md")))])
+                              for page in sorted((ROOT / "docs").rglob("*.md")))])
 #: training commands, in ```bash blocks or inline code: python train.py …, bounce-gym
 #: train|curves|tune …
 #: (not the templates, such as ``bounce-gym curves models/<name>``)
@@ -27,7 +27,7 @@ COMMANDS = [c.strip() for c in re.findall(
     PAGES, re.M) if "<" not in c]
 #: the extras `make install` installs besides the core dependencies (dev only adds test tools)
 EXTRAS = ("experiments", "rl", "jax", "distributed")
-OURS = {"bounce_gym", "baselines", "experiments", "train", "evaluate"}
+OURS = {"bounce_gym", "baselines", "bounce_gym_experiments", "train", "evaluate"}
 #: optional imports that libraries try and do without (imported only because they happen to be
 #: installed here)
 OPTIONAL = {"charset_normalizer": "numpy.f2py.crackfortran: try/except ImportError",
@@ -86,19 +86,38 @@ def test_the_readme_documents_training_commands():
     assert any("--resume" in c for c in COMMANDS) and any(" curves " in c for c in COMMANDS)
 
 
-def test_readme_training_commands_run_as_written(tmp_path):
+def _run_as_written(folder: Path, commands: list[str]) -> set[str]:
+    """Run ``commands`` in ``folder`` (with the budget cap) in turn, each to success; the
+    top-level modules they imported."""
     for name in ("train.py", "configs"):
-        (tmp_path / name).symlink_to(ROOT / name)
+        (folder / name).symlink_to(ROOT / name)
     env = {**os.environ, "BOUNCE_GYM_MAX_TIMESTEPS": "512", "PYTHONPROFILEIMPORTTIME": "1",
            "PYTHONPATH": str(ROOT), "SDL_VIDEODRIVER": "dummy"}
     imported: set[str] = set()
-    for command in COMMANDS:
-        done = subprocess.run(_argv(command), cwd=tmp_path, env=env, capture_output=True,
+    for command in commands:
+        done = subprocess.run(_argv(command), cwd=folder, env=env, capture_output=True,
                               text=True, timeout=600, check=False)
         errors = [line for line in done.stderr.splitlines()
                   if not line.startswith("import time:")]
         assert done.returncode == 0, f"{command}\n" + "\n".join(errors[-20:])
         imported |= _imported(done.stderr)
+    return imported
+
+
+def test_the_first_training_commands_run_as_written(tmp_path):
+    """The README's first training run, its resume and its curves (``make test``; the slow
+    suite runs every command of the README and the docs)."""
+    assert COMMANDS[:3] == ["python train.py configs/train_navigation.yaml",
+                            "python train.py configs/train_navigation.yaml --resume",
+                            "bounce-gym curves models/navigation-lab"]
+    _run_as_written(tmp_path, COMMANDS[:3])
+    assert (tmp_path / "models/navigation-lab/learning_curves.png").is_file()
+    assert (tmp_path / "models/navigation-lab/ppo_seed0.monitor.csv").is_file()
+
+
+@pytest.mark.slow  # 15 training commands, ~2.5 minutes
+def test_readme_training_commands_run_as_written(tmp_path):
+    imported = _run_as_written(tmp_path, COMMANDS)
     assert (tmp_path / "models/navigation-lab/learning_curves.png").is_file()
     assert (tmp_path / "models/navigation-lab/ppo_seed0.monitor.csv").is_file()
     assert (tmp_path / "models/navigation-lab-tune/trials.csv").is_file()
