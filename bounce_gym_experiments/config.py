@@ -346,7 +346,11 @@ def _resolve_map_files(config: object, folder: Path) -> None:
 def validate_config(config: object) -> dict:
     """Check a configuration (`EvaluationConfig`) and fill in the defaults; raise `ConfigError`
     naming the key and what is allowed. A validated configuration validates to itself."""
-    return EvaluationConfig.check(config, "config").model_dump(exclude_none=True)
+    checked = EvaluationConfig.check(config, "config")
+    out = checked.model_dump(exclude_none=True)
+    if checked.executor is not None:  # every key, unset ones as None (the run's provenance)
+        out["executor"] = checked.executor.model_dump()
+    return out
 
 
 def validate_experiment(item: object, at: str) -> dict:

@@ -69,6 +69,7 @@ def test_draws_are_reproducible_and_within_their_bounds(tmp_path):
     assert all(isinstance(d["n_epochs"], int) for d in draws)
 
 
+@pytest.mark.slow  # ~15 s: a Ray instance and four training trials
 def test_a_tiny_search_on_a_local_ray_writes_ordinary_runs_a_table_and_the_best_entry(
         tmp_path, capsys):
     pytest.importorskip("ray")

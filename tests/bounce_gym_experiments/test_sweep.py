@@ -134,6 +134,7 @@ def test_a_failed_unit_is_reported_and_a_rerun_finishes_with_the_same_rows(tmp_p
     assert len(list(calls.iterdir())) == 1  # only the failed unit ran again
 
 
+@pytest.mark.slow  # ~15 s: two full command runs (a failing one and its rerun)
 def test_the_command_reports_failed_units_writes_nothing_and_a_rerun_finishes(reference, capsys,
                                                                               monkeypatch):
     folder, config, expected = reference

@@ -143,6 +143,7 @@ def _cli(folder: Path, *extra: str) -> subprocess.Popen:
                             text=True)
 
 
+@pytest.mark.slow  # ~13 s: a reference run, a killed run and its resume
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGKILL")
 def test_a_killed_run_resumes_from_its_newest_checkpoint_to_the_same_weights(tmp_path):
     whole = _cli(tmp_path / "whole")

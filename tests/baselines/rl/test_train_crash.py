@@ -39,6 +39,7 @@ def _wait_for_first_checkpoint(proc: subprocess.Popen, folder: Path) -> None:
         time.sleep(0.005)
 
 
+@pytest.mark.slow  # ~14 s: training runs killed at many instants
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGKILL")
 def test_sigkill_at_any_instant_leaves_only_complete_listed_models(tmp_path):
     env = gym.make("bounce_gym/BounceNavigation-v0", **NAV)

@@ -73,6 +73,7 @@ def test_gymnasium_check_env_with_a_tick_cost(step_mode):
     check_env(env.unwrapped, skip_render_check=True)
 
 
+@pytest.mark.slow  # ~10 s each
 @pytest.mark.parametrize("step_mode", ["bounce", "tick"])
 def test_a_long_episode_keeps_no_per_step_state(step_mode):
     """Step time stays flat over a long episode because nothing grows with the steps taken:
