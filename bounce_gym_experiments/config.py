@@ -302,12 +302,12 @@ class EvaluationConfig(ConfigModel):
         out, names = [], set()
         for k, item in enumerate(value):
             experiment = validate_experiment(item, f"{located(info)}[{k}]")
-            if experiment["name"] in names:
-                raise ConfigError(f"{located(info)}[{k}].name: {experiment['name']!r} is used "
+            if experiment.name in names:
+                raise ConfigError(f"{located(info)}[{k}].name: {experiment.name!r} is used "
                                   "twice")
-            names.add(experiment["name"])
+            names.add(experiment.name)
             out.append(experiment)
-        return out
+        return out  # checked models: pydantic takes them as they are (no second check)
 
 
 def configs_folder() -> Path:
@@ -353,10 +353,11 @@ def validate_config(config: object) -> dict:
     return out
 
 
-def validate_experiment(item: object, at: str) -> dict:
+def validate_experiment(item: object, at: str) -> Experiment:
     """One experiment (`Experiment`) checked, then by its family (`Family.validate`, which also
     fills in the family's defaults), with its ``rl_models`` (default: the folder of its name)
-    when anything of it is ``rl``; ``at`` locates it in errors."""
+    when anything of it is ``rl``, and checked again with what the family filled in; ``at``
+    locates it in errors."""
     experiment = Experiment.check(item, at).model_dump(exclude_none=True)
     from bounce_gym_experiments.registry import family_of  # the families import this module
 
@@ -369,7 +370,7 @@ def validate_experiment(item: object, at: str) -> dict:
     if plays_rl and "rl_models" not in experiment:
         experiment["rl_models"] = model_folders(
             f"{at}.name (the folder of its rl models)", experiment["name"])
-    return Experiment.check(experiment, at).model_dump(exclude_none=True)
+    return Experiment.check(experiment, at)
 
 
 def registered_horizon(env_id: str) -> int | None:

@@ -70,7 +70,7 @@ _JSON_BOUNDS = {"ge": "minimum", "le": "maximum", "gt": "exclusiveMinimum",
                 "lt": "exclusiveMaximum"}
 
 
-def _standard_bounds(schema: dict, model: type | None = None) -> None:
+def _standard_bounds(schema: dict) -> None:
     """Rename the bounds of every (nested) field schema of ``schema`` to JSON Schema's names."""
     for key in [key for key in schema if key in _JSON_BOUNDS]:
         schema[_JSON_BOUNDS[key]] = schema.pop(key)
