@@ -100,7 +100,6 @@ def evaluate_command(config_path: str | None, progress: bool = True,
         families_of,
         format_table,
         notes_of,
-        summarise,
         table_rows,
         write_plots,
         write_results,
@@ -124,7 +123,7 @@ def evaluate_command(config_path: str | None, progress: bool = True,
               file=sys.stderr)
         return 1
     families, notes, made = families_of(plots), notes_of(plots), provenance()
-    summary, per_seed = table_rows(summarise(rows, families), rows)
+    summary, per_seed = table_rows(rows, families)
     print(format_table(summary, families))
     for note in notes:
         print(f"note: {note}")

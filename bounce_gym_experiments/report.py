@@ -2,18 +2,17 @@
 tables, the CSV and JSON files and the plots. Which table a row goes to and its columns come from
 the experiment's family (`bounce_gym_experiments.registry`).
 
-Every measured column of a summary row is an estimate (`bounce_gym_experiments.stats`) stored as
+A row of a table is a list of runs: a planner or baseline is one run, a trained algorithm one
+run per training seed (its models' episodes carry the ``group`` they make one row of; each model
+also gets a per-seed row). Every measured column of a row is one estimate of
+`bounce_gym_experiments.stats.row_estimate` — the IQM of the runs' means with a two-level
+bootstrap interval over runs and their episodes, for rates and means alike — stored as
 ``<col>`` (the value), ``<col>_lo`` and ``<col>_hi`` (its 95% interval; ``None`` when there is
-none) and ``<col>_n`` (how many values it rests on):
-
-* a yes/no column (``success``, ``feasible``, ``full``, …) is a rate with its Wilson interval;
-* any other number is a mean with its bootstrap interval, over the episodes that have it —
-  ``ticks_to_goal`` exists only for successful episodes, ``steps_to_full`` only for those that
-  reached full coverage, ``success_feasible`` only for feasible ones — so ``_n`` says how many;
-* a family's labels (e.g. ``robots``) are shown as they are.
-
-Trained models' rows are then aggregated over training seeds (`bounce_gym_experiments.aggregate`). A table
-cell reads ``value [lo, hi] n=count``.
+none) and ``<col>_n`` (how many episodes it rests on: ``ticks_to_goal`` exists only for
+successful episodes, ``steps_to_full`` only for those that reached full coverage,
+``success_feasible`` only for feasible ones). A family's labels (e.g. ``robots``) are shown as
+they are. A table cell reads ``value [lo, hi] n=count``; a learner's row with fewer than
+`bounce_gym_experiments.stats.MIN_SEEDS` training seeds is marked in its name (`row_name`).
 """
 
 from __future__ import annotations
@@ -28,7 +27,6 @@ import numpy as np
 
 from bounce_gym.files import atomic_write
 from bounce_gym_experiments import stats
-from bounce_gym_experiments.aggregate import aggregate_training_seeds
 from bounce_gym_experiments.families.base import Family
 from bounce_gym_experiments.plots.profiles import plot_profiles
 from bounce_gym_experiments.plots.trajectories import plot_trajectories
@@ -47,42 +45,70 @@ def notes_of(plots: Mapping) -> list[str]:
     return [note for data in plots.values() for note in data.get("notes", [])]
 
 
-def summarise(rows: list[EpisodeResult], families: Mapping[str, Family] | None = None
-              ) -> list[dict]:
-    """Per (experiment, policy): ``episodes`` and every measured column as an estimate (see
-    the module), in the order the rows came."""
+def _row(result) -> dict:
+    return result.row() if isinstance(result, EpisodeResult) else result
+
+
+def summarise(rows: list, families: Mapping[str, Family] | None = None) -> list[dict]:
+    """Per (experiment, policy), each policy one run: ``episodes`` and every measured column as
+    an estimate (see the module), in the order the rows came. ``rows``: `EpisodeResult` or
+    their ``row()`` dicts."""
+    runs: dict[tuple[str, str], list[dict]] = {}
+    for r in map(_row, rows):
+        runs.setdefault((r["experiment"], r["policy"]), []).append(r)
     families = families or {}
-    groups: dict[tuple[str, str], list[dict]] = {}
+    return [_entry(exp, policy, [items], families.get(exp)) | _group_of(items)
+            for (exp, policy), items in runs.items()]
+
+
+def table_rows(rows: list, families: Mapping[str, Family] | None = None
+               ) -> tuple[list[dict], list[dict]]:
+    """The rows the tables show and the per-seed rows. A trained algorithm's models (episodes
+    with a ``group``) make one row of several runs, one per training seed, in the place of its
+    first model; its per-seed rows (one run each, with their ``group``) are the second list."""
+    rows = [_row(r) for r in rows]
+    families = families or {}
+    keyed: dict[tuple[str, str], dict[str, list[dict]]] = {}
     for r in rows:
-        groups.setdefault((r.experiment, r.policy), []).append(r.row())
-    out = []
-    for (exp, policy), items in groups.items():
-        labels = families[exp].labels if exp in families else frozenset()
-        skipped = _NOT_MEASURED | (families[exp].descriptors if exp in families else frozenset())
-        entry = {"experiment": exp, "policy": policy, "episodes": len(items)}
-        keys = list(dict.fromkeys(k for item in items for k in item))
-        for key in keys:
-            if key in skipped:
-                continue
-            values = [i[key] for i in items if i.get(key) is not None]
-            if not values or not all(isinstance(v, bool | int | float | np.number | np.bool_)
-                                     for v in values):
-                continue
-            if key in labels and all(v == values[0] for v in values):
-                entry[key] = values[0]
-            elif all(isinstance(v, bool | np.bool_) for v in values):
-                stats.rate(values).store(entry, key)
-            else:
-                stats.mean(values).store(entry, key)
-        out.append(entry)
-    return out
+        name = r.get("group") or r["policy"]
+        keyed.setdefault((r["experiment"], name), {}).setdefault(r["policy"], []).append(r)
+    table = []
+    for (exp, name), runs in keyed.items():
+        entry = _entry(exp, name, list(runs.values()), families.get(exp))
+        if any(r.get("group") for items in runs.values() for r in items):
+            entry = {**entry, "seeds": len(runs)}
+            entry = {k: entry[k] for k in ("experiment", "policy", "episodes", "seeds")} | entry
+        table.append(entry)
+    per_seed = summarise([r for r in rows if r.get("group")], families)
+    return table, per_seed
 
 
-def table_rows(summary: list[dict], rows: list[EpisodeResult]) -> tuple[list[dict], list[dict]]:
-    """The rows the tables show (trained models aggregated over their training seeds) and the
-    per-seed rows of the aggregated policies (`bounce_gym_experiments.aggregate`)."""
-    groups = {(r.experiment, r.policy): r.group for r in rows if r.group is not None}
-    return aggregate_training_seeds(summary, groups)
+def _group_of(items: list[dict]) -> dict:
+    group = items[0].get("group")
+    return {} if group is None else {"group": group}
+
+
+def _entry(experiment: str, policy: str, runs: list[list[dict]], family: Family | None) -> dict:
+    """One summary row over ``runs`` (lists of episode rows): every measured column as
+    `bounce_gym_experiments.stats.row_estimate` over the runs' episodes that have it."""
+    labels = family.labels if family is not None else frozenset()
+    skipped = _NOT_MEASURED | (family.descriptors if family is not None else frozenset())
+    entry = {"experiment": experiment, "policy": policy,
+             "episodes": sum(len(items) for items in runs)}
+    keys = list(dict.fromkeys(k for items in runs for item in items for k in item))
+    for key in keys:
+        if key in skipped:
+            continue
+        values = [[i[key] for i in items if i.get(key) is not None] for items in runs]
+        flat = [v for run in values for v in run]
+        if not flat or not all(isinstance(v, bool | int | float | np.number | np.bool_)
+                               for v in flat):
+            continue
+        if key in labels and all(v == flat[0] for v in flat):
+            entry[key] = flat[0]
+        else:
+            stats.row_estimate(values).store(entry, key)
+    return entry
 
 
 def format_number(value) -> str:
@@ -100,8 +126,20 @@ def estimate_text(value: float, lo: float | None, hi: float | None, n: int) -> s
     return f"{float(value):.{digits}f} [{interval}] n={n}"
 
 
+def row_name(row: dict) -> str:
+    """A row's policy name, marked when it is a learner's row with fewer than
+    `bounce_gym_experiments.stats.MIN_SEEDS` training seeds (such a row gets no verdict)."""
+    seeds = row.get("seeds")
+    if seeds is not None and seeds < stats.MIN_SEEDS:
+        return f"{row['policy']} [{seeds} seeds < {stats.MIN_SEEDS}]"
+    return row["policy"]
+
+
 def cell(row: dict, column: str) -> str:
-    """One table cell: an estimate with its interval and count, a plain value, or ``-``."""
+    """One table cell: an estimate with its interval and count, a plain value, or ``-``; the
+    ``policy`` column is the `row_name`."""
+    if column == "policy":
+        return row_name(row)
     value = row.get(column)
     if value is None:
         return "-"

@@ -17,7 +17,7 @@ episodes). Each model is two policies: its sampled actions (``rl <algo>_seed<N>`
 ``rl <folder>/<algo>_seed<N>`` when there are several folders) and its greedy ones (the same
 name and ``(greedy)``, `Family.trained_policies`), whose rows carry the ``group`` they are
 aggregated into (``rl <algo>`` and ``rl <algo> (greedy)``: one row each per algorithm over its
-training seeds, `bounce_gym_experiments.aggregate`).
+training seeds, `bounce_gym_experiments.report.table_rows`).
 """
 
 from __future__ import annotations

@@ -1,5 +1,26 @@
-"""Interval estimates for evaluation tables: 95% intervals for rates, means and, across RL training
-seeds, the interquartile mean (IQM) and performance profiles.
+"""Interval estimates for evaluation tables: one uncertainty model for every cell of a table
+(`row_estimate`), verdicts by probability of improvement (`improvement`), and the estimators
+they grew from (Wilson intervals, bootstrap means, the IQM and performance profiles over runs).
+
+**The protocol of the tables** (Agarwal et al., "Deep RL at the edge of the statistical
+precipice", NeurIPS 2021, the methods of the ``rliable`` package, extended from runs to the
+episodes inside them):
+
+* A row of a table is a list of **runs**, each a list of per-episode values: a trained
+  algorithm has one run per training seed; a planner or a baseline is one run.
+* Its **point estimate** is the interquartile mean (IQM, 25% trimmed from each end) of the runs'
+  means; with fewer than four runs nothing is trimmed, and one run's estimate is its mean.
+* Its **95% interval** is a percentile bootstrap over both levels: each resample draws the runs
+  with replacement and then, inside every drawn run, its episodes with replacement, and
+  recomputes the IQM (`row_estimate`). Episode noise is therefore in every interval, also with
+  few runs, and a planner's interval is the same bootstrap with one run. A rate whose episodes
+  all agree (0 or n successes) has a point interval; the count beside it says how much that is
+  worth.
+* A **verdict** between two rows uses the probability of improvement P(X > Y): the chance that
+  an episode of X (a random run, then a random episode of it) scores better than an episode of
+  Y, ties counting one half — the Mann–Whitney statistic U / (n·m) with the runs weighted
+  equally. Its interval is the same two-level bootstrap, X and Y resampled independently. X
+  wins only when the interval's lower bound is above 0.5 (`improvement`).
 
 * A **rate** (a yes/no outcome per episode, e.g. success) gets the Wilson score interval
   (Wilson 1927), through `scipy.stats.binomtest`; unlike the normal approximation it stays
@@ -16,10 +37,10 @@ seeds, the interquartile mean (IQM) and performance profiles.
   (it resamples each sample independently). The performance profile is, per threshold τ, the
   fraction of runs scoring above τ (averaged over tasks), with the same bootstrap.
 
-These are the estimators of the `rliable` package (checked against its values in the tests);
-they are computed with scipy because rliable 1.2.0 pulls in arch, statsmodels, pandas and
+The run-level estimators are the `rliable` package's (checked against its values in the tests);
+they are computed with numpy and scipy because rliable 1.2.0 pulls in arch, statsmodels, pandas and
 seaborn, fails to import with pandas 3 (arch's decorators), and seeds its bootstrap only through
-numpy's legacy global state.
+numpy's legacy global state; it also resamples runs only, not the episodes within them.
 
 Every interval is ``None`` where there is nothing to resample (fewer than two values).
 """
@@ -228,3 +249,112 @@ def performance_profile(scores, taus: Sequence[float], confidence: float = CONFI
         ci = _stratified(tasks, statistic, seed, n_resamples, confidence)
         lo, hi = np.asarray(ci.low, dtype=float), np.asarray(ci.high, dtype=float)
     return Profile(thresholds, fraction, lo, hi, sum(t.size for t in tasks))
+
+
+#: Fewest training seeds a learner's row needs for a verdict (Agarwal et al. 2021 report that
+#: fewer runs make even bootstrap intervals unreliable); rows with fewer are marked in tables.
+MIN_SEEDS = 5
+#: Slots (resample × run) drawn at once by the two-level bootstrap (bounds its memory).
+SLOT_BATCH = 20_000
+
+
+def _runs(runs) -> list[np.ndarray]:
+    """Non-empty per-run value arrays (runs without values left out)."""
+    out = [np.asarray(r, dtype=float).ravel() for r in runs]
+    out = [r for r in out if r.size]
+    if not out:
+        raise ValueError("no values in any run")
+    return out
+
+
+def _resampled_runs(runs: list[np.ndarray], rng: np.random.Generator, n_resamples: int,
+                    support: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+    """The two-level bootstrap of the module docstring, ``n_resamples`` times: per resample,
+    every drawn run's resampled mean, (resamples, runs), and, given ``support`` (the sorted
+    distinct values), the resampled distribution of an episode over it with every drawn run
+    weighted equally, (resamples, len(support))."""
+    k = len(runs)
+    picks = rng.integers(k, size=(n_resamples, k))
+    means = np.empty((n_resamples, k))
+    weights = None if support is None else np.zeros((n_resamples, support.size))
+    for j, run in enumerate(runs):
+        slots = np.argwhere(picks == j)  # (resample, position) pairs that drew run j
+        codes = None if support is None else np.searchsorted(support, run)
+        step = max(SLOT_BATCH // run.size, 1)
+        for start in range(0, len(slots), step):
+            chunk = slots[start:start + step]
+            draw = rng.integers(run.size, size=(len(chunk), run.size))
+            means[chunk[:, 0], chunk[:, 1]] = run[draw].mean(axis=1)
+            if weights is not None:
+                flat = np.arange(len(chunk))[:, None] * support.size + codes[draw]
+                counts = np.bincount(flat.ravel(), minlength=len(chunk) * support.size)
+                np.add.at(weights, chunk[:, 0],
+                          counts.reshape(len(chunk), support.size) / (run.size * k))
+    return means, weights
+
+
+def _iqm_rows(means: np.ndarray) -> np.ndarray:
+    return stats.trim_mean(means, IQM_TRIM, axis=-1)
+
+
+def row_estimate(runs, confidence: float = CONFIDENCE, n_resamples: int = N_RESAMPLES,
+                 seed: int = SEED) -> Estimate:
+    """A table cell (module docstring): the IQM of the runs' means with its two-level bootstrap
+    percentile interval; ``n`` counts the episodes of all runs. ``runs``: a list of per-episode
+    value sequences, one per run (runs without values are left out)."""
+    runs = _runs(runs)
+    value = float(_iqm_rows(np.array([[r.mean() for r in runs]]))[0])
+    n = sum(r.size for r in runs)
+    if n < 2:
+        return Estimate(value, None, None, n)
+    if np.ptp(np.concatenate(runs)) == 0:
+        return Estimate(value, value, value, n)
+    means, _ = _resampled_runs(runs, np.random.default_rng(seed), n_resamples)
+    tail = 100 * (1 - confidence) / 2
+    lo, hi = np.percentile(_iqm_rows(means), [tail, 100 - tail])
+    return Estimate(value, float(lo), float(hi), n)
+
+
+def _improvement(wx: np.ndarray, wy: np.ndarray) -> np.ndarray:
+    """P(X > Y) + P(X = Y) / 2 for distributions ``wx``, ``wy`` over the same sorted support
+    (last axis)."""
+    below = np.cumsum(wy, axis=-1) - wy  # P(Y < v) at each support value v
+    return np.sum(wx * (below + 0.5 * wy), axis=-1)
+
+
+def improvement(x_runs, y_runs, higher_is_better: bool = True,
+                confidence: float = CONFIDENCE, n_resamples: int = N_RESAMPLES,
+                seed: int = SEED) -> Estimate:
+    """The probability of improvement of X over Y (module docstring) with its two-level
+    bootstrap percentile interval; ``n`` counts the episodes of both. With
+    ``higher_is_better=False`` an improvement is a lower value. X wins when ``lo > 0.5``, Y when
+    ``hi < 0.5`` (`verdict`)."""
+    xs, ys = _runs(x_runs), _runs(y_runs)
+    if not higher_is_better:
+        xs, ys = [-r for r in xs], [-r for r in ys]
+    support = np.unique(np.concatenate(xs + ys))
+
+    def distribution(runs):
+        w = np.zeros(support.size)
+        for r in runs:
+            np.add.at(w, np.searchsorted(support, r), 1.0 / (r.size * len(runs)))
+        return w
+
+    value = float(_improvement(distribution(xs), distribution(ys)))
+    n = sum(r.size for r in xs + ys)
+    rng = np.random.default_rng(seed)
+    _, wx = _resampled_runs(xs, rng, n_resamples, support)
+    _, wy = _resampled_runs(ys, rng, n_resamples, support)
+    tail = 100 * (1 - confidence) / 2
+    lo, hi = np.percentile(_improvement(wx, wy), [tail, 100 - tail])
+    return Estimate(value, float(lo), float(hi), n)
+
+
+def verdict(p: Estimate) -> int:
+    """+1 when X improves on Y (the interval of P(X > Y) lies above 0.5), -1 when Y improves on
+    X (below 0.5), 0 when undecided."""
+    if p.lo is not None and p.lo > 0.5:
+        return 1
+    if p.hi is not None and p.hi < 0.5:
+        return -1
+    return 0

@@ -16,7 +16,7 @@ from bounce_gym_experiments.stats import performance_profile
 
 def plot_profiles(folder: Path, per_seed: list[dict], families: Mapping) -> list[Path]:
     """``<experiment>-profile.png`` for every experiment in ``per_seed`` (rows with ``group``,
-    `bounce_gym_experiments.aggregate`) whose family's score they have."""
+    `bounce_gym_experiments.report.table_rows`) whose family's score they have."""
     by_experiment: dict[str, dict[str, list[float]]] = {}
     for row in per_seed:
         family = families.get(row["experiment"])

@@ -117,7 +117,7 @@ def test_rl_smoke_train_then_evaluate_scores_the_model(tmp_path):
     assert all(r.steps >= 1 for r in scored)
     summary = summarise(rows)
     assert all("success" in s for s in summary)
-    table, per_seed = table_rows(summary, rows)
+    table, per_seed = table_rows(rows)
     assert [t["policy"] for t in table] == ["random", "rl ppo", "rl ppo (greedy)"]
     assert [s["policy"] for s in per_seed] == ["rl ppo_seed0", "rl ppo_seed0 (greedy)"]
 

@@ -102,26 +102,43 @@ def test_the_oracle_takes_the_best_fixed_angle_of_each_seed():
     assert best_fixed_in_hindsight(rows, fixed[:1], navigation.FAMILY) == []
 
 
-def test_rl_rows_are_aggregated_over_training_seeds_with_the_iqm():
+def test_rl_rows_are_one_row_of_runs_with_the_two_level_bootstrap():
     rates = [0.2, 0.5, 0.6, 0.7, 0.9]
     rows = [EpisodeResult("e", f"rl ppo_seed{k}", 10_000 + i, 4, 10, 0.0,
                           {"success": i < round(10 * rate)}, "rl ppo")
             for k, rate in enumerate(rates) for i in range(10)]
     rows += [EpisodeResult("e", "random", 10_000 + i, 4, 10, 0.0, {"success": i < 3})
              for i in range(10)]
-    shown, per_seed = table_rows(summarise(rows, {"e": navigation.FAMILY}), rows)
+    shown, per_seed = table_rows(rows, {"e": navigation.FAMILY})
     assert [r["policy"] for r in shown] == ["rl ppo", "random"]  # variants: test_wrappers
     assert [r["policy"] for r in per_seed] == [f"rl ppo_seed{k}" for k in range(5)]
     ppo = shown[0]
-    expected = stats.iqm_estimate(rates)
-    assert expected.lo < expected.value < expected.hi  # a list of seed scores is one task
+    runs = [[i < round(10 * rate) for i in range(10)] for rate in rates]
+    expected = stats.row_estimate(runs)
     assert (ppo["success"], ppo["success_lo"], ppo["success_hi"]) == pytest.approx(
         (expected.value, expected.lo, expected.hi))
     assert ppo["success"] == pytest.approx((0.5 + 0.6 + 0.7) / 3)  # the middle 50% of seeds
-    assert (ppo["seeds"], ppo["episodes"], ppo["success_n"]) == (5, 50, 5)
-    assert "seeds" not in shown[1] and shown[1]["success_n"] == 10
+    # the episodes are resampled too: two seeds with the same mean are not a point interval
+    # (the audit's two-seed row read 0.863 [0.860, 0.865] while each seed alone was ±0.05)
+    same = [[i < 5 for i in range(10)], [i >= 5 for i in range(10)]]
+    assert stats.iqm_estimate([0.5, 0.5]).hi == stats.iqm_estimate([0.5, 0.5]).lo
+    both = stats.row_estimate(same)
+    assert both.value == 0.5 and both.lo < 0.35 and both.hi > 0.65
+    assert (ppo["seeds"], ppo["episodes"], ppo["success_n"]) == (5, 50, 50)
+    random = shown[1]
+    assert "seeds" not in random and random["success_n"] == 10
+    assert (random["success"], random["success_lo"], random["success_hi"]) == pytest.approx(
+        tuple(getattr(stats.row_estimate([[i < 3 for i in range(10)]]), k)
+              for k in ("value", "lo", "hi")))
     table = format_table(shown, {"e": navigation.FAMILY})
     assert "seeds" in table.splitlines()[1] and f"{ppo['success']:.3f} [" in table
+
+
+def test_a_learner_row_with_fewer_than_five_seeds_is_marked():
+    rows = [EpisodeResult("e", f"rl dqn_seed{k}", 10_000 + i, 4, 10, 0.0, {"success": i < 5},
+                          "rl dqn") for k in range(2) for i in range(10)]
+    shown, _ = table_rows(rows, {"e": navigation.FAMILY})
+    assert "e           rl dqn [2 seeds < 5]  20" in format_table(shown, {"e": navigation.FAMILY})
 
 
 def test_results_record_provenance_config_seeds_and_interval_columns(tmp_path, capsys):
