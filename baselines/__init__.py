@@ -5,6 +5,17 @@ exporting its own names; this package exports the policy interface they share
 (`baselines.policy`).
 """
 
-from baselines.policy import FixedAnglePolicy, MultiPolicy, Policy, RandomAnglePolicy
+from baselines.policy import (
+    CONTACT_AND_CLOCK,
+    INFORMATION_CLASSES,
+    POSE_OBSERVED,
+    START_OBSERVED,
+    FixedAnglePolicy,
+    MultiPolicy,
+    Policy,
+    RandomAnglePolicy,
+    labelled,
+)
 
-__all__ = ["FixedAnglePolicy", "MultiPolicy", "Policy", "RandomAnglePolicy"]
+__all__ = ["CONTACT_AND_CLOCK", "INFORMATION_CLASSES", "POSE_OBSERVED", "START_OBSERVED",
+           "FixedAnglePolicy", "MultiPolicy", "Policy", "RandomAnglePolicy", "labelled"]

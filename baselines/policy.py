@@ -19,6 +19,25 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 
+#: Information classes: what a policy reads besides contact, clock and the task's givens (the
+#: goal, and the start where the task's observation holds it). A policy declares its class in
+#: ``information``; tables name every class but the first in the row's name (`labelled`).
+CONTACT_AND_CLOCK = "contact and clock"
+#: reads the true start configuration once, at the start of the episode
+START_OBSERVED = "start observed"
+#: reads the true pose (or model state) during the episode: privileged
+POSE_OBSERVED = "pose observed"
+INFORMATION_CLASSES = (CONTACT_AND_CLOCK, START_OBSERVED, POSE_OBSERVED)
+
+
+def labelled(name: str, information: str) -> str:
+    """``name`` with its information class in parentheses, unless the class is
+    `CONTACT_AND_CLOCK` or the name already says it."""
+    if information == CONTACT_AND_CLOCK or f"({information})" in name:
+        return name
+    return f"{name} ({information})"
+
+
 def is_parallel_env(env) -> bool:
     """Whether ``env`` is a PettingZoo parallel env (agents keyed by name) rather than a
     Gymnasium env."""
@@ -32,9 +51,11 @@ def episode_rng(own_seed: int | None, episode_seed: int) -> np.random.Generator:
 
 
 class Policy(ABC):
-    """Base class: ``start_options`` and ``reset`` are optional, ``act`` is required."""
+    """Base class: ``start_options`` and ``reset`` are optional, ``act`` is required;
+    ``information`` is the policy's information class (`INFORMATION_CLASSES`)."""
 
     name = "policy"
+    information = CONTACT_AND_CLOCK
 
     def start_options(self, env, seed: int) -> dict | None:
         """Reset options the policy needs (e.g. a planner's start configuration); ``None`` lets

@@ -129,10 +129,12 @@ def evaluate_command(config_path: str | None, progress: bool = True,
         print(f"note: {note}")
     run_folder = new_run_folder(config)
     with run_folder as folder:  # appears whole, once everything is written
-        write_results(folder, [r.row() for r in rows], summary, config, per_seed, notes, made)
+        episodes = [r.row() for r in rows]
+        write_results(folder, episodes, summary, config, per_seed, notes, made)
         written = write_plots(folder, plots, summary, per_seed)
         if config["leaderboard"]:
-            written += write_leaderboard(folder, config, summary, families, notes, made)
+            written += write_leaderboard(folder, config, summary, episodes, families, notes,
+                                         made)
     try:  # the run folder now holds the results; never delete through a planted link
         refuse_links("config.output", output, store.folder)
     except ConfigError as exc:

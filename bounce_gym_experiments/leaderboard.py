@@ -2,12 +2,14 @@
 ``configs/benchmark.yaml``): per experiment, its policies ordered by the family's score, every
 measured cell with its 95% interval and count.
 
-Writes ``leaderboard.md`` (first "Who wins": per experiment, the best planner against the best
-trained agent and against random bouncing, decided by their intervals (`verdicts`); then a
+Writes ``leaderboard.md`` (first "Who wins": per experiment, the best planner, the best trained
+agent and random bouncing compared by probability of improvement (`verdicts`); then a
 section per experiment: env, difficulty, episodes per policy, horizon, then the table; notes such
 as model folders without models at the end),
 ``leaderboard.csv`` (one line per experiment and policy, every estimate with ``_lo``, ``_hi`` and
-``_n``) and ``leaderboard.png`` (each experiment's score per policy with its interval).
+``_n``), ``verdicts.csv`` (the "Who wins" rows as text, what README.md's and the docs' result
+tables are generated from) and ``leaderboard.png`` (each experiment's score per policy with its
+interval).
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ from bounce_gym.files import atomic_write
 from bounce_gym_experiments.oracle import ORACLE_NAME
 from bounce_gym_experiments.plots.figures import pyplot, save_figure
 from bounce_gym_experiments.registry import world_name
-from bounce_gym_experiments.report import cell, csv_text, tables
+from bounce_gym_experiments import stats
+from bounce_gym_experiments.report import cell, csv_text, row_name, tables
 
 
 def ordered(rows: list[dict], family) -> list[dict]:
@@ -52,29 +55,47 @@ def kind(policy: str) -> str:
 
 
 def _best(rows: list[dict], family, which: str) -> dict | None:
+    """The best row of a kind by point value; for trained agents, the best of those with enough
+    training seeds for a verdict (else the best of the others, which gets none)."""
     mine = [r for r in ordered(rows, family) if kind(r["policy"]) == which
             and r.get(family.score) is not None]
-    return mine[0] if mine else None
+    enough = [r for r in mine if r.get("seeds", stats.MIN_SEEDS) >= stats.MIN_SEEDS]
+    return (enough or mine or [None])[0]
 
 
-def _versus(a: dict | None, b: dict | None, family) -> str:
-    """Which of two rows wins on the family's score: the one whose 95% interval lies wholly on
-    the better side of the other's; ``tie`` when the intervals overlap."""
-    if a is None or b is None:
-        return "-"
-    score = family.score
-    lo_a, hi_a = a.get(f"{score}_lo", a[score]), a.get(f"{score}_hi", a[score])
-    lo_b, hi_b = b.get(f"{score}_lo", b[score]), b.get(f"{score}_hi", b[score])
-    if None in (lo_a, hi_a, lo_b, hi_b):
-        return "undecided (no interval)"
-    better_a = lo_a > hi_b if family.higher_is_better else hi_a < lo_b
-    better_b = lo_b > hi_a if family.higher_is_better else hi_b < lo_a
-    return a["policy"] if better_a else b["policy"] if better_b else "tie (intervals overlap)"
+def runs_of(episodes: list[dict], experiment: str, row: dict, score: str) -> list[list[float]]:
+    """The score's per-episode values of a table row, one list per run: a trained algorithm's
+    row (its episodes carry its ``group``) has one run per model, any other row one."""
+    runs: dict[str, list[float]] = {}
+    for e in episodes:
+        if e["experiment"] != experiment or e.get(score) is None:
+            continue
+        if e.get("group") == row["policy"] or (e.get("group") is None
+                                                and e["policy"] == row["policy"]):
+            runs.setdefault(e["policy"], []).append(float(e[score]))
+    return list(runs.values())
 
 
-def verdicts(summary: list[dict], families: Mapping) -> list[dict]:
-    """Per experiment: its best planner, best trained agent (sampled actions), random's row,
-    and who wins between them on the family's score (`_versus`)."""
+def _compare(a: dict | None, b: dict | None, episodes: list[dict], experiment: str, family
+             ) -> dict | None:
+    """P(a improves on b) on the family's score (`bounce_gym_experiments.stats.improvement`) and
+    who wins; ``None`` when a row is missing or is a learner's with too few seeds."""
+    if a is None or b is None or any(r.get("seeds", stats.MIN_SEEDS) < stats.MIN_SEEDS
+                                     for r in (a, b)):
+        return None
+    p = stats.improvement(runs_of(episodes, experiment, a, family.score),
+                          runs_of(episodes, experiment, b, family.score),
+                          family.higher_is_better)
+    winner = {1: a["policy"], -1: b["policy"], 0: None}[stats.verdict(p)]
+    return {"p": p.value, "p_lo": p.lo, "p_hi": p.hi, "winner": winner}
+
+
+def verdicts(summary: list[dict], episodes: list[dict], families: Mapping) -> list[dict]:
+    """Per experiment: its best planner, best trained agent (sampled actions) and random's row;
+    P(improvement) with its interval for RL over the planner, RL over random and the planner
+    over random (`_compare`); and whether the experiment discriminates: whether the best of
+    these rows improves on the worst (the lower bound of P above 0.5). An experiment that does
+    not is left out of the headline table."""
     out = []
     for name in dict.fromkeys(r["experiment"] for r in summary):
         if name not in families:
@@ -83,42 +104,91 @@ def verdicts(summary: list[dict], families: Mapping) -> list[dict]:
         rows = [r for r in summary if r["experiment"] == name]
         planner, rl = _best(rows, family, "planner"), _best(rows, family, "rl")
         random = _best(rows, family, "random")
-        out.append({"experiment": name, "score": family.score, "planner": planner, "rl": rl,
-                    "random": random, "rl_vs_planner": _versus(rl, planner, family),
-                    "rl_vs_random": _versus(rl, random, family)})
+        shown = [r for r in (planner, rl, random)
+                 if r is not None and r.get("seeds", stats.MIN_SEEDS) >= stats.MIN_SEEDS]
+        spread = ordered(shown, family)
+        apart = (_compare(spread[0], spread[-1], episodes, name, family)
+                 if len(spread) > 1 else None)
+        out.append({"experiment": name, "score": family.score,
+                    "higher_is_better": family.higher_is_better, "planner": planner, "rl": rl,
+                    "random": random,
+                    "rl_vs_planner": _compare(rl, planner, episodes, name, family),
+                    "rl_vs_random": _compare(rl, random, episodes, name, family),
+                    "planner_vs_random": _compare(planner, random, episodes, name, family),
+                    "discriminates": apart is not None and apart["winner"] is not None})
     return out
 
 
-def _verdict_lines(summary: list[dict], families: Mapping) -> list[str]:
+def verdict_text(comparison: dict | None) -> str:
+    """``P=0.62 [0.58, 0.66]: <winner>`` (``no difference`` when undecided), ``-`` without a
+    comparison."""
+    if comparison is None:
+        return "-"
+    who = comparison["winner"] or "no difference"
+    return f"P={comparison['p']:.2f} [{comparison['p_lo']:.2f}, {comparison['p_hi']:.2f}]: {who}"
+
+
+#: the columns of the headline table and of ``verdicts.csv``
+VERDICT_COLUMNS = ("experiment", "score", "direction", "planner", "rl", "random",
+                   "rl_vs_planner", "rl_vs_random", "planner_vs_random", "discriminates")
+
+
+def verdict_rows(verdict_list: list[dict]) -> list[dict]:
+    """The verdicts as flat text rows (``verdicts.csv``, the headline tables of README.md and
+    the docs: `bounce_gym_experiments.published`)."""
     def shown(row, score):
-        return "-" if row is None else f"{row['policy']}: {cell(row, score)}"
+        return "-" if row is None else f"{row_name(row)}: {cell(row, score)}"
 
+    return [{"experiment": v["experiment"], "score": v["score"],
+             "direction": "higher" if v["higher_is_better"] else "lower",
+             **{k: shown(v[k], v["score"]) for k in ("planner", "rl", "random")},
+             **{k: verdict_text(v[k]) for k in ("rl_vs_planner", "rl_vs_random",
+                                                "planner_vs_random")},
+             "discriminates": "yes" if v["discriminates"] else "no"} for v in verdict_list]
+
+
+def headline_markdown(rows: list[dict]) -> list[str]:
+    """The "Who wins" table of verdict rows (`verdict_rows`): the experiments that
+    discriminate, then one line naming those left out."""
+    lines = ["| experiment | score | best planner | best trained agent | random | RL vs planner "
+             "| RL vs random | planner vs random |", "|---|---|---|---|---|---|---|---|"]
+    for v in rows:
+        if v["discriminates"] == "yes":
+            lines.append(f"| {v['experiment']} | {v['score']} ({v['direction']} is better) | "
+                         f"{v['planner']} | {v['rl']} | {v['random']} | {v['rl_vs_planner']} | "
+                         f"{v['rl_vs_random']} | {v['planner_vs_random']} |")
+    left_out = [v["experiment"] for v in rows if v["discriminates"] != "yes"]
+    if left_out:
+        lines += ["", "Not in this table, because its best and worst compared rows are not apart "
+                  f"on the score: {', '.join(left_out)}."]
+    return lines
+
+
+def _verdict_lines(summary: list[dict], episodes: list[dict], families: Mapping) -> list[str]:
     lines = ["## Who wins", "",
-             "Per experiment, the best planner, the best trained agent (sampled actions; the "
-             "greedy rows are in the tables) and random bouncing on the task's score; a policy "
-             "wins when its 95% interval lies wholly on the better side of the other's.", "",
-             "| experiment | score | best planner | best trained agent | random | RL vs planner "
-             "| RL vs random |", "|---|---|---|---|---|---|---|"]
-    for v in verdicts(summary, families):
-        score = v["score"]
-        lines.append(f"| {v['experiment']} | {score} | {shown(v['planner'], score)} | "
-                     f"{shown(v['rl'], score)} | {shown(v['random'], score)} | "
-                     f"{v['rl_vs_planner']} | {v['rl_vs_random']} |")
-    return lines + [""]
+             "Per experiment, the best planner, the best trained agent (sampled actions, at "
+             f"least {stats.MIN_SEEDS} training seeds; the greedy rows are in the tables) and "
+             "random bouncing on the task's score. Each comparison is the probability of "
+             "improvement P(X > Y) — that an episode of the first scores better than one of the "
+             "second — with its 95% interval; the first wins when the interval lies above 0.5, "
+             "the second when it lies below. A row's name says what it observes beyond contact "
+             "and clock.", ""]
+    return lines + headline_markdown(verdict_rows(verdicts(summary, episodes, families))) + [""]
 
 
-def markdown(config: Mapping, summary: list[dict], families: Mapping, notes: list[str],
-             provenance: Mapping) -> str:
+def markdown(config: Mapping, summary: list[dict], episodes: list[dict], families: Mapping,
+             notes: list[str], provenance: Mapping) -> str:
     """The leaderboard as Markdown (see the module)."""
     experiments = {exp["name"]: exp for exp in config["experiments"]}
     git = provenance.get("git", {})
     lines = [f"# {config['name']}: leaderboard", "",
              f"Commit {git.get('commit', 'unknown')}{' (modified)' if git.get('dirty') else ''}. "
-             "Each cell: value [95% interval] n=count. Rates (success, feasible, full) carry "
-             "Wilson intervals, means bootstrap intervals; n counts the episodes that have the "
-             "value (for a trained algorithm's row, the IQM over its training seeds: n counts "
-             "seeds). Rows are ordered by each task's score; overlapping intervals do not rank.",
-             "", *_verdict_lines(summary, families)]
+             "Each cell: value [95% interval] n=episodes. A row is a list of runs (a trained "
+             "algorithm: one per training seed; anything else: one); the value is the "
+             "interquartile mean of the runs' means and the interval a bootstrap over runs and "
+             "their episodes, for rates and means alike. Rows are ordered by each task's score; "
+             "the order alone ranks nothing.",
+             "", *_verdict_lines(summary, episodes, families)]
     for heading, columns, rows in tables(summary, families):
         for name in dict.fromkeys(r["experiment"] for r in rows):
             exp, family = experiments[name], families[name]
@@ -177,13 +247,17 @@ def plot(folder: Path, summary: list[dict], families: Mapping) -> Path | None:
     return save_figure(fig, folder / "leaderboard.png")
 
 
-def write_leaderboard(folder: Path, config: Mapping, summary: list[dict], families: Mapping,
-                      notes: list[str], provenance: Mapping) -> list[Path]:
-    """Write ``leaderboard.md``, ``leaderboard.csv`` and ``leaderboard.png``; returns them."""
-    md, table = folder / "leaderboard.md", folder / "leaderboard.csv"
-    atomic_write(md, markdown(config, summary, families, notes, provenance).encode())
+def write_leaderboard(folder: Path, config: Mapping, summary: list[dict], episodes: list[dict],
+                      families: Mapping, notes: list[str], provenance: Mapping) -> list[Path]:
+    """Write ``leaderboard.md``, ``leaderboard.csv``, ``verdicts.csv`` (the headline rows,
+    `verdict_rows`) and ``leaderboard.png``; returns them. ``episodes``: the episode rows."""
+    md, table, verdict_file = (folder / "leaderboard.md", folder / "leaderboard.csv",
+                               folder / "verdicts.csv")
+    atomic_write(md, markdown(config, summary, episodes, families, notes, provenance).encode())
     atomic_write(table, csv_text(csv_rows(config, summary, families),
                                  ("experiment", "difficulty", "env", "policy", "episodes",
                                   "seeds", "score")).encode())
+    atomic_write(verdict_file, csv_text(verdict_rows(verdicts(summary, episodes, families)),
+                                        VERDICT_COLUMNS).encode())
     figure = plot(folder, summary, families)
-    return [md, table] + ([figure] if figure is not None else [])
+    return [md, table, verdict_file] + ([figure] if figure is not None else [])

@@ -29,7 +29,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from baselines.policy import Policy, is_parallel_env
+from baselines.policy import Policy, is_parallel_env, labelled
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import config_errors
 from bounce_gym_experiments.config import validate_config
@@ -154,6 +154,12 @@ class Prepared:
     notes: list[str]
 
 
+def _named(policy: Policy) -> Policy:
+    """``policy`` with its information class in its name (`baselines.policy.labelled`)."""
+    policy.name = labelled(policy.name, policy.information)
+    return policy
+
+
 def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Prepared:
     """Build a validated experiment's env, planner setup and policies (loading its models), so
     that every mistake in it is reported before any episode runs; ``where`` names the
@@ -161,7 +167,8 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
     family = family_of(experiment, where)
     env = make_experiment_env(experiment, f"{where}.env_kwargs")
     setup = family.prepare(env, experiment)
-    entrants = [Entrant(p, env, setup) for p in policies_for(experiment, env, family, setup)]
+    entrants = [Entrant(_named(p), env, setup)
+                for p in policies_for(experiment, env, family, setup)]
     notes = []
     if "rl" in experiment["policies"] or "rl" in experiment.get("adversaries", ()):
         folders = experiment["rl_models"]

@@ -254,6 +254,8 @@ def performance_profile(scores, taus: Sequence[float], confidence: float = CONFI
 #: Fewest training seeds a learner's row needs for a verdict (Agarwal et al. 2021 report that
 #: fewer runs make even bootstrap intervals unreliable); rows with fewer are marked in tables.
 MIN_SEEDS = 5
+#: Decimals a probability of improvement is rounded to (float error of its weights is ~1e-15).
+PROBABILITY_DIGITS = 12
 #: Slots (resample × run) drawn at once by the two-level bootstrap (bounds its memory).
 SLOT_BATCH = 20_000
 
@@ -340,14 +342,17 @@ def improvement(x_runs, y_runs, higher_is_better: bool = True,
             np.add.at(w, np.searchsorted(support, r), 1.0 / (r.size * len(runs)))
         return w
 
-    value = float(_improvement(distribution(xs), distribution(ys)))
+    value = _improvement(distribution(xs), distribution(ys))
     n = sum(r.size for r in xs + ys)
     rng = np.random.default_rng(seed)
     _, wx = _resampled_runs(xs, rng, n_resamples, support)
     _, wy = _resampled_runs(ys, rng, n_resamples, support)
     tail = 100 * (1 - confidence) / 2
     lo, hi = np.percentile(_improvement(wx, wy), [tail, 100 - tail])
-    return Estimate(value, float(lo), float(hi), n)
+    # the weights are sums of 1/(episodes x runs): round off their float error, so that ties
+    # read exactly 0.5 and never count as a win
+    value, lo, hi = (round(float(v), PROBABILITY_DIGITS) for v in (value, lo, hi))
+    return Estimate(value, lo, hi, n)
 
 
 def verdict(p: Estimate) -> int:

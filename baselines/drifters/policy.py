@@ -19,7 +19,7 @@ from baselines.drifters.value_iteration import (
     reach_probability,
     value_iteration,
 )
-from baselines.policy import Policy, episode_rng
+from baselines.policy import POSE_OBSERVED, Policy, episode_rng
 from bounce_gym.cells import DRIFT, DrifterCells
 from bounce_gym.errors import ConfigError
 
@@ -60,6 +60,8 @@ class ValueIterationPolicy(Policy):
     """
 
     name = "value iteration"
+    #: acts on ``info["state"]``, the drifter's true model state
+    information = POSE_OBSERVED
 
     def __init__(self, gamma: float = 0.95, form: str = "thesis", tol: float = 1e-9,
                  max_iterations: int = 100_000) -> None:

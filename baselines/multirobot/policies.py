@@ -27,7 +27,7 @@ import numpy as np
 
 from baselines.multirobot.coverage import CoverageResult, plan_coverage, random_start
 from baselines.multirobot.monitoring import MonitoringResult, joint_monitoring_cycles
-from baselines.policy import MultiPolicy
+from baselines.policy import START_OBSERVED, MultiPolicy
 from bounce_gym.cells import CellModel, JointCellModel
 from bounce_gym.errors import ConfigError
 
@@ -68,6 +68,8 @@ class CoveragePlanPolicy(MultiPolicy):
     """
 
     name = "planner"
+    #: the plan is made from the true joint start configuration, read at `reset`
+    information = START_OBSERVED
 
     def __init__(self, joint_model: JointCellModel, phi_index: list[int],
                  turn_index: dict[int, int], neighbors: str = "rotation",

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from baselines.navigation.roadmap import Plan, Roadmap, goal_cells
-from baselines.policy import Policy
+from baselines.policy import POSE_OBSERVED, Policy
 from bounce_gym.errors import ConfigError
 
 # -- policies ---------------------------------------------------------------------------------
@@ -139,6 +139,8 @@ class NavigationPlanner(Policy):
                  replan_from_info: bool = False) -> None:
         self.w1, self.w2 = w1, w2
         self.replan_from_info = bool(replan_from_info)
+        if self.replan_from_info:
+            self.information = POSE_OBSERVED
         self._cache_key = None
         self.roadmap: Roadmap | None = None
         self.plan: Plan | None = None

@@ -48,6 +48,13 @@ class EnvBase(TakesArguments[EnvOptions], RendererOwner):
         return self.core.task
 
     @property
+    def observes_pose(self) -> bool:
+        """Whether the observation holds the robot's true pose during the episode (a
+        privileged observation: ``privileged=True``), not just contact, clock and the task's
+        givens."""
+        return bool(self.options.privileged)
+
+    @property
     def robot_state(self):
         """The true `RobotState` of every robot (poses, contacts, clocks), for planners and
         evaluation; the robots themselves sense only what the observation holds. Read it, do

@@ -74,6 +74,11 @@ class GoalNavigationEnv(BounceEnv):
     tasks = ("goal_navigation",)
     option_defaults = {"task": "goal_navigation"}
 
+    @property
+    def observes_pose(self) -> bool:
+        """True: ``achieved_goal`` is the robot's cell pose after every step."""
+        return True
+
     def __init__(self, render_mode: str | None = None, **options: object) -> None:
         super().__init__(render_mode, **options)
         if self.options.action_type != "discrete":

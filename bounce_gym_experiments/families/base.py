@@ -7,7 +7,15 @@ import math
 from collections.abc import Mapping
 from pathlib import Path
 
-from baselines.policy import FixedAnglePolicy, Policy, RandomAnglePolicy, is_parallel_env
+from baselines.policy import (
+    CONTACT_AND_CLOCK,
+    POSE_OBSERVED,
+    FixedAnglePolicy,
+    Policy,
+    RandomAnglePolicy,
+    is_parallel_env,
+    labelled,
+)
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError
 from bounce_gym.extras import require
@@ -193,20 +201,27 @@ class Family:
         `baselines.rl.policies.SharedSB3Policy` for every robot; a JAX learner's model
         (``jax_ppo``, ``jax_dqn``): `baselines.rl.jaxrl.policy.JaxPolicy`. Each model plays twice: its
         sampled actions (``rl <algo>_seed<N>``, group ``rl <algo>``) and its greedy ones (the
-        same names with `baselines.rl.policies.GREEDY_SUFFIX`), two groups of their own."""
+        same names with `baselines.rl.policies.GREEDY_SUFFIX`), two groups of their own. On an
+        env whose observation holds the pose (``env.unwrapped.observes_pose``: v1's
+        ``achieved_goal``, ``privileged=True``) the models are `POSE_OBSERVED` and their names
+        say so."""
         from baselines.rl.model_files import JAX_ALGOS, MODEL_NAME, model_files, run_name
         from baselines.rl.policies import GREEDY_SUFFIX, SB3Policy, SharedSB3Policy
 
         sb3 = SharedSB3Policy if is_parallel_env(env) else SB3Policy
+        information = POSE_OBSERVED if getattr(env.unwrapped, "observes_pose", False) \
+            else CONTACT_AND_CLOCK
         out = []
         for path in model_files(folder):
             name = MODEL_NAME.fullmatch(path.name)
-            group = f"rl {label}{run_name(name['algo'], name['variant'])}"
+            group = labelled(f"rl {label}{run_name(name['algo'], name['variant'])}",
+                             information)
             kind = _jax_policy() if name["algo"] in JAX_ALGOS else sb3
             for deterministic in (False, True):
                 suffix = GREEDY_SUFFIX if deterministic else ""
                 policy = kind(path, env, deterministic)
-                policy.name = f"rl {label}{path.stem}{suffix}"
+                policy.information = information
+                policy.name = labelled(f"rl {label}{path.stem}", information) + suffix
                 out.append((policy, group + suffix))
         return out
 

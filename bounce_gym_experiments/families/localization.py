@@ -2,20 +2,47 @@
 (`baselines.localization.AngleSwitchPolicy`) against the filter's remaining candidates.
 
 Per episode: ``success`` (localized), ``candidates`` (left at the end), ``correct`` (the claim is
-the true decision state) and ``wrong_claim`` (it is not among the claim). With the task's
+the true decision state), ``wrong_claim`` (it is not among the claim) and the score,
+``steps_to_correct``: the bumps (env steps) until the filter made a correct claim, an episode
+without one — no claim within the horizon, or a wrong one — counted at the horizon
+(right-censored; ``correct`` says how many were not). Success alone is no score on the
+benchmark's map: the planner, the trained agents and random bouncing all localize in every
+episode, and they differ in how soon. With the task's
 ``filter_factory: belief`` the planner is `baselines.localization.BeliefLocalizationPolicy`,
 with ``filter_factory: particles`` `baselines.localization.ParticleLocalizationPolicy`.
 """
 
 from __future__ import annotations
 
-from bounce_gym_experiments.families.base import SingleRobotFamily
+from bounce_gym_experiments.families.base import Episode, SingleRobotFamily
+
+
+class LocalizationEpisode(Episode):
+    """Counts the steps until a correct claim (module docstring)."""
+
+    def __init__(self, env, read) -> None:
+        self.read = read
+        self.horizon = int(env.spec.max_episode_steps)
+        self.steps = 0
+        self.correct_at: int | None = None
+
+    def step(self, info):
+        self.steps += 1
+        if self.correct_at is None and info.get("localized") and info.get("correct"):
+            self.correct_at = self.steps
+        return False
+
+    def metrics(self, info):
+        steps = self.horizon if self.correct_at is None else self.correct_at
+        return {**self.read(info), "steps_to_correct": steps}
 
 
 class Localization(SingleRobotFamily):
     name = task = "localization"
-    columns = (*SingleRobotFamily.columns, "success", "candidates", "correct", "wrong_claim")
-    score = "success"
+    columns = (*SingleRobotFamily.columns, "steps_to_correct", "success", "candidates",
+               "correct", "wrong_claim")
+    score = "steps_to_correct"
+    higher_is_better = False
 
     def make_planner(self, env):
         from baselines.localization import (
@@ -30,6 +57,9 @@ class Localization(SingleRobotFamily):
         if env.unwrapped.task.filter_factory == PARTICLES:
             return ParticleLocalizationPolicy.for_env(env)
         return AngleSwitchPolicy.for_env(env)
+
+    def episode(self, env, policy, setup):
+        return LocalizationEpisode(env, self.metrics)
 
     def metrics(self, info):
         return {"success": bool(info.get("localized", False)),

@@ -30,6 +30,12 @@ class DrifterEnvBase(TakesArguments[DrifterOptions], RendererOwner):
     metadata = {"render_modes": RENDER_MODES, "render_fps": 8}
     options_model = DrifterOptions
 
+    @property
+    def observes_pose(self) -> bool:
+        """Whether the observation holds the drifter's true position (``observe_pose``); the
+        last surface fix (``observe_fix``) is what a real drifter senses, not its pose."""
+        return bool(self.options.observe_pose)
+
     def _build(self, kwargs: Mapping, render_mode: str | None, field_style: str,
                clock_steps: int | None, start_key: str, defaults: Mapping | None = None) -> None:
         """Validate the arguments (those of `DrifterOptions` this env takes, with its defaults
