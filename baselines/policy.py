@@ -18,7 +18,6 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-
 #: Information classes: what a policy reads besides contact, clock and the task's givens (the
 #: goal, and the start where the task's observation holds it). A policy declares its class in
 #: ``information``; tables name every class but the first in the row's name (`labelled`).

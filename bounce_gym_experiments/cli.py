@@ -9,10 +9,12 @@
     bounce-gym curves models/<name> [--window EPISODES]
     bounce-gym trust models/<name>/checkpoints/<algo>_seed<N>_<steps>_steps.zip ...
     bounce-gym schema evaluation|training | --write
+    bounce-gym tables [--write] [--from RUN_FOLDER [--into docs/results/benchmark]]
 
 ``evaluate`` prints tables (per experiment and policy, every cell with its 95% interval and
 count) and writes ``episodes.csv``, ``summary.csv``, ``results.json``, plots and, for a
-configuration with ``leaderboard: true``, ``leaderboard.md`` and ``leaderboard.csv`` into
+configuration with ``leaderboard: true``, ``leaderboard.md``, ``leaderboard.csv`` and
+``verdicts.csv`` into
 ``<output>/<name>-<timestamp>/``, which appears only once all of them are written (they are
 written into a hidden ``.<name>-<timestamp>.tmp-<random>`` beside it, `bounce_gym_experiments.run_folders`);
 without a configuration it runs the default one (``eval_default.yaml``; format:
@@ -56,6 +58,11 @@ in ``models/<name>-tune/``, summarised in ``trials.csv`` and ``best_hyperparams.
 ``schema`` prints the JSON Schema of the evaluation or the training configuration, generated
 from their models (`bounce_gym_experiments.schema`); ``schema --write`` writes both into the
 shipped ``configs/schema/``, where editors find them.
+
+``tables`` checks the result tables of README.md and docs/ against the leaderboard files they
+cite (exit 1 and one ``stale:`` line each where they differ); ``--write`` regenerates them,
+after ``--from RUN_FOLDER`` copied a run's leaderboard files into ``--into``
+(`bounce_gym_experiments.published`).
 
 ``bounce-gym --version`` (and ``train.py --version``, ``evaluate.py --version``) prints the
 installed distribution's version, ``bounce-gym <version>``. Flags are never abbreviated:
@@ -439,6 +446,7 @@ COMMAND_MODULES = {
     "curves": ("matplotlib",),
     "trust": (),
     "schema": (),
+    "tables": (),
 }
 
 
@@ -448,6 +456,36 @@ def schema_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--write", action="store_true",
                         help="write every schema into configs/schema/")
     return parser
+
+
+def tables_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    parser.add_argument("--write", action="store_true",
+                        help="regenerate the tables (default: list those that differ from "
+                             "their file, exit 1 if any)")
+    parser.add_argument("--from", dest="run", metavar="RUN_FOLDER",
+                        help="first copy this run's leaderboard files into --into")
+    parser.add_argument("--into", metavar="FOLDER", default="docs/results/benchmark",
+                        help="where --from copies to (default: docs/results/benchmark)")
+    return parser
+
+
+def tables_command(write: bool, run: str | None, into: str) -> int:
+    """Check or regenerate the result tables of README.md and docs/ (run in the repository
+    root; `bounce_gym_experiments.published`)."""
+    from bounce_gym_experiments import published
+
+    root = Path.cwd()
+    if run is not None:
+        for path in published.publish(Path(run), root / into):
+            print(f"copied {path.relative_to(root)}")
+    if write:
+        for path in published.rewrite(root):
+            print(f"rewrote the result tables of {path.relative_to(root)}")
+        return 0
+    old = published.stale(root)
+    for line in old:
+        print(f"stale: {line}")
+    return 1 if old else 0
 
 
 def dispatch(args: argparse.Namespace) -> int:
@@ -467,6 +505,8 @@ def dispatch(args: argparse.Namespace) -> int:
             return curves_command(args.folder, args.window)
         if args.command == "schema":
             return schema_command(args.name, args.write)
+        if args.command == "tables":
+            return tables_command(args.write, args.run, args.into)
         if args.command == "tune":
             return tune_command(args.config, args.space, args.trials, args.metric, args.scheduler,
                         args.seed, args.timesteps, args.resume, args.workers, args.address,
@@ -506,6 +546,9 @@ def main(argv: list[str] | None = None) -> int:
                                                    "--resume (user-level, by sha256)"))
     schema_parser(commands.add_parser("schema", help="the JSON Schema of the configuration "
                                                      "files"))
+    tables_parser(commands.add_parser("tables", help="check or regenerate the result tables of "
+                                                     "README.md and docs/ from a run's "
+                                                     "leaderboard"))
     return dispatch(parser.parse_args(argv))
 
 

@@ -23,10 +23,10 @@ from baselines.drifters.policy import AlwaysDriftPolicy, RandomLayerPolicy
 from baselines.policy import RandomAnglePolicy
 from baselines.rl.policies import GREEDY_SUFFIX
 from bounce_gym.files import atomic_write
+from bounce_gym_experiments import stats
 from bounce_gym_experiments.oracle import ORACLE_NAME
 from bounce_gym_experiments.plots.figures import pyplot, save_figure
 from bounce_gym_experiments.registry import world_name
-from bounce_gym_experiments import stats
 from bounce_gym_experiments.report import cell, csv_text, row_name, tables
 
 
