@@ -20,9 +20,9 @@ from bounce_gym_experiments.families.base import Episode, SingleRobotFamily
 class LocalizationEpisode(Episode):
     """Counts the steps until a correct claim (module docstring)."""
 
-    def __init__(self, env, read) -> None:
+    def __init__(self, horizon: int, read) -> None:
         self.read = read
-        self.horizon = int(env.spec.max_episode_steps)
+        self.horizon = horizon
         self.steps = 0
         self.correct_at: int | None = None
 
@@ -58,8 +58,12 @@ class Localization(SingleRobotFamily):
             return ParticleLocalizationPolicy.for_env(env)
         return AngleSwitchPolicy.for_env(env)
 
+    def prepare(self, env, experiment):
+        """The horizon, where `LocalizationEpisode` caps the steps to a correct claim."""
+        return int(experiment["max_steps"])
+
     def episode(self, env, policy, setup):
-        return LocalizationEpisode(env, self.metrics)
+        return LocalizationEpisode(setup, self.metrics)
 
     def metrics(self, info):
         return {"success": bool(info.get("localized", False)),
