@@ -100,9 +100,9 @@ def evaluate_command(config_path: str | None, progress: bool = True,
 
     from bounce_gym.errors import ConfigError
     from bounce_gym.files import check_writable, refuse_links
+    from bounce_gym.provenance import provenance
     from bounce_gym_experiments.executors import UnitStore
     from bounce_gym_experiments.leaderboard import write_leaderboard
-    from bounce_gym_experiments.provenance import provenance
     from bounce_gym_experiments.report import (
         families_of,
         format_table,

@@ -31,9 +31,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from baselines.policy import FixedAnglePolicy
+from bounce_gym.provenance import git_state, package_versions
 from bounce_gym_experiments.executors import Executor, Unit, UnitFailure, UnitStore
 from bounce_gym_experiments.oracle import best_fixed_in_hindsight
-from bounce_gym_experiments.provenance import git_state, package_versions
 from bounce_gym_experiments.runner import EpisodeResult, Prepared, prepare_experiment, run_episode
 
 #: seeds per unit: enough episodes to outweigh a unit's overhead, few enough to spread a

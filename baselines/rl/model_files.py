@@ -13,9 +13,10 @@ A JAX learner's file (``jax_ppo``, ``jax_dqn``; `JAX_ALGOS`) holds no SB3 part: 
 its `METADATA_ENTRY`, saved and listed in the manifest like the others.
 
 A model zip is Stable-Baselines3's file plus entries of its own, which SB3 ignores:
-``bounce_gym.json`` (`METADATA_ENTRY`: the training configuration and the observation wrappers
+``bounce_gym.json`` (`METADATA_ENTRY`: the training configuration, the observation wrappers
 the model was trained behind — frame stacking, VecNormalize statistics, `baselines.rl.wrappers`
-— so the evaluation rebuilds them) and, in a checkpoint, ``bounce_gym_resume.pkl``
+— so the evaluation rebuilds them, and ``trained_with``, the machine and library versions of
+the run, `bounce_gym.provenance`; `ModelFile.trained_with` reads it) and, in a checkpoint, ``bounce_gym_resume.pkl``
 (`RESUME_ENTRY`: what resuming needs besides the weights and the optimiser,
 `baselines.rl.resume`) with its signature ``bounce_gym_resume.sig`` (`SIGNATURE_ENTRY`). One
 file holds a whole checkpoint, so a crash leaves either all of it or none. The format and the
@@ -75,6 +76,9 @@ DATA_ENTRY = "data"
 WEIGHTS_ENTRY = "weights.npz"
 #: The zip entry holding this package's metadata of a model (JSON).
 METADATA_ENTRY = "bounce_gym.json"
+#: The zip entry where Stable-Baselines3 writes the OS, Python and library versions (text).
+SB3_SYSTEM_INFO = "system_info.txt"
+_MAX_SYSTEM_INFO_BYTES = 4096
 #: The zip entry of a checkpoint holding the state resuming needs (a pickle).
 RESUME_ENTRY = "bounce_gym_resume.pkl"
 #: The zip entry holding the signature of `RESUME_ENTRY` (`bounce_gym.trust.sign`, hex).
@@ -245,6 +249,30 @@ class ModelFile:
         from baselines.rl.model_load import load_model_file  # it builds on train_config
 
         return load_model_file(self, observation_space, action_space, **load_kwargs)
+
+    def trained_with(self) -> dict | None:
+        """What the file records of the machine and libraries that trained it: the metadata's
+        ``trained_with`` (`bounce_gym.provenance.provenance`, written since it was added), else,
+        for an older SB3 file, the lines of SB3's own `SB3_SYSTEM_INFO` (OS, Python and library
+        versions, no processor) as ``{"sb3_system_info": {name: value}}``; ``None`` when the
+        file records neither (the JAX learners' files saved before it)."""
+        record = self.metadata.get("trained_with")
+        if isinstance(record, dict):
+            return record
+        if self.sizes.get(SB3_SYSTEM_INFO, _MAX_SYSTEM_INFO_BYTES + 1) > _MAX_SYSTEM_INFO_BYTES:
+            return None
+        try:
+            with zipfile.ZipFile(io.BytesIO(self.data)) as archive:
+                text = archive.read(SB3_SYSTEM_INFO).decode("utf-8", errors="replace")
+        except ZIP_ERRORS as exc:
+            raise ConfigError(f"model {self.path}: its entry {SB3_SYSTEM_INFO!r} cannot be read "
+                              f"({type(exc).__name__}: {exc})") from None
+        info = {}
+        for line in text.splitlines():
+            name, sep, value = line.removeprefix("- ").partition(":")
+            if sep and name.strip():
+                info[name.strip()] = value.strip()
+        return {"sb3_system_info": info} if info else None
 
     def resume_state(self) -> object:
         """The checkpoint's `RESUME_ENTRY`, unpickled once vouched for: signed by this user's

@@ -275,6 +275,7 @@ def _check_same_config(saved: Mapping, config: Mapping, path: Path) -> None:
 def _train_run(run: RunFiles, progress: bool, extra_callbacks: list, log) -> Path:
     from baselines.rl.resume import capture, checkpoint_callback
     from baselines.rl.wrappers import describe_wrappers
+    from bounce_gym.provenance import provenance
 
     config = run.config
     env = make_train_env(config, run.seed)
@@ -282,8 +283,10 @@ def _train_run(run: RunFiles, progress: bool, extra_callbacks: list, log) -> Pat
         found = run.checkpoints() if config["resume"] else {}
         model = _resumed(run, env, found, log) if found else _fresh(run, env, log)
 
+        made = provenance()  # once per run: the git calls are not repeated per checkpoint
+
         def metadata() -> dict:
-            return {"config": config, "wrappers": describe_wrappers(env)}
+            return {"config": config, "wrappers": describe_wrappers(env), "trained_with": made}
 
         def save_checkpoint(model) -> None:
             run.check_links()  # also a link made since the run started

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 import yaml
 
+from bounce_gym.provenance import PACKAGES, git_state, provenance
 from bounce_gym_experiments import stats
 from bounce_gym_experiments.families import navigation
 from bounce_gym_experiments.oracle import ORACLE_NAME, best_fixed_in_hindsight
-from bounce_gym_experiments.provenance import PACKAGES, git_state, provenance
 from bounce_gym_experiments.report import estimate_text, format_table, summarise, table_rows
 from bounce_gym_experiments.runner import EpisodeResult, run
 
@@ -176,7 +176,7 @@ def test_git_state_outside_a_checkout_or_without_git_is_unknown(tmp_path, monkey
     def no_git(*args, **kwargs):
         raise FileNotFoundError("git")
 
-    monkeypatch.setattr("bounce_gym_experiments.provenance.subprocess.run", no_git)
+    monkeypatch.setattr("bounce_gym.provenance.subprocess.run", no_git)
     assert provenance()["git"] == {"commit": "unknown", "dirty": None}
 
 

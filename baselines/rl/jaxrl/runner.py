@@ -26,6 +26,7 @@ from baselines.rl.model_files import save_model
 from baselines.rl.monitor import open_monitor_file
 from baselines.rl.train_env import MONITOR_KEYS
 from bounce_gym.errors import ConfigError
+from bounce_gym.provenance import provenance
 
 #: The most env steps of one chunk (iterations are whole; at least one per chunk).
 CHUNK_STEPS = 16384
@@ -87,8 +88,11 @@ def train_run(run, log) -> Path:
     every = config["checkpoint_every"]
     due = every
 
+    made = provenance()
+
     def metadata() -> dict:
-        return {"config": config, "jax": {"num_timesteps": agent.steps(state)}}
+        return {"config": config, "jax": {"num_timesteps": agent.steps(state)},
+                "trained_with": made}
 
     def save_checkpoint() -> None:
         run.check_links()

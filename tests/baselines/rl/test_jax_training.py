@@ -3,6 +3,7 @@ of each through `baselines.rl.train` writes the model, its checkpoints, the moni
 manifest; the model plays in the evaluation beside SB3's (sampled by default, greedy twin); the
 same configuration and seed give the same weights bit for bit; the configuration checks."""
 import io
+import platform
 import zipfile
 
 import gymnasium as gym
@@ -11,6 +12,8 @@ import pytest
 
 pytest.importorskip("jax")
 pytest.importorskip("optax")
+
+import jax  # noqa: E402
 
 import bounce_gym  # noqa: E402,F401
 from baselines.rl.curves import learning_curves  # noqa: E402
@@ -59,6 +62,9 @@ def test_a_run_writes_model_checkpoints_monitor_and_manifest(runs, algo):
     trained = read_model(path)
     assert trained.algo == algo and trained.metadata["config"]["algo"] == algo
     steps = trained.metadata["jax"]["num_timesteps"]
+    made = trained.trained_with()  # the machine and libraries of this run
+    assert made == trained.metadata["trained_with"]
+    assert made["packages"]["jax"] == jax.__version__ and made["machine"] == platform.machine()
     assert steps >= CONFIGS[algo]["total_timesteps"]
     manifest = (folder / "nav" / MANIFEST).read_text()
     assert path.name in manifest

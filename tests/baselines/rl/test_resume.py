@@ -101,6 +101,9 @@ def test_same_configuration_and_seed_give_the_same_weights(tmp_path):
     (c,) = train({**config, "models": str(tmp_path / "c"), "seed": 1}, progress=False)
     assert _same_weights(a, b) and _episodes(a) == _episodes(b)
     assert not _same_weights(a, c)
+    made = read_model(a).trained_with()  # the machine and libraries, in the metadata
+    assert made == read_model(b).trained_with() == read_model(a).metadata["trained_with"]
+    assert made["packages"]["torch"] == torch.__version__ and made["python"].count(".") == 2
 
 
 @pytest.mark.parametrize("case", list(CASES))
