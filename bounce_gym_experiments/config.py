@@ -187,8 +187,9 @@ class Experiment(ConfigModel):
                                   "scenario's options (docs: Evaluation).")
     planner_kwargs: dict[str, Any] | None = Field(
         default=None, description="Options of the family's planners, for the families that "
-                                  "take them (e.g. {phi: 135}, or which planners run: {models: "
-                                  "[...]}; docs: Evaluation).")
+                                  "take them (e.g. {phi: 135}, which planners run: {models: "
+                                  "[...]}, or where every policy of a monitoring experiment "
+                                  "starts: {start: draw or cycle}; docs: Evaluation).")
     rl_models: str | list[str | ModelFolder] | None = Field(
         default=None,
         description="The folders of the models folder whose models rl runs (default: the "

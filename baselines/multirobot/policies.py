@@ -7,10 +7,11 @@
   After the plan the robots keep bouncing with φ_i. Edges a turn cannot execute — a random restart,
   or a position jump of the ``"full"`` neighbourhood — end the plan there (``executable_steps``);
   the robots bounce on.
-* `MonitoringPlanPolicy` — Algorithm 2 (PERSISTENTBEHAVIOR, `baselines.multirobot.monitoring`): places the two
-  robots on an accepted collision-free joint limit cycle (chosen by the seed) and lets them bounce
-  with their φ_i forever; the cycle repeats with no robot–robot contact and visits each robot's
-  region every period.
+* `MonitoringPlanPolicy` — Algorithm 2 (PERSISTENTBEHAVIOR, `baselines.multirobot.monitoring`): lets the two
+  robots bounce with their φ_i forever. With ``start="cycle"`` it first places them on an
+  accepted collision-free joint limit cycle (`cycle_start`, chosen by the seed); the cycle then
+  repeats with no robot–robot contact and visits each robot's region every period. With
+  ``start="draw"`` (default) they start where the env draws them, as every other policy does.
 
 Both are exact on the ``cell`` backend (the papers' grid model) in ``step_mode="tick"``: the env's
 joint cell after step t is the plan's (tests replay whole plans). On the continuous backends they
@@ -31,7 +32,12 @@ from baselines.policy import START_OBSERVED, MultiPolicy
 from bounce_gym.cells import CellModel, JointCellModel
 from bounce_gym.errors import ConfigError
 
-__all__ = ["CoveragePlanPolicy", "MonitoringPlanPolicy", "regions_of"]
+__all__ = ["MONITORING_STARTS", "CoveragePlanPolicy", "MonitoringPlanPolicy", "cycle_start",
+           "regions_of"]
+
+#: where `MonitoringPlanPolicy` starts the robots: ``draw`` (the env's random draw for the seed;
+#: the default) or ``cycle`` (on an accepted cycle of Algorithm 2, `cycle_start`)
+MONITORING_STARTS = ("draw", "cycle")
 
 
 def _angle_index(env, robot: int, phi_deg: float) -> int:
@@ -215,20 +221,41 @@ def in_region_share(result: MonitoringResult, g: int, regions, samples: int = 16
     return float(np.mean(shares))
 
 
-class MonitoringPlanPolicy(MultiPolicy):
-    """Start two robots on an accepted cycle of Algorithm 2 and let them bounce (module docstring).
+def cycle_start(result: MonitoringResult, seed: int) -> tuple[int, int] | None:
+    """The start on an accepted cycle of Algorithm 2 for ``seed``: accepted group ``seed mod r``,
+    entered at its cycle cell ``(seed div r) mod period``, as ``(group, joint cell)``; ``None``
+    when no group was accepted (r = 0). ``result.start_options(cell)`` places the robots there."""
+    if result.r == 0:
+        return None
+    group = seed % result.r
+    cycle = result.cycles[group]
+    return group, int(cycle[(seed // result.r) % len(cycle)])
 
-    ``result`` is the `MonitoringResult`; ``r`` the number of accepted groups. After
-    `start_options`: ``group`` (index into ``result.cycles``), ``period``, ``start_cell`` and
-    ``predicted_in_region`` (the cell model's time in own region on that cycle, `in_region_share`).
-    With r = 0 there is nothing to follow: the env draws its own start and the robots bounce.
+
+class MonitoringPlanPolicy(MultiPolicy):
+    """Let two robots bounce with their φ_i, from the env's start or from an accepted cycle of
+    Algorithm 2 (module docstring).
+
+    ``result`` is the `MonitoringResult`; ``r`` the number of accepted groups; ``start`` one of
+    `MONITORING_STARTS`. Its name is ``planner``, or ``planner (cycle start)`` when it picks its
+    start. After `start_options` with ``start="cycle"``: ``group`` (index into
+    ``result.cycles``), ``period``, ``start_cell`` and ``predicted_in_region`` (the cell model's
+    time in own region on that cycle, `in_region_share`). They stay ``None`` with
+    ``start="draw"`` (the model makes no prediction from an arbitrary start) and with r = 0
+    (nothing to follow: the env draws the start and the robots bounce).
     """
 
     name = "planner"
 
-    def __init__(self, result: MonitoringResult, phi_index: list[int]) -> None:
+    def __init__(self, result: MonitoringResult, phi_index: list[int],
+                 start: str = MONITORING_STARTS[0]) -> None:
+        if start not in MONITORING_STARTS:
+            raise ConfigError(f"start: expected one of {list(MONITORING_STARTS)}, got {start!r}")
         self.result = result
         self.phi_index = list(phi_index)
+        self.start = start
+        if start == "cycle":
+            self.name = "planner (cycle start)"
         self.group = self.period = self.start_cell = self.predicted_in_region = None
 
     @property
@@ -238,14 +265,15 @@ class MonitoringPlanPolicy(MultiPolicy):
     @classmethod
     def for_env(cls, env, phi: object = None, mode: str = "visit",
                 forbid_swaps: bool | None = None, min_sep_cells: int | None = None,
-                cell_bins: int = 8, corner_rule: str = "no_squeeze") -> MonitoringPlanPolicy:
+                cell_bins: int = 8, corner_rule: str = "no_squeeze",
+                start: str = MONITORING_STARTS[0]) -> MonitoringPlanPolicy:
         """The planner for a 2-robot monitoring `MultiBounceEnv` in tick mode.
 
         ``phi``: degrees, one for both robots or a pair (default: each robot's first angle).
         Regions: the task's polygons (`regions_of`). ``forbid_swaps`` defaults to whether the env's
         robots bounce off each other (a swap on the grid is then a conflict: docs/choices/multirobot.md,
         "Robot–robot conflicts on the grid"); ``min_sep_cells`` (the cycles' safety margin,
-        `joint_monitoring_cycles`) to the env's.
+        `joint_monitoring_cycles`) to the env's. ``start``: one of `MONITORING_STARTS`.
         """
         env = getattr(env, "unwrapped", env)
         _check_tick_mode(env, "MonitoringPlanPolicy")
@@ -264,19 +292,26 @@ class MonitoringPlanPolicy(MultiPolicy):
         result = joint_monitoring_cycles(model, [math.radians(p) for p in phis], regions_of(env, model),
                                      mode=mode, forbid_swaps=forbid_swaps,
                                      min_sep_cells=min_sep_cells)
-        return cls(result, [_angle_index(env, i, p) for i, p in enumerate(phis)])
+        return cls(result, [_angle_index(env, i, p) for i, p in enumerate(phis)], start)
+
+    def cycle_options(self, seed: int) -> dict | None:
+        """The reset options that place the robots at `cycle_start` for ``seed`` (``None`` with
+        r = 0), whatever ``start`` is: what an experiment imposes on every policy to give them
+        this planner's start."""
+        chosen = cycle_start(self.result, seed)
+        return None if chosen is None else self.result.start_options(chosen[1])
 
     def start_options(self, env, seed: int) -> dict | None:
-        """Accepted group ``seed mod r``, entered at cycle cell ``(seed div r) mod period``."""
-        if self.r == 0:
-            self.group = self.period = self.start_cell = self.predicted_in_region = None
+        """``start="cycle"``: the `cycle_options` of ``seed``; ``start="draw"``: ``None`` (the
+        env's draw)."""
+        self.group = self.period = self.start_cell = self.predicted_in_region = None
+        chosen = cycle_start(self.result, seed) if self.start == "cycle" else None
+        if chosen is None:
             return None
-        self.group = seed % self.r
-        cycle = self.result.cycles[self.group]
-        self.period = len(cycle)
+        self.group, self.start_cell = chosen
+        self.period = len(self.result.cycles[self.group])
         self.predicted_in_region = in_region_share(self.result, self.group,
                                                    getattr(env, "unwrapped", env).task.regions)
-        self.start_cell = int(cycle[(seed // self.r) % self.period])
         return self.result.start_options(self.start_cell)
 
     def reset(self, env) -> None:

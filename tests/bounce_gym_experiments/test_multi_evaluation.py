@@ -15,11 +15,17 @@ from baselines.rl.train import validate_train_config
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
 from bounce_gym.errors import ConfigError
 from bounce_gym_experiments import stats
-from bounce_gym_experiments.config import validate_config
+from bounce_gym_experiments.config import configs_folder, load_config, validate_config
 from bounce_gym_experiments.families import multirobot_coverage, multirobot_monitoring
 from bounce_gym_experiments.oracle import ORACLE_NAME
 from bounce_gym_experiments.report import format_table, summarise
-from bounce_gym_experiments.runner import EpisodeResult, make_experiment_env, run, run_episode
+from bounce_gym_experiments.runner import (
+    EpisodeResult,
+    make_experiment_env,
+    prepare_experiment,
+    run,
+    run_episode,
+)
 
 ROOT = Path(__file__).parents[2]
 sys.path.insert(0, str(ROOT))
@@ -204,15 +210,82 @@ def test_encounters_count_pairs_together_at_the_end_of_a_step():
 
 
 def test_monitoring_rows_report_region_time_encounters_and_r():
-    rows, _ = run({"experiments": [monitoring_exp()]}, progress=False)
-    planner = [r for r in rows if r.policy == "planner"]
+    exp = monitoring_exp(planner_kwargs={"phi": 90, "start": "cycle"})
+    rows, _ = run({"experiments": [exp]}, progress=False)
+    planner = [r for r in rows if r.policy == "planner (cycle start)"]
     assert len(planner) == 3 and len(rows) == 6
     for r in planner:  # an accepted group of Algorithm 2: collision-free, every period
         assert r.metrics["r"] > 0 and r.metrics["encounters"] == 0 and r.metrics["period"] > 0
         assert 0 < r.metrics["in_region"] <= 1 and r.steps == 200
+        assert 0 < r.metrics["predicted_in_region"] < 1
     summary = {s["policy"]: s for s in summarise(rows, {"mon": multirobot_monitoring.FAMILY})}
     assert "in_region_lo" in summary["random"] and "r" not in summary["random"]
-    assert summary["planner"]["r"] == planner[0].metrics["r"] and "r_n" not in summary["planner"]
+    planned = summary["planner (cycle start)"]
+    assert planned["r"] == planner[0].metrics["r"] and "r_n" not in planned
+
+
+def test_monitoring_planner_from_the_drawn_start_predicts_nothing():
+    rows, _ = run({"experiments": [monitoring_exp()]}, progress=False)
+    planner = [r for r in rows if r.policy == "planner"]
+    assert len(planner) == 3
+    for r in planner:
+        assert r.metrics["r"] > 0
+        assert "period" not in r.metrics and "predicted_in_region" not in r.metrics
+
+
+def _benchmark_monitoring(start: str):
+    """The benchmark's monitoring experiment of ``start``, its trained agents included,
+    prepared for three seeds."""
+    name = {"draw": "multirobot-monitoring-15x15",
+            "cycle": "multirobot-monitoring-15x15-cycle-start"}[start]
+    (exp,) = (e for e in load_config(configs_folder() / "benchmark.yaml")["experiments"]
+              if e["name"] == name)
+    assert exp["planner_kwargs"]["start"] == start
+    exp.update(seeds=[10_000, 10_001, 10_002], max_steps=1, horizon_reason=REASON)
+    config = validate_config({"models": str(ROOT / "baselines" / "agents"),
+                              "experiments": [exp]})
+    return prepare_experiment(config["experiments"][0], Path(config["models"]), "exp")
+
+
+def _start_pose(env) -> np.ndarray:
+    state = env.unwrapped.robot_state
+    return np.column_stack([state.position, state.heading])
+
+
+@pytest.mark.parametrize("start", ["draw", "cycle"])
+def test_every_monitoring_policy_starts_where_the_experiment_says(start):
+    """``start: draw``: every policy (the planner too) starts at a plain ``env.reset(seed)``;
+    ``start: cycle``: every policy starts on the planner's cycle start for the seed."""
+    prepared = _benchmark_monitoring(start)
+    names = [e.policy.name for e in prepared.entrants]
+    planner = {"draw": "planner", "cycle": "planner (cycle start)"}[start]
+    assert names[:5] == [planner, "random", "fixed 45°", "fixed 90°", "fixed 135°"]
+    assert any(n.startswith("rl ") for n in names)
+    plain = make_experiment_env(prepared.experiment)
+    moved = False
+    for seed in prepared.experiment["seeds"]:
+        plain.reset(seed=seed)
+        drawn = _start_pose(plain)
+        if start == "cycle":
+            plain.reset(seed=seed, options=prepared.setup.cycle_options(seed))
+            expected = _start_pose(plain)
+            moved |= not np.allclose(expected, drawn)
+        else:
+            expected = drawn
+        for e in prepared.entrants:
+            episode = prepared.family.episode(e.env, e.policy, e.setup)
+            run_episode(e.env, e.policy, seed, 0, episode)
+            assert np.allclose(_start_pose(e.env), expected), (e.policy.name, seed)
+    if start == "cycle":  # the cycle start is not the draw on every seed
+        assert moved
+
+
+def test_monitoring_start_is_checked():
+    with pytest.raises(ConfigError, match=r"^config\.experiments\[0\]\.planner_kwargs\.start: "
+                                          r"expected one of \['draw', 'cycle'\], got 'best'$"):
+        validate_config({"experiments": [monitoring_exp(planner_kwargs={"start": "best"})]})
+    default = validate_config({"experiments": [monitoring_exp()]})["experiments"][0]
+    assert default["planner_kwargs"] == {"phi": 90, "start": "draw"}
 
 
 def test_coverage_planner_rows_reproduce_the_predicted_steps():

@@ -16,6 +16,7 @@ from baselines.multirobot.monitoring import joint_monitoring_cycles
 from baselines.multirobot.policies import (
     CoveragePlanPolicy,
     MonitoringPlanPolicy,
+    cycle_start,
     regions_of,
 )
 from bounce_gym.envs.multi_bounce_env import MultiBounceEnv
@@ -130,7 +131,7 @@ def test_coverage_plan_on_a_continuous_backend_starts_on_its_cells():
 @pytest.mark.parametrize("phi", [45, 90])
 def test_monitoring_cycle_replays_collision_free_and_visits_regions(phi):
     env = MultiBounceEnv(**MONITOR)
-    policy = MonitoringPlanPolicy.for_env(env, phi=phi)
+    policy = MonitoringPlanPolicy.for_env(env, phi=phi, start="cycle")
     assert policy.r > 0
     model = env.cell_model()
     regions = regions_of(env, model)
@@ -150,7 +151,7 @@ def test_monitoring_prediction_is_the_time_measured_on_the_cycle():
     """On the cell backend the robots run the cycle exactly: over whole periods the task's
     ``in_region_fraction`` is the planner's ``predicted_in_region``."""
     env = MultiBounceEnv(**MONITOR)
-    policy = MonitoringPlanPolicy.for_env(env, phi=90)
+    policy = MonitoringPlanPolicy.for_env(env, phi=90, start="cycle")
     for seed in range(3):
         obs, infos = env.reset(seed=seed, options=policy.start_options(env, seed))
         policy.reset(env)
@@ -164,7 +165,7 @@ def test_monitoring_prediction_is_the_time_measured_on_the_cycle():
 
 def test_monitoring_contacts_are_zero_on_the_cycle_and_groups_match_algorithm_2():
     env = MultiBounceEnv(**{**MONITOR, "robot_collisions": "bounce"})
-    policy = MonitoringPlanPolicy.for_env(env, phi=90)
+    policy = MonitoringPlanPolicy.for_env(env, phi=90, start="cycle")
     model = env.cell_model()
     direct = joint_monitoring_cycles(model, [math.radians(90)] * 2, regions_of(env, model),
                                  forbid_swaps=True)
@@ -180,7 +181,7 @@ def test_monitoring_contacts_are_zero_on_the_cycle_and_groups_match_algorithm_2(
 
 def test_monitoring_cycles_with_a_safety_margin_keep_it():
     env = MultiBounceEnv(**MONITOR)
-    policy = MonitoringPlanPolicy.for_env(env, phi=90, min_sep_cells=1)
+    policy = MonitoringPlanPolicy.for_env(env, phi=90, min_sep_cells=1, start="cycle")
     assert 0 < policy.r < MonitoringPlanPolicy.for_env(env, phi=90).r
     rc = env.cell_model().position_rc
     for seed in range(3):
@@ -191,11 +192,29 @@ def test_monitoring_cycles_with_a_safety_margin_keep_it():
 
 def test_monitoring_without_groups_falls_back_to_the_env_start():
     env = MultiBounceEnv(**{**MONITOR, "robot_collisions": "bounce"})
-    policy = MonitoringPlanPolicy.for_env(env, phi=45)  # swaps forbidden: no group survives
+    policy = MonitoringPlanPolicy.for_env(env, phi=45, start="cycle")  # swaps forbidden: no group
     assert policy.r == 0 and policy.start_options(env, 0) is None
     env.reset(seed=0)
     policy.reset(env)
     assert policy.act({"robot_0": None, "robot_1": None}, {}) == {"robot_0": 0, "robot_1": 0}
+
+
+def test_monitoring_start_is_the_env_draw_unless_the_cycle_is_asked_for():
+    env = MultiBounceEnv(**MONITOR)
+    drawn = MonitoringPlanPolicy.for_env(env, phi=90)
+    cycle = MonitoringPlanPolicy(drawn.result, drawn.phi_index, start="cycle")
+    assert (drawn.start, drawn.name) == ("draw", "planner")
+    assert cycle.name == "planner (cycle start)"
+    for seed in (0, 7, 1234):
+        assert drawn.start_options(env, seed) is None
+        assert drawn.group is drawn.predicted_in_region is None
+        group, cell = cycle_start(drawn.result, seed)
+        options = cycle.start_options(env, seed)
+        assert (cycle.group, cycle.start_cell) == (group, cell)
+        assert group == seed % drawn.r and cell in drawn.result.cycles[group]
+        assert options == drawn.cycle_options(seed) == drawn.result.start_options(cell)
+    with pytest.raises(ConfigError, match="start: expected one of"):
+        MonitoringPlanPolicy(drawn.result, drawn.phi_index, start="fixed")
 
 
 def test_monitoring_planner_needs_two_robots_and_the_monitoring_task():
