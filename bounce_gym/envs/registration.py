@@ -29,8 +29,7 @@ import warnings
 
 import gymnasium as gym
 import pettingzoo
-
-from bounce_gym.envs.map_horizon import MapHorizon
+from gymnasium.envs.registration import WrapperSpec
 
 #: Gymnasium id -> (registered arguments, max_episode_steps; None: the id is in `MAP_HORIZON`)
 GYM_ENVS: dict[str, tuple[dict[str, object], int | None]] = {
@@ -50,8 +49,11 @@ GYM_ENVS: dict[str, tuple[dict[str, object], int | None]] = {
 ENTRY_POINTS = {
     "bounce_gym/BounceNavigation-v1": "bounce_gym.envs.goal_navigation_env:GoalNavigationEnv",
 }
-#: Gymnasium ids whose horizon is the env's ``horizon``, derived from its map (`MapHorizon`)
+#: Gymnasium ids whose horizon is the env's ``horizon``, derived from its map, which the
+#: wrapper `bounce_gym.envs.map_horizon.MapHorizon` applies (named, so that registering imports
+#: no env module)
 MAP_HORIZON = ("bounce_gym/BounceNavigation-v1",)
+_MAP_HORIZON_WRAPPER = WrapperSpec("MapHorizon", "bounce_gym.envs.map_horizon:MapHorizon", {})
 #: the ids whose envs `BounceVectorEnv` batches (localization's filter is not batched)
 VECTOR_ENTRY_POINT = "bounce_gym.envs.vector_env:BounceVectorEnv"
 VECTOR_IDS = ("bounce_gym/Bounce-v0", "bounce_gym/BounceNavigation-v0",
@@ -185,7 +187,7 @@ def register_envs() -> None:
                              env_id, "bounce_gym.envs.bounce_env:BounceEnv"),
                          vector_entry_point=VECTOR_ENTRY_POINT if env_id in VECTOR_IDS else None,
                          kwargs=kwargs, max_episode_steps=steps,
-                         additional_wrappers=((MapHorizon.wrapper_spec(),)
+                         additional_wrappers=((_MAP_HORIZON_WRAPPER,)
                                               if env_id in MAP_HORIZON else ()))
     for env_id, (entry_point, steps) in DRIFTER_GYM_ENVS.items():
         if env_id not in gym.registry:
