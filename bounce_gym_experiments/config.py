@@ -14,7 +14,9 @@ must be at least ``EVALUATION_SEEDS_START`` (10,000) and at most `MAX_SEED` (2**
 most `MAX_SEEDS` (100,000) of them; the validated configuration holds the list.
 
 **Horizon.** An episode lasts at most the horizon its env registers — Gymnasium's
-``max_episode_steps``, PettingZoo's ``max_cycles`` — which is also what training uses; a
+``max_episode_steps``, PettingZoo's ``max_cycles``; for the ids whose horizon follows from their
+map (`bounce_gym.envs.registration.MAP_HORIZON`) the one the env derives on the experiment's
+map — which is also what training uses; a
 different ``max_steps`` (at most `MAX_STEPS`) needs ``horizon_reason``, and then sets the env's
 own limit, so that the env and the episode loop stop together.
 
@@ -45,6 +47,7 @@ from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
     GYMNASIUM_IDS,
+    MAP_HORIZON,
     PATROL_PETTINGZOO_ENVS,
     PETTINGZOO_ENVS,
     is_pettingzoo_id,
@@ -167,8 +170,9 @@ class Experiment(ConfigModel):
                     f"at most {MAX_SEEDS}. Every policy runs one episode per seed.")
     max_steps: int | None = Field(
         default=None, ge=1, le=MAX_STEPS,
-        description="Longest episode in env steps. Default: the horizon the env registers "
-                    "(what training uses); another value needs horizon_reason.")
+        description="Longest episode in env steps. Default: the env's horizon, the one its "
+                    "id registers or, for BounceNavigation-v1, derives from its map (what "
+                    "training uses); another value needs horizon_reason.")
     horizon_reason: str | None = Field(
         default=None, description="Why max_steps differs from the registered horizon (only "
                                   "then).")
@@ -418,9 +422,26 @@ def evaluation_seeds(where: str, seeds: object) -> list[int]:
     return list(seeds)
 
 
+def env_horizon(env_id: str, env_kwargs: Mapping[str, Any]) -> int | None:
+    """The horizon of ``env_id`` made with ``env_kwargs``: the registered one
+    (`registered_horizon`), or for an id of `MAP_HORIZON` the one its env derives from its map
+    (what ``gym.make`` reports as ``env.spec.max_episode_steps``)."""
+    if env_id not in MAP_HORIZON:
+        return registered_horizon(env_id)
+    env = gym.make(env_id, **env_kwargs)
+    try:
+        return env.spec.max_episode_steps if env.spec is not None else None
+    finally:
+        env.close()
+
+
 def checked_horizon(where: str, exp: Experiment) -> int:
-    """The experiment's ``max_steps``: the registered horizon, or another with its reason."""
-    horizon = registered_horizon(exp.env)
+    """The experiment's ``max_steps``: the env's horizon (`env_horizon`), or another with its
+    reason."""
+    try:
+        horizon = env_horizon(exp.env, exp.env_kwargs)
+    except (ConfigError, TypeError) as exc:
+        raise ConfigError(f"{where}.env_kwargs: {exc}") from None
     reason = exp.horizon_reason
     if reason is not None and not reason.strip():
         raise ConfigError(f"{where}.horizon_reason: expected a non-empty explanation")
@@ -436,8 +457,9 @@ def checked_horizon(where: str, exp: Experiment) -> int:
         raise ConfigError(f"{where}.horizon_reason: only with a max_steps that differs from "
                           f"the registered horizon {horizon}")
     if exp.max_steps != horizon and reason is None:
+        source = "derives on this map" if exp.env in MAP_HORIZON else "registers"
         raise ConfigError(f"{where}.max_steps: {exp.max_steps} differs from the horizon {horizon} "
-                          f"that {exp.env} registers (and training uses); leave max_steps out, "
+                          f"that {exp.env} {source} (and training uses); leave max_steps out, "
                           "or say why in horizon_reason")
     return exp.max_steps
 

@@ -8,11 +8,17 @@ vectorised ``compute_reward(achieved_goal, desired_goal, info)`` equal to the st
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from gymnasium import spaces
 
 from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.errors import ConfigError
+
+#: the horizon of ``BounceNavigation-v1`` in units of the longest optimal plan of the map
+#: (`GoalNavigationEnv.horizon`)
+HORIZON_FACTOR = 3.0
 
 
 class GoalNavigationEnv(BounceEnv):
@@ -25,8 +31,8 @@ class GoalNavigationEnv(BounceEnv):
     that the model says it can reach — after ``info["optimal_bounces"]`` bounces at the
     fewest. It is v0's navigation with the changes that let a learner learn it
     (docs/learning.md): goals where a contact-sensing robot can know it has arrived, only
-    joined start/goal pairs, a horizon a few times the longest optimal plan, the sparse
-    reward, and the goal-conditioned observation below.
+    joined start/goal pairs, a horizon a few times the longest optimal plan of the map
+    (`horizon`), the sparse reward, and the goal-conditioned observation below.
 
     ## Observation Space
 
@@ -55,8 +61,12 @@ class GoalNavigationEnv(BounceEnv):
 
     ## Episode End
 
-    Terminated on reaching the goal. Truncated by the registered horizon (``max_episode_steps``;
-    `bounce_gym.envs.registration.ABOUT` says how it was chosen).
+    Terminated on reaching the goal. Truncated after `horizon` steps: `HORIZON_FACTOR` (3)
+    times the longest optimal plan of the env's own map (``task.longest_plan``, the fewest
+    bounces of the hardest start/goal pair it draws), so every map gets the same slack — 42
+    on the lab map (14 bounces). The id registers no ``max_episode_steps``; ``gym.make`` applies
+    the horizon with `bounce_gym.envs.map_horizon.MapHorizon` and reports it as
+    ``env.spec.max_episode_steps``; ``gym.make(..., max_episode_steps=n)`` sets another.
 
     ## Arguments
 
@@ -92,6 +102,10 @@ class GoalNavigationEnv(BounceEnv):
             "achieved_goal": spaces.Box(0.0, 1.0, (size,), dtype=np.float32),
             "desired_goal": spaces.Box(0.0, 1.0, (size,), dtype=np.float32),
         })
+        #: the steps after which an episode is truncated: `HORIZON_FACTOR` times the longest
+        #: optimal plan of the map, rounded up (one step where no start/goal pair is joined,
+        #: which only ``draw="any"`` allows)
+        self.horizon = max(1, math.ceil(HORIZON_FACTOR * self.task.longest_plan))
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         sensed, info = super().reset(seed=seed, options=options)

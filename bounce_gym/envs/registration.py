@@ -2,7 +2,9 @@
 
 Each id is a task an agent can be scored on: what it observes, what its reward makes optimal,
 and ONE horizon — the registered ``max_episode_steps`` (``max_cycles`` for the PettingZoo ids),
-which training and evaluation both use. Defaults: kinematic backend, bounce mode (one step =
+which training and evaluation both use; an id whose horizon follows from its map (`MAP_HORIZON`)
+registers none and gets it from `bounce_gym.envs.map_horizon.MapHorizon`, which ``gym.make``
+adds and which reports it as ``env.spec.max_episode_steps``. Defaults: kinematic backend, bounce mode (one step =
 the bump, then the drive to the next contact), Φ = {45°, 90°, 135°}, unless an id's registered
 arguments say otherwise. The observation is ``clock`` (ticks since the last bump / max_clock),
 preceded by ``contact`` only where it can be 0 (tick mode, several robots, turn commands; see
@@ -27,13 +29,15 @@ import warnings
 
 import gymnasium as gym
 import pettingzoo
+from gymnasium.envs.registration import WrapperSpec
 
-GYM_ENVS: dict[str, tuple[dict[str, object], int]] = {
+#: Gymnasium id -> (registered arguments, max_episode_steps; None: the id is in `MAP_HORIZON`)
+GYM_ENVS: dict[str, tuple[dict[str, object], int | None]] = {
     "bounce_gym/Bounce-v0": ({"world": "two_rooms", "task": "free"}, 500),
     "bounce_gym/BounceNavigation-v0": (
         {"world": "lab_navigation", "task": "navigation", "history": 4}, 200),
     "bounce_gym/BounceNavigation-v1": (
-        {"world": "lab_navigation", "task": "goal_navigation", "backend": "cell"}, 42),
+        {"world": "lab_navigation", "task": "goal_navigation", "backend": "cell"}, None),
     "bounce_gym/BounceCoverage-v0": ({"world": "lab_fig1", "task": "coverage"}, 500),
     "bounce_gym/BounceLocalization-v0": (
         {"world": "lab_localization_a", "task": "localization", "angles": (45.0, 135.0),
@@ -45,6 +49,11 @@ GYM_ENVS: dict[str, tuple[dict[str, object], int]] = {
 ENTRY_POINTS = {
     "bounce_gym/BounceNavigation-v1": "bounce_gym.envs.goal_navigation_env:GoalNavigationEnv",
 }
+#: Gymnasium ids whose horizon is the env's ``horizon``, derived from its map, which the
+#: wrapper `bounce_gym.envs.map_horizon.MapHorizon` applies (named, so that registering imports
+#: no env module)
+MAP_HORIZON = ("bounce_gym/BounceNavigation-v1",)
+_MAP_HORIZON_WRAPPER = WrapperSpec("MapHorizon", "bounce_gym.envs.map_horizon:MapHorizon", {})
 #: the ids whose envs `BounceVectorEnv` batches (localization's filter is not batched)
 VECTOR_ENTRY_POINT = "bounce_gym.envs.vector_env:BounceVectorEnv"
 VECTOR_IDS = ("bounce_gym/Bounce-v0", "bounce_gym/BounceNavigation-v0",
@@ -97,8 +106,9 @@ ABOUT: dict[str, str] = {
         "so far, whatever the reward."),
     "bounce_gym/BounceNavigation-v1": (
         "The navigation of v0 as a goal-conditioned task for learners (`GoalNavigationEnv`); "
-        "the horizon is three times the longest optimal plan of the map (14 bounces; mean "
-        "4.8). Start and goal poses only where the cell model joins them "
+        "the horizon is three times the longest optimal plan of the env's own map "
+        "(`HORIZON_FACTOR`; 42 steps on the lab: its longest plan is 14 bounces, the mean "
+        "4.8), so `world=...` gets the same slack. Start and goal poses only where the cell model joins them "
         "(`info[\"optimal_bounces\"]`: the fewest bounces). Observation: a `Dict` of "
         "`observation` (clock and the one-hot cell pose), `achieved_goal` (the poses the step "
         "passed) and `desired_goal` (the goal pose); reward 1 on reaching the goal, else 0, "
@@ -176,7 +186,9 @@ def register_envs() -> None:
             gym.register(env_id, entry_point=ENTRY_POINTS.get(
                              env_id, "bounce_gym.envs.bounce_env:BounceEnv"),
                          vector_entry_point=VECTOR_ENTRY_POINT if env_id in VECTOR_IDS else None,
-                         kwargs=kwargs, max_episode_steps=steps)
+                         kwargs=kwargs, max_episode_steps=steps,
+                         additional_wrappers=((_MAP_HORIZON_WRAPPER,)
+                                              if env_id in MAP_HORIZON else ()))
     for env_id, (entry_point, steps) in DRIFTER_GYM_ENVS.items():
         if env_id not in gym.registry:
             gym.register(env_id, entry_point=entry_point, max_episode_steps=steps)

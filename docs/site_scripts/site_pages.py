@@ -72,6 +72,10 @@ def _gymnasium_page(env_id: str, env: gym.Env) -> tuple[str, tuple[str, ...]]:
     spec = env.spec
     cls = type(env.unwrapped)
     vector = spec.vector_entry_point or "none (`gym.make_vec` wraps copies of the env)"
+    horizon = str(spec.max_episode_steps)
+    if env_id in registration.MAP_HORIZON:
+        horizon += (" on the registered map; derived from the map (three times its longest "
+                    "optimal plan), so another `world` gets its own (`MapHorizon`)")
     lines = [
         f"# `{env_id}`",
         "",
@@ -91,7 +95,7 @@ def _gymnasium_page(env_id: str, env: gym.Env) -> tuple[str, tuple[str, ...]]:
         "|---|---|",
         f"| entry point | `{spec.entry_point}` |",
         f"| registered arguments | {_kwargs(spec.kwargs)} |",
-        f"| horizon (`max_episode_steps`) | {spec.max_episode_steps} |",
+        f"| horizon (`max_episode_steps`) | {horizon} |",
         f"| vector entry point | {_code(vector) if spec.vector_entry_point else vector} |",
         "",
         "## Observation space",

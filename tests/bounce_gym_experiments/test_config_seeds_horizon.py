@@ -11,6 +11,7 @@ from bounce_gym_experiments.runner import make_experiment_env
 
 NAV = "bounce_gym/BounceNavigation-v0"
 COVERAGE = "bounce_gym/MultiBounceCoverage-v0"
+GOAL = "bounce_gym/BounceNavigation-v1"
 
 
 def _one(**exp) -> dict:
@@ -98,3 +99,16 @@ def test_relative_map_files_are_read_next_to_the_config(tmp_path):
     loaded = load_config(path)
     assert loaded["experiments"][0]["env_kwargs"]["world"] == str(tmp_path / "maps/box.yaml")
     assert loaded["experiments"][1]["env_kwargs"]["world"] == "square"
+
+
+def test_a_v1_experiment_runs_the_horizon_of_its_map():
+    grid = {"world": "configs/maps/bench_grid_14x22.yaml"}
+    lab = _one(env=GOAL)
+    assert lab["max_steps"] == 42
+    exp = _one(env=GOAL, env_kwargs=grid)
+    assert exp["max_steps"] == 60 == make_experiment_env(exp).spec.max_episode_steps
+    with pytest.raises(ConfigError, match=r"max_steps: 42 differs from the horizon 60 that "
+                                          r"bounce_gym/BounceNavigation-v1 derives on this map"):
+        _one(env=GOAL, env_kwargs=grid, max_steps=42)
+    longer = _one(env=GOAL, env_kwargs=grid, max_steps=80, horizon_reason="a longer study")
+    assert make_experiment_env(longer).spec.max_episode_steps == 80

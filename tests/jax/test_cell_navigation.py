@@ -148,3 +148,13 @@ def test_unsupported_options_say_why():
              noise={"type": "reliable", "r": 0.8, "eps_deg": 45})
     with pytest.raises(ConfigError, match="step_mode 'tick'"):
         make("bounce_gym/Bounce-v0", backend="cell", step_mode="tick")
+
+
+@pytest.mark.parametrize("world", ["lab_navigation", "configs/maps/bench_grid_14x22.yaml", GRID])
+def test_v1_horizon_is_the_numpy_envs_on_every_map(world):
+    """The JAX env truncates where the NumPy env's per-map horizon does (42 on the lab)."""
+    numpy_env = gym.make("bounce_gym/BounceNavigation-v1", world=world)
+    env, params = make("bounce_gym/BounceNavigation-v1", world=world)
+    assert int(params.max_steps_in_episode) == numpy_env.spec.max_episode_steps \
+        == numpy_env.unwrapped.horizon
+    assert (world != "lab_navigation") or int(params.max_steps_in_episode) == 42

@@ -98,6 +98,12 @@ class GoalNavigationTask(NavigationTask):
         if self.draw == "reachable" and not len(self.starts):
             raise ConfigError("draw: 'reachable' needs a start pose that joins some goal pose, "
                               "and this world has none for these angles")
+        arrivals = np.unique(self.reach.arrival[self.starts])
+        plans = self.bounces[arrivals].astype(np.int64)
+        plans[np.arange(len(arrivals)), arrivals] = UNREACHABLE  # a goal is not the first bump
+        #: the fewest bounces of the hardest start/goal pair ``draw="reachable"`` draws: the
+        #: longest optimal plan of the map (`UNREACHABLE` where no pair is joined)
+        self.longest_plan = int(plans.max(initial=UNREACHABLE))
         #: per pose: its index among the decision poses (−1: not one)
         self.goal_index = np.full(model.n_cells, -1, dtype=np.int64)
         self.goal_index[self.reach.decisions] = np.arange(len(self.reach.decisions))
