@@ -37,8 +37,11 @@ BLOCK = re.compile(r"(<!-- results: (?P<spec>[^>]*?) -->\n)(?P<body>.*?)(<!-- en
 
 
 def documents(root: Path) -> list[Path]:
-    """The Markdown files that may hold published tables: README.md and docs/**/*.md."""
-    return [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+    """The Markdown files that may hold published tables: README.md and docs/**/*.md but the
+    published leaderboards themselves (docs/results/)."""
+    results = root / "docs" / "results"
+    return [root / "README.md", *sorted(p for p in (root / "docs").rglob("*.md")
+                                        if results not in p.parents)]
 
 
 def _read_csv(root: Path, name: str) -> list[dict]:
