@@ -10,7 +10,8 @@ leaderboard, copied into the repository (``docs/results/<name>/``)::
 ``verdicts.csv`` gives the "Who wins" table (`bounce_gym_experiments.leaderboard.headline_markdown`);
 ``leaderboard.csv`` a table per experiment, optionally limited to some experiments and columns:
 ``<!-- results: docs/results/benchmark/leaderboard.csv experiments=navigation-lab,coverage-lab
-columns=success,ticks -->`` (the family's score is always shown). `stale` lists the blocks
+columns=success,ticks -->`` (the family's score is always shown, a listed column only where the
+experiment has it). `stale` lists the blocks
 that differ from their file (a test runs it); `rewrite` regenerates them (``bounce-gym tables
 --write``), after `publish` copied a run's files in (``--from RUN_FOLDER``). Paths are relative
 to the repository root; a block never cites a file outside it.
@@ -80,7 +81,7 @@ def render(root: Path, spec: str) -> str:
                 if r["experiment"] == experiment]
         score = str(mine[0]["score"])
         columns = [score] + [c for c in chosen.get("columns", "").split(",")
-                             if c and c != score]
+                             if c and c != score and any(r.get(c) is not None for r in mine)]
         lines += [f"**{experiment}** ({mine[0]['difficulty']}; score: {score})", "",
                   "| policy | " + " | ".join(columns) + " |",
                   "|---|" + "---|" * len(columns)]

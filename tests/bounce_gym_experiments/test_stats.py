@@ -121,3 +121,32 @@ def test_a_band_is_the_mean_interval_at_every_point():
     assert np.array_equal(one.lo, curves[0]) and np.array_equal(one.hi, curves[0])
     with pytest.raises(ValueError, match="curves"):
         stats.mean_band(np.zeros(3))
+
+
+def test_probability_of_improvement_of_one_run_is_the_mann_whitney_statistic():
+    rng = np.random.default_rng(4)
+    x, y = rng.normal(size=50).round(1), (rng.normal(size=70) + 0.3).round(1)  # with ties
+    p = stats.improvement([x], [y])
+    assert p.value == pytest.approx(scipy_stats.mannwhitneyu(x, y).statistic / (50 * 70))
+    assert p.lo < p.value < p.hi and p.n == 120
+    lower = stats.improvement([x], [y], higher_is_better=False)
+    assert lower.value == pytest.approx(1 - p.value)
+    assert stats.improvement([x], [y]) == p  # the same values give the same interval
+
+
+def test_runs_are_weighted_equally_in_the_probability_of_improvement():
+    # run 1 has one episode, run 2 has three: P(X > 0) = (1 + 0) / 2, not 1/4
+    p = stats.improvement([[1.0], [-1.0, -1.0, -1.0]], [[0.0]])
+    assert p.value == 0.5
+
+
+def test_a_row_estimate_is_the_iqm_of_run_means_with_episodes_resampled():
+    runs = [[1, 0, 1, 1], [0, 0, 1, 0], [1, 1, 1, 1], [0, 1, 0, 1], [1, 0, 0, 0]]
+    e = stats.row_estimate(runs)
+    means = sorted(np.mean(r) for r in runs)
+    assert e.value == pytest.approx(np.mean(means[1:4])) and e.n == 20
+    assert 0 <= e.lo < e.value < e.hi <= 1
+    assert stats.row_estimate([[3.0, 3.0], [3.0]]) == stats.Estimate(3.0, 3.0, 3.0, 3)
+    assert stats.row_estimate([[2.0]]).lo is None
+    with pytest.raises(ValueError):
+        stats.row_estimate([[], []])
