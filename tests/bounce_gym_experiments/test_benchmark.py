@@ -12,6 +12,7 @@ import yaml
 from bounce_gym import worlds
 from bounce_gym.worlds import generators
 from bounce_gym_experiments.config import configs_folder, load_config, validate_config
+from bounce_gym_experiments.runner import prepare_experiment
 
 ROOT = Path(__file__).parents[2]
 sys.path.insert(0, str(ROOT))
@@ -74,8 +75,14 @@ def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
         assert f"## {exp['name']} ({exp['difficulty']})" in board
     head, tables = board.split("\n## Who wins\n")[1].split("\n## ", 1)
     verdicts = [line for line in head.splitlines() if line.startswith("| ")][1:]
-    assert [line.split(" | ")[0][2:] for line in verdicts] == [
-        e["name"] for e in config["experiments"]]
+    shown = [line.split(" | ")[0][2:] for line in verdicts]
+    left_out = re.search(r"on the score: (.*)\.", head)
+    left_out = left_out[1].split(", ") if left_out else []
+    # with two seeds hardly anything is apart; every experiment is in the table or named
+    assert sorted(shown + left_out) == sorted(e["name"] for e in config["experiments"])
+    with (folder / "verdicts.csv").open(encoding="utf-8") as fh:
+        assert [v["experiment"] for v in csv.DictReader(fh)] == [
+            e["name"] for e in config["experiments"]]
     rows = [line for line in tables.splitlines() if line.startswith("| ")
             and "policy" not in line]
     assert len(rows) >= 6 * 3 and all(CELL.search(line) for line in rows)
@@ -90,3 +97,26 @@ def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
     scores = [float(line["success"]) for line in navigation]
     assert scores == sorted(scores, reverse=True)  # best first
     assert (folder / "leaderboard.png").stat().st_size > 1000
+
+
+def test_every_policy_of_a_benchmark_experiment_starts_from_the_same_draw():
+    """Policies compared in one row start from the same draw (issue 34): no policy picks its own
+    start unless the experiment imposes one start on all of them (monitoring's cycle start);
+    the drifter deployments, whose policies are starts, are the one exception."""
+    config = validate_config(load_config(BENCHMARK))
+    for exp in config["experiments"]:
+        if exp["env"] == "bounce_gym/MultiDrifter-v0":
+            continue
+        exp = {**exp, "policies": [k for k in exp["policies"] if k != "rl"]}
+        prepared = prepare_experiment(exp, ROOT / "no-models", exp["name"])
+        for seed in (10_000, 10_001):
+            for entrant in prepared.entrants:
+                episode = prepared.family.episode(entrant.env, entrant.policy, entrant.setup)
+                own = entrant.policy.start_options(entrant.env, seed)
+                imposed = episode.start_options(seed)
+                assert own is None or own == imposed, (exp["name"], entrant.policy.name)
+        names = [e.policy.name for e in prepared.entrants]
+        if exp["name"] == "multirobot-monitoring-15x15-cycle-start":
+            assert "planner (cycle start)" in names
+        if exp["name"] == "multirobot-coverage-10x10":
+            assert "planner (start observed)" in names
