@@ -9,8 +9,9 @@ which kinds of policy to run. The experiment's family (`bounce_gym_experiments.r
 the checks of its own keys: which ``policies`` it runs and their default, ``adversaries``,
 ``planner_kwargs``, ``visibility`` (`bounce_gym_experiments.families.base.Family.validate`).
 
-**Seeds.** Evaluation seeds are disjoint from training seeds (`baselines.seeds`): every seed
-must be at least ``EVALUATION_SEEDS_START`` (10,000) and at most `MAX_SEED` (2**32 - 1); at
+**Seeds.** Evaluation seeds are disjoint from the training and tuning seeds
+(`baselines.seeds`): every seed must be at least ``EVALUATION_SEEDS_START`` (10,000) and at
+most `MAX_SEED` (2**32 - 1), and one that falls in a reserved range is refused naming it; at
 most `MAX_SEEDS` (100,000) of them; the validated configuration holds the list.
 
 **Horizon.** An episode lasts at most the horizon its env registers — Gymnasium's
@@ -42,7 +43,7 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.config_model import ConfigModel, located, shorten, where
 from baselines.rl.model_files import check_folder_name
-from baselines.seeds import EVALUATION_SEEDS_START
+from baselines.seeds import EVALUATION_SEEDS_START, MAX_SEED, reserved_overlap
 from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
@@ -65,9 +66,8 @@ from bounce_gym_experiments.executors import (
 
 DIFFICULTIES = ("easy", "medium", "hard")
 DEFAULT_CONFIG_NAME = "eval_default.yaml"
-#: Most evaluation seeds of one experiment (episodes per policy), and the largest seed.
+#: Most evaluation seeds of one experiment (episodes per policy).
 MAX_SEEDS = 100_000
-MAX_SEED = 2**32 - 1
 #: Longest episode an experiment's ``max_steps`` may ask for.
 MAX_STEPS = 10**6
 #: env options a model folder of ``rl_models`` may set differently (observation only)
@@ -89,8 +89,8 @@ class SeedRange(ConfigModel):
     """``{start, count}``: the seeds start, start + 1, …, start + count - 1."""
 
     start: int = Field(ge=EVALUATION_SEEDS_START, le=MAX_SEED,
-                       description="The first seed (at least 10000: the seeds below are "
-                                   "training's).")
+                       description=f"The first seed (at least {EVALUATION_SEEDS_START}: the "
+                                   f"seeds below are training's and tuning's).")
     count: int = Field(ge=1, le=MAX_SEEDS, description="How many seeds (at most 100000, and the "
                                                        "last at most 2**32 - 1).")
 
@@ -99,6 +99,11 @@ class SeedRange(ConfigModel):
     def _range(cls, data: Any, info: ValidationInfo) -> Any:
         if isinstance(data, Mapping) and isinstance(data.get("start"), int) \
                 and isinstance(data.get("count"), int):  # else pydantic's type error
+            reserved = reserved_overlap(range(data["start"], data["start"] + data["count"]))
+            if reserved is not None:
+                raise ConfigError(f"{where(info)}: evaluation seeds must not overlap {reserved} "
+                                  f"(baselines.seeds), got start {data['start']}, count "
+                                  f"{data['count']}")
             start = integer(located(info, "start"), data["start"],
                             minimum=EVALUATION_SEEDS_START, maximum=MAX_SEED)
             integer(located(info, "count"), data["count"], minimum=1,
@@ -166,7 +171,8 @@ class Experiment(ConfigModel):
     seeds: list[int] | SeedRange = Field(
         default_factory=lambda: [EVALUATION_SEEDS_START],
         description=f"The evaluation seeds: a list of distinct integers, or {{start, count}}; "
-                    f"each in [{EVALUATION_SEEDS_START}, 2**32 - 1] (disjoint from training's), "
+                    f"each in [{EVALUATION_SEEDS_START}, 2**32 - 1] (disjoint from training's "
+                    f"and tuning's), "
                     f"at most {MAX_SEEDS}. Every policy runs one episode per seed.")
     max_steps: int | None = Field(
         default=None, ge=1, le=MAX_STEPS,
@@ -406,11 +412,16 @@ def evaluation_seeds(where: str, seeds: object) -> list[int]:
                           f"got {shorten(seeds)}")
     if len(seeds) > MAX_SEEDS:
         raise ConfigError(f"{where}: at most {MAX_SEEDS} seeds, got {len(seeds)}")
+    reasons = [reserved_overlap(range(s, s + 1)) for s in seeds]
+    first = next((reason for reason in reasons if reason is not None), None)
+    if first is not None:
+        clash = [s for s, reason in zip(seeds, reasons, strict=True) if reason == first]
+        raise ConfigError(f"{where}: evaluation seeds must not overlap {first} (baselines.seeds), "
+                          f"got {clash[:5]}{' ...' if len(clash) > 5 else ''}")
     low = [s for s in seeds if s < EVALUATION_SEEDS_START]
     if low:
         raise ConfigError(f"{where}: evaluation seeds must be >= {EVALUATION_SEEDS_START} "
-                          f"(training uses the seeds below it, baselines.seeds), got {low[:5]}"
-                          f"{' ...' if len(low) > 5 else ''}")
+                          f"(baselines.seeds), got {low[:5]}{' ...' if len(low) > 5 else ''}")
     high = [s for s in seeds if s > MAX_SEED]
     if high:
         raise ConfigError(f"{where}: evaluation seeds must be <= {MAX_SEED}, got {high[:5]}"

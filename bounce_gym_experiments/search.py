@@ -15,6 +15,11 @@ trains (at the end of a rollout, at most ten times a run, once an episode has fi
 when it ends; ASHA (``--scheduler asha``) compares the trials at the same env steps and stops
 the worst early: a stopped trial keeps its checkpoints but saves no model.
 
+**Seeds** (`baselines.seeds`). A trial trains with the configuration's first seed s, its
+envs seeded s, s + 1, … (training seeds, checked like any training run's), and its metric is
+read from those same training episodes. No trial plays an episode on a tuning or an evaluation
+seed, so the evaluation of the chosen hyperparameters stays on episodes no choice was made on.
+
 **Outputs**, besides the runs: ``trials.csv`` (one row per trial: its status, the metric,
 episodes and env steps, and its hyperparameters) and ``best_hyperparams.yaml``, the best
 finished trial's complete entry in rl-zoo's layout, keyed by env id, to paste into

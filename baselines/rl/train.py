@@ -16,7 +16,7 @@ checked by `baselines.rl.train_config`, whose docstring gives every number's ran
     hyperparams_file: hyperparams/ppo.yaml  # optional, rl-zoo style, keyed by env id; relative
                                      # to this file's folder
     total_timesteps: 200000          # per seed (default: the file's n_timesteps), 1..10**10
-    seeds: [0, 1, 2, 3, 4]           # or seed: 0; env i of seed s is seeded with s + i < 10000
+    seeds: [0, 1, 2, 3, 4]           # or seed: 0; env i of seed s is seeded with s + i < 9000
     n_envs: 8                        # parallel episodes (default 4; DQN and multi-robot 1),
                                      # 1..1024
     n_stack: 1                       # frame stacking (VecFrameStack) when > 1, 1..100

@@ -20,7 +20,7 @@ configuration sets itself wins over the file (``total_timesteps`` over ``n_times
 everywhere, nested ``hyperparams`` included. ``total_timesteps`` is an integer in
 [1, `MAX_TIMESTEPS` = 10**10] and ``checkpoint_every`` in [0, 10**10]; ``n_envs`` in
 [1, `MAX_ENVS` = 1024]; ``n_stack`` in [1, `MAX_STACK` = 100]; ``torch_threads`` in [1, 4 x the
-machine's cores]; ``seed``/``seeds`` (at most 10,000 distinct) as `baselines.seeds` allows;
+machine's cores]; ``seed``/``seeds`` (at most 9,000 distinct) as `baselines.seeds` allows;
 ``normalize``'s ``clip_obs`` and ``clip_reward`` finite and > 0. Hyperparameters
 (`HYPERPARAM_RANGES`; a ``lin_<x>`` schedule is checked on x): ``learning_rate``,
 ``clip_range``, ``clip_range_vf`` (or null), ``target_kl`` (or null) and ``max_grad_norm``
@@ -56,7 +56,7 @@ from baselines.config_model import ConfigModel
 from baselines.rl.jaxrl.settings import hyperparameters as jax_hyperparameters
 from baselines.rl.model_files import ALGOS, JAX_ALGOS, VARIANT, check_folder_name
 from baselines.rl.patrol import PATROL_ID, ROLES
-from baselines.seeds import EVALUATION_SEEDS_START
+from baselines.seeds import TRAINING_SEEDS
 from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
@@ -178,7 +178,8 @@ class TrainingConfig(ConfigModel):
                                                              "with seeds.")
     seeds: list[int] | None = Field(default=None, min_length=1,
                                     description="Several runs' distinct seeds (>= 0); env i of "
-                                                "a run is seeded seed + i, below 10000.")
+                                                "a run is seeded seed + i, below "
+                                                f"{TRAINING_SEEDS.stop} (the training seeds).")
     n_envs: int | None = Field(default=None, ge=1, le=MAX_ENVS,
                                description="Envs stepped together (default: 4; 1 for DQN and "
                                            "multi-robot envs).")
@@ -437,14 +438,14 @@ def _seeds(config: dict) -> list[int]:
 
 
 def _check_seed_range(config: dict) -> None:
-    """Env i of the run with seed s is seeded with s + i: every such seed stays below the
-    evaluation seeds (`baselines.seeds`)."""
+    """Env i of the run with seed s is seeded with s + i: every such seed is a training seed,
+    below the tuning and evaluation seeds (`baselines.seeds`)."""
     for seed in config["seeds"]:
-        if seed + config["n_envs"] > EVALUATION_SEEDS_START:
+        if seed + config["n_envs"] > TRAINING_SEEDS.stop:
             raise ConfigError(
                 f"config.seeds: seed {seed} with n_envs {config['n_envs']} would seed envs up to "
                 f"{seed + config['n_envs'] - 1}; training env seeds must stay below "
-                f"{EVALUATION_SEEDS_START}, where the evaluation seeds start (baselines.seeds)")
+                f"{TRAINING_SEEDS.stop}, where the tuning seeds start (baselines.seeds)")
 
 
 def _normalize(value: bool | dict) -> dict | None:

@@ -47,10 +47,11 @@ def _experiment(**overrides) -> dict:
      "config.experiments[1].env_kwargs: "),
     (_experiment(seeds=[-1]), "config.experiments[1].seeds: evaluation seeds must be >= 10000"),
     (_experiment(seeds=[3, 10_001]),
-     "config.experiments[1].seeds: evaluation seeds must be >= 10000 (training uses the seeds "
-     "below it, baselines.seeds), got [3]"),
-    (_experiment(seeds={"start": 0, "count": 200}),
-     "config.experiments[1].seeds.start: expected an integer in [10000, 4294967295], got 0"),
+     "config.experiments[1].seeds: evaluation seeds must not overlap the training seeds "
+     "[0, 9000) (baselines.seeds), got [3]"),
+    (_experiment(seeds={"start": 9_950, "count": 200}),
+     "config.experiments[1].seeds: evaluation seeds must not overlap the tuning seeds "
+     "[9000, 10000) (baselines.seeds), got start 9950, count 200"),
     (_experiment(max_steps=7, horizon_reason=None),
      "config.experiments[1].max_steps: 7 differs from the horizon 200 that "
      "bounce_gym/BounceNavigation-v0 registers"),
@@ -127,11 +128,11 @@ def _train(**overrides) -> dict:
     (_train(algo="dqn", env_kwargs={"action_type": "continuous"}, hyperparams={}), [],
      "config.algo: dqn needs discrete actions"),
     (_train(), ["--resume"], "config.resume: nothing to resume: "),
-    (_train(seeds=[0, 10000]), [], "config.seeds: seed 10000 with n_envs 1 would seed envs up "
-                                   "to 10000"),
-    (_train(n_envs=3, seeds=[9998]), [], "config.seeds: seed 9998 with n_envs 3 would seed "
-                                         "envs up to 10000; training env seeds must stay below "
-                                         "10000"),
+    (_train(seeds=[0, 9000]), [], "config.seeds: seed 9000 with n_envs 1 would seed envs up "
+                                  "to 9000"),
+    (_train(n_envs=3, seeds=[8998]), [], "config.seeds: seed 8998 with n_envs 3 would seed "
+                                         "envs up to 9000; training env seeds must stay below "
+                                         "9000, where the tuning seeds start (baselines.seeds)"),
     (_train(seed=0, seeds=[1]), [], "config.seeds: give either seed"),
     (_train(seeds=[1, 1]), [], "config.seeds: expected a non-empty list of distinct integers"),
     (_train(n_stack=0), [], "config.n_stack: expected an integer in [1, 100], got 0"),

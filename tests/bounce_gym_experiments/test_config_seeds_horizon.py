@@ -26,14 +26,23 @@ def test_seeds_default_to_the_first_evaluation_seed_and_expand_from_start_and_co
 
 
 @pytest.mark.parametrize(("seeds", "message"), [
-    ([0, 1], r"config\.experiments\[0\]\.seeds: evaluation seeds must be >= 10000 \(training "
-             r"uses the seeds below it, baselines\.seeds\), got \[0, 1\]"),
-    ([10_000, 9_999], r"\.seeds: evaluation seeds must be >= 10000.*got \[9999\]"),
+    ([0, 1], r"config\.experiments\[0\]\.seeds: evaluation seeds must not overlap the training "
+             r"seeds \[0, 9000\) \(baselines\.seeds\), got \[0, 1\]$"),
+    ([10_000, 9_999], r"^config\.experiments\[0\]\.seeds: evaluation seeds must not overlap the "
+                      r"tuning seeds \[9000, 10000\) \(baselines\.seeds\), got \[9999\]$"),
+    ([9_500, 3], r"\.seeds: .* the tuning seeds \[9000, 10000\) .*got \[9500\]$"),
+    ([-1, 10_001], r"\.seeds: evaluation seeds must be >= 10000 \(baselines\.seeds\), got \[-1\]"),
     (list(range(7)), r"got \[0, 1, 2, 3, 4\] \.\.\."),
     ([10_000, 10_000], r"\.seeds: every seed once .*repeated: \[10000\]"),
     ([], r"\.seeds: expected a non-empty list"),
     ([True], r"\.seeds: expected a non-empty list of integers"),
-    ({"start": 5, "count": 10}, r"\.seeds\.start: expected an integer in \[10000, 4294967295\], got 5"),
+    ({"start": 5, "count": 10}, r"^config\.experiments\[0\]\.seeds: evaluation seeds must not "
+                                r"overlap the training seeds \[0, 9000\) \(baselines\.seeds\), "
+                                r"got start 5, count 10$"),
+    ({"start": 9_990, "count": 200}, r"^config\.experiments\[0\]\.seeds: evaluation seeds must "
+                                     r"not overlap the tuning seeds \[9000, 10000\)"),
+    ({"start": -20, "count": 10}, r"\.seeds\.start: expected an integer in \[10000, 4294967295\], "
+                                  r"got -20"),
     ({"start": 10_000, "count": 0}, r"\.seeds\.count: expected an integer in \[1, 100000\], got 0"),
     ({"start": 10_000}, r"\.seeds: missing key 'count'"),
     ({"start": 10_000, "count": 2, "step": 3}, r"\.seeds: unknown keys \['step'\]"),

@@ -12,6 +12,7 @@ import yaml
 
 from baselines.rl.model_files import read_model
 from baselines.rl.train_config import validate_train_config
+from baselines.seeds import EVALUATION_SEEDS, TRAINING_SEEDS, TUNING_SEEDS
 from bounce_gym.errors import ConfigError
 from bounce_gym_experiments.search import trial_configs
 from bounce_gym_experiments.search_space import load_search_space, sample_trial
@@ -56,6 +57,23 @@ def test_a_missing_space_file_and_a_non_hyperparameter_are_refused(tmp_path):
     with pytest.raises(ConfigError, match="search: trial 0 .*config.hyperparams.colour: not a "
                                           "hyperparameter of PPO"):
         trial_configs(config, _space(tmp_path, {"colour": {"choice": ["red"]}}), 2, 0)
+
+
+def test_trials_train_and_are_scored_on_training_seeds_only(tmp_path):
+    """A trial trains on the configuration's first seed and is scored on its own training
+    episodes (the monitor file): every env seed it uses is a training seed, never a tuning or
+    evaluation one, and a first seed whose envs would reach the tuning seeds is refused."""
+    config = {key: value for key, value in CONFIG.items() if key != "seed"}
+    config.update(models=str(tmp_path / "models"), seeds=[TRAINING_SEEDS.stop - 2, 5])
+    for _, trial in trial_configs(config, _space(tmp_path, SPACE), 3, 0):
+        assert trial["seeds"] == [TRAINING_SEEDS.stop - 2]
+        env_seeds = range(trial["seeds"][0], trial["seeds"][0] + trial["n_envs"])
+        assert all(s in TRAINING_SEEDS for s in env_seeds)
+        assert not any(s in TUNING_SEEDS or s in EVALUATION_SEEDS for s in env_seeds)
+    with pytest.raises(ConfigError, match=r"search: trial 0 .*config\.seeds: seed 8999 with "
+                                          r"n_envs 2 would seed envs up to 9000"):
+        trial_configs({**config, "seeds": [TRAINING_SEEDS.stop - 1]}, _space(tmp_path, SPACE),
+                      1, 0)
 
 
 def test_draws_are_reproducible_and_within_their_bounds(tmp_path):

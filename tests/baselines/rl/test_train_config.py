@@ -17,7 +17,7 @@ from baselines.rl.train_config import (  # noqa: E402
     validate_train_config,
 )
 from baselines.rl.train_env import make_train_env  # noqa: E402
-from baselines.seeds import EVALUATION_SEEDS_START  # noqa: E402
+from baselines.seeds import TRAINING_SEEDS  # noqa: E402
 
 CONFIGS = Path(__file__).parents[3] / "configs"
 TRAIN_CONFIGS = sorted(CONFIGS.glob("train_*.yaml"))
@@ -28,7 +28,7 @@ HYPERPARAMS = sorted((CONFIGS / "hyperparams").glob("*.yaml"))
 def test_shipped_training_configs_build_their_model(path):
     config = validate_train_config(yaml.safe_load(path.read_text()), path.parent)
     assert config["total_timesteps"] >= 10_000 and len(config["seeds"]) >= 1
-    assert max(config["seeds"]) + config["n_envs"] <= EVALUATION_SEEDS_START
+    assert max(config["seeds"]) + config["n_envs"] <= TRAINING_SEEDS.stop
     if config["algo"] in JAX_ALGOS:  # the JAX learner, built (its checks) but not compiled
         pytest.importorskip("jax")
         from baselines.rl.jaxrl.runner import learner
