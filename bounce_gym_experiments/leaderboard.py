@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from baselines.drifters.fleet import RANDOM_DEPLOYMENT
 from baselines.drifters.policy import AlwaysDriftPolicy, RandomLayerPolicy
 from baselines.policy import RandomAnglePolicy
 from baselines.rl.policies import GREEDY_SUFFIX
@@ -42,12 +43,12 @@ def ordered(rows: list[dict], family) -> list[dict]:
 
 
 def kind(policy: str) -> str:
-    """``rl``, ``greedy`` (a trained agent's greedy twin), ``random`` (a random angle, or the
-    drifter's random layer), ``fixed`` (a fixed angle, or the drifter that never changes
+    """``rl``, ``greedy`` (a trained agent's greedy twin), ``random`` (a random angle, the
+    drifter's random layer, the fleet's random deployment), ``fixed`` (a fixed angle, or the drifter that never changes
     layer), ``oracle`` or ``planner`` (every other row: the family's reference planners)."""
     if policy.startswith("rl "):
         return "greedy" if policy.endswith(GREEDY_SUFFIX) else "rl"
-    if policy in (RandomAnglePolicy.name, RandomLayerPolicy.name):
+    if policy in (RandomAnglePolicy.name, RandomLayerPolicy.name, RANDOM_DEPLOYMENT):
         return "random"
     if policy.startswith("fixed ") or policy == AlwaysDriftPolicy.name:
         return "fixed"

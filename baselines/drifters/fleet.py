@@ -26,12 +26,16 @@ from bounce_gym import validate
 from bounce_gym.cells import DRIFT, DrifterCells
 from bounce_gym.errors import ConfigError
 
-__all__ = ["DEPLOYMENT_METHODS", "DeploymentPolicy"]
+__all__ = ["DEPLOYMENT_METHODS", "RANDOM_DEPLOYMENT", "DeploymentPolicy"]
 
 #: The deployments `DeploymentPolicy` releases a fleet at.
 DEPLOYMENT_METHODS = ("alg5.2", "random", "greedy")
 #: The layer the fleet is released in and covers (MultiDrifter-v0 covers the surface).
 SURFACE = 0
+
+
+#: the row name of the random deployment (the baseline the others are compared with)
+RANDOM_DEPLOYMENT = "random deployment"
 
 
 class DeploymentPolicy(MultiPolicy):
@@ -50,7 +54,7 @@ class DeploymentPolicy(MultiPolicy):
                               "take none")
         self.method = method
         self.horizon = None if horizon is None else validate.integer("horizon", horizon, 1)
-        self.name = {"alg5.2": "Alg. 5.2 deployment", "random": "random deployment",
+        self.name = {"alg5.2": "Alg. 5.2 deployment", "random": RANDOM_DEPLOYMENT,
                      "greedy": f"greedy deployment (H={horizon})"}[method]
         self.deployment: Deployment | None = None
         self._model: DrifterCells | None = None

@@ -21,9 +21,10 @@ def test_kinds_of_rows():
     assert [kind(p) for p in ("rl dqn", "rl ppo (greedy)", "random", "fixed 45°",
                               "oracle: best fixed angle per episode (hindsight)",
                               "roadmap planner", "random layer", "always drift",
-                              "value iteration", "rl dqn (pose observed) (greedy)")] == [
+                              "value iteration", "rl dqn (pose observed) (greedy)",
+                              "random deployment", "Alg. 5.2 deployment")] == [
         "rl", "greedy", "random", "fixed", "oracle", "planner", "random", "fixed", "planner",
-        "greedy"]
+        "greedy", "random", "planner"]
 
 
 def _episodes(experiment, policy, outcomes, group=None, score="success"):
