@@ -38,7 +38,6 @@ SETTINGS = {
     "no-roughening": (DEFAULT_PARTICLES, {"jitter_deg": 0.0}),
     "roughening-1deg": (DEFAULT_PARTICLES, {"jitter_deg": 1.0}),
     "exact-clocks": (DEFAULT_PARTICLES, {"tolerance": 0}),
-    "3000-particles": (3_000, {}),
 }
 
 #: the modules that build a ParticleBelief for the task and for the policy
