@@ -1,6 +1,6 @@
 """How something was made: package versions, the source commit, the Python, the platform and the
 machine. One record serves both the evaluation's ``results.json`` (``provenance``) and every
-trained model's metadata (``trained_with``, `baselines.rl.model_files`), so that a result or an
+trained model's metadata (``trained_with``), so that a result or an
 agent can be traced to the code and the machine that produced it.
 
 The machine matters for trained weights: the same configuration, seed and library versions give

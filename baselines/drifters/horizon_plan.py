@@ -24,7 +24,7 @@ import scipy.sparse as sp
 
 from baselines.drifters.policy import reach_env
 from baselines.drifters.value_iteration import goal_states
-from baselines.policy import Policy
+from baselines.policy import POSE_OBSERVED, Policy
 from bounce_gym import validate
 from bounce_gym.cells import DrifterCells
 from bounce_gym.cells.sampled_drifter import SampledDrifterCells
@@ -110,6 +110,8 @@ class HorizonReachPolicy(Policy):
     """
 
     name = "value iteration (sampled GCM)"
+    #: acts on the true position the observation holds (``observe_pose``)
+    information = POSE_OBSERVED
 
     def __init__(self, horizon: int, samples: int | None = None, seed: int = 0,
                  refine: int = 1) -> None:

@@ -31,6 +31,7 @@ class MapHorizon(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     Attributes:
         max_episode_steps: the limit this wrapper applies (None: the inner ``TimeLimit``'s).
+        _elapsed_steps: steps since the last reset (named as ``TimeLimit`` names its counter).
     """
 
     def __init__(self, env: gym.Env) -> None:
@@ -38,16 +39,16 @@ class MapHorizon(gym.Wrapper, gym.utils.RecordConstructorArgs):
         gym.Wrapper.__init__(self, env)
         self.max_episode_steps: int | None = (
             None if _has_time_limit(env) else int(env.unwrapped.horizon))  # type: ignore[attr-defined]
-        self._elapsed = 0
+        self._elapsed_steps = 0
 
     def reset(self, **kwargs):
-        self._elapsed = 0
+        self._elapsed_steps = 0
         return self.env.reset(**kwargs)
 
     def step(self, action):
         observation, reward, terminated, truncated, info = self.env.step(action)
-        self._elapsed += 1
-        if self.max_episode_steps is not None and self._elapsed >= self.max_episode_steps:
+        self._elapsed_steps += 1
+        if self.max_episode_steps is not None and self._elapsed_steps >= self.max_episode_steps:
             truncated = True
         return observation, reward, terminated, truncated, info
 

@@ -378,7 +378,7 @@ def _config_content() -> list[Case]:
         ("seeds: negative", evaluation(experiment(seeds=[-1])),
          f"{x}.seeds: evaluation seeds must be >= 10000"),
         ("seeds: training seeds", evaluation(experiment(seeds=[0, 1])),
-         f"{x}.seeds: evaluation seeds must be >= 10000"),
+         f"{x}.seeds: evaluation seeds must not overlap the training seeds [0, 9000)"),
         ("seeds: above 2**32", evaluation(experiment(seeds=[2**32])),
          f"{x}.seeds: evaluation seeds must be <= 4294967295"),
         ("seeds: a bool", evaluation(experiment(seeds=[True])),

@@ -40,6 +40,9 @@ FLEET = "bounce_gym/MultiDrifter-v0"
 CELL = re.compile(r"-?\d+(\.\d+)? \[(-?\d+(\.\d+)?, -?\d+(\.\d+)?|-, -)\] n=\d+")
 TWO_SINK_FLEET = 5  # Alg. 5.2's deployment cells on two_sink's surface
 
+#: the value iteration row: it acts on the drifter's true model state (info["state"])
+VI = "value iteration (pose observed)"
+
 
 def reach(name="reach", count=3, **kwargs) -> dict:
     return {"name": name, "env": REACH, "env_kwargs": {"observe_fix": True, **kwargs},
@@ -71,13 +74,13 @@ def test_a_tiny_drifter_evaluation_reports_every_cell_with_an_interval(tmp_path,
     assert "drifter deployment: surface coverage (Alg. 5.2)" in out
     rows = {(line.split()[0], " ".join(line.split()[1:3])): line for line in out.splitlines()
             if line.startswith(("reach", "deploy"))}
-    for policy in ("value iteration", "random layer", "always drift"):
+    for policy in (VI, "random layer", "always drift"):
         line = next(v for (exp, p), v in rows.items() if exp == "reach" and policy.startswith(p))
         assert len(CELL.findall(line)) >= 2  # success and return at least, each with an interval
     (folder,) = (tmp_path / "runs").iterdir()
     summary = {(r["experiment"], r["policy"]): r
                for r in json.loads((folder / "results.json").read_text())["summary"]}
-    planner = summary[("reach", "value iteration")]
+    planner = summary[("reach", VI)]
     assert planner["success_n"] == 3 and planner["predicted_success_n"] == 3
     assert 0 <= planner["success_lo"] <= planner["success"] <= planner["success_hi"] <= 1
     assert "predicted_success" in summary[("reach", "always drift")]
@@ -98,7 +101,7 @@ def test_value_iteration_success_on_the_cell_backend_is_the_models_prediction(tm
     the model); the table's interval for the success rate holds the mean prediction."""
     exp = {**reach(count=200), "policies": ["planner"]}
     rows, plots = run(config(tmp_path, exp), progress=False)
-    assert {r.policy for r in rows} == {"value iteration"}
+    assert {r.policy for r in rows} == {VI}
     success = np.array([r.metrics["success"] for r in rows], dtype=float)
     p = np.array([r.metrics["predicted_success"] for r in rows])
     assert 0.2 < p.mean() < 0.8  # neither certain nor hopeless: the test can tell them apart
@@ -257,7 +260,7 @@ def test_the_sampled_planner_rows_beside_the_old_one(tmp_path):
            "policies": ["planner"], "max_steps": 20, "horizon_reason": "a quick test",
            "planner_kwargs": {"models": ["cell", "sampled"], "samples": 4}}
     rows, _ = run(config(tmp_path, exp), progress=False)
-    assert {r.policy for r in rows} == {"value iteration", "value iteration (sampled GCM)"}
+    assert {r.policy for r in rows} == {VI, "value iteration (sampled GCM) (pose observed)"}
     assert all(0 <= r.metrics["predicted_success"] <= 1 for r in rows)
 
 

@@ -42,7 +42,7 @@ def _write(path: Path, data: dict) -> Path:
         ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "seeds": [0.5]}]},
          "seeds"),
         ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "seeds": [9_999]}]},
-         r"config.experiments\[0\].seeds: evaluation seeds must be >= 10000"),
+         r"config.experiments\[0\].seeds: evaluation seeds must not overlap the tuning seeds"),
         ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "policies": ["oracle"]}]},
          "policies"),
         ({"experiments": [{"name": "a", "env": "bounce_gym/Bounce-v0", "max_steps": "10"}]},

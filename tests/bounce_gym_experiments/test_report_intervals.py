@@ -194,9 +194,10 @@ def test_a_second_model_folder_with_the_privileged_observation(tmp_path):
     config = {"name": "priv", "output": str(tmp_path / "runs"),
               "models": str(tmp_path / "models"), "experiments": [exp]}
     rows, plots = run(config, progress=False)
-    privileged = [r for r in rows if r.policy == "rl nav-priv/ppo_seed0"]
+    # the folder's observation holds the pose: its rows say so
+    privileged = [r for r in rows if r.policy == "rl nav-priv/ppo_seed0 (pose observed)"]
     assert [r.seed for r in privileged] == [10_000, 10_001, 10_002]
-    assert {r.group for r in privileged} == {"rl nav-priv/ppo"}
+    assert {r.group for r in privileged} == {"rl nav-priv/ppo (pose observed)"}
     fixed = {r.seed: r.metrics["feasible"] for r in rows if r.policy == "fixed 90°"}
     assert {r.seed: r.metrics["feasible"] for r in privileged} == fixed  # the same episodes
     assert plots["nav"]["notes"] == [f"nav: no trained models in {tmp_path / 'models' / 'nav'} "
@@ -205,7 +206,7 @@ def test_a_second_model_folder_with_the_privileged_observation(tmp_path):
     (folder,) = (tmp_path / "runs").iterdir()
     assert (folder / "nav-profile.png").stat().st_size > 1000
     results = json.loads((folder / "results.json").read_text())
-    assert [s["policy"] for s in results["per_seed"]] == ["rl nav-priv/ppo_seed0",
-                                                         "rl nav-priv/ppo_seed0 (greedy)"]
-    assert {"rl nav-priv/ppo", "rl nav-priv/ppo (greedy)"} <= \
+    assert [s["policy"] for s in results["per_seed"]] == [
+        "rl nav-priv/ppo_seed0 (pose observed)", "rl nav-priv/ppo_seed0 (pose observed) (greedy)"]
+    assert {"rl nav-priv/ppo (pose observed)", "rl nav-priv/ppo (pose observed) (greedy)"} <= \
         {s["policy"] for s in results["summary"]}
