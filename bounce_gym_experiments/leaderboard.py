@@ -165,7 +165,7 @@ def headline_markdown(rows: list[dict]) -> list[str]:
     return lines
 
 
-def _verdict_lines(summary: list[dict], episodes: list[dict], families: Mapping) -> list[str]:
+def _verdict_lines(rows: list[dict]) -> list[str]:
     lines = ["## Who wins", "",
              "Per experiment, the best planner, the best trained agent (sampled actions, at "
              f"least {stats.MIN_SEEDS} training seeds; the greedy rows are in the tables) and "
@@ -174,12 +174,12 @@ def _verdict_lines(summary: list[dict], episodes: list[dict], families: Mapping)
              "second — with its 95% interval; the first wins when the interval lies above 0.5, "
              "the second when it lies below. A row's name says what it observes beyond contact "
              "and clock.", ""]
-    return lines + headline_markdown(verdict_rows(verdicts(summary, episodes, families))) + [""]
+    return lines + headline_markdown(rows) + [""]
 
 
-def markdown(config: Mapping, summary: list[dict], episodes: list[dict], families: Mapping,
+def markdown(config: Mapping, summary: list[dict], verdict_list: list[dict], families: Mapping,
              notes: list[str], provenance: Mapping) -> str:
-    """The leaderboard as Markdown (see the module)."""
+    """The leaderboard as Markdown (see the module); ``verdict_list``: its `verdict_rows`."""
     experiments = {exp["name"]: exp for exp in config["experiments"]}
     git = provenance.get("git", {})
     lines = [f"# {config['name']}: leaderboard", "",
@@ -189,7 +189,7 @@ def markdown(config: Mapping, summary: list[dict], episodes: list[dict], familie
              "interquartile mean of the runs' means and the interval a bootstrap over runs and "
              "their episodes, for rates and means alike. Rows are ordered by each task's score; "
              "the order alone ranks nothing.",
-             "", *_verdict_lines(summary, episodes, families)]
+             "", *_verdict_lines(verdict_list)]
     for heading, columns, rows in tables(summary, families):
         for name in dict.fromkeys(r["experiment"] for r in rows):
             exp, family = experiments[name], families[name]
@@ -254,11 +254,11 @@ def write_leaderboard(folder: Path, config: Mapping, summary: list[dict], episod
     `verdict_rows`) and ``leaderboard.png``; returns them. ``episodes``: the episode rows."""
     md, table, verdict_file = (folder / "leaderboard.md", folder / "leaderboard.csv",
                                folder / "verdicts.csv")
-    atomic_write(md, markdown(config, summary, episodes, families, notes, provenance).encode())
+    decided = verdict_rows(verdicts(summary, episodes, families))  # the bootstraps, once
+    atomic_write(md, markdown(config, summary, decided, families, notes, provenance).encode())
     atomic_write(table, csv_text(csv_rows(config, summary, families),
                                  ("experiment", "difficulty", "env", "policy", "episodes",
                                   "seeds", "score")).encode())
-    atomic_write(verdict_file, csv_text(verdict_rows(verdicts(summary, episodes, families)),
-                                        VERDICT_COLUMNS).encode())
+    atomic_write(verdict_file, csv_text(decided, VERDICT_COLUMNS).encode())
     figure = plot(folder, summary, families)
     return [md, table, verdict_file] + ([figure] if figure is not None else [])

@@ -130,19 +130,12 @@ def _success(path: Path) -> int:
     the evaluation plays them (sampled actions, drawn from each episode's seed)."""
     from baselines.rl.jaxrl.policy import JaxPolicy
     from baselines.rl.policies import SB3Policy
+    from bounce_gym_experiments.runner import run_episode
 
     env = gym.make("bounce_gym/BounceNavigation-v1")
     policy = (JaxPolicy if path.name.startswith("jax_") else SB3Policy)(path, env)
-    reached = 0
-    for seed in range(FIRST_SEED, FIRST_SEED + EPISODES):
-        policy.start_options(env, seed)
-        observation, info = env.reset(seed=seed)
-        policy.reset(env)
-        done = False
-        while not done:
-            observation, _, terminated, truncated, info = env.step(policy.act(observation, info))
-            done = terminated or truncated
-        reached += bool(info["is_success"])
+    reached = sum(bool(run_episode(env, policy, seed, env.spec.max_episode_steps)[0]["info"][
+        "is_success"]) for seed in range(FIRST_SEED, FIRST_SEED + EPISODES))
     env.close()
     return reached
 
