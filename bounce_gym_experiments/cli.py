@@ -89,13 +89,16 @@ from bounce_gym.extras import from_import_error, require
 
 
 def evaluate_command(config_path: str | None, progress: bool = True,
-             flags: Mapping[str, str] | None = None) -> int:
+                     flags: Mapping[str, str] | None = None,
+                     experiments: list[str] | None = None) -> int:
     """Run an evaluation configuration on its executor (``flags``: the executor flags given,
     `executor_from`), print the tables and write the run folder; if units fail for good, say
-    which and return 1, keeping the finished units for the next run."""
+    which and return 1, keeping the finished units for the next run. ``experiments``: run only
+    the experiments of these names (`select_experiments`)."""
     from bounce_gym_experiments.config import load_config, validate_config
 
-    config = validate_config(load_config(config_path))  # before the heavy imports below
+    # before the heavy imports below
+    config = select_experiments(validate_config(load_config(config_path)), experiments)
     import shutil
 
     from bounce_gym.errors import ConfigError
@@ -154,6 +157,24 @@ def evaluate_command(config_path: str | None, progress: bool = True,
           f"{len(written)} other files" + (" (leaderboard.md, leaderboard.csv, plots)"
                                            if config["leaderboard"] else " (plots)"))
     return 0
+
+
+def select_experiments(config: dict, names: list[str] | None) -> dict:
+    """``config`` with only the experiments named (in the configuration's order; None: all of
+    them); an unknown name is a `ConfigError` that suggests the nearest."""
+    from bounce_gym.errors import ConfigError
+    from bounce_gym.validate import did_you_mean
+
+    if names is None:
+        return config
+    known = [exp["name"] for exp in config["experiments"]]
+    unknown = [name for name in names if name not in known]
+    if unknown:
+        raise ConfigError(f"--experiments: no experiment named {unknown[0]!r} in the "
+                          f"configuration"
+                          + (f"; {hint}" if (hint := did_you_mean(unknown[:1], known)) else ""))
+    return {**config, "experiments": [exp for exp in config["experiments"]
+                                      if exp["name"] in names]}
 
 
 #: the executor flags, by the key of an ``executor`` block each sets
@@ -385,6 +406,8 @@ def add_version_flag(parser: argparse.ArgumentParser) -> argparse.ArgumentParser
 def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("config", nargs="?", help="YAML configuration (default: eval_default.yaml)")
     add_executor_flags(parser)
+    parser.add_argument("--experiments", nargs="+", metavar="NAME",
+                        help="run only these experiments of the configuration")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     return parser
 
@@ -498,7 +521,7 @@ def dispatch(args: argparse.Namespace) -> int:
         require(feature, *COMMAND_MODULES[args.command])
         if args.command == "evaluate":
             return evaluate_command(args.config, progress=not args.no_progress,
-                            flags=executor_flags(args))
+                                    flags=executor_flags(args), experiments=args.experiments)
         if args.command == "trust":
             return trust_command(args.models)
         if args.command == "curves":

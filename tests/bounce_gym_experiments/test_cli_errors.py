@@ -458,3 +458,20 @@ def test_a_configuration_error_comes_before_any_heavy_import(tmp_path, argv, tex
     assert done.stdout == "2 []\n", done.stderr
     errors = done.stderr.splitlines()
     assert len(errors) == 1 and errors[0].startswith("error: "), done.stderr
+
+
+def test_evaluate_runs_only_the_experiments_named(tmp_path, capsys):
+    """``--experiments`` keeps the configuration's order and leaves the others out; an unknown
+    name is one line that suggests the nearest, before anything runs."""
+    config = _write(tmp_path / "c.yaml", {
+        "name": "pick", "output": str(tmp_path / "runs"),
+        "experiments": [_experiment(name="first"), _experiment(name="second")]})
+    line = _one_error(capsys, ["evaluate", str(config), "--experiments", "secnd"])
+    assert line == ("error: --experiments: no experiment named 'secnd' in the configuration; "
+                    "did you mean 'second'?")
+    assert not (tmp_path / "runs").exists()
+    assert main(["evaluate", str(config), "--experiments", "second", "--workers", "1",
+                 "--no-progress"]) == 0
+    (run,) = (tmp_path / "runs").iterdir()
+    results = json.loads((run / "results.json").read_text(encoding="utf-8"))
+    assert {row["experiment"] for row in results["summary"]} == {"second"}
