@@ -211,17 +211,21 @@ class Family:
         sb3 = SharedSB3Policy if is_parallel_env(env) else SB3Policy
         information = POSE_OBSERVED if getattr(env.unwrapped, "observes_pose", False) \
             else CONTACT_AND_CLOCK
+        here = motion_model_of(env.unwrapped.options.backend, env.unwrapped.options.physics)
         out = []
         for path in model_files(folder):
             name = MODEL_NAME.fullmatch(path.name)
+            trained = trained_motion_model(path)
+            elsewhere = f" (trained on {trained})" if trained not in (None, here) else ""
             group = labelled(f"rl {label}{run_name(name['algo'], name['variant'])}",
-                             information)
+                             information) + elsewhere
             kind = _jax_policy() if name["algo"] in JAX_ALGOS else sb3
             for deterministic in (False, True):
                 suffix = GREEDY_SUFFIX if deterministic else ""
                 policy = kind(path, env, deterministic)
                 policy.information = information
-                policy.name = labelled(f"rl {label}{path.stem}", information) + suffix
+                policy.name = labelled(f"rl {label}{path.stem}", information) + elsewhere \
+                    + suffix
                 out.append((policy, group + suffix))
         return out
 
@@ -298,3 +302,31 @@ def _jax_policy():
     from baselines.rl.jaxrl.policy import JaxPolicy
 
     return JaxPolicy
+
+
+def motion_model_of(backend: str, physics: str | None) -> str:
+    """A motion model's name in row names: ``cell``, ``kinematic``, ``pymunk ideal`` or
+    ``pymunk dynamic`` (``physics`` None: the backend's default)."""
+    if backend != "pymunk":
+        return backend
+    return f"pymunk {physics or 'dynamic'}"
+
+
+def trained_motion_model(path: Path) -> str | None:
+    """The motion model a model file was trained on (`motion_model_of`), read from the training
+    configuration its metadata records (the env id's registered arguments under its
+    ``env_kwargs``); None where the file records no configuration (a model saved by hand)."""
+    import gymnasium
+
+    from baselines.rl.model_files import read_model
+    from bounce_gym.envs.options import EnvOptions
+
+    config = read_model(path).metadata.get("config")
+    if not isinstance(config, Mapping) or not isinstance(config.get("env"), str):
+        return None
+    try:
+        kwargs = {**registered_kwargs(config["env"]), **dict(config.get("env_kwargs") or {})}
+    except (gymnasium.error.Error, KeyError):  # an id this version does not register
+        return None
+    backend = kwargs.get("backend", EnvOptions.model_fields["backend"].default)
+    return motion_model_of(str(backend), kwargs.get("physics"))

@@ -156,3 +156,21 @@ def test_the_sampled_planner_reads_no_info_in_the_evaluation():
     blind, _ = run_episode(env, Blind(planner), 10_000, exp["max_steps"], record=True)
     assert seen["steps"] == blind["steps"] and seen["ticks"] == blind["ticks"]
     assert seen["info"]["position"] == pytest.approx(blind["info"]["position"])
+
+
+def test_agents_trained_on_another_motion_model_say_so():
+    """The lab coverage agents were trained on the cell backend: on pymunk's dynamic physics
+    their rows are named "(trained on cell)"."""
+    from bounce_gym_experiments.families.base import trained_motion_model
+    from bounce_gym_experiments.runner import prepare_experiment
+
+    folder = ROOT / "baselines" / "agents" / "coverage-lab"
+    assert {trained_motion_model(path) for path in folder.glob("*.zip")} == {"cell"}
+    experiment = validate_config({"name": "t", "models": "baselines/agents", "experiments": [{
+        "name": "c", "env": "bounce_gym/BounceCoverage-v0", "seeds": [10_000],
+        "policies": ["rl"], "rl_models": "coverage-lab",
+        "env_kwargs": {"world": "lab_fig1", "cell_bins": 360, "angles": [30, 75, 315],
+                       **DYNAMIC}}]})["experiments"][0]
+    prepared = prepare_experiment(experiment, folder.parent, "e")
+    assert {entrant.group for entrant in prepared.entrants} == {
+        "rl ppo (trained on cell)", "rl ppo (trained on cell) (greedy)"}
