@@ -211,12 +211,15 @@ class Family:
         sb3 = SharedSB3Policy if is_parallel_env(env) else SB3Policy
         information = POSE_OBSERVED if getattr(env.unwrapped, "observes_pose", False) \
             else CONTACT_AND_CLOCK
-        here = motion_model_of(env.unwrapped.options.backend, env.unwrapped.options.physics)
+        options = env.unwrapped.options
+        here = motion_model_of(options.backend, options.physics) \
+            if hasattr(options, "physics") else None  # the drifters' flows have none
         out = []
         for path in model_files(folder):
             name = MODEL_NAME.fullmatch(path.name)
             trained = trained_motion_model(path)
-            elsewhere = f" (trained on {trained})" if trained not in (None, here) else ""
+            elsewhere = f" (trained on {trained})" \
+                if None not in (here, trained) and trained != here else ""
             group = labelled(f"rl {label}{run_name(name['algo'], name['variant'])}",
                              information) + elsewhere
             kind = _jax_policy() if name["algo"] in JAX_ALGOS else sb3

@@ -22,10 +22,17 @@ from bounce_gym_experiments.plots.figures import pyplot, save_figure
 
 
 class CoverageEpisode(TeamEpisode):
-    def __init__(self, env) -> None:
+    """``start`` (seed → reset options, or ``None``): the start the experiment imposes on every
+    policy."""
+
+    def __init__(self, env, start=None) -> None:
         super().__init__(env)
+        self.start_of = start
         self.steps_to_full = None
         self.horizon = int(self.inner.max_cycles)
+
+    def start_options(self, seed):
+        return None if self.start_of is None else self.start_of(seed)
 
     def start(self, info):
         if info["coverage"] >= 1.0:
@@ -57,8 +64,25 @@ class MultiRobotCoverage(MultiRobot):
     planner_attributes = ("predicted_steps_to_full",)
     planner_class = "CoveragePlanPolicy"
 
+    def prepare(self, env, experiment):
+        """On a continuous backend the planner, built once per env: Algorithm 1 plans from a
+        joint cell, so every policy starts where the planner's random joint cell puts the
+        robots (`CoveragePlanPolicy.start_options`: cell centres and bin headings, drawn from
+        the seed) — the same draw for all. On the cell backend the env's own draw is a joint
+        cell: ``None`` (and where the angles are not discrete: no planner applies, and
+        `MultiRobot.policies` says why)."""
+        options = env.unwrapped.options
+        if options.backend == "cell" or options.action_type != "discrete":
+            return None
+        return super().planner(env, experiment, None)
+
+    def planner(self, env, experiment, setup):
+        return super().planner(env, experiment, setup) if setup is None else setup
+
     def episode(self, env, policy, setup):
-        return CoverageEpisode(env)
+        if setup is None:
+            return CoverageEpisode(env)
+        return CoverageEpisode(env, lambda seed: setup.start_options(env, seed))
 
     def collect(self, data, env, policy, setup):
         super().collect(data, env, policy, setup)
