@@ -128,19 +128,14 @@ class BoundaryPieces:
             normal[mask] = both / np.hypot(both[:, 0], both[:, 1])[:, None]
         return point, normal
 
-    def project(self, points: np.ndarray, direction: np.ndarray | None = None,
-                touch: float = 0.0, front: float = 0.0) -> Projection:
-        """The nearest boundary point of each point (n, 2) (`Projection`). With unit
-        ``direction`` vectors (n, 2), also whether a segment within ``touch`` of the point lies
-        ahead of it: the direction to the segment (−normal) makes a cosine above ``front`` with
-        the direction (a bumper pressed by a wall the robot touches)."""
+    def project(self, points: np.ndarray) -> Projection:
+        """The nearest boundary point of each point (n, 2) (`Projection`)."""
         points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         _, near = self._tree.query(points)
         seg0 = self._owner[near]
         best_d = np.full(len(points), np.inf)
         best_seg = seg0.copy()
         best_t = np.zeros(len(points))
-        facing = np.zeros(len(points), dtype=bool)
         for seg in (self._before[seg0], seg0, self._after[seg0]):
             vec = self.end[seg] - self.start[seg]
             rel = points - self.start[seg]
@@ -149,11 +144,8 @@ class BoundaryPieces:
             d = np.hypot(gap[:, 0], gap[:, 1])
             better = d < best_d
             best_d[better], best_seg[better], best_t[better] = d[better], seg[better], t[better]
-            if direction is not None:
-                ahead = -np.einsum("ij,ij->i", self.normal[seg], direction)
-                facing |= (d <= touch) & (ahead > front)
         s = self.offset[best_seg] + best_t * self._seg_len[best_seg]
-        return Projection(self.piece[best_seg], s, best_d, self.normal[best_seg], facing)
+        return Projection(self.piece[best_seg], s, best_d, self.normal[best_seg])
 
 
 @dataclass(frozen=True)
@@ -164,15 +156,12 @@ class Projection:
         piece, s: the piece of the nearest boundary point and its arc length along the piece.
         distance: the distance to it.
         normal: (n, 2) the inward normal of its segment.
-        facing: whether a segment the point touches lies ahead of it (False without
-            directions).
     """
 
     piece: np.ndarray
     s: np.ndarray
     distance: np.ndarray
     normal: np.ndarray
-    facing: np.ndarray
 
 
 def _rings(region) -> list[np.ndarray]:

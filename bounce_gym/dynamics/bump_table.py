@@ -73,7 +73,7 @@ from bounce_gym import model_cache
 from bounce_gym.cells.bump_states import BumpStates
 from bounce_gym.cells.model import CellModel
 from bounce_gym.cells.outcomes import BumpOutcomes
-from bounce_gym.dynamics.backends.pymunk_dynamic import ARC_MARGIN, TRAVEL
+from bounce_gym.dynamics.backends.pymunk_dynamic import ARC_MARGIN, DEPTH, TRAVEL
 from bounce_gym.dynamics.boundary_pieces import BoundaryPieces
 from bounce_gym.dynamics.bump_sampler import (
     CHORD_SAG,
@@ -100,13 +100,14 @@ DEFAULT_HEADINGS = 180
 TICK_SPLIT = 4
 #: the four nodes around a lookup are interpolated when their drives end on one piece and their
 #: durations differ by at most this many ticks
-CLOSE = 0.25
+CLOSE = 1.0
 #: a pose farther than this (in robot radii) from the boundary is not a contact: the bumper's
 #: travel (`pymunk_dynamic.TRAVEL`) plus the chords' sag
 GAP = TRAVEL + CHORD_SAG
-#: a robot within this many radii of a boundary segment touches its wall (the chords' sag and
-#: the inset of a contact pose, with room to spare)
-TOUCH = 2 * CHORD_SAG
+#: a robot whose centre is within (1 + TOUCH) radii of a wall touches it: the dynamic backend's
+#: contact depth (`pymunk_dynamic.DEPTH`); a robot that braked off a wall corner and rests a
+#: fraction of a millimetre clear of it does not, and drives on when it faces it
+TOUCH = DEPTH
 #: ``end_piece`` codes of a node: its robot got nowhere within the limit, or stayed blocked
 LOST, STAYS = -1, -2
 #: the largest rotation whose turn ticks are tabulated (radians): two turns, beyond any noise
@@ -197,8 +198,8 @@ class BumpTable:
         seconds, the pieces they end on (`LOST`, `STAYS`), and whether each point is a contact
         (within `GAP` of the boundary).
 
-        A robot that touches a wall ahead (within `TOUCH` of a boundary segment it faces, as
-        its bumper reads the walls it touches) stays. The others are interpolated from the
+        A robot that touches a wall ahead (`TOUCH`: its bumper reads the walls it touches)
+        stays. The others are interpolated from the
         nodes (module docstring), except where the nearest node stays while the robot does
         not — it stands a little clear of the wall it faces, or near a corner the node
         touches —: it drives straight to the wall ahead (`World.first_hit`)."""
@@ -206,7 +207,7 @@ class BumpTable:
         psi = np.mod(np.asarray(psi, dtype=np.float64), TWO_PI)
         direction = np.column_stack((np.cos(psi), np.sin(psi)))
         radius = self.pieces.radius
-        near = self.pieces.project(point, direction, TOUCH * radius, self.front)
+        near = self.pieces.project(point)
         contact = np.isfinite(point).all(axis=1) & (near.distance <= GAP * radius)
         piece = np.where(contact, near.piece, 0)
         n_int = self.intervals[piece]
@@ -233,7 +234,10 @@ class BumpTable:
         duration = np.where(smooth, np.einsum("cn,cn->n", weight, seconds), self.seconds[nearest])
         angle = self.normal[nearest]
         normal = np.column_stack((np.cos(angle), np.sin(angle)))
-        straight = np.flatnonzero(contact & ~near.facing & (status == STAYS))
+        stays = np.zeros(len(point), dtype=bool)
+        stays[contact] = _touched_ahead(self.pieces.world, point[contact], direction[contact],
+                                        (1 + TOUCH) * radius, self.front)[0]
+        straight = np.flatnonzero(contact & ~stays & (status == STAYS))
         if len(straight):
             hit = self.pieces.world.first_hit(point[straight], direction[straight], radius)
             reach = np.where(np.isfinite(hit.distance), hit.distance, 0.0)
@@ -241,7 +245,6 @@ class BumpTable:
             normal[straight], turned[straight] = hit.normal, 0.0
             duration[straight] = reach / self.cruise + self.lag
             status[straight] = self.pieces.project(end[straight]).piece
-        stays = near.facing
         end[stays], normal[stays], turned[stays], duration[stays] = (
             point[stays], near.normal[stays], 0.0, 0.0)
         status[stays] = STAYS
@@ -283,20 +286,40 @@ class BumpTable:
         heading = np.asarray(heading, dtype=np.float64).reshape(-1)
         world, radius = self.pieces.world, self.pieces.radius
         direction = np.column_stack((np.cos(heading), np.sin(heading)))
-        forward = world.first_hit(point, direction, radius)
         behind = world.first_hit(point, -direction, radius).distance
         behind = np.where(np.isfinite(behind), behind, 0.0)
         start = point - behind[:, None] * direction
         end, final, normal, duration, status, contact = self.drives(start, heading)
         duration = duration - behind / self.cruise
-        # a robot placed with the wall within its bumper's travel ahead is blocked at once
-        placed = forward.distance <= TRAVEL * radius
+        # a robot placed with a wall within its bumper's travel ahead is blocked at once
+        placed, latched = _touched_ahead(world, point, direction, (1 + TRAVEL) * radius,
+                                         self.front)
         end[placed], final[placed], duration[placed] = point[placed], heading[placed], 0.0
-        normal[placed] = forward.normal[placed]
+        normal[placed] = latched[placed]
         ticks = np.where(duration > 0, self.drive_ticks(np.maximum(duration, 0.0)), 0)
         arrived = placed | (contact & (status >= 0) & (ticks < max_ticks))
         z = np.where(arrived, BumpStates(model).of(end, final, normal), -1)
         return z, end, final, ticks
+
+
+def _touched_ahead(world, point: np.ndarray, direction: np.ndarray, reach: float,
+                   front: float) -> tuple[np.ndarray, np.ndarray]:
+    """Whether a wall within ``reach`` of each robot centre lies ahead of it — the direction to
+    its nearest point makes a cosine above ``front`` with the heading: the bumper read of a
+    robot at rest, as the dynamic backend reads it —, and the normal (towards the robot) of
+    the most frontal such wall."""
+    start, vec = world.edge_start, world.edge_end - world.edge_start
+    length2 = np.einsum("ij,ij->i", vec, vec)
+    rel = point[:, None, :] - start[None, :, :]
+    u = np.clip(np.einsum("rwk,wk->rw", rel, vec) / length2, 0.0, 1.0)
+    away = rel - u[..., None] * vec
+    dist = np.hypot(away[..., 0], away[..., 1])
+    ahead = -np.einsum("rwk,rk->rw", away, direction) / np.maximum(dist, 1e-300)
+    ahead = np.where(dist <= reach, ahead, -np.inf)
+    best = np.argmax(ahead, axis=1) if len(point) else np.zeros(0, dtype=np.int64)
+    rows = np.arange(len(point))
+    normal = away[rows, best] / np.maximum(dist[rows, best], 1e-300)[:, None]
+    return ahead[rows, best] > front, normal
 
 
 def table_fingerprint(dynamics: dict, spacing: float, headings: int) -> str:
