@@ -91,10 +91,11 @@ from bounce_gym.errors import ConfigError
 
 #: the version of the stored layout and of the construction; a change invalidates old files
 FORMAT = 1
-#: default node spacing along the boundary, in robot radii (4.25 cm on a Create 2)
-DEFAULT_SPACING = 0.25
-#: default number of tabulated headings (2° apart)
-DEFAULT_HEADINGS = 180
+#: default node spacing along the boundary, in robot radii (8.5 cm on a Create 2), and number
+#: of tabulated headings (3° apart): chosen from the measured error and build time
+#: (docs/continuous_planners.md)
+DEFAULT_SPACING = 0.5
+DEFAULT_HEADINGS = 120
 #: the build simulates with ticks this many times shorter: the drive's duration is known within
 #: 1 / TICK_SPLIT of a tick before the odometer refines it
 TICK_SPLIT = 4
@@ -199,10 +200,11 @@ class BumpTable:
         (within `GAP` of the boundary).
 
         A robot that touches a wall ahead (`TOUCH`: its bumper reads the walls it touches)
-        stays. The others are interpolated from the
-        nodes (module docstring), except where the nearest node stays while the robot does
-        not — it stands a little clear of the wall it faces, or near a corner the node
-        touches —: it drives straight to the wall ahead (`World.first_hit`)."""
+        stays. The others are interpolated from the four nodes around them where those agree
+        (module docstring). Where they do not — the drive's target jumps between them, or a
+        node stays while the robot, a hair clear of the wall, drives — the wall ahead is cast
+        (`World.first_hit`): the nodes that end on its piece are interpolated, and where none
+        does, the robot drives straight to the cast contact."""
         point = np.asarray(point, dtype=np.float64).reshape(-1, 2)
         psi = np.mod(np.asarray(psi, dtype=np.float64), TWO_PI)
         direction = np.column_stack((np.cos(psi), np.sin(psi)))
@@ -234,19 +236,35 @@ class BumpTable:
         duration = np.where(smooth, np.einsum("cn,cn->n", weight, seconds), self.seconds[nearest])
         angle = self.normal[nearest]
         normal = np.column_stack((np.cos(angle), np.sin(angle)))
-        stays = np.zeros(len(point), dtype=bool)
-        stays[contact] = _touched_ahead(self.pieces.world, point[contact], direction[contact],
-                                        (1 + TOUCH) * radius, self.front)[0]
-        straight = np.flatnonzero(contact & ~stays & (status == STAYS))
-        if len(straight):
-            hit = self.pieces.world.first_hit(point[straight], direction[straight], radius)
+        stays, latched = np.zeros(len(point), dtype=bool), near.normal.copy()
+        stays[contact], latched[contact] = _touched_ahead(
+            self.pieces.world, point[contact], direction[contact], (1 + TOUCH) * radius,
+            self.front)
+        # where the nodes disagree, the wall ahead is cast: the nodes that end on its piece
+        # are interpolated, and where none does — or the nearest node stays while the robot
+        # does not (it rests a little clear of the wall it faces) — the robot drives straight
+        rough = np.flatnonzero(contact & ~stays & ~smooth)
+        if len(rough):
+            hit = self.pieces.world.first_hit(point[rough], direction[rough], radius)
             reach = np.where(np.isfinite(hit.distance), hit.distance, 0.0)
-            end[straight] = point[straight] + reach[:, None] * direction[straight]
-            normal[straight], turned[straight] = hit.normal, 0.0
-            duration[straight] = reach / self.cruise + self.lag
-            status[straight] = self.pieces.project(end[straight]).piece
+            cast = point[rough] + reach[:, None] * direction[rough]
+            target = self.pieces.project(cast).piece
+            agree = (ends[:, rough] == target) & (seconds[:, rough] > 0)
+            share = weight[:, rough] * agree
+            total = share.sum(axis=0)
+            some = total > 0
+            share = share[:, some] / total[some]
+            rows = rough[some]
+            end[rows] = np.einsum("cn,cnk->nk", share, self.end[corners[:, rows]])
+            turned[rows] = np.einsum("cn,cn->n", share, self.heading[corners[:, rows]])
+            duration[rows] = np.einsum("cn,cn->n", share, seconds[:, rows])
+            status[rows] = target[some]
+            rows, none = rough[~some], ~some
+            end[rows], normal[rows], turned[rows] = cast[none], hit.normal[none], 0.0
+            duration[rows] = reach[none] / self.cruise + self.lag
+            status[rows] = target[none]
         end[stays], normal[stays], turned[stays], duration[stays] = (
-            point[stays], near.normal[stays], 0.0, 0.0)
+            point[stays], latched[stays], 0.0, 0.0)
         status[stays] = STAYS
         return end, np.mod(psi + turned, TWO_PI), normal, duration, status, contact
 
@@ -378,7 +396,7 @@ def _layout(dynamics: dict, spacing: float, headings: int, key: str
     fields = {"headings": headings, "tick_seconds": tau,
               "cruise": params.cruise_speed / params.world_scale,
               "front": math.cos(math.radians(params.bumper_arc) / 2) + ARC_MARGIN,
-              "turn_steps": _turn_steps(params, tau), "fingerprint": key}
+              "turn_steps": turn_tick_steps(params, tau), "fingerprint": key}
     return pieces, intervals, offset, fields
 
 
@@ -426,9 +444,10 @@ def _durations(clock: np.ndarray, odometer: np.ndarray, fine_tick: float, cruise
     return np.where(drove, estimate, out), lag
 
 
-def _turn_steps(params: PhysicsParams, tau: float) -> np.ndarray:
-    """The rotations at which a turn's duration reaches 1, 2, … ticks (bisection on
-    `Turn.duration`): a turn up to the first adds no tick (module docstring)."""
+def turn_tick_steps(params: PhysicsParams, tau: float) -> np.ndarray:
+    """The rotations (radians, ascending) at which a turn's duration reaches 1, 2, … ticks of
+    ``tau`` seconds (bisection on `Turn.duration`): a turn by up to the first adds no tick to
+    the clock, one up to the second adds one, … (module docstring)."""
     def duration(delta: float) -> float:
         if delta == 0.0:
             return 0.0
