@@ -110,12 +110,14 @@ def _report(name: str, out: dict, particles: int) -> None:
           f"{_spread(out['ratio'])}")
     for kind in ("bumps", "reset"):
         e = out["error"][kind]
-        quantiles = ", ".join(f"{int(100 * q['q'])} % {1000 * q['value']:.2g} mm "
-                              f"[{1000 * q['ci95'][0]:.2g}, {1000 * q['ci95'][1]:.2g}]"
-                              for q in e["position_error"])
         print(f"  {kind} (n = {e['n']}): same state {_share(e['same_state'])}, clock exact "
-              f"{_share(e['ticks_exact'])}, within 1 {_share(e['ticks_within_1'])}; position "
-              f"error {quantiles}")
+              f"{_share(e['ticks_exact'])}, within 1 {_share(e['ticks_within_1'])}")
+        for label, key in (("all", "position_error"),
+                           (f"{e['moved']} that moved", "position_error_moved")):
+            quantiles = ", ".join(f"{int(100 * q['q'])} % {1000 * q['value']:.2g} mm "
+                                  f"[{1000 * q['ci95'][0]:.2g}, {1000 * q['ci95'][1]:.2g}]"
+                                  for q in e[key])
+            print(f"    position error, {label}: {quantiles}")
 
 
 def main(argv: list[str] | None = None) -> dict:

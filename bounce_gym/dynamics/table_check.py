@@ -9,7 +9,7 @@ drawn uniformly from [0, 2π), through the simulator and through the table with 
 rotation (no noise: the table applies the noise model's draw as given, so the map itself is
 compared). It also compares the reset drives of the first step. For both it reports the share
 of outcomes whose next decision state (`BumpStates`) is the same, the distribution of the
-distance between the two contact points, and the shares with the same clock and a clock within
+distance between the two contact points (also over the robots that moved), and the shares with the same clock and a clock within
 one tick, over the outcomes where the simulator's robot arrived (its own lost robots are
 counted apart). Shares carry Wilson 95 % intervals; quantiles the distribution-free 95 %
 interval of order statistics.
@@ -54,12 +54,16 @@ def quantile_interval(values: np.ndarray, q: float) -> dict:
 
 
 def compare(z_sim: np.ndarray, end_sim: np.ndarray, ticks_sim: np.ndarray,
-            z_tab: np.ndarray, end_tab: np.ndarray, ticks_tab: np.ndarray) -> dict:
+            z_tab: np.ndarray, end_tab: np.ndarray, ticks_tab: np.ndarray,
+            start: np.ndarray) -> dict:
     """The agreement of table outcomes with simulated ones, over those the simulator
-    arrived in (module docstring)."""
+    arrived in (module docstring); the position error also over the simulator's robots that
+    left their ``start`` (the others bumped again where they were, which the table places
+    exactly)."""
     arrived = z_sim >= 0
     n = int(arrived.sum())
     error = np.hypot(*(end_sim[arrived] - end_tab[arrived]).T)
+    moved = np.hypot(*(end_sim[arrived] - start[arrived]).T) > 0
     gap = np.abs(ticks_sim[arrived] - ticks_tab[arrived])
 
     def share(mask: np.ndarray) -> dict:
@@ -69,6 +73,8 @@ def compare(z_sim: np.ndarray, end_sim: np.ndarray, ticks_sim: np.ndarray,
     return {"n": n, "simulator_lost": int((~arrived).sum()),
             "same_state": share(z_sim[arrived] == z_tab[arrived]),
             "position_error": [quantile_interval(error, q) for q in QUANTILES],
+            "moved": int(moved.sum()),
+            "position_error_moved": [quantile_interval(error[moved], q) for q in QUANTILES],
             "ticks_exact": share(gap == 0), "ticks_within_1": share(gap <= 1)}
 
 
@@ -86,7 +92,7 @@ def table_error(table: BumpTable, model: CellModel, dynamics: dict, n: int = 100
     heading = rng.uniform(0.0, 2 * math.pi, n)
     z, end, final, clock = reset_drives(model, exact, point, heading, rng, max_ticks)
     zt, endt, _, clockt = table.reset_drives(model, point, heading, max_ticks)
-    reset = compare(z, end, clock, zt, endt, clockt)
+    reset = compare(z, end, clock, zt, endt, clockt, point)
     ok = np.flatnonzero(z >= 0)
     turn = rng.uniform(0.0, 2 * math.pi, len(ok))
     first = simulate_bumps(model, turn, np.arange(len(ok)), end[ok], final[ok], rng, exact,
@@ -97,5 +103,6 @@ def table_error(table: BumpTable, model: CellModel, dynamics: dict, n: int = 100
     pose, pose_heading = first.end[held], first.heading[held]
     sim = simulate_bumps(model, turn, action, pose, pose_heading, rng, exact, max_ticks)
     tab = table.bumps(model, turn, action, pose, pose_heading, rng, None, max_ticks)
-    bumps = compare(sim.next_state, sim.end, sim.ticks, tab.next_state, tab.end, tab.ticks)
+    bumps = compare(sim.next_state, sim.end, sim.ticks, tab.next_state, tab.end, tab.ticks,
+                    pose)
     return {"poses": len(held), "bumps": bumps, "reset": reset}
