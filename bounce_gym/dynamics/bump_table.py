@@ -55,7 +55,7 @@ rule; continuous headings) and the simulator otherwise::
     outcomes = motion.bumps(angles, action, end, heading, rng, max_ticks)   # a BumpOutcomes
 
 The measured error against the simulator, and the build times, are in
-docs/continuous_planners.md; `table_error` computes them.
+docs/bump_table.md; `table_error` computes them.
 """
 
 from __future__ import annotations
@@ -93,7 +93,7 @@ from bounce_gym.errors import ConfigError
 FORMAT = 1
 #: default node spacing along the boundary, in robot radii (8.5 cm on a Create 2), and number
 #: of tabulated headings (3° apart): chosen from the measured error and build time
-#: (docs/continuous_planners.md)
+#: (docs/bump_table.md)
 DEFAULT_SPACING = 0.5
 DEFAULT_HEADINGS = 120
 #: the build simulates with ticks this many times shorter: the drive's duration is known within
