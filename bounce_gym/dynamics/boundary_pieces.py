@@ -11,9 +11,8 @@ continuous except where the drive's target changes. A piece is parametrized by a
 from its first vertex (Birkhoff's coordinate of the billiard boundary); a ring with no sharp
 vertex is one piece from its first vertex all the way round.
 
-Points are mapped back to (piece, s) by projection onto the nearest ring segment, found through a
-k-d tree of points spread along the segments (`project`): contact points lie within a hair of the
-boundary, so the nearest sample lies on the nearest segment or one next to it along the ring.
+Points are mapped back to (piece, s) by projection onto the nearest ring segment among those a
+grid lists near them (`project`, `bounce_gym.dynamics.segment_grid`).
 """
 
 from __future__ import annotations
@@ -22,18 +21,23 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
+from bounce_gym.dynamics.segment_grid import SegmentGrid
 from bounce_gym.worlds import World
 
 #: A ring vertex where the boundary turns by more than this (radians) ends a piece: 20°, well
 #: above the 6.4° between the chords of a disk's arc (`World.eroded`'s 16 chords per quarter
 #: circle) and well below the 90° of a room's corner.
 BREAK = math.radians(20.0)
-#: Samples per segment length of the projection's k-d tree, relative to the shortest segment.
-SAMPLES_PER_SEGMENT = 4
+#: Points within this many radii of the boundary are projected onto it exactly (the grid of
+#: `bounce_gym.dynamics.segment_grid` lists the segments that near); contact points lie within
+#: a few hundredths of a radius.
+REACH = 0.1
+#: the grid's cell side, in radii: small enough that a cell lists few of the short chords
+#: around an obstacle corner (at most six on the lab maps)
+CELL = 0.25
 
 
 class BoundaryPieces:
@@ -86,21 +90,14 @@ class BoundaryPieces:
         tangent = tangent / seg_len[:, None]
         self.normal = np.column_stack((-tangent[:, 1], tangent[:, 0]))
         self._seg_len = seg_len
-        #: each segment's neighbours along its ring (the projection checks them too)
+        #: each segment's neighbours along its ring (the normals at vertices average them)
         ring_size = np.concatenate([np.full(len(s), len(s)) for s in starts])
         ring_first = np.concatenate([np.full(len(s), sum(len(t) for t in starts[:i]))
                                      for i, s in enumerate(starts)])
         local = np.arange(len(self.start)) - ring_first
         self._before = ring_first + np.mod(local - 1, ring_size)
         self._after = ring_first + np.mod(local + 1, ring_size)
-        step = max(float(seg_len.min()), 1e-9 * max(float(seg_len.max()), 1.0)) \
-            / SAMPLES_PER_SEGMENT
-        per = np.maximum(np.ceil(seg_len / step).astype(np.int64), 1) + 1
-        owner = np.repeat(np.arange(len(seg_len)), per)
-        t = np.concatenate([np.linspace(0.0, 1.0, k) for k in per.tolist()])
-        self._tree = cKDTree(self.start[owner] + t[:, None] * tangent[owner] * seg_len[owner,
-                                                                                      None])
-        self._owner = owner
+        self._grid = SegmentGrid(self.start, self.end, CELL * radius, REACH * radius)
 
     @property
     def n_pieces(self) -> int:
@@ -129,21 +126,18 @@ class BoundaryPieces:
         return point, normal
 
     def project(self, points: np.ndarray) -> Projection:
-        """The nearest boundary point of each point (n, 2) (`Projection`)."""
+        """The nearest boundary point of each point (n, 2) (`Projection`); a point farther
+        than `REACH` radii from the boundary may read as at distance inf."""
         points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        _, near = self._tree.query(points)
-        seg0 = self._owner[near]
-        best_d = np.full(len(points), np.inf)
-        best_seg = seg0.copy()
-        best_t = np.zeros(len(points))
-        for seg in (self._before[seg0], seg0, self._after[seg0]):
-            vec = self.end[seg] - self.start[seg]
-            rel = points - self.start[seg]
-            t = np.clip(np.einsum("ij,ij->i", rel, vec) / self._seg_len[seg] ** 2, 0.0, 1.0)
-            gap = rel - t[:, None] * vec
-            d = np.hypot(gap[:, 0], gap[:, 1])
-            better = d < best_d
-            best_d[better], best_seg[better], best_t[better] = d[better], seg[better], t[better]
+        candidates = self._grid.near(points)
+        _, dist, t = self._grid.closest(points, candidates)
+        pick = np.argmin(dist, axis=1)
+        rows = np.arange(len(points))
+        best_d, best_t = dist[rows, pick], t[rows, pick]
+        # the padding segment (beyond the reach of every segment) reads as segment 0, far away
+        best_seg = candidates[rows, pick]
+        best_d = np.where(best_seg < len(self.start), best_d, np.inf)
+        best_seg = np.where(best_seg < len(self.start), best_seg, 0)
         s = self.offset[best_seg] + best_t * self._seg_len[best_seg]
         return Projection(self.piece[best_seg], s, best_d, self.normal[best_seg])
 

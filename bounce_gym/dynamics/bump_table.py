@@ -87,6 +87,7 @@ from bounce_gym.dynamics.noise import Exact, make_noise
 from bounce_gym.dynamics.platform import PhysicsParams, physics_params
 from bounce_gym.dynamics.profiles import Turn
 from bounce_gym.dynamics.rules import TWO_PI
+from bounce_gym.dynamics.segment_grid import SegmentGrid
 from bounce_gym.errors import ConfigError
 
 #: the version of the stored layout and of the construction; a change invalidates old files
@@ -138,6 +139,7 @@ class BumpTable:
 
     Attributes:
         pieces: the boundary the nodes lie on.
+        walls: the world's edges near each point (the walls a robot may touch).
         intervals: (P,) node intervals per piece (nodes: intervals + 1).
         offset: (P,) the first node of every piece.
         headings: tabulated headings per boundary node.
@@ -157,6 +159,7 @@ class BumpTable:
     """
 
     pieces: BoundaryPieces
+    walls: SegmentGrid
     intervals: np.ndarray
     offset: np.ndarray
     headings: int
@@ -238,8 +241,7 @@ class BumpTable:
         normal = np.column_stack((np.cos(angle), np.sin(angle)))
         stays, latched = np.zeros(len(point), dtype=bool), near.normal.copy()
         stays[contact], latched[contact] = _touched_ahead(
-            self.pieces.world, point[contact], direction[contact], (1 + TOUCH) * radius,
-            self.front)
+            self.walls, point[contact], direction[contact], (1 + TOUCH) * radius, self.front)
         # where the nodes disagree, the wall ahead is cast: the nodes that end on its piece
         # are interpolated, and where none does — or the nearest node stays while the robot
         # does not (it rests a little clear of the wall it faces) — the robot drives straight
@@ -310,7 +312,7 @@ class BumpTable:
         end, final, normal, duration, status, contact = self.drives(start, heading)
         duration = duration - behind / self.cruise
         # a robot placed with a wall within its bumper's travel ahead is blocked at once
-        placed, latched = _touched_ahead(world, point, direction, (1 + TRAVEL) * radius,
+        placed, latched = _touched_ahead(self.walls, point, direction, (1 + TRAVEL) * radius,
                                          self.front)
         end[placed], final[placed], duration[placed] = point[placed], heading[placed], 0.0
         normal[placed] = latched[placed]
@@ -320,19 +322,14 @@ class BumpTable:
         return z, end, final, ticks
 
 
-def _touched_ahead(world, point: np.ndarray, direction: np.ndarray, reach: float,
-                   front: float) -> tuple[np.ndarray, np.ndarray]:
+def _touched_ahead(walls: SegmentGrid, point: np.ndarray, direction: np.ndarray,
+                   reach: float, front: float) -> tuple[np.ndarray, np.ndarray]:
     """Whether a wall within ``reach`` of each robot centre lies ahead of it — the direction to
     its nearest point makes a cosine above ``front`` with the heading: the bumper read of a
     robot at rest, as the dynamic backend reads it —, and the normal (towards the robot) of
-    the most frontal such wall."""
-    start, vec = world.edge_start, world.edge_end - world.edge_start
-    length2 = np.einsum("ij,ij->i", vec, vec)
-    rel = point[:, None, :] - start[None, :, :]
-    u = np.clip(np.einsum("rwk,wk->rw", rel, vec) / length2, 0.0, 1.0)
-    away = rel - u[..., None] * vec
-    dist = np.hypot(away[..., 0], away[..., 1])
-    ahead = -np.einsum("rwk,rk->rw", away, direction) / np.maximum(dist, 1e-300)
+    the most frontal such wall. ``walls`` lists the world's edges near each point."""
+    away, dist, _ = walls.closest(point, walls.near(point))
+    ahead = -np.einsum("nkc,nc->nk", away, direction) / np.maximum(dist, 1e-300)
     ahead = np.where(dist <= reach, ahead, -np.inf)
     best = np.argmax(ahead, axis=1) if len(point) else np.zeros(0, dtype=np.int64)
     rows = np.arange(len(point))
@@ -393,7 +390,9 @@ def _layout(dynamics: dict, spacing: float, headings: int, key: str
     offset = np.concatenate(([0], np.cumsum((intervals + 1) * headings)[:-1]))
     params = dynamic_params(dynamics)
     tau = params.tick_seconds(float(dynamics.get("step_length", 1.0)))
-    fields = {"headings": headings, "tick_seconds": tau,
+    walls = SegmentGrid(dynamics["world"].edge_start, dynamics["world"].edge_end, radius,
+                        (1 + TRAVEL) * radius)
+    fields = {"walls": walls, "headings": headings, "tick_seconds": tau,
               "cruise": params.cruise_speed / params.world_scale,
               "front": math.cos(math.radians(params.bumper_arc) / 2) + ARC_MARGIN,
               "turn_steps": turn_tick_steps(params, tau), "fingerprint": key}
@@ -423,7 +422,7 @@ def _build(dynamics: dict, spacing: float, headings: int, key: str) -> BumpTable
     arrays = {"end": out.end, "heading": heading,
               "normal": np.arctan2(out.normal[:, 1], out.normal[:, 0]),
               "end_piece": end_piece.astype(np.int32), "seconds": seconds}
-    return BumpTable(pieces, intervals, offset, end=arrays["end"], heading=arrays["heading"],
+    return BumpTable(pieces=pieces, intervals=intervals, offset=offset, end=arrays["end"], heading=arrays["heading"],
                      normal=arrays["normal"], end_piece=arrays["end_piece"],
                      seconds=arrays["seconds"], build_seconds=time.perf_counter() - began,
                      lag=lag, **fields)
@@ -484,7 +483,7 @@ def _from_stored(dynamics: dict, spacing: float, headings: int, key: str, header
     except (ValueError, KeyError, TypeError) as exc:
         model_cache.warn_unusable(path, exc)
         return None
-    return BumpTable(pieces, intervals, offset, end=arrays["end"].astype(np.float64),
+    return BumpTable(pieces=pieces, intervals=intervals, offset=offset, end=arrays["end"].astype(np.float64),
                      heading=arrays["heading"].astype(np.float64),
                      normal=arrays["normal"].astype(np.float64),
                      end_piece=arrays["end_piece"].astype(np.int64),
