@@ -14,8 +14,8 @@ the turn are applied at lookup time. Tabulating a map once over a grid of its do
 it afterwards is the idea of Hsu's cell-to-cell mapping (C. S. Hsu, *Cell-to-Cell Mapping*,
 Springer 1987, ch. 1–2); here the grid points keep continuous images and are interpolated.
 
-**The table.** Nodes at ``spacing`` robot radii along every piece (both ends included) × ``headings``
-headings ψ = 2π j / headings. Each node's robot is placed at rest at the boundary point (moved a
+**The table.** Nodes at ``spacing`` robot radii along every piece (both ends included) ×
+``headings`` headings ψ = 2π j / headings. Each node's robot is placed at rest at the boundary point (moved a
 hair into the free space, as `bump_sampler` places section points: `INSET`, `CHORD_SAG`) with
 heading ψ and driven by the real simulator to its first contact (`drive_from_rest`, many robots
 per space, ``robot_collisions="ignore"``). A node keeps: the contact point, the heading there
@@ -28,11 +28,14 @@ Its whole ticks are exact at the nodes, since the drive starts at a tick boundar
 
 **Lookup** (`BumpTable.bumps`, vectorised). The executed rotation is ``angles[action] mod 2π``
 plus a draw of the dynamics' noise model (Alam's relative rule, as the simulator executes it);
-ψ = heading + rotation; the contact point is projected onto the boundary (piece, s). The drive is
-interpolated bilinearly in (s, ψ) between the four nodes around it where all four end on the same
-piece with durations within `CLOSE` ticks of each other (the map is smooth there); elsewhere —
-across the corner a drive's target jumps at, or between a drive and a stay — the nearest node is
-used. The clock at the next bump is the turn's ticks plus the drive's: the turn, started at the
+ψ = heading + rotation; the contact point is projected onto the boundary (piece, s). A robot
+that touches a wall ahead of ψ bumps again where it is (its bumper reads the walls it touches,
+within `TOUCH`). Otherwise the drive is interpolated bilinearly in (s, ψ) between the four nodes
+around it where all four end on the same piece with durations within `CLOSE` ticks of each other
+(the map is smooth there); elsewhere — across the corner a drive's target jumps at, or between a
+drive and a stay — the wall ahead is cast (`World.first_hit`, a swept disk) and the nodes that
+end on its piece are interpolated, or, where none does, the robot drives straight to the cast
+contact (`BumpTable.drives`). The clock at the next bump is the turn's ticks plus the drive's: the turn, started at the
 bump tick, ends after ``Turn.duration`` seconds (`bounce_gym.dynamics.profiles`), the robot waits
 for the next tick boundary and the bump tick itself is not counted, so it adds
 ``max(ceil(duration / τ), 1) − 1`` ticks; the drive adds ``ceil(seconds / τ)``.
