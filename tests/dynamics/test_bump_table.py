@@ -37,8 +37,9 @@ def test_the_table_predicts_the_simulator_on_held_out_poses(table):
     report = table_error(table, MODEL, DYNAMICS, n=80, seed=7)
     bumps, reset = report["bumps"], report["reset"]
     assert bumps["n"] >= 60 and reset["n"] >= 70
-    # measured at this coarse resolution: same decision state for 97 % of the bumps and 96 %
-    # of the reset drives, clocks within one tick for all; the bounds leave room for chance
+    # measured at this coarse resolution (seeds 7-9, about 80 poses each): the same decision
+    # state for 94-100 % of the bumps and 92-95 % of the reset drives, the same clock for
+    # 99-100 % of the bumps, within one tick for all; the bounds leave room for chance
     assert bumps["same_state"]["share"] >= 0.85
     assert reset["same_state"]["share"] >= 0.85
     assert bumps["ticks_within_1"]["share"] >= 0.95 and bumps["ticks_exact"]["share"] >= 0.85
