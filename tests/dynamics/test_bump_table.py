@@ -11,6 +11,7 @@ import pytest
 
 from bounce_gym.cells.model import CellModel
 from bounce_gym.dynamics import bump_table as bt
+from bounce_gym.dynamics.boundary_pieces import BoundaryPieces
 from bounce_gym.dynamics.bump_sampler import drive_from_rest, reset_drives, simulate_bumps
 from bounce_gym.dynamics.bump_table import BumpMotion, bump_motion, bump_table, turn_tick_steps
 from bounce_gym.dynamics.platform import physics_params
@@ -148,3 +149,20 @@ def test_reset_drive_clocks_are_each_robots_own():
                              np.random.default_rng(0), 40).clock[0] for i in range(3)]
     np.testing.assert_array_equal(together.clock, alone)
     assert together.clock[0] < together.clock[1]
+
+
+def test_boundary_points_project_back_to_their_arc_length():
+    pieces = BoundaryPieces(ROOM, RADIUS)
+    # the room's inside corners cut its ring; the pillar's ring has none: one piece
+    assert pieces.n_pieces == 5
+    total = 2 * (2.5 - 2 * RADIUS) + 2 * (2 - 2 * RADIUS) + 1.6 + 2 * math.pi * RADIUS
+    assert pieces.length.sum() == pytest.approx(total, rel=2e-3)  # the arcs are chords
+    rng = np.random.default_rng(0)
+    piece = rng.integers(0, pieces.n_pieces, 500)
+    s = rng.random(500) * pieces.length[piece]
+    point, normal = pieces.locate(piece, s)
+    near = pieces.project(point + 1e-6 * normal)
+    np.testing.assert_array_equal(near.piece, piece)
+    np.testing.assert_allclose(near.s, s, atol=1e-9)
+    np.testing.assert_allclose(near.distance, 1e-6, rtol=1e-6)
+    assert np.isinf(pieces.project(np.array([[1.2, 0.4]])).distance[0])  # far from it
