@@ -33,9 +33,9 @@ that touches a wall ahead of ψ bumps again where it is (its bumper reads the wa
 within `TOUCH`). Otherwise the drive is interpolated bilinearly in (s, ψ) between the four nodes
 around it where all four end on the same piece with durations within `CLOSE` ticks of each other
 (the map is smooth there); elsewhere — across the corner a drive's target jumps at, or between a
-drive and a stay — the wall ahead is cast (`World.first_hit`, a swept disk) and the nodes that
-end on its piece are interpolated, or, where none does, the robot drives straight to the cast
-contact (`BumpTable.drives`). The clock at the next bump is the turn's ticks plus the drive's: the turn, started at the
+drive and a stay — the robot drives straight to the contact ahead, cast with `World.first_hit`
+(a swept disk), taking the distance's time at cruise speed plus the lag (`BumpTable.drives`).
+The clock at the next bump is the turn's ticks plus the drive's: the turn, started at the
 bump tick, ends after ``Turn.duration`` seconds (`bounce_gym.dynamics.profiles`), the robot waits
 for the next tick boundary and the bump tick itself is not counted, so it adds
 ``max(ceil(duration / τ), 1) − 1`` ticks; the drive adds ``ceil(seconds / τ)``.
@@ -208,9 +208,12 @@ class BumpTable:
         A robot that touches a wall ahead (`TOUCH`: its bumper reads the walls it touches)
         stays. The others are interpolated from the four nodes around them where those agree
         (module docstring). Where they do not — the drive's target jumps between them, or a
-        node stays while the robot, a hair clear of the wall, drives — the wall ahead is cast
-        (`World.first_hit`): the nodes that end on its piece are interpolated, and where none
-        does, the robot drives straight to the cast contact."""
+        node stays while the robot, a hair clear of the wall, drives — the robot drives straight
+        to the contact ahead, cast with `World.first_hit` (a swept disk), in the distance's time
+        at cruise speed plus the lag: exact but for the slide along a wall met at a glancing
+        angle (up to v² / 2a, 6 cm on a Create 2). Interpolating only the nodes that end on the
+        cast contact's piece was measured worse: on the generated grid map their spread over
+        3° of heading, up to 0.8 m at 12 m, put 10 % of the reset drives 20 cm off or more."""
         point = np.asarray(point, dtype=np.float64).reshape(-1, 2)
         psi = np.mod(np.asarray(psi, dtype=np.float64), TWO_PI)
         direction = np.column_stack((np.cos(psi), np.sin(psi)))
@@ -245,29 +248,17 @@ class BumpTable:
         stays, latched = np.zeros(len(point), dtype=bool), near.normal.copy()
         stays[contact], latched[contact] = _touched_ahead(
             self.walls, point[contact], direction[contact], (1 + TOUCH) * radius, self.front)
-        # where the nodes disagree, the wall ahead is cast: the nodes that end on its piece
-        # are interpolated, and where none does — or the nearest node stays while the robot
-        # does not (it rests a little clear of the wall it faces) — the robot drives straight
+        # where the nodes disagree, the robot drives straight to the wall ahead: its contact
+        # is cast, and the drive takes the distance at cruise speed plus the lag
         rough = np.flatnonzero(contact & ~stays & ~smooth)
         if len(rough):
             hit = self.pieces.world.first_hit(point[rough], direction[rough], radius)
             reach = np.where(np.isfinite(hit.distance), hit.distance, 0.0)
-            cast = point[rough] + reach[:, None] * direction[rough]
-            target = self.pieces.project(cast).piece
-            agree = (ends[:, rough] == target) & (seconds[:, rough] > 0)
-            share = weight[:, rough] * agree
-            total = share.sum(axis=0)
-            some = total > 0
-            share = share[:, some] / total[some]
-            rows = rough[some]
-            end[rows] = np.einsum("cn,cnk->nk", share, self.end[corners[:, rows]])
-            turned[rows] = np.einsum("cn,cn->n", share, self.heading[corners[:, rows]])
-            duration[rows] = np.einsum("cn,cn->n", share, seconds[:, rows])
-            status[rows] = target[some]
-            rows, none = rough[~some], ~some
-            end[rows], normal[rows], turned[rows] = cast[none], hit.normal[none], 0.0
-            duration[rows] = reach[none] / self.cruise + self.lag
-            status[rows] = target[none]
+            end[rough] = point[rough] + reach[:, None] * direction[rough]
+            normal[rough], turned[rough] = hit.normal, 0.0
+            duration[rough] = reach / self.cruise + self.lag
+            status[rough] = np.where(np.isfinite(hit.distance),
+                                     self.pieces.project(end[rough]).piece, LOST)
         end[stays], normal[stays], turned[stays], duration[stays] = (
             point[stays], latched[stays], 0.0, 0.0)
         status[stays] = STAYS
