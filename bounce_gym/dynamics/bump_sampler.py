@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -172,30 +173,71 @@ def _simulator(dynamics: dict, n: int) -> BounceDynamics:
     return BounceDynamics(params.pop("world"), n, robot_collisions="ignore", **params)
 
 
-def reset_drives(model: CellModel, dynamics: dict, point: np.ndarray, heading: np.ndarray,
-                  rng: np.random.Generator, max_ticks: int
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Robots placed at poses in the free space drive straight to their first contact, as a
-    bounce-mode reset does: their decision states (−1: none within ``max_ticks``), contact
-    points, headings and clocks."""
+@dataclass(frozen=True)
+class RestDrives:
+    """Robots placed at rest that drove straight to their first contact (`drive_from_rest`),
+    one entry per robot.
+
+    Attributes:
+        blocked: whether it was blocked within the limit.
+        end, heading, normal: (n, 2) where it stopped, (n,) its heading there and (n, 2) the
+            normal of the contact it latched (into the free space).
+        clock: ticks from the start to the end of the tick in which it was blocked (0: blocked
+            where it was placed).
+        odometer: distance it drove.
+    """
+
+    blocked: np.ndarray
+    end: np.ndarray
+    heading: np.ndarray
+    normal: np.ndarray
+    clock: np.ndarray
+    odometer: np.ndarray
+
+
+def drive_from_rest(dynamics: dict, point: np.ndarray, heading: np.ndarray,
+                    rng: np.random.Generator, max_ticks: int) -> RestDrives:
+    """Robots placed at rest at (``point``, ``heading``) drive straight to their first contact,
+    as a bounce-mode reset does; each is read at the end of the first tick in which it is
+    blocked (its clock then stops counting: blocked robots of a batch otherwise go on counting
+    the ticks the others still drive)."""
     point = np.asarray(point, dtype=np.float64)
     heading = np.asarray(heading, dtype=np.float64)
     n = len(point)
-    blocked, end, final = np.zeros(n, dtype=bool), np.zeros((n, 2)), np.zeros(n)
-    normal, clock = np.zeros((n, 2)), np.zeros(n, dtype=np.int64)
+    done, end, final = np.zeros(n, dtype=bool), np.zeros((n, 2)), np.zeros(n)
+    normal, clock, odometer = np.zeros((n, 2)), np.zeros(n, dtype=np.int64), np.zeros(n)
     for part in _parts(dynamics, n):
         sim = _simulator(dynamics, part.stop - part.start)
         state = sim.reset(rng, point[part], heading[part])
         if sim.backend.drives_independently:
             sim.backend.drive_each(state)
-        for _ in range(max_ticks):
-            if state.blocked.all():
+        got = np.zeros(part.stop - part.start, dtype=bool)
+        for tick in range(max_ticks + 1):
+            new = state.blocked & ~got
+            idx = np.arange(part.start, part.stop)[new]
+            end[idx], final[idx], normal[idx] = (state.position[new], state.heading[new],
+                                                 state.contact_normal[new])
+            clock[idx], odometer[idx] = state.clock[new], state.odometer[new]
+            got |= new
+            if got.all() or tick == max_ticks:
                 break
             sim.backend.drive(state, 1, until_first_block=False)
-        blocked[part], end[part], final[part] = state.blocked, state.position, state.heading
-        normal[part], clock[part] = state.contact_normal, state.clock
-    z = BumpStates(model).of(end, final, normal)
-    return np.where(blocked, z, -1), end, final, clock
+        done[part] = got
+        rest = np.arange(part.start, part.stop)[~got]
+        end[rest], final[rest] = state.position[~got], state.heading[~got]
+        clock[rest], odometer[rest] = state.clock[~got], state.odometer[~got]
+    return RestDrives(done, end, final, normal, clock, odometer)
+
+
+def reset_drives(model: CellModel, dynamics: dict, point: np.ndarray, heading: np.ndarray,
+                  rng: np.random.Generator, max_ticks: int
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Robots placed at poses in the free space drive straight to their first contact, as a
+    bounce-mode reset does (`drive_from_rest`): their decision states (−1: none within
+    ``max_ticks``), contact points, headings and clocks."""
+    out = drive_from_rest(dynamics, point, heading, rng, max_ticks)
+    z = BumpStates(model).of(out.end, out.heading, out.normal)
+    return np.where(out.blocked, z, -1), out.end, out.heading, out.clock
 
 
 def simulate_bumps(model: CellModel, angles: np.ndarray, action: np.ndarray, point: np.ndarray,
