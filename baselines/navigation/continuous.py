@@ -19,7 +19,8 @@ lattice. `ContinuousNavigationPlanner` chooses each bounce angle from that range
   found while the belief's most likely pose is the one the plan expects and searches again
   from that pose otherwise (in a noisy world: after a rotation error that the clock revealed).
   Without a plan within the search's budget it follows the way to the search's most promising
-  pose and searches again at its end (at most ``episode_searches`` searches per episode). In a noise-free world this replans from the exact pose
+  pose and searches again at its end (at most ``episode_searches`` fruitless searches per
+  episode). In a noise-free world this replans from the exact pose
   at every bump where needed; in a noisy one it is determinised replanning (the most likely
   outcome taken as certain, replanned on surprise; Yoon, Fern & Givan, FF-Replan, ICAPS 2007).
 
@@ -65,9 +66,9 @@ class ContinuousNavigationPlanner(Policy):
         frontier: poses kept per level of the search.
         search_bumps: levels (bumps) of one search.
         search_nodes: poses one search expands at most.
-        episode_searches: searches in one episode at most; once they are spent without a plan
-            it keeps turning by the middle of the range (it bounds the time an unreachable
-            goal costs).
+        episode_searches: searches without a plan in one episode at most; once they are spent
+            it keeps turning by the middle of the range (it bounds the time an unreachable goal
+            costs).
         draws: in a noisy world, poses of the belief simulated to predict every bump.
         field_cell: side of the grid of `ShotField` (world units).
     """
@@ -124,7 +125,7 @@ class ContinuousNavigationPlanner(Policy):
         self.plan: AnglePlan | None = None
         self._k = 0
         self.predicted_success = None
-        self.surprises = self.searches = self.steps = 0
+        self.surprises = self.searches = self.failures = self.steps = 0
 
     def _clock(self, observation) -> int:
         return int(round(float(np.asarray(observation).reshape(-1)[self._clock_index])
@@ -182,12 +183,13 @@ class ContinuousNavigationPlanner(Policy):
         not the pose the plan expects."""
         best = int(np.argmax(self.weight))
         point, heading = self.point[best], float(self.heading[best])
-        if not self._on_plan(point, heading) and self.searches < self.episode_searches:
+        if not self._on_plan(point, heading) and self.failures < self.episode_searches:
             self.plan = search_angles(self.exact_motion, point, heading, self.goal, self.range,
                                       self.budget, self.steps_total - self.steps, self._score,
                                       self.rng, self.max_ticks)
             self._k = 0
             self.searches += 1
+            self.failures += int(not self.plan.found)
         if self.predicted_success is None:
             self.predicted_success = self._predicted()
         if self._k >= len(self.plan.angles):  # no way left: turn by the middle of the range
