@@ -14,11 +14,11 @@ and the disk, the headings that do so form the intersection of three arcs:
 
 `shot_intervals` returns that intersection as an interval of bounce angles per pose (it is one
 interval: the first two arcs are each narrower than a half-turn), `shot_angles` a few angles
-spread inside it; `ShotField` and `turn_gap` tell how far a pose is from having one. Whether a wall blocks the drive before the disk is left to the simulator; the
-search and the look-ahead of `baselines.navigation.continuous` simulate these angles beside
-their grids, so that a goal hit that a grid of 1° steps would step over (the disk is 3.4° wide
-seen from 10 units) is not missed. `shot_gap` measures how far a pose is from having a shot,
-which ranks the poses of a search that has to drop some.
+spread inside it. Whether a wall blocks the drive before the disk is left to the simulator: the
+search of `baselines.navigation.angle_search` simulates these angles beside its grid, so that a
+goal hit that a grid of 1° steps would step over (the disk is 3.4° wide seen from 10 units) is
+not missed. `ShotField` and `turn_gap` tell how far a pose is from having a shot, which ranks
+the poses of a search that has to drop some.
 """
 
 from __future__ import annotations
