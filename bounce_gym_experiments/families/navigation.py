@@ -97,7 +97,8 @@ class Feasibility:
 
         task, model = env.task, env.cell_model()
         if self._roadmap is None or self._roadmap.model is not model:
-            self._roadmap = Roadmap(model, np.degrees(env.options.angles[0]), task.w1, task.w2)
+            degrees = np.round(np.degrees(env.options.angles[0]), 9)
+            self._roadmap = Roadmap(model, degrees, task.w1, task.w2)
         start = int(model.cell_of(task.start[0], task.start[1])[0])
         goals = goal_cells(model, task.goal[0][0], float(task.goal[1][0]), task.goal_radius,
                            task.heading_tolerance)
