@@ -183,16 +183,17 @@ class ContinuousNavigationPlanner(Policy):
         not the pose the plan expects."""
         best = int(np.argmax(self.weight))
         point, heading = self.point[best], float(self.heading[best])
-        if not self._on_plan(point, heading) and self.failures < self.episode_searches:
-            self.plan = search_angles(self.exact_motion, point, heading, self.goal, self.range,
-                                      self.budget, self.steps_total - self.steps, self._score,
-                                      self.rng, self.max_ticks)
-            self._k = 0
-            self.searches += 1
-            self.failures += int(not self.plan.found)
+        if not self._on_plan(point, heading):
+            self.plan, self._k = None, 0
+            if self.failures < self.episode_searches:
+                self.plan = search_angles(self.exact_motion, point, heading, self.goal,
+                                          self.range, self.budget, self.steps_total - self.steps,
+                                          self._score, self.rng, self.max_ticks)
+                self.searches += 1
+                self.failures += int(not self.plan.found)
         if self.predicted_success is None:
             self.predicted_success = self._predicted()
-        if self._k >= len(self.plan.angles):  # no way left: turn by the middle of the range
+        if self.plan is None or self._k >= len(self.plan.angles):  # no way: turn by the middle
             return 0.5 * (self.range[0] + self.range[1])
         angle = float(self.plan.angles[self._k])
         self._k += 1
