@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from baselines.policy import Policy
+from bounce_gym.errors import ConfigError
 from bounce_gym_experiments.config import load_config, validate_config
 from bounce_gym_experiments.families.navigation import navigation_planners
 from bounce_gym_experiments.runner import make_experiment_env, run_episode
@@ -153,6 +154,16 @@ def test_the_continuous_planner_rows_run(tmp_path):
         for policy in ran.values():
             assert policy["feasible_n"] == policy["world_reachable_n"] == 1
             assert ("success_world_reachable" in policy) == (policy["world_reachable"] == 1.0)
+
+
+@pytest.mark.parametrize(("action_type", "models"), [("discrete", ["continuous"]),
+                                                     ("continuous", ["roadmap", "continuous"])])
+def test_the_planners_must_take_the_env_actions(action_type, models):
+    (exp,) = (dict(e, env_kwargs={**e["env_kwargs"], "action_type": action_type},
+                   planner_kwargs={"models": models})
+              for e in _experiments("eval_physics.yaml") if e["name"] == CONTINUOUS_ROWS[0])
+    with pytest.raises(ConfigError, match="take continuous actions, the others discrete"):
+        validate_config({"experiments": [exp]})
 
 
 class Blind(Policy):
