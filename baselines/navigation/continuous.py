@@ -43,14 +43,13 @@ import numpy as np
 from baselines.navigation.angle_search import AngleBudget, AnglePlan, search_angles
 from baselines.navigation.motion import continuous_action, executed_angle, simulated_motion
 from baselines.navigation.reachability import noise_free
+from baselines.navigation.sampled import DEFAULT_HORIZON
 from baselines.navigation.shots import GoalRegion, ShotField, turn_gap
 from baselines.policy import Policy
 from bounce_gym.dynamics.bump_sampler import default_max_ticks
 from bounce_gym.dynamics.noise import Exact
 from bounce_gym.errors import ConfigError
 
-#: the horizon (steps) when the env registers none: BounceNavigation-v0's
-DEFAULT_HORIZON = 200
 #: the weight of `turn_gap` (world units per radian) beside `ShotField.distance`
 TURN_WEIGHT = 1.0
 
