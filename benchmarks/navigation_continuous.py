@@ -1,7 +1,8 @@
 """Navigation with continuous bounce angles: the continuous-angle planner on the lab map.
 Run with ``python -m benchmarks.navigation_continuous [--episodes N] [--noise]``.
 
-Episodes: BounceNavigation-v0 on the kinematic backend with ``action_type: continuous``
+Episodes: BounceNavigation-v0 on the kinematic backend (or ``--backend pymunk --physics ...``,
+where the search's budget flags make it affordable) with ``action_type: continuous``
 (45°–135°), goal radius 0.3, heading tolerance 10°, 200 steps, the env's own random start and
 goal poses from held-out seeds 10,000 + i — as the rows ``navigation-lab-continuous-*`` of
 configs/eval_physics.yaml. Per episode, with the navigation family's own checks: whether the
@@ -68,13 +69,25 @@ def main(argv: list[str] | None = None) -> list[dict]:
     parser.add_argument("--first-seed", type=int, default=FIRST_SEED)
     parser.add_argument("--noise", action="store_true",
                         help="rotation noise: reliable, r = 0.9, eps = 5 degrees")
+    parser.add_argument("--backend", default="kinematic")
+    parser.add_argument("--physics", default=None)
+    parser.add_argument("--grid-deg", type=float, default=2.0)
+    parser.add_argument("--frontier", type=int, default=300)
+    parser.add_argument("--search-bumps", type=int, default=10)
+    parser.add_argument("--search-nodes", type=int, default=3_000)
+    parser.add_argument("--episode-searches", type=int, default=8)
     args = parser.parse_args(argv)
-    kwargs = dict(KWARGS)
+    kwargs = {**KWARGS, "backend": args.backend}
+    if args.physics:
+        kwargs["physics"] = args.physics
     if args.noise:
         kwargs["noise"] = {"type": "reliable", "r": 0.9, "eps_deg": 5}
     env = gym.make(ENV_ID, **kwargs)
     feasible, reachable = Feasibility(), WorldReachability(HORIZON)
-    planner = ContinuousNavigationPlanner(horizon=HORIZON)
+    planner = ContinuousNavigationPlanner(
+        horizon=HORIZON, grid_deg=args.grid_deg, frontier=args.frontier,
+        search_bumps=args.search_bumps, search_nodes=args.search_nodes,
+        episode_searches=args.episode_searches)
     rows = []
     for seed in range(args.first_seed, args.first_seed + args.episodes):
         env.reset(seed=seed)
