@@ -13,7 +13,7 @@ The check is one-sided. A hit is a proof: the walk's angles, replayed in the env
 goal. A miss is not: the walks are a sample of the sequences of angles, and a goal that only a
 narrow set of them reaches (a long corridor to be crossed at a steep angle, say) may be missed.
 Its budget is ``walks`` × ``bumps`` simulated bumps (by default 1,000 × 200: the 200 steps of
-``BounceNavigation-v0``); on the kinematic backend about 0.6 s for a pair the walks miss, less
+``BounceNavigation-v0``); on the kinematic backend about 1 s for a pair the walks miss, less
 for one they hit (the walks stop at the first hit).
 """
 
