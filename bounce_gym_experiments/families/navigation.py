@@ -11,9 +11,9 @@ that observe their pose, as on ``BounceNavigation-v1`` off the cell backend), an
 default ``[roadmap]``. These three take discrete actions; on an env with
 ``action_type: continuous`` the models are ``[continuous]``, `ContinuousNavigationPlanner`
 choosing every bounce angle from the continuous range (row "continuous-angle planner", its
-horizon the experiment's ``max_steps``). The sampled planner's options `SAMPLED_OPTIONS` (``samples``, ``seed``,
-``particles``, ``draws``, ``depth``, ``reach``, ``cell_size``, ``rollouts``) are passed to it; its
-horizon is the experiment's ``max_steps``.
+horizon the experiment's ``max_steps``). The sampled planner's options `SAMPLED_OPTIONS`
+(``samples``, ``seed``, ``particles``, ``draws``, ``depth``, ``reach``, ``cell_size``,
+``rollouts``) are passed to it; its horizon is the experiment's ``max_steps``.
 
 Per episode:
 
@@ -33,8 +33,8 @@ Per episode:
   horizon from its first belief (its mean over the episodes is the model's prediction of
   ``success``).
 
-* ``world_reachable`` (continuous actions on the kinematic backend only: elsewhere the walks' 200,000
-  simulated bumps per pair take too long) — random walks with continuous angles from the
+* ``world_reachable`` (continuous actions on the kinematic backend only: elsewhere the walks'
+  200,000 simulated bumps per pair take too long) — random walks with continuous angles from the
   start, simulated in the noise-free world, pass through the goal
   (`baselines.navigation.reachability.world_reachable`: no planner is asked, and a pair it
   misses may still be reachable); ``success_world_reachable`` is ``success`` on those episodes.
