@@ -182,8 +182,8 @@ class NavigationEpisode(Episode):
 class Navigation(SingleRobotFamily):
     name = task = "navigation"
     columns = (*SingleRobotFamily.columns, "success", "feasible", "success_feasible",
-               "world_reachable", "success_world_reachable", "predicted_success", "ticks_to_goal", "bounce_ratio", "optimal_bounces",
-               "plan_cost", "predicted_ticks", "predicted_weight")
+               "world_reachable", "success_world_reachable", "predicted_success", "ticks_to_goal",
+               "bounce_ratio", "optimal_bounces", "plan_cost", "predicted_ticks", "predicted_weight")
     score = "success"
     planner_attributes = ("predicted_success", "predicted_ticks", "predicted_weight")
     takes_planner_kwargs = True
