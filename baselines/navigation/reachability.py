@@ -6,8 +6,9 @@ reset does (the task does not count that drive's path), then plays ``walks`` ind
 walks of at most ``bumps`` bumps each in the noise-free world: at every bump every walk draws
 its angle uniformly from the continuous range (the float32 action the env would be given,
 `baselines.navigation.motion`), all walks are simulated together
-(`bounce_gym.dynamics.bump_sampler.simulate_bumps`), and every straight drive is tested against the goal region by the task's own test (`BumpOutcomes.goal_hits`). The
-pair is *world-reachable* when some walk's drive passes through the goal.
+(`bounce_gym.dynamics.bump_sampler.simulate_bumps`), and every straight drive is tested
+against the goal region by the task's own test (`BumpOutcomes.goal_hits`). The pair is
+*world-reachable* when some walk's drive passes through the goal.
 
 The check is one-sided. A hit is a proof: the walk's angles, replayed in the env, reach the
 goal. A miss is not: the walks are a sample of the sequences of angles, and a goal that only a
