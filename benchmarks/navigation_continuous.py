@@ -78,8 +78,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     parser.add_argument("--physics", default=None)
     parser.add_argument("--grid-deg", type=float, default=2.0)
     parser.add_argument("--frontier", type=int, default=300)
-    parser.add_argument("--search-bumps", type=int, default=10)
-    parser.add_argument("--search-nodes", type=int, default=3_000)
+    parser.add_argument("--search-bumps", type=int, default=20)
+    parser.add_argument("--search-nodes", type=int, default=6_000)
     parser.add_argument("--episode-searches", type=int, default=8)
     args = parser.parse_args(argv)
     kwargs = {**KWARGS, "backend": args.backend}

@@ -75,8 +75,8 @@ class ContinuousNavigationPlanner(Policy):
     name = "continuous-angle planner"
 
     def __init__(self, seed: int = 0, horizon: int | None = None, grid_deg: float = 2.0,
-                 shots: int = 3, frontier: int = 300, search_bumps: int = 10,
-                 search_nodes: int = 3_000, episode_searches: int = 8, draws: int = 256,
+                 shots: int = 3, frontier: int = 300, search_bumps: int = 20,
+                 search_nodes: int = 6_000, episode_searches: int = 8, draws: int = 256,
                  field_cell: float = 0.25) -> None:
         if not 0.0 < grid_deg <= 90.0:
             raise ConfigError(f"grid_deg: expected a step in (0, 90] degrees, got {grid_deg!r}")
