@@ -8,9 +8,12 @@ Planners (``planner_kwargs``, all optional): ``models`` lists which of `PLANNER_
 departs from it (row "roadmap planner (pose observed)": privileged, the planner beside learners
 that observe their pose, as on ``BounceNavigation-v1`` off the cell backend), and
 ``sampled``, `SampledNavigationPlanner` closed loop on its particle belief (row "sampled-gcm");
-default ``[roadmap]``. The sampled planner's options `SAMPLED_OPTIONS` (``samples``, ``seed``,
-``particles``, ``draws``, ``depth``, ``reach``, ``cell_size``, ``rollouts``) are passed to it; its
-horizon is the experiment's ``max_steps``.
+default ``[roadmap]``. These three take discrete actions; on an env with
+``action_type: continuous`` the models are ``[continuous]``, `ContinuousNavigationPlanner`
+choosing every bounce angle from the continuous range (row "continuous-angle planner", its
+horizon the experiment's ``max_steps``). The sampled planner's options `SAMPLED_OPTIONS`
+(``samples``, ``seed``, ``particles``, ``draws``, ``depth``, ``reach``, ``cell_size``,
+``rollouts``) are passed to it; its horizon is the experiment's ``max_steps``.
 
 Per episode:
 
@@ -30,9 +33,15 @@ Per episode:
   horizon from its first belief (its mean over the episodes is the model's prediction of
   ``success``).
 
-Feasibility needs the roadmap, so it is measured where the planner can run (discrete actions,
-bounce steps); the first policy to meet a start/goal pair asks the roadmap, the others reuse the
-answer.
+* ``world_reachable`` (continuous actions on the kinematic backend only: elsewhere the walks'
+  200,000 simulated bumps per pair take too long) — random walks with continuous angles from the
+  start, simulated in the noise-free world, pass through the goal
+  (`baselines.navigation.reachability.world_reachable`: no planner is asked, and a pair it
+  misses may still be reachable); ``success_world_reachable`` is ``success`` on those episodes.
+
+Feasibility needs the roadmap, so it is measured in bounce steps (with continuous actions, for
+the roadmap of the env's Φ: "cell-feasible"); the first policy to meet a start/goal pair asks
+the roadmap and the random walks, the others reuse the answers.
 """
 
 from __future__ import annotations
@@ -48,7 +57,9 @@ from bounce_gym.errors import ConfigError
 from bounce_gym_experiments.families.base import Episode, SingleRobotFamily, env_task
 
 #: the planners ``planner_kwargs.models`` may name
-PLANNER_MODELS = ("roadmap", "roadmap_pose", "sampled")
+PLANNER_MODELS = ("roadmap", "roadmap_pose", "sampled", "continuous")
+#: the planners of envs with continuous actions
+CONTINUOUS_MODELS = ("continuous",)
 #: the row of the roadmap planner that replans from the true pose (a privileged variant)
 POSE_NAME = "roadmap planner (pose observed)"
 #: the options of the sampled planner ``planner_kwargs`` may set
@@ -58,37 +69,93 @@ SAMPLED_OPTIONS = ("samples", "seed", "particles", "draws", "depth", "reach", "c
 MINIMUM = {"samples": 2, "seed": 0}
 #: the sampled planner's row
 SAMPLED_NAME = "sampled-gcm"
+#: the seed of the random walks of the world-reachability check
+WALK_SEED = 0
+#: the backends whose simulator plays the check's 200,000 bumps per pair in about a second
+WALK_BACKENDS = ("kinematic",)
+
+
+def _pair(env) -> bytes:
+    task = env.unwrapped.task
+    return np.concatenate([np.ravel(task.start[0]), np.ravel(task.start[1]),
+                           np.ravel(task.goal[0]), np.ravel(task.goal[1])]).tobytes()
 
 
 class Feasibility:
-    """Whether the roadmap has a plan from the env's current start to its goal, remembered per
-    (start, goal) pose pair."""
+    """Whether the roadmap of the env's cell model and Φ has a plan from the env's current start
+    to its goal (as `NavigationPlanner` plans it), remembered per (start, goal) pose pair."""
 
     def __init__(self) -> None:
-        from baselines.navigation import NavigationPlanner
+        self.known: dict[bytes, bool] = {}
+        self._roadmap = None
 
-        self.probe = NavigationPlanner()
+    def __call__(self, env) -> bool:
+        key = _pair(env)
+        if key not in self.known:
+            self.known[key] = self._has_plan(env.unwrapped)
+        return self.known[key]
+
+    def _has_plan(self, env) -> bool:
+        from baselines.navigation import Roadmap, goal_cells
+
+        task, model = env.task, env.cell_model()
+        if self._roadmap is None or self._roadmap.model is not model:
+            degrees = np.round(np.degrees(env.options.angles[0]), 9)
+            self._roadmap = Roadmap(model, degrees, task.w1, task.w2)
+        start = int(model.cell_of(task.start[0], task.start[1])[0])
+        goals = goal_cells(model, task.goal[0][0], float(task.goal[1][0]), task.goal_radius,
+                           task.heading_tolerance)
+        return start >= 0 and len(goals) > 0 and self._roadmap.plan(start, goals) is not None
+
+
+class WorldReachability:
+    """Whether random walks with continuous angles reach the env's current goal from its start
+    in the noise-free world (`baselines.navigation.reachability`), remembered per pair."""
+
+    def __init__(self, bumps: int) -> None:
+        self.bumps = int(bumps)
         self.known: dict[bytes, bool] = {}
 
     def __call__(self, env) -> bool:
-        task = env.unwrapped.task
-        key = np.concatenate([np.ravel(task.start[0]), np.ravel(task.start[1]),
-                              np.ravel(task.goal[0]), np.ravel(task.goal[1])]).tobytes()
+        from baselines.navigation.motion import simulated_motion
+        from baselines.navigation.reachability import noise_free, world_reachable
+        from baselines.navigation.shots import GoalRegion
+
+        key = _pair(env)
         if key not in self.known:
-            self.probe.reset(env.unwrapped)
-            self.known[key] = self.probe.plan is not None
+            env = env.unwrapped
+            task, options = env.task, env.options
+            motion = simulated_motion(env.cell_model(), noise_free(options.robot_dynamics))
+            goal = GoalRegion(np.asarray(task.goal[0][0], dtype=np.float64),
+                              float(task.goal[1][0]), task.goal_radius, task.heading_tolerance)
+            self.known[key] = world_reachable(
+                motion, (task.start[0][0], float(task.start[1][0])), goal,
+                options.angle_range[0], self.bumps, WALK_SEED).reached
         return self.known[key]
 
 
+class NavigationChecks:
+    """What an episode's start/goal pair is measured by besides the policy: the roadmap's
+    feasibility and, with continuous actions, the world-reachability check (None: not
+    measured)."""
+
+    def __init__(self, feasibility: Feasibility | None,
+                 reachability: WorldReachability | None) -> None:
+        self.feasibility, self.reachability = feasibility, reachability
+
+
 class NavigationEpisode(Episode):
-    def __init__(self, env, feasibility: Feasibility | None) -> None:
+    def __init__(self, env, checks: NavigationChecks | None) -> None:
         self.env = env
-        self.feasibility = feasibility
+        self.checks = checks
         self.feasible: bool | None = None
+        self.reachable: bool | None = None
 
     def start(self, info):
-        if self.feasibility is not None:
-            self.feasible = self.feasibility(self.env)
+        if self.checks is not None and self.checks.feasibility is not None:
+            self.feasible = self.checks.feasibility(self.env)
+        if self.checks is not None and self.checks.reachability is not None:
+            self.reachable = self.checks.reachability(self.env)
         return False
 
     def metrics(self, info):
@@ -97,6 +164,10 @@ class NavigationEpisode(Episode):
             out["feasible"] = self.feasible
             if self.feasible:
                 out["success_feasible"] = out["success"]
+        if self.reachable is not None:
+            out["world_reachable"] = self.reachable
+            if self.reachable:
+                out["success_world_reachable"] = out["success"]
         if "ticks_to_goal" in info:
             out["ticks_to_goal"] = info["ticks_to_goal"]
         if info.get("optimal_bounces", -1) > 0:  # the goal-conditioned task (v1)
@@ -111,8 +182,8 @@ class NavigationEpisode(Episode):
 class Navigation(SingleRobotFamily):
     name = task = "navigation"
     columns = (*SingleRobotFamily.columns, "success", "feasible", "success_feasible",
-               "predicted_success", "ticks_to_goal", "bounce_ratio", "optimal_bounces",
-               "plan_cost", "predicted_ticks", "predicted_weight")
+               "world_reachable", "success_world_reachable", "predicted_success", "ticks_to_goal",
+               "bounce_ratio", "optimal_bounces", "plan_cost", "predicted_ticks", "predicted_weight")
     score = "success"
     planner_attributes = ("predicted_success", "predicted_ticks", "predicted_weight")
     takes_planner_kwargs = True
@@ -124,20 +195,28 @@ class Navigation(SingleRobotFamily):
 
     def validate(self, experiment):
         super().validate(experiment)
-        navigation_planner_options(experiment)
+        models, _ = navigation_planner_options(experiment)
+        continuous = experiment.get("env_kwargs", {}).get("action_type") == "continuous"
+        named = "models" in experiment.get("planner_kwargs", {})
+        if named and any((m in CONTINUOUS_MODELS) != continuous for m in models):
+            raise ConfigError(f"planner_kwargs.models: {list(CONTINUOUS_MODELS)} take continuous "
+                              f"actions, the others discrete ones; env_kwargs.action_type is "
+                              f"{'continuous' if continuous else 'discrete'}, got {models!r}")
 
     def prepare(self, env, experiment):
         options = env.unwrapped.options
-        if options.action_type != "discrete" or options.step_mode != "bounce":
+        if options.step_mode != "bounce":
             return None
-        return Feasibility()
+        walks = options.action_type == "continuous" and options.backend in WALK_BACKENDS
+        return NavigationChecks(Feasibility(), WorldReachability(experiment["max_steps"])
+                                if walks else None)
 
     def policies(self, kind, env, experiment, setup):
         if kind != "planner":
             return super().policies(kind, env, experiment, setup)
-        if env.unwrapped.options.action_type != "discrete":
-            return []
-        return navigation_planners(experiment)
+        continuous = env.unwrapped.options.action_type == "continuous"
+        return [p for p in navigation_planners(experiment)
+                if isinstance(p, _continuous_planner_class()) == continuous]
 
     def episode(self, env, policy, setup):
         return NavigationEpisode(env, setup)
@@ -161,7 +240,15 @@ def navigation_planners(experiment: Mapping) -> list[Policy]:
         sampled = SampledNavigationPlanner(horizon=experiment["max_steps"], **kwargs)
         sampled.name = SAMPLED_NAME
         out.append(sampled)
+    if "continuous" in models:
+        out.append(_continuous_planner_class()(horizon=experiment["max_steps"]))
     return out
+
+
+def _continuous_planner_class():
+    from baselines.navigation.continuous import ContinuousNavigationPlanner
+
+    return ContinuousNavigationPlanner
 
 
 def navigation_planner_options(experiment: Mapping) -> tuple[list[str], dict]:

@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from baselines.policy import Policy
+from bounce_gym.errors import ConfigError
 from bounce_gym_experiments.config import load_config, validate_config
 from bounce_gym_experiments.families.navigation import navigation_planners
 from bounce_gym_experiments.runner import make_experiment_env, run_episode
@@ -28,6 +29,9 @@ MODEL_KEYS = {"backend", "physics", "corner_rule", "robot_radius"}
 #: the sampled planner's rows (issue 24): kinematic without noise, kinematic and dynamic with
 SAMPLED_ROWS = ("navigation-lab-sampled-kinematic", "navigation-lab-sampled-noise-kinematic",
                 "navigation-lab-sampled-noise-pymunk-dynamic")
+#: the continuous-angle planner's rows: kinematic without and with rotation noise
+CONTINUOUS_ROWS = ("navigation-lab-continuous-kinematic",
+                   "navigation-lab-continuous-noise-kinematic")
 #: the sampled planner's options in the quick runs: a coarse model of few samples, a short
 #: look-ahead
 TINY = {"samples": 2, "cell_size": 1.0, "depth": 1, "reach": 3}
@@ -44,6 +48,10 @@ def _dynamic(exp: dict) -> bool:
 
 def _sampled(exp: dict) -> bool:
     return "sampled" in exp.get("planner_kwargs", {}).get("models", ())
+
+
+def _continuous(exp: dict) -> bool:
+    return exp["env_kwargs"].get("action_type") == "continuous"
 
 
 def _rest(exp: dict) -> tuple:
@@ -77,7 +85,8 @@ def test_the_physics_comparison_has_every_backend_per_task():
     assert [e["name"] for e in experiments if _sampled(e)] == list(SAMPLED_ROWS)
     noisy = {e["name"]: "noise" in e["env_kwargs"] for e in experiments if _sampled(e)}
     assert noisy == {name: "noise" in name for name in SAMPLED_ROWS}
-    names = {e["name"] for e in experiments if not _sampled(e)}
+    assert [e["name"] for e in experiments if _continuous(e)] == list(CONTINUOUS_ROWS)
+    names = {e["name"] for e in experiments if not _sampled(e) and not _continuous(e)}
     stems = {n.rsplit("-", 1)[0].removesuffix("-pymunk") for n in names}
     for stem in stems:
         assert {f"{stem}-cell", f"{stem}-kinematic", f"{stem}-pymunk-ideal",
@@ -129,6 +138,32 @@ def test_the_sampled_planner_rows_run(tmp_path):
             assert policy["feasible_n"] == 1
             assert ("success_feasible" in policy) == (policy["feasible"] == 1.0)
         assert "predicted_success" not in ran["roadmap planner"]
+
+
+def test_the_continuous_planner_rows_run(tmp_path):
+    """The continuous-angle planner's rows, one short episode each: the planner and random
+    bouncing run, with the cell feasibility, the world reachability and the prediction."""
+    rows = [dict(exp, seeds=[10_002], max_steps=6, horizon_reason="a quick test")
+            for exp in _experiments("eval_physics.yaml") if exp["name"] in CONTINUOUS_ROWS]
+    summary = _summary(tmp_path, rows)
+    for row in rows:
+        ran = {s["policy"]: s for s in summary if s["experiment"] == row["name"]}
+        assert set(ran) == {"continuous-angle planner", "random"}, row["name"]
+        planner = ran["continuous-angle planner"]
+        assert planner["predicted_success_n"] == 1 and 0.0 <= planner["predicted_success"] <= 1
+        for policy in ran.values():
+            assert policy["feasible_n"] == policy["world_reachable_n"] == 1
+            assert ("success_world_reachable" in policy) == (policy["world_reachable"] == 1.0)
+
+
+@pytest.mark.parametrize(("action_type", "models"), [("discrete", ["continuous"]),
+                                                     ("continuous", ["roadmap", "continuous"])])
+def test_the_planners_must_take_the_env_actions(action_type, models):
+    (exp,) = (dict(e, env_kwargs={**e["env_kwargs"], "action_type": action_type},
+                   planner_kwargs={"models": models})
+              for e in _experiments("eval_physics.yaml") if e["name"] == CONTINUOUS_ROWS[0])
+    with pytest.raises(ConfigError, match="take continuous actions, the others discrete"):
+        validate_config({"experiments": [exp]})
 
 
 class Blind(Policy):

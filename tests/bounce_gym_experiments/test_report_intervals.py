@@ -75,7 +75,7 @@ def test_feasibility_on_a_tiny_navigation_config():
 
 
 def test_plan_cost_is_read_from_info_when_the_env_reports_it():
-    episode = navigation.NavigationEpisode(env=None, feasibility=None)
+    episode = navigation.NavigationEpisode(env=None, checks=None)
     assert episode.metrics({"is_success": True, "ticks_to_goal": 12, "plan_cost": 212.0}) == {
         "success": True, "ticks_to_goal": 12, "plan_cost": 212.0}
     assert episode.metrics({"is_success": False}) == {"success": False}

@@ -1,0 +1,227 @@
+"""Navigation with continuous bounce angles, closed loop from contact and clock.
+
+With Φ = {45°, 90°, 135°} a noise-free robot started at a pose meets the walls only on the
+lattice of poses its start and Φ generate, and many goals lie off it; the env's continuous
+action (``action_type="continuous"``: any angle of its range, 45°–135° by default) has no such
+lattice. `ContinuousNavigationPlanner` chooses each bounce angle from that range:
+
+* at reset it reads the episode's start and goal poses (what the task appends to the
+  observation) and predicts the drive of the reset from the start (simulated);
+* its belief is a set of weighted poses, as `baselines.navigation.sampled`'s (a particle
+  filter, Thrun, Burgard & Fox, *Probabilistic Robotics*, 2005, §4.3): after every bump the
+  poses of the belief are moved by the angle it executed — in a noisy world ``draws`` of them,
+  each drawing its own rotation error — and kept where their clock equals the clock it reads
+  (identical poses merged; when none does, those of the nearest clock, counted in
+  ``surprises``). Without noise it is one exact pose;
+* it decides from the belief's most likely pose, by the search over bump poses with a fine
+  grid of angles and the goal shots in the noise-free simulator
+  (`baselines.navigation.angle_search`, its poses ranked by `ShotField`): it follows the plan
+  found while the belief's most likely pose is the one the plan expects and searches again
+  from that pose otherwise (in a noisy world: after a rotation error that the clock revealed).
+  Without a plan within the search's budget it follows the way to the search's most promising
+  pose and searches again at its end (at most ``episode_searches`` fruitless searches per
+  episode). In a noise-free world this replans from the exact pose
+  at every bump where needed; in a noisy one it is determinised replanning (the most likely
+  outcome taken as certain, replanned on surprise; Yoon, Fern & Givan, FF-Replan, ICAPS 2007).
+
+It reads only its observation (the clock) in `act`, never ``info``. ``predicted_success`` is its
+estimate, at its first decision, of the probability of reaching the goal within the episode:
+without noise, 1 when the search found a plan (exact: the world is deterministic and the plan
+was simulated in it) and 0 when it found none; with noise, the share q of ``draws`` simulated
+robots (drawn from the belief, each with its own rotation errors) that the plan takes to the
+goal open loop, turned into the probability that one of the k = ⌊steps left / plan length⌋
+attempts that fit in the episode succeeds, 1 − (1 − q)^k — a model that takes the attempts as
+independent and each failed one as costing a whole plan's bumps.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from baselines.navigation.angle_search import AngleBudget, AnglePlan, search_angles
+from baselines.navigation.motion import continuous_action, executed_angle, simulated_motion
+from baselines.navigation.reachability import noise_free
+from baselines.navigation.sampled import DEFAULT_HORIZON
+from baselines.navigation.shots import GoalRegion, ShotField, turn_gap
+from baselines.policy import Policy
+from bounce_gym.dynamics.bump_sampler import default_max_ticks
+from bounce_gym.dynamics.noise import Exact
+from bounce_gym.errors import ConfigError
+
+#: the weight of `turn_gap` (world units per radian) beside `ShotField.distance`
+TURN_WEIGHT = 1.0
+
+
+class ContinuousNavigationPlanner(Policy):
+    """Navigation with continuous bounce angles (module docstring).
+
+    Args:
+        seed: seed of its random draws (the search's frontier, the belief's rotation errors).
+        horizon: steps to plan for (None: the env's registered episode length).
+        grid_deg: step of the grid of angles the search tries from every pose (degrees).
+        shots: angles inside every pose's shot interval the search also tries.
+        frontier: poses kept per level of the search.
+        search_bumps: levels (bumps) of one search.
+        search_nodes: poses one search expands at most.
+        episode_searches: searches without a plan in one episode at most; once they are spent
+            it keeps turning by the middle of the range (it bounds the time an unreachable goal
+            costs).
+        draws: in a noisy world, poses of the belief simulated to predict every bump.
+        field_cell: side of the grid of `ShotField` (world units).
+    """
+
+    name = "continuous-angle planner"
+
+    def __init__(self, seed: int = 0, horizon: int | None = None, grid_deg: float = 2.0,
+                 shots: int = 3, frontier: int = 300, search_bumps: int = 20,
+                 search_nodes: int = 6_000, episode_searches: int = 8, draws: int = 256,
+                 field_cell: float = 0.25) -> None:
+        if not 0.0 < grid_deg <= 90.0:
+            raise ConfigError(f"grid_deg: expected a step in (0, 90] degrees, got {grid_deg!r}")
+        self.seed, self.horizon, self.grid_deg = int(seed), horizon, float(grid_deg)
+        self.shots, self.frontier = int(shots), int(frontier)
+        self.search_bumps, self.search_nodes = int(search_bumps), int(search_nodes)
+        self.episode_searches = int(episode_searches)
+        self.draws, self.field_cell = int(draws), float(field_cell)
+        self.predicted_success: float | None = None
+
+    # -- episode ------------------------------------------------------------------------------
+    def reset(self, env) -> None:
+        env = getattr(env, "unwrapped", env)
+        task, options = env.task, env.options
+        if getattr(task, "name", None) != "navigation":
+            raise ConfigError("ContinuousNavigationPlanner needs an env with task='navigation'")
+        if options.step_mode != "bounce" or options.action_type != "continuous":
+            raise ConfigError("ContinuousNavigationPlanner needs step_mode='bounce' and "
+                              "action_type='continuous'")
+        if options.bounce_rule != "relative":
+            raise ConfigError("ContinuousNavigationPlanner aims its shots under the relative "
+                              f"bounce rule, not {options.bounce_rule!r}")
+        self.range = options.angle_range[0]
+        self.goal = GoalRegion(np.asarray(task.goal[0][0], dtype=np.float64),
+                               float(task.goal[1][0]), task.goal_radius, task.heading_tolerance)
+        model = env.cell_model()
+        self.motion = simulated_motion(model, options.robot_dynamics)
+        self.exact_motion = simulated_motion(model, noise_free(options.robot_dynamics))
+        self.max_ticks = default_max_ticks(options.robot_dynamics)
+        self.deterministic = isinstance(options.noise, Exact)
+        self.field = ShotField(options.world, options.robot_radius, self.goal, self.field_cell)
+        lo, hi = self.range
+        grid = np.linspace(lo, hi, max(2, round(math.degrees(hi - lo) / self.grid_deg) + 1))
+        self.budget = AngleBudget(grid, self.shots, self.frontier, self.search_bumps,
+                                  self.search_nodes)
+        spec_steps = getattr(getattr(env, "spec", None), "max_episode_steps", None)
+        self.steps_total = int(self.horizon or spec_steps or DEFAULT_HORIZON)
+        self.rng = np.random.default_rng(self.seed)
+        start = np.asarray(task.start[0][0], dtype=np.float64).reshape(1, 2)
+        _, end, heading, clock = self.motion.reset_drives(
+            start, np.array([float(task.start[1][0])]), self.rng, self.max_ticks)
+        self._next = {"ticks": clock, "end": end, "heading": heading, "weight": np.ones(1)}
+        self._clock_index = 1 if env.core.observes_contact else 0
+        self._max_clock = options.max_clock
+        self.plan: AnglePlan | None = None
+        self._k = 0
+        self.predicted_success = None
+        self.surprises = self.searches = self.failures = self.steps = 0
+
+    def _clock(self, observation) -> int:
+        return int(round(float(np.asarray(observation).reshape(-1)[self._clock_index])
+                         * self._max_clock))
+
+    # -- belief -------------------------------------------------------------------------------
+    def _condition(self, clock: int) -> None:
+        """The belief: the predicted poses whose clock is the one read (or the nearest),
+        identical poses merged."""
+        nxt = self._next
+        gap = np.abs(nxt["ticks"] - clock)
+        keep = gap == gap.min()
+        self.surprises += int(gap.min() > 0)
+        point, heading, weight = nxt["end"][keep], nxt["heading"][keep], nxt["weight"][keep]
+        key = np.round(np.column_stack((point, np.mod(heading, 2 * np.pi))), 9)
+        _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        weight = np.bincount(inverse.ravel(), weights=weight)
+        self.point, self.heading = point[first], heading[first]
+        self.weight = weight / weight.sum()
+
+    def _predict(self, angle: float) -> None:
+        """The belief's poses (in a noisy world ``draws`` of them by weight, each with its own
+        rotation error) bump with ``angle`` and drive on; those that pass through the goal end
+        the episode, so the others are kept (all, if none is)."""
+        if self.deterministic:
+            point, heading, weight = self.point, self.heading, self.weight
+        else:
+            pick = self.rng.choice(len(self.point), self.draws, p=self.weight)
+            point, heading = self.point[pick], self.heading[pick]
+            weight = np.full(self.draws, 1.0 / self.draws)
+        out = self.motion.bumps(np.full(len(point), angle), np.arange(len(point)), point,
+                                heading, self.rng, self.max_ticks)
+        hit = self._hits(out)
+        keep = ~hit if (~hit).any() else np.ones(len(hit), dtype=bool)
+        self._next = {"ticks": out.ticks[keep], "end": out.end[keep],
+                      "heading": out.heading[keep], "weight": weight[keep]}
+
+    def _hits(self, out) -> np.ndarray:
+        g = self.goal
+        return out.goal_hits(g.point, g.heading, g.radius, g.tolerance)
+
+    # -- decisions ----------------------------------------------------------------------------
+    def _score(self, point: np.ndarray, heading: np.ndarray) -> np.ndarray:
+        return self.field.distance(point) + TURN_WEIGHT * turn_gap(heading, self.goal,
+                                                                   self.range)
+
+    def _on_plan(self, point: np.ndarray, heading: float) -> bool:
+        plan, k = self.plan, self._k
+        return (plan is not None and k < len(plan.angles)
+                and np.allclose(plan.points[k], point, rtol=0, atol=1e-9)
+                and math.isclose(plan.headings[k], heading, abs_tol=1e-9))
+
+    def _decide(self) -> float:
+        """The next angle: the plan's, searched again from the most likely pose when that is
+        not the pose the plan expects."""
+        best = int(np.argmax(self.weight))
+        point, heading = self.point[best], float(self.heading[best])
+        if not self._on_plan(point, heading):
+            self.plan, self._k = None, 0
+            if self.failures < self.episode_searches:
+                self.plan = search_angles(self.exact_motion, point, heading, self.goal,
+                                          self.range, self.budget, self.steps_total - self.steps,
+                                          self._score, self.rng, self.max_ticks)
+                self.searches += 1
+                self.failures += int(not self.plan.found)
+        if self.predicted_success is None:
+            self.predicted_success = self._predicted()
+        if self.plan is None or self._k >= len(self.plan.angles):  # no way: turn by the middle
+            return 0.5 * (self.range[0] + self.range[1])
+        angle = float(self.plan.angles[self._k])
+        self._k += 1
+        return angle
+
+    def _predicted(self) -> float:
+        """The success estimate at the first decision (module docstring)."""
+        plan = self.plan
+        if not plan.found:
+            return 0.0
+        if self.deterministic:
+            return 1.0
+        pick = self.rng.choice(len(self.point), self.draws, p=self.weight)
+        point, heading = self.point[pick], self.heading[pick]
+        done = np.zeros(self.draws, dtype=bool)
+        for angle in plan.angles:
+            out = self.motion.bumps(np.full(len(point), angle), np.arange(len(point)), point,
+                                    heading, self.rng, self.max_ticks)
+            done |= self._hits(out)
+            point, heading = out.end, out.heading
+        q = float(done.mean())
+        attempts = max(1, (self.steps_total - self.steps) // len(plan.angles))
+        return 1.0 - (1.0 - q) ** attempts
+
+    def act(self, observation, info):
+        del info  # the robot's own observation only
+        self._condition(self._clock(observation))
+        angle = self._decide()
+        action = continuous_action(np.array([angle]), self.range)
+        self._predict(float(executed_angle(action, self.range)[0]))
+        self.steps += 1
+        return action

@@ -1,0 +1,78 @@
+"""Whether the world lets a robot with continuous bounce angles reach a goal at all, asked of
+the simulator and not of any planner.
+
+`world_reachable` drives the robot from its start pose to its first contact as a bounce-mode
+reset does (the task does not count that drive's path), then plays ``walks`` independent random
+walks of at most ``bumps`` bumps each in the noise-free world: at every bump every walk draws
+its angle uniformly from the continuous range (the float32 action the env would be given,
+`baselines.navigation.motion`), all walks are simulated together
+(`bounce_gym.dynamics.bump_sampler.simulate_bumps`), and every straight drive is tested
+against the goal region by the task's own test (`BumpOutcomes.goal_hits`). The pair is
+*world-reachable* when some walk's drive passes through the goal.
+
+The check is one-sided. A hit is a proof: the walk's angles, replayed in the env, reach the
+goal. A miss is not: the walks are a sample of the sequences of angles, and a goal that only a
+narrow set of them reaches (a long corridor to be crossed at a steep angle, say) may be missed.
+Its budget is ``walks`` × ``bumps`` simulated bumps (by default 1,000 × 200: the 200 steps of
+``BounceNavigation-v0``); on the kinematic backend about 1 s for a pair the walks miss, less
+for one they hit (the walks stop at the first hit).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from baselines.navigation.motion import executed_angle
+from baselines.navigation.shots import GoalRegion
+from bounce_gym.dynamics.bump_sampler import default_max_ticks
+from bounce_gym.dynamics.noise import Exact
+
+#: the default number of random walks
+WALKS = 1_000
+
+
+@dataclass(frozen=True)
+class Reachability:
+    """What `world_reachable` found: ``reached`` (some walk passed through the goal), after how
+    many bumps the first did (−1: none), and the budget it spent."""
+
+    reached: bool
+    first_bump: int
+    walks: int
+    bumps: int
+
+
+def noise_free(dynamics: dict) -> dict:
+    """``dynamics`` (`BounceDynamics` arguments) with the rotation noise taken out."""
+    return {**dynamics, "noise": Exact()}
+
+
+def world_reachable(motion, start: tuple[np.ndarray, float], goal: GoalRegion,
+                    angle_range: tuple[float, float], bumps: int, seed: int,
+                    walks: int = WALKS, max_ticks: int | None = None) -> Reachability:
+    """Random walks with continuous angles from ``start`` (position (2,), heading) in the
+    noise-free world of ``motion`` (`baselines.navigation.motion.simulated_motion` of
+    `noise_free` dynamics): does any pass through ``goal`` within ``bumps`` bumps (module
+    docstring)? ``seed`` seeds the angles drawn."""
+    rng = np.random.default_rng(seed)
+    if max_ticks is None:
+        max_ticks = default_max_ticks(motion.dynamics)
+    position, heading = np.asarray(start[0], dtype=np.float64).reshape(1, 2), float(start[1])
+    state, point, head, _ = motion.reset_drives(position, np.array([heading]), rng, max_ticks)
+    if state[0] < 0:
+        return Reachability(False, -1, walks, bumps)
+    point, head = np.repeat(point, walks, axis=0), np.repeat(head, walks)
+    for bump in range(1, bumps + 1):
+        angle = executed_angle(rng.uniform(-1.0, 1.0, len(point)).astype(np.float32),
+                               angle_range)
+        out = motion.bumps(angle, np.arange(len(angle)), point, head, rng, max_ticks)
+        if out.goal_hits(goal.point, goal.heading, goal.radius, goal.tolerance).any():
+            return Reachability(True, bump, walks, bumps)
+        alive = out.next_state >= 0
+        point, head = out.end[alive], out.heading[alive]
+        if len(point) == 0:
+            break
+    return Reachability(False, -1, walks, bumps)
+
