@@ -8,7 +8,7 @@ goal poses from held-out seeds 10,000 + i — as the rows ``navigation-lab-conti
 configs/eval_physics.yaml. Per episode, with the navigation family's own checks: whether the
 pair is cell-feasible (the roadmap of the env's cell model with Φ = {45°, 90°, 135°} has a plan)
 and world-reachable (random continuous-angle walks reach it, `baselines.navigation.reachability`;
-kinematic backend only, counted as not reachable elsewhere),
+kinematic backend and pymunk's dynamic physics only, counted as not reachable elsewhere),
 the planner's success and its predicted success, and the planner's own time (its ``reset`` and
 ``act`` calls, on one core). Prints success on all, cell-feasible and world-reachable pairs with
 95 % Wilson intervals and counts, the mean prediction beside it (± its 95 % t-interval), and the
@@ -27,7 +27,7 @@ from scipy import stats
 import bounce_gym  # noqa: F401  (registers the envs)
 from baselines.navigation.continuous import ContinuousNavigationPlanner
 from bounce_gym_experiments.families.navigation import (
-    WALK_BACKENDS,
+    WALK_MODELS,
     Feasibility,
     WorldReachability,
 )
@@ -97,7 +97,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     for seed in range(args.first_seed, args.first_seed + args.episodes):
         env.reset(seed=seed)
         checks = {"feasible": feasible(env),
-                  "reachable": args.backend in WALK_BACKENDS and reachable(env)}
+                  "reachable": (env.unwrapped.options.backend, env.unwrapped.options.physics)
+                  in WALK_MODELS and reachable(env)}
         success, spent = _episode(env, planner, seed)
         rows.append({**checks, "success": success, "predicted": planner.predicted_success,
                      "seconds": spent})

@@ -41,12 +41,13 @@ import math
 import numpy as np
 
 from baselines.navigation.angle_search import AngleBudget, AnglePlan, search_angles
-from baselines.navigation.motion import continuous_action, executed_angle, simulated_motion
+from baselines.navigation.motion import continuous_action, executed_angle
 from baselines.navigation.reachability import noise_free
 from baselines.navigation.sampled import DEFAULT_HORIZON
 from baselines.navigation.shots import GoalRegion, ShotField, turn_gap
 from baselines.policy import Policy
 from bounce_gym.dynamics.bump_sampler import default_max_ticks
+from bounce_gym.dynamics.bump_table import bump_motion
 from bounce_gym.dynamics.noise import Exact
 from bounce_gym.errors import ConfigError
 
@@ -103,8 +104,8 @@ class ContinuousNavigationPlanner(Policy):
         self.goal = GoalRegion(np.asarray(task.goal[0][0], dtype=np.float64),
                                float(task.goal[1][0]), task.goal_radius, task.heading_tolerance)
         model = env.cell_model()
-        self.motion = simulated_motion(model, options.robot_dynamics)
-        self.exact_motion = simulated_motion(model, noise_free(options.robot_dynamics))
+        self.motion = bump_motion(model, options.robot_dynamics)
+        self.exact_motion = bump_motion(model, noise_free(options.robot_dynamics))
         self.max_ticks = default_max_ticks(options.robot_dynamics)
         self.deterministic = isinstance(options.noise, Exact)
         self.field = ShotField(options.world, options.robot_radius, self.goal, self.field_cell)

@@ -33,8 +33,9 @@ Per episode:
   horizon from its first belief (its mean over the episodes is the model's prediction of
   ``success``).
 
-* ``world_reachable`` (continuous actions on the kinematic backend only: elsewhere the walks'
-  200,000 simulated bumps per pair take too long) — random walks with continuous angles from the
+* ``world_reachable`` (continuous actions on the kinematic backend and on pymunk's dynamic
+  physics, whose walks read the tabulated bump map and replay a hit in the simulator; on
+  pymunk's ideal physics the walks' 200,000 simulated bumps per pair take too long) — random walks with continuous angles from the
   start, simulated in the noise-free world, pass through the goal
   (`baselines.navigation.reachability.world_reachable`: no planner is asked, and a pair it
   misses may still be reachable); ``success_world_reachable`` is ``success`` on those episodes.
@@ -71,8 +72,9 @@ MINIMUM = {"samples": 2, "seed": 0}
 SAMPLED_NAME = "sampled-gcm"
 #: the seed of the random walks of the world-reachability check
 WALK_SEED = 0
-#: the backends whose simulator plays the check's 200,000 bumps per pair in about a second
-WALK_BACKENDS = ("kinematic",)
+#: the motion models (backend, physics) whose walks play the check's 200,000 bumps per pair in
+#: about a second: the kinematic simulator, pymunk's dynamic physics through the bump table
+WALK_MODELS = (("kinematic", "ideal"), ("pymunk", "dynamic"))
 
 
 def _pair(env) -> bytes:
@@ -117,15 +119,15 @@ class WorldReachability:
         self.known: dict[bytes, bool] = {}
 
     def __call__(self, env) -> bool:
-        from baselines.navigation.motion import simulated_motion
         from baselines.navigation.reachability import noise_free, world_reachable
         from baselines.navigation.shots import GoalRegion
+        from bounce_gym.dynamics.bump_table import bump_motion
 
         key = _pair(env)
         if key not in self.known:
             env = env.unwrapped
             task, options = env.task, env.options
-            motion = simulated_motion(env.cell_model(), noise_free(options.robot_dynamics))
+            motion = bump_motion(env.cell_model(), noise_free(options.robot_dynamics))
             goal = GoalRegion(np.asarray(task.goal[0][0], dtype=np.float64),
                               float(task.goal[1][0]), task.goal_radius, task.heading_tolerance)
             self.known[key] = world_reachable(
@@ -207,7 +209,8 @@ class Navigation(SingleRobotFamily):
         options = env.unwrapped.options
         if options.step_mode != "bounce":
             return None
-        walks = options.action_type == "continuous" and options.backend in WALK_BACKENDS
+        walks = options.action_type == "continuous" \
+            and (options.backend, options.physics) in WALK_MODELS
         return NavigationChecks(Feasibility(), WorldReachability(experiment["max_steps"])
                                 if walks else None)
 

@@ -9,11 +9,12 @@ import pytest
 
 import bounce_gym  # noqa: F401  (registers the envs)
 from baselines.navigation.continuous import ContinuousNavigationPlanner
-from baselines.navigation.motion import continuous_action, executed_angle, simulated_motion
+from baselines.navigation.motion import continuous_action, executed_angle
 from baselines.navigation.reachability import noise_free, world_reachable
 from baselines.navigation.sampled import SampledNavigationPlanner
 from baselines.navigation.search import shortest_plan
 from baselines.navigation.shots import GoalRegion, shot_intervals
+from bounce_gym.dynamics.bump_table import bump_motion
 from bounce_gym.envs.actions import to_angle
 from bounce_gym.worlds import World
 
@@ -85,7 +86,7 @@ def _reachable(goal_position, seed: int = 0):
                    robot_radius=0.2, task_kwargs=options).unwrapped
     env.reset(seed=seed)
     task = env.task
-    motion = simulated_motion(env.cell_model(), noise_free(env.options.robot_dynamics))
+    motion = bump_motion(env.cell_model(), noise_free(env.options.robot_dynamics))
     goal = GoalRegion(task.goal[0][0], float(task.goal[1][0]), task.goal_radius,
                       task.heading_tolerance)
     return world_reachable(motion, (task.start[0][0], float(task.start[1][0])), goal,
