@@ -120,3 +120,31 @@ def test_actions_execute_the_angles_simulated(angle):
     assert executed_angle(action, angle_range)[0] == to_angle(
         action, "continuous", np.zeros(3), angle_range)
     assert abs(executed_angle(action, angle_range)[0] - angle) < 1e-6
+
+
+def test_on_dynamic_physics_a_table_hit_counts_once_the_simulator_replays_it(tmp_path,
+                                                                             monkeypatch):
+    """The walks read the tabulated map (a coarse one here): the goal in the start's room is
+    reached, the one behind the wall is not, and a hit the simulator's replay refuses does not
+    count."""
+    from baselines.navigation import reachability
+
+    env = gym.make(ENV_ID, world=SPLIT, backend="pymunk", physics="dynamic",
+                   action_type="continuous", robot_radius=0.2,
+                   task_kwargs={"goal_radius": 0.3, "heading_tolerance_deg": 10,
+                                "start": {"position": [1.0, 2.0], "heading": 0.3}}).unwrapped
+    env.reset(seed=0)
+    motion = bump_motion(env.cell_model(), noise_free(env.options.robot_dynamics),
+                         spacing=1.0, headings=36, cache=tmp_path)
+    assert motion.table is not None
+    task = env.task
+    start = (task.start[0][0], float(task.start[1][0]))
+
+    def reached(position) -> bool:
+        goal = GoalRegion(np.array(position), 1.0, task.goal_radius, task.heading_tolerance)
+        return world_reachable(motion, start, goal, env.options.angle_range[0], 60, 0,
+                               walks=200).reached
+
+    assert reached([1.5, 1.0]) and not reached([4.5, 2.0])
+    monkeypatch.setattr(reachability, "replay_reaches", lambda *args: False)
+    assert not reached([1.5, 1.0])
