@@ -408,8 +408,9 @@ def _batched(config: Mapping) -> bool:
 
     if "vec_env" in config:
         return config["vec_env"] == "native"
+    options = {**gym.spec(config["env"]).kwargs, **config.get("env_kwargs", {})}
     with config_errors("config.env_kwargs"):
-        return batch_refusal(**{**gym.spec(config["env"]).kwargs, **config.get("env_kwargs", {})}) is None
+        return batch_refusal(**options) is None
 
 
 def _check_vec_env(config: dict, multi: bool, native: bool) -> None:
