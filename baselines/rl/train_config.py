@@ -64,7 +64,7 @@ from bounce_gym.envs.registration import (
     PETTINGZOO_ENVS,
     is_pettingzoo_id,
 )
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import ConfigError, config_errors
 from bounce_gym.files import check_path_text
 from bounce_gym.validate import did_you_mean, integer, number, unknown_keys
 
@@ -294,7 +294,7 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     if "variant" in config and not VARIANT.fullmatch(config["variant"]):
         raise ConfigError(f"config.variant: expected lower-case letters and digits in parts "
                           f"joined by '-' (e.g. stack4), got {config['variant']!r}")
-    defaults = {"vec_env": "native" if native else "sync",
+    defaults = {"vec_env": "native" if native and (multi or _batched(config)) else "sync",
                 "n_envs": 1 if multi or config["algo"] in ("dqn", "jax_dqn") else 4,
                 **_DEFAULTS}
     for key, value in defaults.items():
@@ -398,6 +398,19 @@ def _check_role(config: Mapping) -> None:
     if config["env"] != PATROL_ID and role is not None:
         raise ConfigError(f"config.role: only {PATROL_ID} has roles, not {config['env']}; "
                           "remove the key")
+
+
+def _batched(config: Mapping) -> bool:
+    """Whether the env's batched version steps ``env_kwargs`` (an id with one): not the pymunk
+    backend, actuation noise or tick steps (`bounce_gym.envs.vector_env.batch_refusal`), which
+    train on ``sync`` copies by default. Bad ``env_kwargs`` raise `ConfigError` here."""
+    from bounce_gym.envs.vector_env import batch_refusal
+
+    if "vec_env" in config:
+        return config["vec_env"] == "native"
+    options = {**gym.spec(config["env"]).kwargs, **config.get("env_kwargs", {})}
+    with config_errors("config.env_kwargs"):
+        return batch_refusal(**options) is None
 
 
 def _check_vec_env(config: dict, multi: bool, native: bool) -> None:

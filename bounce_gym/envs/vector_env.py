@@ -415,6 +415,14 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return array
 
 
+def batch_refusal(**options: object) -> str | None:
+    """Why `BounceVectorEnv` would refuse the `BounceEnv` keyword arguments ``options`` (the
+    pymunk backend, actuation noise, tick steps, an unbatched task), or None when it takes
+    them: what a caller that may fall back to separate copies asks first."""
+    single = BounceEnv(None, **options)
+    return _unbatchable(single.options, single.core.task)
+
+
 def _unbatchable(opts, task) -> str | None:
     """Why these options cannot be batched, or None."""
     if task.name not in VECTOR_TASKS:
