@@ -71,18 +71,21 @@ class AnglePlan:
 
 
 def search_angles(motion, point: np.ndarray, heading: float, goal: GoalRegion,
-                  angle_range: tuple[float, float], budget: AngleBudget, max_bumps: int,
+                  angle_range: tuple[float, float] | None, budget: AngleBudget, max_bumps: int,
                   score: Score, rng: np.random.Generator, max_ticks: int) -> AnglePlan:
     """The fewest bumps (at most ``max_bumps`` and ``budget.bumps``) from the bump pose
     (``point``, ``heading``) to a drive through the goal (module docstring); ``motion``:
     ``bumps(angles, action, point, heading, rng, max_ticks)`` as in
-    `baselines.navigation.motion`. Without a plan, the way to the last level's pose of least
-    ``score``."""
+    `bounce_gym.dynamics.bump_table.bump_motion`. Without a plan, the way to the last level's
+    pose of least ``score``. ``angle_range``: the continuous action's range, whose float32
+    actions the angles are rounded to; None for discrete angles, tried as they are (and no
+    shots: ``budget.shots`` must be 0)."""
     points = [np.asarray(point, dtype=np.float64).reshape(1, 2)]
     headings = [np.array([float(heading)])]
     parents, angles = [np.array([-1])], [np.array([np.nan])]
     seen = {_key(points[0], headings[0])[0]}
-    grid = exact_angles(budget.grid, angle_range)
+    grid = np.asarray(budget.grid, dtype=np.float64) if angle_range is None \
+        else exact_angles(budget.grid, angle_range)
     expanded = 0
     for _ in range(min(int(max_bumps), budget.bumps)):
         fp, fh = points[-1], headings[-1]
@@ -90,7 +93,8 @@ def search_angles(motion, point: np.ndarray, heading: float, goal: GoalRegion,
         if n == 0 or expanded >= budget.nodes:
             break
         expanded += n
-        shots = exact_angles(shot_angles(fp, fh, goal, angle_range, budget.shots), angle_range)
+        shots = np.zeros(0) if angle_range is None else exact_angles(
+            shot_angles(fp, fh, goal, angle_range, budget.shots), angle_range)
         has = ~np.isnan(shots)
         angle = np.concatenate((shots[has], np.tile(grid, n)))
         parent = np.concatenate((np.nonzero(has)[0], np.repeat(np.arange(n), len(grid))))

@@ -24,6 +24,11 @@ lattice. `ContinuousNavigationPlanner` chooses each bounce angle from that range
   at every bump where needed; in a noisy one it is determinised replanning (the most likely
   outcome taken as certain, replanned on surprise; Yoon, Fern & Givan, FF-Replan, ICAPS 2007).
 
+On an env with discrete actions it is the same planner restricted to Φ: the search tries Φ's
+angles only (no grid, no shots) and ``act`` returns the index of the angle chosen (the
+navigation family's row "search planner": closed loop from contact and clock where the
+papers' roadmap runs open loop).
+
 It reads only its observation (the clock) in `act`, never ``info``. ``predicted_success`` is its
 estimate, at its first decision, of the probability of reaching the goal within the episode:
 without noise, 1 when the search found a plan (exact: the world is deterministic and the plan
@@ -94,13 +99,16 @@ class ContinuousNavigationPlanner(Policy):
         task, options = env.task, env.options
         if getattr(task, "name", None) != "navigation":
             raise ConfigError("ContinuousNavigationPlanner needs an env with task='navigation'")
-        if options.step_mode != "bounce" or options.action_type != "continuous":
-            raise ConfigError("ContinuousNavigationPlanner needs step_mode='bounce' and "
-                              "action_type='continuous'")
+        if options.step_mode != "bounce":
+            raise ConfigError("ContinuousNavigationPlanner needs step_mode='bounce'")
         if options.bounce_rule != "relative":
             raise ConfigError("ContinuousNavigationPlanner aims its shots under the relative "
                               f"bounce rule, not {options.bounce_rule!r}")
-        self.range = options.angle_range[0]
+        #: the env's discrete angles Φ (radians), or None for the continuous range
+        self.phi = np.asarray(options.angles[0], dtype=np.float64) \
+            if options.action_type == "discrete" else None
+        self.range = options.angle_range[0] if self.phi is None \
+            else (float(self.phi.min()), float(self.phi.max()))
         self.goal = GoalRegion(np.asarray(task.goal[0][0], dtype=np.float64),
                                float(task.goal[1][0]), task.goal_radius, task.heading_tolerance)
         model = env.cell_model()
@@ -110,9 +118,13 @@ class ContinuousNavigationPlanner(Policy):
         self.deterministic = isinstance(options.noise, Exact)
         self.field = ShotField(options.world, options.robot_radius, self.goal, self.field_cell)
         lo, hi = self.range
-        grid = np.linspace(lo, hi, max(2, round(math.degrees(hi - lo) / self.grid_deg) + 1))
-        self.budget = AngleBudget(grid, self.shots, self.frontier, self.search_bumps,
-                                  self.search_nodes)
+        if self.phi is None:
+            grid = np.linspace(lo, hi, max(2, round(math.degrees(hi - lo) / self.grid_deg) + 1))
+            self.budget = AngleBudget(grid, self.shots, self.frontier, self.search_bumps,
+                                      self.search_nodes)
+        else:  # only Φ's angles can be executed: no grid, no shots between them
+            self.budget = AngleBudget(self.phi, 0, self.frontier, self.search_bumps,
+                                      self.search_nodes)
         spec_steps = getattr(getattr(env, "spec", None), "max_episode_steps", None)
         self.steps_total = int(self.horizon or spec_steps or DEFAULT_HORIZON)
         self.rng = np.random.default_rng(self.seed)
@@ -187,14 +199,17 @@ class ContinuousNavigationPlanner(Policy):
             self.plan, self._k = None, 0
             if self.failures < self.episode_searches:
                 self.plan = search_angles(self.exact_motion, point, heading, self.goal,
-                                          self.range, self.budget, self.steps_total - self.steps,
+                                          self.range if self.phi is None else None, self.budget,
+                                          self.steps_total - self.steps,
                                           self._score, self.rng, self.max_ticks)
                 self.searches += 1
                 self.failures += int(not self.plan.found)
         if self.predicted_success is None:
             self.predicted_success = self._predicted()
         if self.plan is None or self._k >= len(self.plan.angles):  # no way: turn by the middle
-            return 0.5 * (self.range[0] + self.range[1])
+            middle = 0.5 * (self.range[0] + self.range[1])
+            return middle if self.phi is None else float(self.phi[np.argmin(
+                np.abs(self.phi - middle))])
         angle = float(self.plan.angles[self._k])
         self._k += 1
         return angle
@@ -222,7 +237,11 @@ class ContinuousNavigationPlanner(Policy):
         del info  # the robot's own observation only
         self._condition(self._clock(observation))
         angle = self._decide()
+        self.steps += 1
+        if self.phi is not None:
+            index = int(np.argmin(np.abs(self.phi - angle)))
+            self._predict(float(self.phi[index]))
+            return index
         action = continuous_action(np.array([angle]), self.range)
         self._predict(float(executed_angle(action, self.range)[0]))
-        self.steps += 1
         return action

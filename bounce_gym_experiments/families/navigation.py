@@ -58,9 +58,14 @@ from bounce_gym.errors import ConfigError
 from bounce_gym_experiments.families.base import Episode, SingleRobotFamily, env_task
 
 #: the planners ``planner_kwargs.models`` may name
-PLANNER_MODELS = ("roadmap", "roadmap_pose", "sampled", "continuous")
+PLANNER_MODELS = ("roadmap", "roadmap_pose", "sampled", "search", "continuous")
 #: the planners of envs with continuous actions
 CONTINUOUS_MODELS = ("continuous",)
+#: the roadmap's row on a continuous backend, where its plan (made on the cell model) runs open
+#: loop from the observations
+OPEN_LOOP_NAME = "roadmap planner (open loop)"
+#: the search planner's row: `ContinuousNavigationPlanner` restricted to the env's Φ
+SEARCH_NAME = "search planner"
 #: the row of the roadmap planner that replans from the true pose (a privileged variant)
 POSE_NAME = "roadmap planner (pose observed)"
 #: the options of the sampled planner ``planner_kwargs`` may set
@@ -218,47 +223,75 @@ class Navigation(SingleRobotFamily):
         if kind != "planner":
             return super().policies(kind, env, experiment, setup)
         continuous = env.unwrapped.options.action_type == "continuous"
-        return [p for p in navigation_planners(experiment)
-                if isinstance(p, _continuous_planner_class()) == continuous]
+        return [policy for model, policy in navigation_planners(experiment)
+                if (model in CONTINUOUS_MODELS) == continuous]
 
     def episode(self, env, policy, setup):
         return NavigationEpisode(env, setup)
 
 
-def navigation_planners(experiment: Mapping) -> list[Policy]:
-    """The planner rows of a navigation experiment (module docstring), checked before any
-    episode runs."""
+def navigation_planners(experiment: Mapping) -> list[tuple[str, Policy]]:
+    """The planner rows of a navigation experiment (module docstring), each with its model's
+    name, checked before any episode runs."""
     from baselines.navigation import NavigationPlanner
+    from baselines.navigation.continuous import ContinuousNavigationPlanner
     from baselines.navigation.sampled import SampledNavigationPlanner
 
     models, kwargs = navigation_planner_options(experiment)
-    out: list[Policy] = []
+    out: list[tuple[str, Policy]] = []
     if "roadmap" in models:
-        out.append(NavigationPlanner())
+        roadmap = NavigationPlanner()
+        if _motion_model(experiment)[0] != "cell":
+            roadmap.name = OPEN_LOOP_NAME
+        out.append(("roadmap", roadmap))
     if "roadmap_pose" in models:
         privileged = NavigationPlanner(replan_from_info=True)
         privileged.name = POSE_NAME
-        out.append(privileged)
+        out.append(("roadmap_pose", privileged))
     if "sampled" in models:
         sampled = SampledNavigationPlanner(horizon=experiment["max_steps"], **kwargs)
         sampled.name = SAMPLED_NAME
-        out.append(sampled)
+        out.append(("sampled", sampled))
+    if "search" in models:
+        search = ContinuousNavigationPlanner(horizon=experiment["max_steps"])
+        search.name = SEARCH_NAME
+        out.append(("search", search))
     if "continuous" in models:
-        out.append(_continuous_planner_class()(horizon=experiment["max_steps"]))
+        out.append(("continuous", ContinuousNavigationPlanner(horizon=experiment["max_steps"])))
     return out
 
 
-def _continuous_planner_class():
-    from baselines.navigation.continuous import ContinuousNavigationPlanner
+def _motion_model(experiment: Mapping) -> tuple[str, str]:
+    """The backend and the action type of an experiment's env: its ``env_kwargs`` over the
+    arguments its id registers over `EnvOptions`' defaults."""
+    from bounce_gym.envs.options import EnvOptions
+    from bounce_gym_experiments.config import registered_kwargs
 
-    return ContinuousNavigationPlanner
+    kwargs = {**registered_kwargs(experiment["env"]), **experiment.get("env_kwargs", {})}
+    return (str(kwargs.get("backend", EnvOptions.model_fields["backend"].default)),
+            str(kwargs.get("action_type", EnvOptions.model_fields["action_type"].default)))
+
+
+def default_planner_models(experiment: Mapping) -> list[str]:
+    """The planners an experiment runs when ``planner_kwargs.models`` names none: the one that
+    works on its motion model. On the cell backend the papers' roadmap (the cell model is the
+    env); on a continuous backend the closed-loop planners — the continuous-angle planner with
+    continuous actions, the search planner with Φ on ``BounceNavigation-v0``, and on the
+    goal-conditioned v1 (whose learners observe their pose) the roadmap replanned from the true
+    pose."""
+    backend, action_type = _motion_model(experiment)
+    if backend == "cell":
+        return ["roadmap"]
+    if action_type == "continuous":
+        return ["continuous"]
+    return ["search"] if env_task(experiment) == "navigation" else ["roadmap_pose"]
 
 
 def navigation_planner_options(experiment: Mapping) -> tuple[list[str], dict]:
     """The planners ``planner_kwargs.models`` names (default: the roadmap planner) and the
     sampled planner's options, checked before any env is built."""
     kwargs = dict(experiment.get("planner_kwargs", {}))
-    models = kwargs.pop("models", ["roadmap"])
+    models = kwargs.pop("models", None) or default_planner_models(experiment)
     unknown = sorted(key for key in kwargs if key not in SAMPLED_OPTIONS)
     if unknown:
         raise ConfigError(f"planner_kwargs: unknown {unknown}; allowed are models, "

@@ -130,14 +130,14 @@ def test_the_sampled_planner_rows_run(tmp_path):
     summary = _summary(tmp_path, rows)
     for row in rows:
         ran = {s["policy"]: s for s in summary if s["experiment"] == row["name"]}
-        assert set(ran) == {"roadmap planner", "sampled-gcm"}, row["name"]
+        assert set(ran) == {"roadmap planner (open loop)", "sampled-gcm"}, row["name"]
         sampled = ran["sampled-gcm"]
         assert sampled["predicted_success_n"] == 1
         assert 0.0 <= sampled["predicted_success"] <= 1.0
         for policy in ran.values():
             assert policy["feasible_n"] == 1
             assert ("success_feasible" in policy) == (policy["feasible"] == 1.0)
-        assert "predicted_success" not in ran["roadmap planner"]
+        assert "predicted_success" not in ran["roadmap planner (open loop)"]
 
 
 def test_the_continuous_planner_rows_run(tmp_path):
@@ -186,7 +186,7 @@ def test_the_sampled_planner_reads_no_info_in_the_evaluation():
                    max_steps=8, horizon_reason="a quick test")
               for e in _experiments("eval_physics.yaml") if e["name"] == SAMPLED_ROWS[0])
     env = make_experiment_env(exp)
-    (planner,) = navigation_planners(exp)
+    ((_, planner),) = navigation_planners(exp)
     seen, _ = run_episode(env, planner, 10_000, exp["max_steps"], record=True)
     blind, _ = run_episode(env, Blind(planner), 10_000, exp["max_steps"], record=True)
     assert seen["steps"] == blind["steps"] and seen["ticks"] == blind["ticks"]

@@ -148,3 +148,50 @@ def test_on_dynamic_physics_a_table_hit_counts_once_the_simulator_replays_it(tmp
     assert reached([1.5, 1.0]) and not reached([4.5, 2.0])
     monkeypatch.setattr(reachability, "replay_reaches", lambda *args: False)
     assert not reached([1.5, 1.0])
+
+
+def _run_discrete(env, planner, seed: int, blind: bool):
+    obs, info = env.reset(seed=seed)
+    planner.reset(env)
+    actions = []
+    while True:
+        action = planner.act(obs, {} if blind else info)
+        actions.append(int(action))
+        obs, _, terminated, truncated, info = env.step(action)
+        if terminated or truncated:
+            return bool(info["is_success"]), actions
+
+
+def test_with_discrete_angles_it_searches_phi_only_and_reads_no_info():
+    """On an env with Φ = {45°, 90°, 135°} the planner (the family's "search planner") returns
+    indices of Φ, reaches a goal on the three-angle lattice, and ignores ``info``."""
+    pair = {**PAIR, "goal": {"position": [4.5, 2.5], "heading": float(np.radians(90))}}
+    env = gym.make(ENV_ID, world=ROOM, backend="kinematic", angles=[45, 90, 135],
+                   task_kwargs=pair)
+    planner = ContinuousNavigationPlanner(search_bumps=10)
+    success, actions = _run_discrete(env, planner, 0, blind=False)
+    assert planner.predicted_success in (0.0, 1.0)
+    assert set(actions) <= {0, 1, 2}
+    assert (success, actions) == _run_discrete(env, planner, 0, blind=True)
+    assert success == (planner.predicted_success == 1.0)
+
+
+@pytest.mark.parametrize(("env_kwargs", "models"), [
+    ({"backend": "cell"}, ["roadmap"]),
+    ({"backend": "kinematic"}, ["search"]),
+    ({"backend": "pymunk", "action_type": "continuous"}, ["continuous"]),
+])
+def test_the_default_planner_is_the_one_that_works_on_the_motion_model(env_kwargs, models):
+    from bounce_gym_experiments.families.navigation import (
+        OPEN_LOOP_NAME,
+        default_planner_models,
+        navigation_planners,
+    )
+
+    experiment = {"env": ENV_ID, "env_kwargs": env_kwargs, "max_steps": 200}
+    assert default_planner_models(experiment) == models
+    if "action_type" not in env_kwargs:  # v1 (whose learners observe the pose): discrete only
+        assert default_planner_models({**experiment, "env": "bounce_gym/BounceNavigation-v1"}) \
+            == (["roadmap"] if env_kwargs["backend"] == "cell" else ["roadmap_pose"])
+    (_, roadmap), = navigation_planners({**experiment, "planner_kwargs": {"models": ["roadmap"]}})
+    assert (roadmap.name == OPEN_LOOP_NAME) == (env_kwargs["backend"] != "cell")
