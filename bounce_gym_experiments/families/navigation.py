@@ -3,17 +3,22 @@ predicted cost (`baselines.navigation.NavigationPlanner`), and the stochastic sh
 the GCM sampled from the env's own dynamics (`baselines.navigation.sampled`).
 
 Planners (``planner_kwargs``, all optional): ``models`` lists which of `PLANNER_MODELS` run —
-``roadmap``, the papers' plan on the env's cell model run open loop (row "roadmap planner"), and
-``roadmap_pose``, the same plan replanned from the true pose in ``info`` whenever the clock
-departs from it (row "roadmap planner (pose observed)": privileged, the planner beside learners
-that observe their pose, as on ``BounceNavigation-v1`` off the cell backend), and
-``sampled``, `SampledNavigationPlanner` closed loop on its particle belief (row "sampled-gcm");
-default ``[roadmap]``. These three take discrete actions; on an env with
-``action_type: continuous`` the models are ``[continuous]``, `ContinuousNavigationPlanner`
-choosing every bounce angle from the continuous range (row "continuous-angle planner", its
-horizon the experiment's ``max_steps``). The sampled planner's options `SAMPLED_OPTIONS`
-(``samples``, ``seed``, ``particles``, ``draws``, ``depth``, ``reach``, ``cell_size``,
-``rollouts``) are passed to it; its horizon is the experiment's ``max_steps``.
+``roadmap``, the papers' plan on the env's cell model run open loop (row "roadmap planner"; on
+a continuous backend "roadmap planner (open loop)"), ``roadmap_pose``, the same plan replanned
+from the true pose in ``info`` whenever the clock departs from it (row "roadmap planner (pose
+observed)": privileged, the planner beside learners that observe their pose, as on
+``BounceNavigation-v1`` off the cell backend), ``sampled``, `SampledNavigationPlanner` closed
+loop on its particle belief (row "sampled-gcm"), and ``search``, `ContinuousNavigationPlanner`
+restricted to Φ (row "search planner": closed loop from contact and clock, searching the
+simulator — on pymunk's dynamic physics the tabulated bump map — from its belief). These take
+discrete actions; on an env with ``action_type: continuous`` the model is ``continuous``,
+`ContinuousNavigationPlanner` choosing every bounce angle from the continuous range (row
+"continuous-angle planner"). Without ``models`` an experiment runs the planner that works on its
+motion model (`default_planner_models`): the roadmap on the cell backend, elsewhere ``search``
+(``continuous`` with continuous actions; ``roadmap_pose`` on v1). Every planner's horizon is the
+experiment's ``max_steps``; the sampled planner's options `SAMPLED_OPTIONS` (``samples``,
+``seed``, ``particles``, ``draws``, ``depth``, ``reach``, ``cell_size``, ``rollouts``) are
+passed to it.
 
 Per episode:
 
