@@ -55,9 +55,10 @@ def noise_free(dynamics: dict) -> dict:
 
 def world_reachable(motion, start: tuple[np.ndarray, float], goal: GoalRegion,
                     angle_range: tuple[float, float], bumps: int, seed: int,
-                    walks: int = WALKS, max_ticks: int | None = None) -> Reachability:
-    """Random walks with continuous angles from ``start`` (position (2,), heading) in the
-    noise-free world of ``motion`` (`bounce_gym.dynamics.bump_table.bump_motion` of
+                    walks: int = WALKS, max_ticks: int | None = None,
+                    phi: np.ndarray | None = None) -> Reachability:
+    """Random walks with continuous angles (with ``phi``: uniform among these discrete angles,
+    radians) from ``start`` (position (2,), heading) in the noise-free world of ``motion`` (`bounce_gym.dynamics.bump_table.bump_motion` of
     `noise_free` dynamics): does any pass through ``goal`` within ``bumps`` bumps (module
     docstring)? ``seed`` seeds the angles drawn. Where ``motion`` reads the tabulated map (a
     model of the simulator), a walk's hit counts only once its angles, replayed in the
@@ -73,8 +74,11 @@ def world_reachable(motion, start: tuple[np.ndarray, float], goal: GoalRegion,
     walk = np.arange(walks)  # the walk of every robot still driving
     history = np.zeros((walks, bumps))  # the angles every walk drew
     for bump in range(1, bumps + 1):
-        angle = executed_angle(rng.uniform(-1.0, 1.0, len(point)).astype(np.float32),
-                               angle_range)
+        if phi is None:
+            angle = executed_angle(rng.uniform(-1.0, 1.0, len(point)).astype(np.float32),
+                                   angle_range)
+        else:
+            angle = np.asarray(phi, dtype=np.float64)[rng.integers(len(phi), size=len(point))]
         history[walk, bump - 1] = angle
         out = motion.bumps(angle, np.arange(len(angle)), point, head, rng, max_ticks)
         hits = out.goal_hits(goal.point, goal.heading, goal.radius, goal.tolerance)

@@ -38,10 +38,11 @@ Per episode:
   horizon from its first belief (its mean over the episodes is the model's prediction of
   ``success``).
 
-* ``world_reachable`` (continuous actions on the kinematic backend and on pymunk's dynamic
-  physics, whose walks read the tabulated bump map and replay a hit in the simulator; on
-  pymunk's ideal physics the walks' 200,000 simulated bumps per pair take too long) — random walks with continuous angles from the
-  start, simulated in the noise-free world, pass through the goal
+* ``world_reachable`` (on the kinematic backend and on pymunk's dynamic physics, whose walks
+  read the tabulated bump map and replay a hit in the simulator; on pymunk's ideal physics the
+  walks' 200,000 simulated bumps per pair take too long) — random walks from the start with the
+  env's own actions (angles uniform in the continuous range, or uniform among Φ), simulated in
+  the noise-free world, pass through the goal
   (`baselines.navigation.reachability.world_reachable`: no planner is asked, and a pair it
   misses may still be reachable); ``success_world_reachable`` is ``success`` on those episodes.
 
@@ -121,8 +122,8 @@ class Feasibility:
 
 
 class WorldReachability:
-    """Whether random walks with continuous angles reach the env's current goal from its start
-    in the noise-free world (`baselines.navigation.reachability`), remembered per pair."""
+    """Whether random walks with the env's actions reach its current goal from its start in the
+    noise-free world (`baselines.navigation.reachability`), remembered per pair."""
 
     def __init__(self, bumps: int) -> None:
         self.bumps = int(bumps)
@@ -140,9 +141,10 @@ class WorldReachability:
             motion = bump_motion(env.cell_model(), noise_free(options.robot_dynamics))
             goal = GoalRegion(np.asarray(task.goal[0][0], dtype=np.float64),
                               float(task.goal[1][0]), task.goal_radius, task.heading_tolerance)
+            phi = None if options.action_type == "continuous" else options.angles[0]
             self.known[key] = world_reachable(
                 motion, (task.start[0][0], float(task.start[1][0])), goal,
-                options.angle_range[0], self.bumps, WALK_SEED).reached
+                options.angle_range[0], self.bumps, WALK_SEED, phi=phi).reached
         return self.known[key]
 
 
@@ -219,8 +221,7 @@ class Navigation(SingleRobotFamily):
         options = env.unwrapped.options
         if options.step_mode != "bounce":
             return None
-        walks = options.action_type == "continuous" \
-            and (options.backend, options.physics) in WALK_MODELS
+        walks = options.backend != "cell" and (options.backend, options.physics) in WALK_MODELS
         return NavigationChecks(Feasibility(), WorldReachability(experiment["max_steps"])
                                 if walks else None)
 
