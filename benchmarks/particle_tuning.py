@@ -7,7 +7,7 @@ acting, one episode per seed, and prints the share of correct and of wrong claim
 Wilson intervals and the time per episode. A setting changes the `ParticleBelief` arguments of
 both the task's belief and the policy's (roughening ``jitter_deg``, clock ``tolerance`` and
 ``slack``, augmented MCL's ``alpha_slow``, ``alpha_fast`` and ``inject_below``) and the task's
-claim rule (``claim_ess``, ``claim_bumps``); the others keep the defaults of
+claim rule (``claim_ess``, ``claim_bumps``, ``claim_replicas``); the others keep the defaults of
 `bounce_gym.dynamics.particles` and `bounce_gym.envs.tasks.localization`. ``--particles`` sets
 the particle count of both.
 
@@ -50,7 +50,10 @@ SETTINGS = {
     "three-bumps": ({}, {"claim_bumps": 3}),
     "five-bumps": ({}, {"claim_bumps": 5}),
     "eight-bumps": ({}, {"claim_bumps": 8}),
-    "mass-only": ({"alpha_fast": 0.05}, {"claim_ess": 0.0, "claim_bumps": 1}),
+    "no-replica": ({}, {"claim_replicas": 0}),
+    "two-replicas": ({}, {"claim_replicas": 2}),
+    "mass-only": ({"alpha_fast": 0.05}, {"claim_ess": 0.0, "claim_bumps": 1,
+                                          "claim_replicas": 0}),
 }
 
 #: the modules that build a ParticleBelief for the task and for the policy

@@ -124,9 +124,9 @@ class ParticleBelief:
     ``reset(rng, clock)`` or ``reset_at(rng, position, heading)``; ``update(angle, clock)``;
     ``position``, ``heading`` (the particles' poses at their last bump), ``states`` (decision
     state of every particle, −1 for one not at a contact), ``previous``, ``weight``, ``ess``,
-    ``injected`` (fresh particles at the last update), ``depletions``, ``mass()`` (state →
-    mass), ``max_mass``, ``most_likely``, ``successors(state)``, ``entropy``,
-    ``expected_entropy(angles)``.
+    ``likelihood`` (w_avg of the last update), ``injected`` (fresh particles at the last
+    update), ``depletions``, ``mass()`` (state → mass), ``max_mass``, ``most_likely``,
+    ``successors(state)``, ``entropy``, ``expected_entropy(angles)``.
     """
 
     def __init__(self, model: CellModel, dynamics: dict, n_particles: int = DEFAULT_PARTICLES,
@@ -229,7 +229,7 @@ class ParticleBelief:
         self.position, self.heading, self.states = position, heading, states
         self.previous = np.full(len(states), -1, dtype=np.int64)
         self.weight = np.full(len(states), 1.0 / len(states))
-        self.ess, self.injected = float(len(states)), 0
+        self.ess, self.injected, self.likelihood = float(len(states)), 0, 1.0
         self.w_slow = self.w_fast = None
 
     # -- the filter ---------------------------------------------------------------------------
@@ -244,7 +244,7 @@ class ParticleBelief:
         weight = np.where(gap == 0, 1.0, np.where(gap <= self.tolerance, self.slack, 0.0))
         weight[states < 0] = 0.0
         weight *= self.weight
-        average = float(weight.sum())  # w_avg: the clock's likelihood under the prediction
+        average = self.likelihood = float(weight.sum())  # w_avg (module docstring)
         if average <= 0:  # depletion: every particle drawn anew from the latest clock
             self.depletions += 1
             self._place(*self._prior(clock, self.n, angle))

@@ -32,6 +32,8 @@ DEFAULT_CLAIM_ESS = 0.1
 DEFAULT_CLAIM_BUMPS = 2
 #: default mass below which the particle filter's followed claim is withdrawn
 DEFAULT_WITHDRAW_BELOW = 0.5
+#: default independent particle sets besides the main one that must agree on a claim
+DEFAULT_CLAIM_REPLICAS = 1
 #: The methods a filter must have (``size`` and ``localized`` may appear only after ``reset``).
 _FILTER_METHODS = ("reset", "update")
 
@@ -59,10 +61,11 @@ class LocalizationTask(Task):
         model_samples: with ``"belief"``, sample points per decision state and angle of the
             sampled GCM (`BounceCore.sampled_model`, default 200).
         particles: with ``"particles"``, the number of particles (default 10,000).
-        claim_ess, claim_bumps, withdraw_below: with ``"particles"``, the effective sample
-            size a claim needs (a share of the particles, default 0.1), the bumps in a row its
-            evidence must hold (default 2) and the followed mass below which it is withdrawn
-            (default 0.5): `ParticleClaims`.
+        claim_ess, claim_bumps, withdraw_below, claim_replicas: with ``"particles"``, the
+            effective sample size a claim needs (a share of the particles, default 0.1), the
+            bumps in a row its evidence must hold (default 2), the followed mass below which it
+            is withdrawn (default 0.5) and the independent particle sets besides the main one
+            that must agree (default 1): `ParticleClaims`.
 
     **Claims.** Every filter's ``localized`` is a claim, judged against the robot's true
     decision state at a bump (`bounce_gym.cells.bump_states`: the cell of the env's cell model
@@ -122,7 +125,8 @@ class LocalizationTask(Task):
                  model_samples: int = DEFAULT_SAMPLES,
                  particles: int = DEFAULT_PARTICLES, claim_ess: float = DEFAULT_CLAIM_ESS,
                  claim_bumps: int = DEFAULT_CLAIM_BUMPS,
-                 withdraw_below: float = DEFAULT_WITHDRAW_BELOW) -> None:
+                 withdraw_below: float = DEFAULT_WITHDRAW_BELOW,
+                 claim_replicas: int = DEFAULT_CLAIM_REPLICAS) -> None:
         if filter_factory not in (None, COMBINATORIAL, BELIEF, PARTICLES) \
                 and (isinstance(filter_factory, str) or not callable(filter_factory)):
             raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, {BELIEF!r}, "
@@ -138,6 +142,7 @@ class LocalizationTask(Task):
         self.claim_ess = number("claim_ess", claim_ess, minimum=0.0, maximum=1.0)
         self.claim_bumps = integer("claim_bumps", claim_bumps, minimum=1)
         self.withdraw_below = number("withdraw_below", withdraw_below, minimum=0.0, maximum=1.0)
+        self.claim_replicas = integer("claim_replicas", claim_replicas, minimum=0)
 
     def configure(self, core) -> None:
         super().configure(core)
@@ -146,7 +151,8 @@ class LocalizationTask(Task):
             self.filter = BeliefClaims(core, self.claim_threshold, self.model_samples)
         elif self.filter_factory == PARTICLES:
             self.filter = ParticleClaims(core, self.particles, ClaimRule(
-                self.claim_threshold, self.claim_ess, self.claim_bumps, self.withdraw_below))
+                self.claim_threshold, self.claim_ess, self.claim_bumps, self.withdraw_below,
+                self.claim_replicas))
         elif self.filter_factory == COMBINATORIAL:
             self.filter = combinatorial_filter(core)
         elif self.filter_factory is None:
@@ -324,12 +330,14 @@ class ClaimRule:
         bumps: bumps in a row at which the evidence must hold before the claim is made.
         withdraw_below: a standing claim is withdrawn once the mass that followed it falls
             below this.
+        replicas: independent particle sets, besides the main one, that must agree.
     """
 
     threshold: float = DEFAULT_CLAIM_THRESHOLD
     ess: float = DEFAULT_CLAIM_ESS
     bumps: int = DEFAULT_CLAIM_BUMPS
     withdraw_below: float = DEFAULT_WITHDRAW_BELOW
+    replicas: int = DEFAULT_CLAIM_REPLICAS
 
 
 class ParticleClaims(_Claim):
@@ -338,23 +346,35 @@ class ParticleClaims(_Claim):
     MCL with sensor resetting), with claims that need evidence and are withdrawn when the
     belief turns against them.
 
-    **Evidence.** At a bump the belief is *evident* for a state when that state holds at least
-    ``rule.threshold`` of the mass and the effective sample size of the measurement
-    (`ParticleBelief.ess`) is at least ``rule.ess`` × particles. Mass alone is no evidence: the
-    audit of the first version found most wrong claims at mass 1.00 within ten bumps, held by
-    the few particles that outlived the rest. The ESS (not the count of distinct poses: after
-    roughening every pose is distinct) says how many particles carried that mass. Evidence
-    followed for ``rule.bumps`` bumps in a row — the next bump's evident state is where the
-    particles of the last one went (`ParticleBelief.successors`), so a chance run of two
-    unrelated confident states does not count — makes the claim (``made`` is True at that
+    **Replicas.** Besides its main belief (``belief``, whose mass, entropy and candidates the
+    task reports) the filter runs ``rule.replicas`` independent particle sets of the same size
+    (``replicas``), fed the same angles and clocks, with generators spawned from its own. A
+    confident wrong belief here is an artefact of one sample: the few particles near the true
+    pose all died (particle deprivation, Probabilistic Robotics §4.3.4) and a group elsewhere
+    that happened to fit the clocks took the mass — in the two wrong claims traced on the
+    tuning seeds (9010, 9014; 1,000 particles, rotation noise) the true state held no mass
+    from the 1st and the 14th bump on, while the wrong group fitted the clocks well (its w_avg
+    rose to 0.5–0.9, so nothing was injected either). An independent set loses the truth
+    independently and rarely settles on the same wrong state at the same bump, so agreement is
+    the evidence a single set cannot give about the hypotheses it no longer holds.
+
+    **Evidence.** At a bump the beliefs are *evident* for a state when in every one of them
+    that state holds at least ``rule.threshold`` of the mass and the effective sample size of
+    the measurement (`ParticleBelief.ess`) is at least ``rule.ess`` × particles. The ESS (not
+    the count of distinct poses: after roughening every pose is distinct) says how many
+    particles carried the mass: the audit of the first version found most wrong claims at mass
+    1.00, held by the few particles that outlived the rest. Evidence followed for ``rule.bumps``
+    bumps in a row — the next bump's evident state is where the particles of the last one went
+    (`ParticleBelief.successors`), in every belief — makes the claim (``made`` is True at that
     update, ``claims_made`` counts it).
 
     **Withdrawal.** A standing claim is followed from bump to bump: it moves to the state that
-    most of its particles reached. It is withdrawn (``withdrawn`` counts it) when that state
-    holds less than ``rule.withdraw_below`` of the belief — the clock contradicted the claim,
-    particles were injected in its place, or the belief was depleted and drawn anew (no
-    particle then descends from the claim) — or when the ESS falls below the floor. A new claim
-    then needs fresh evidence.
+    most of its particles reached. It is withdrawn (``withdrawn`` counts it) when, in any
+    belief, that state holds less than ``rule.withdraw_below`` of the mass — the clock
+    contradicted the claim, particles were injected in its place, or the belief was depleted
+    and drawn anew (no particle then descends from the claim) —, when the beliefs follow it to
+    different states, or when an ESS falls below the floor. A new claim then needs fresh
+    evidence.
     """
 
     def __init__(self, core, particles: int, rule: ClaimRule | None = None) -> None:
@@ -362,13 +382,17 @@ class ParticleClaims(_Claim):
         if options.action_type != "discrete" or options.step_mode != "bounce":
             raise ConfigError("localization filter 'particles': needs discrete actions and "
                               "step_mode='bounce' (it is updated once per bump)")
-        self.belief = ParticleBelief(core.cell_model(), options.robot_dynamics, particles,
-                                     max_clock=int(options.max_clock))
         self.rule = ClaimRule() if rule is None else rule
+        self.beliefs = [ParticleBelief(core.cell_model(), options.robot_dynamics, particles,
+                                       max_clock=int(options.max_clock))
+                        for _ in range(1 + self.rule.replicas)]
+        self.belief, self.replicas = self.beliefs[0], self.beliefs[1:]
         self.claim: int | None = None
 
     def reset(self, rng: np.random.Generator, clock: int) -> None:
-        self.belief.reset(rng, clock)
+        for belief, stream in zip(self.beliefs, (rng, *rng.spawn(len(self.replicas))),
+                                  strict=True):
+            belief.reset(stream, clock)
         self.claim = None  # a claim is judged at a bump after a step: none at the reset
         self.pending: int | None = None  # the state of the evidence gathered so far
         self.streak = 0  # bumps in a row the evidence for ``pending`` held
@@ -379,7 +403,8 @@ class ParticleClaims(_Claim):
         self.made = False
         if angle is None:  # no bump in this step: nothing to update
             return
-        self.belief.update(angle, ticks)
+        for belief in self.beliefs:
+            belief.update(angle, ticks)
         if self.claim is not None:
             self.claim = self._follow(self.claim, self.rule.withdraw_below)
             self.withdrawn += self.claim is None
@@ -393,8 +418,8 @@ class ParticleClaims(_Claim):
             else self._follow(self.pending, self.rule.threshold)
         if followed is not None:
             self.pending, self.streak = followed, self.streak + 1
-        elif self.belief.max_mass >= self.rule.threshold and self._enough():
-            self.pending, self.streak = self.belief.most_likely, 1
+        elif (evident := self._evident()) is not None:
+            self.pending, self.streak = evident, 1
         else:
             self.pending, self.streak = None, 0
         if self.streak >= self.rule.bumps:
@@ -402,18 +427,31 @@ class ParticleClaims(_Claim):
             self.claims_made += 1
             self.pending, self.streak = None, 0
 
-    def _enough(self) -> bool:
+    def _enough(self, belief: ParticleBelief) -> bool:
         """Whether the measurement's effective sample size reaches the floor."""
-        return self.belief.ess >= self.rule.ess * self.belief.n
+        return belief.ess >= self.rule.ess * belief.n
+
+    def _evident(self) -> int | None:
+        """The state every belief holds at least ``rule.threshold`` of its mass in, with the
+        ESS floor reached; else None."""
+        states = {belief.most_likely for belief in self.beliefs}
+        if len(states) > 1 or not all(belief.max_mass >= self.rule.threshold
+                                      and self._enough(belief) for belief in self.beliefs):
+            return None
+        return states.pop()
 
     def _follow(self, state: int, level: float) -> int | None:
-        """The state the particles that were in ``state`` reached at the last bump, if it
-        holds at least ``level`` of the belief and the ESS reaches the floor; else None."""
-        states, mass = self.belief.successors(state)
-        mass = np.where(states >= 0, mass, 0.0)
-        if mass.size == 0 or mass.max() < level or not self._enough():
-            return None
-        return int(states[np.argmax(mass)])
+        """The state the particles that were in ``state`` reached at the last bump, if in every
+        belief they reached the same one, holding at least ``level`` of its mass with the ESS
+        floor reached; else None."""
+        reached = set()
+        for belief in self.beliefs:
+            states, mass = belief.successors(state)
+            mass = np.where(states >= 0, mass, 0.0)
+            if mass.size == 0 or mass.max() < level or not self._enough(belief):
+                return None
+            reached.add(int(states[np.argmax(mass)]))
+        return reached.pop() if len(reached) == 1 else None
 
     @property
     def size(self) -> int:
