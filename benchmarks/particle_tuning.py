@@ -121,6 +121,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--noise", action="store_true",
                         help="reliable rotation noise r = 0.9, eps = 5 deg (default: none)")
     parser.add_argument("--seeds", choices=("tuning", "evaluation"), default="tuning")
+    parser.add_argument("--skip", type=int, default=0,
+                        help="seeds of the pool skipped before the --n measured (to split a run)")
     parser.add_argument("--particles", type=int, default=DEFAULT_PARTICLES,
                         help="particles of the task's belief and of the policy's")
     parser.add_argument("--physics", choices=("ideal", "dynamic"),
@@ -135,9 +137,10 @@ def main(argv: list[str] | None = None) -> None:
     if args.seeds == "evaluation" and names != ["default"]:
         parser.error("--seeds evaluation measures the defaults only (--settings default)")
     pool = TUNING_SEEDS if args.seeds == "tuning" else EVALUATION_SEEDS
-    if not 1 <= args.n <= len(pool):
-        parser.error(f"--n: expected 1 to {len(pool)} ({args.seeds} seeds), got {args.n}")
-    seeds = pool[:args.n]
+    if not 1 <= args.n <= len(pool) - args.skip or args.skip < 0:
+        parser.error(f"--n, --skip: expected 1 to {len(pool)} ({args.seeds} seeds) in all, got "
+                     f"{args.n}, {args.skip}")
+    seeds = pool[args.skip:args.skip + args.n]
     print(f"seeds {seeds.start}-{seeds.stop - 1} ({args.seeds}), noise {args.noise}, "
           f"{args.particles} particles, {args.physics or 'kinematic'}", flush=True)
     for name in names:
