@@ -95,10 +95,6 @@ _PRIOR_BATCH = 4
 _PRIOR_MIN = 256
 #: batches tried before the prior settles for the nearest clock it found
 _PRIOR_TRIES = 50
-#: the same for the fresh particles of a sensor reset: they come at every injection, and a
-#: clock no pose reads (a robot kidnapped into a drive the prior rarely draws) must not cost
-#: the 50 batches of a reset at every bump
-_RESET_TRIES = 8
 
 
 def supported(dynamics: BounceDynamics) -> bool:
@@ -188,7 +184,7 @@ class ParticleBelief:
         kept: list[tuple[np.ndarray, ...]] = []
         best = np.inf  # the least clock gap of the poses kept so far
         batch = max(_PRIOR_BATCH * n, _PRIOR_MIN)
-        for _ in range(_PRIOR_TRIES if angle is None else _RESET_TRIES):
+        for _ in range(_PRIOR_TRIES):
             start = self._simulator(batch).reset(self.rng)
             z, point, heading, ticks = self.motion.reset_drives(
                 start.position, start.heading, self.rng, self.max_ticks)
