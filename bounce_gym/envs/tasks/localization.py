@@ -322,7 +322,7 @@ class BeliefClaims(_Claim):
 class ClaimRule:
     """When the particle filter claims a decision state and when it withdraws the claim
     (`ParticleClaims`): the defaults were chosen on the tuning seeds
-    (benchmarks/particle_tuning.py, docs/localization_belief.md).
+    (benchmarks/claim_rules.py, docs/localization_belief.md).
 
     Attributes:
         threshold: the mass one decision state needs.
@@ -355,8 +355,12 @@ class ParticleClaims(_Claim):
     tuning seeds (9010, 9014; 1,000 particles, rotation noise) the true state held no mass
     from the 1st and the 14th bump on, while the wrong group fitted the clocks well (its w_avg
     rose to 0.5–0.9, so nothing was injected either). An independent set loses the truth
-    independently and rarely settles on the same wrong state at the same bump, so agreement is
-    the evidence a single set cannot give about the hypotheses it no longer holds.
+    independently and less often settles on the same wrong state at the same bump, so
+    agreement is evidence a single set cannot give about the hypotheses it no longer holds. It
+    is no proof: on recorded tuning episodes the replica removed 7 of 8 wrong claims
+    (benchmarks/claim_rules.py), yet on the evaluation seeds both sets agreed on a wrong state
+    in 4 of 200 episodes at 1,000 particles — once the truth is gone from both, the clocks can
+    favour the same wrong hypothesis (docs/localization_belief.md).
 
     **Evidence.** At a bump the beliefs are *evident* for a state when in every one of them
     that state holds at least ``rule.threshold`` of the mass and the effective sample size of
