@@ -2,62 +2,76 @@
 
 Monte Carlo localization (Thrun, Burgard & Fox, *Probabilistic Robotics*, 2005, §4.3 and §8.3)
 for a robot that senses only its bumps and its clock. The belief is a set of weighted pose
-particles: contact poses (position, heading) at the particles' last bumps, moved by
-`BounceDynamics` robots that ignore each other (``robot_collisions="ignore"``) with the env's
-backend, rule, noise, radius, step length and physics.
+particles: contact poses (position, heading) at the particles' last bumps.
 
-* **Motion model.** At a bump every particle is placed at its pose, executes the commanded
-  bounce angle and drives to its own next contact (`bounce_gym.dynamics.bump_sampler.
-  simulate_bumps`, the seam of the sampled GCM): the simulator itself, so each particle draws
-  its own executed rotation from the env's noise model, and turns that take time, motors and
-  sliding are simulated as the env does (the sampling motion model of §4.3, with the real
-  dynamics in place of an odometry formula). A pose that does not read as a contact when
-  placed (on the dynamic physics, a robot that braked off its wall) explains no clock.
+* **Motion model.** Particles move only through a ``motion`` object with the two methods of
+  `bounce_gym.dynamics.bump_sampler.SimulatedMotion` (the default): ``bumps`` (every particle
+  executes the commanded bounce angle and drives to its own next contact) and ``reset_drives``
+  (start poses drive to their first contact). The default simulates each drive with
+  `BounceDynamics` robots that ignore each other and share the env's backend, rule, noise,
+  radius, step length and physics, so every particle draws its own executed rotation from the
+  env's noise model (the sampling motion model of §4.3, with the real dynamics in place of an
+  odometry formula); a tabulated bump-to-bump map with the same two methods can replace it. A
+  pose that does not read as a contact when placed explains no clock.
 * **Measurement model.** The clock at the bump (ticks since the last one, read as the robot reads
   it: capped at ``max_clock``). A particle whose clock equals the robot's has likelihood 1, one
   within ``tolerance`` ticks ``slack`` (defaults 1 tick, 0.05), any other 0. The tolerance
   keeps a group of particles around the true pose alive through one bump that none of them
-  reproduces exactly (finitely many particles only approximate the set of consistent poses).
+  reproduces exactly.
 * **Roughening.** Before every bump each particle's heading is perturbed by a normal error of
   standard deviation ``jitter`` (default 0.5°): artificial process noise against particle
   deprivation (§4.3.4). A billiard separates nearby poses quickly, and the set of poses that
-  agree with a long clock history is thin; without the perturbation the particles near the
-  true pose all disagree with the robot after some bumps while a group elsewhere that happens
-  to agree takes the whole mass — a confident wrong claim (measured on lab_localization_a
-  without noise: 3 wrong claims in 50 episodes without it, 1 in 200 with it).
-* **Resampling** (low-variance resampling, §4.3.4) only when the effective sample size
-  1 / Σ w² falls below half the particle count: while every particle explains the clocks the
-  weights stay as they are, so resampling noise cannot drift the mass of two equally
-  consistent groups of poses onto one of them.
-* **Depletion.** When no particle explains the clock the belief restarts from the global prior
-  (the sensor-reset idea of augmented MCL, §8.3.5, taken to its end: everything is forgotten);
-  `restarts` counts it. A share ``restart`` of the particles may also be redrawn from the prior
-  at every update (0 by default: such particles would sit in wrong states and hold mass there).
+  agree with a long clock history is thin.
+* **Resampling** (low-variance resampling, §4.3.4, Table 4.4) when the effective sample size
+  falls below half the particle count, or when particles are injected (below): while every
+  particle explains the clocks the weights stay as they are, so resampling noise cannot drift
+  the mass of two equally consistent groups of poses onto one of them.
+* **Effective sample size** ``ess`` = 1 / Σ w² of the weights right after the measurement, before
+  any resampling. Resampling makes every weight equal and would hide how few particles carried
+  the mass; after the next roughened bump the copies are distinct hypotheses again, each tested
+  by the clock, so the ESS of the next measurement counts them honestly. The claims of
+  `bounce_gym.envs.tasks.localization.ParticleClaims` need it above a floor.
+* **Recovery: augmented MCL with sensor resetting.** The average likelihood of a measurement
+  under the predicted belief, w_avg = Σ w p(clock | particle), feeds a short- and a long-term
+  average, w_fast and w_slow (rates ``alpha_fast`` > ``alpha_slow``; both start at the first
+  w_avg), and a share max(0, 1 − w_fast / (κ w_slow)) of the particles is replaced by fresh
+  ones at the resampling (augmented MCL, §8.3.5, Table 8.3, which has κ = 1). A sudden run of
+  clocks the belief explains worse than it used to — the robot was kidnapped, or the particles
+  near the true pose died — so brings in new hypotheses, while a belief that explains the
+  clocks as well as ever gets none. The dead band κ = ``inject_below`` (default 0.5) is ours:
+  here w_avg swings from bump to bump (a robot whose rotation error few particles drew, a long
+  drive that spreads the particles' clocks: single bumps at 0.1–0.3 amid 1.0 were seen on the
+  lab map), and with κ = 1 every such swing injected a share of particles, which holds the
+  mass of a well localized belief below a 0.99 claim (tests/dynamics/test_particles.py,
+  seeds 1 and 2, 40 noise-free bumps: the true state held 0.84 and 0.71 with κ = 1 and
+  alpha_fast = 0.5, 0.995 and 0.98 with the defaults). With κ = 0.5 injection needs w_fast
+  below half of w_slow, a run of bad bumps. The fresh particles are not uniform poses, which the next clock would almost all
+  refute, but poses drawn consistent with the latest measurement (sensor resetting, Lenser &
+  Veloso 2000): global-prior contact poses that bounce with the commanded angle and read the
+  robot's clock at their next bump. When no particle explains a clock at all (w_avg = 0) the
+  whole set is drawn that way and both averages restart (`depletions` counts it). The
+  defaults (`DEFAULT_ALPHA_SLOW`, `DEFAULT_ALPHA_FAST`) were chosen on the tuning seeds
+  (benchmarks/particle_tuning.py); ``alpha_fast == alpha_slow`` turns injection off.
 * **Prior.** Global localization: the robot starts at a uniform pose of the free space with a
   uniform heading and drives to its first contact (what a bounce-mode reset does); the particles
   are such drives, kept where their clock equals the clock the robot read after its reset.
 
 The belief is read as mass per decision state (cell × heading bin of a `CellModel` at the bump,
 `bounce_gym.cells.bump_states`). Particles are kept as pose arrays between updates (exactly the
-contacts the simulator computed, which round-trip as starts); resampling indexes them, and
-every prediction re-places the particles in fresh simulators (pymunk: physics spaces of a few
-robots each, `bump_sampler.BATCH`). Any backend with continuous headings is supported
-(`supported`). Where the backend drives robots independently and turns them instantly (the
-kinematic backend) the particles instead stay the robots of one simulator between bumps and
-resampling permutes its robot state: the same filter, without the cost of placing every
-particle again at every bump (about two thirds of an update's time on the lab map).
+contacts the motion returned), with the decision state each had before the last bump
+(``previous``, −1 for a fresh particle), so a claim on a state can be followed to the states its
+particles reached (`successors`). Any backend with continuous headings is supported
+(`supported`); nothing here depends on which one.
 """
 
 from __future__ import annotations
 
 import copy
-from dataclasses import fields
 
 import numpy as np
 
-from bounce_gym.cells.bump_states import BumpStates
 from bounce_gym.cells.model import CellModel
-from bounce_gym.dynamics.bump_sampler import default_max_ticks, reset_drives, simulate_bumps
+from bounce_gym.dynamics.bump_sampler import SimulatedMotion, default_max_ticks
 from bounce_gym.dynamics.simulator import BounceDynamics
 from bounce_gym.errors import ConfigError
 
@@ -69,9 +83,17 @@ DEFAULT_JITTER = float(np.radians(0.5))
 DEFAULT_TOLERANCE = 1
 #: default likelihood of a particle off by 1 … ``tolerance`` ticks (one off by 0 has 1)
 DEFAULT_SLACK = 0.05
-#: prior poses drawn per batch (times the particle count) while filling the prior
+#: default rate of the long-term average likelihood w_slow (augmented MCL)
+DEFAULT_ALPHA_SLOW = 0.05
+#: default rate of the short-term average likelihood w_fast (augmented MCL)
+DEFAULT_ALPHA_FAST = 0.3
+#: default share of w_slow below which w_fast must fall before particles are injected
+DEFAULT_INJECT_BELOW = 0.5
+#: prior poses drawn per batch (times the particles wanted) while filling the prior
 _PRIOR_BATCH = 4
-#: batches tried before the prior gives up on the clock read at reset
+#: the fewest prior poses drawn in one batch (a few injected particles still get a fair pool)
+_PRIOR_MIN = 256
+#: batches tried before the prior settles for the nearest clock it found
 _PRIOR_TRIES = 50
 
 
@@ -86,48 +108,56 @@ class ParticleBelief:
     Args:
         model: the cell model whose cell numbers are the decision states.
         dynamics: keyword arguments of `BounceDynamics` with the ``world`` (backend, rule, noise,
-            radius, step_length, backend_options).
+            radius, step_length, backend_options); the prior's start poses are drawn with it.
         n_particles: particles kept.
         max_clock: the largest clock the robot reads (clocks are capped there).
         tolerance, slack: ticks either side of the clock read that still count, with weight
             ``slack`` (module docstring).
         jitter: standard deviation of the roughening of every heading before a bump
             (radians; None: `DEFAULT_JITTER`).
-        restart: share of particles redrawn from the prior at every update.
-        max_ticks: the longest simulated drive (None: `bump_sampler.default_max_ticks`); a
-            particle that does not bump again within it explains no clock.
+        alpha_slow, alpha_fast: rates of the long- and short-term average likelihoods of
+            augmented MCL, 0 ≤ alpha_slow ≤ alpha_fast ≤ 1 (equal: no injection).
+        inject_below: κ, the dead band of the injection (module docstring), in (0, 1].
+        max_ticks: the longest drive (None: `bump_sampler.default_max_ticks`); a particle that
+            does not bump again within it explains no clock.
+        motion: the motion model (None: `SimulatedMotion` of ``model`` and ``dynamics``).
 
     ``reset(rng, clock)`` or ``reset_at(rng, position, heading)``; ``update(angle, clock)``;
     ``position``, ``heading`` (the particles' poses at their last bump), ``states`` (decision
-    state of every particle, −1 for one not at a contact), ``weight``, ``mass()``
-    (state → mass), ``max_mass``, ``most_likely``, ``entropy``, ``expected_entropy(angles)``.
+    state of every particle, −1 for one not at a contact), ``previous``, ``weight``, ``ess``,
+    ``likelihood`` (w_avg of the last update), ``injected`` (fresh particles at the last
+    update), ``depletions``, ``mass()`` (state → mass), ``max_mass``, ``most_likely``,
+    ``successors(state)``, ``entropy``, ``expected_entropy(angles)``.
     """
 
     def __init__(self, model: CellModel, dynamics: dict, n_particles: int = DEFAULT_PARTICLES,
                  max_clock: int | None = None, tolerance: int = DEFAULT_TOLERANCE,
-                 slack: float = DEFAULT_SLACK,
-                 jitter: float | None = None, restart: float = 0.0,
-                 max_ticks: int | None = None) -> None:
+                 slack: float = DEFAULT_SLACK, jitter: float | None = None,
+                 alpha_slow: float = DEFAULT_ALPHA_SLOW, alpha_fast: float = DEFAULT_ALPHA_FAST,
+                 inject_below: float = DEFAULT_INJECT_BELOW, max_ticks: int | None = None, motion=None) -> None:
         if isinstance(n_particles, bool) or not isinstance(n_particles, int | np.integer) \
                 or n_particles < 1:
             raise ConfigError(f"particles: expected an integer >= 1, got {n_particles!r}")
-        if not 0.0 <= float(slack) <= 1.0 or not 0.0 <= float(restart) < 1.0:
-            raise ConfigError(f"slack, restart: expected numbers in [0, 1] and [0, 1), got "
-                              f"{slack!r}, {restart!r}")
+        if not 0.0 <= float(slack) <= 1.0:
+            raise ConfigError(f"slack: expected a number in [0, 1], got {slack!r}")
+        if not 0.0 <= float(alpha_slow) <= float(alpha_fast) <= 1.0:
+            raise ConfigError(f"alpha_slow, alpha_fast: expected 0 <= alpha_slow <= alpha_fast "
+                              f"<= 1, got {alpha_slow!r}, {alpha_fast!r}")
+        if not 0.0 < float(inject_below) <= 1.0:
+            raise ConfigError(f"inject_below: expected a number in (0, 1], got {inject_below!r}")
         self.model, self.n = model, int(n_particles)
-        self.states_of = BumpStates(model)
         self.dynamics = dict(dynamics)
+        self.motion = SimulatedMotion(model, self.dynamics) if motion is None else motion
         self.jitter = DEFAULT_JITTER if jitter is None else float(jitter)
         self.max_clock = max_clock
         self.max_ticks = default_max_ticks(self.dynamics) if max_ticks is None else int(max_ticks)
-        self.tolerance, self.slack, self.restart = int(tolerance), float(slack), float(restart)
-        probe = self._simulator(1)
-        #: particles kept as the robots of one simulator (module docstring)
-        self.in_place = probe.backend.drives_independently and not probe.backend.turns_take_time
-        if not supported(probe):
+        self.tolerance, self.slack = int(tolerance), float(slack)
+        self.alpha_slow, self.alpha_fast = float(alpha_slow), float(alpha_fast)
+        self.inject_below = float(inject_below)
+        if not supported(self._simulator(1)):
             raise ConfigError(f"particle belief: backend {dynamics.get('backend')!r} is not "
                               "supported (it needs continuous headings)")
-        self.restarts = 0
+        self.depletions = 0
 
     # -- construction -------------------------------------------------------------------------
     def _simulator(self, m: int) -> BounceDynamics:
@@ -138,21 +168,28 @@ class ParticleBelief:
         clock = np.asarray(clock, dtype=np.int64)
         return clock if self.max_clock is None else np.minimum(clock, self.max_clock)
 
-    def _drives(self, point: np.ndarray, heading: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Robots at start poses drive to their first contact: states (−1: none), contact
-        points, headings, clocks."""
-        return reset_drives(self.model, self.dynamics, point, heading, self.rng, self.max_ticks)
+    def _bumps(self, angle: float, point: np.ndarray, heading: np.ndarray,
+               rng: np.random.Generator) -> tuple[np.ndarray, ...]:
+        """Every pose bumps with ``angle`` and drives on: clocks read, next decision states
+        (−1: no next bump), points and headings there."""
+        out = self.motion.bumps(np.array([float(angle)]), np.zeros(len(heading), dtype=np.int64),
+                                point, heading, rng, self.max_ticks)
+        return self._read(out.ticks), out.next_state, out.end, out.heading
 
-    def _prior(self, clock: int | None, n: int) -> tuple[np.ndarray, ...]:
-        """``n`` uniform start poses driven to their first contact, where the drive reads
-        ``clock`` (None: any) — or, if no drawn pose reads it, the nearest clock any does:
-        start points and headings, bump points, headings and states."""
+    def _prior(self, clock: int | None, n: int, angle: float | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``n`` uniform start poses driven to their first contact — and, with an ``angle``,
+        bounced once more with it —, kept where the last drive reads ``clock`` (None: any), or,
+        if no drawn pose reads it, the nearest clock any does: points, headings, states."""
         kept: list[tuple[np.ndarray, ...]] = []
         best = np.inf  # the least clock gap of the poses kept so far
+        batch = max(_PRIOR_BATCH * n, _PRIOR_MIN)
         for _ in range(_PRIOR_TRIES):
-            state = self._simulator(_PRIOR_BATCH * n).reset(self.rng)
-            z, point, heading, ticks = self._drives(state.position, state.heading)
+            start = self._simulator(batch).reset(self.rng)
+            z, point, heading, ticks = self.motion.reset_drives(
+                start.position, start.heading, self.rng, self.max_ticks)
+            if angle is not None:  # sensor resetting: poses that explain the latest clock
+                ticks, z, point, heading = self._bumps(angle, point, heading, self.rng)
             gap = np.zeros(len(z)) if clock is None \
                 else np.abs(self._read(ticks) - self._read(clock)).astype(np.float64)
             gap[z < 0] = np.inf
@@ -161,8 +198,7 @@ class ParticleBelief:
                 kept, best = [], least
             if least == best and np.isfinite(least):
                 keep = gap == least
-                kept.append((state.position[keep], state.heading[keep], point[keep],
-                             heading[keep], z[keep]))
+                kept.append((point[keep], heading[keep], z[keep]))
             if best == 0 and sum(len(part[-1]) for part in kept) >= n:
                 break
         if not kept:
@@ -175,136 +211,105 @@ class ParticleBelief:
         """Global localization: the prior of the module docstring, conditioned on the ``clock``
         read after the reset drive (None: not conditioned)."""
         self.rng = rng
-        self.restarts = 0
+        self.depletions = 0
         self._place(*self._prior(clock, self.n))
 
     def reset_at(self, rng: np.random.Generator, position: np.ndarray,
                  heading: np.ndarray) -> None:
         """Particles driven to their first contact from the given start poses (n, 2), (n,)."""
         self.rng = rng
-        self.restarts = 0
+        self.depletions = 0
         position = np.asarray(position, dtype=np.float64).reshape(-1, 2)
         self.n = len(position)
         heading = np.asarray(heading, dtype=np.float64).reshape(-1)
-        self._place(position, heading, *self._drive_starts(position, heading))
+        z, point, final, _ = self.motion.reset_drives(position, heading, rng, self.max_ticks)
+        self._place(point, final, z)
 
-    def _drive_starts(self, position: np.ndarray, heading: np.ndarray) -> tuple[np.ndarray, ...]:
-        """Bump points, headings and states of start poses driven to their first contact
-        (nothing driven where the particles live in one simulator: `_place` drives them)."""
-        if self.in_place:
-            return None, None, None
-        z, point, final, _ = self._drives(position, heading)
-        return point, final, z
-
-    def _place(self, start: np.ndarray, start_heading: np.ndarray, position: np.ndarray | None,
-               heading: np.ndarray | None, states: np.ndarray | None) -> None:
-        """The particles at their first contact: driven there from the start poses in one
-        simulator (`in_place`), else the bump poses and states given."""
-        self.weight = np.full(len(start), 1.0 / len(start))
-        if self.in_place:
-            self.sim = self._simulator(len(start))
-            state = self.sim.reset(self.rng, start, start_heading)
-            self.sim.backend.drive_each(state)
-            self._refresh()
-        else:
-            self.position, self.heading, self.states = position, heading, states
-
-    def _refresh(self) -> None:
-        """The decision states of the particles in the simulator (`in_place`)."""
-        state = self.sim.state
-        self.position, self.heading = state.position, state.heading
-        self.states = self.states_of.of(state.position, state.heading, state.contact_normal)
-        self.states[~state.blocked] = -1
+    def _place(self, position: np.ndarray, heading: np.ndarray, states: np.ndarray) -> None:
+        """A fresh set of equally weighted particles; the likelihood averages start over."""
+        self.position, self.heading, self.states = position, heading, states
+        self.previous = np.full(len(states), -1, dtype=np.int64)
+        self.weight = np.full(len(states), 1.0 / len(states))
+        self.ess, self.injected, self.likelihood = float(len(states)), 0, 1.0
+        self.w_slow = self.w_fast = None
 
     # -- the filter ---------------------------------------------------------------------------
-    def _predict(self, angle: float, heading: np.ndarray, rng: np.random.Generator
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Every particle bumps with ``angle`` from its position (with ``heading``) and drives
-        on, in fresh simulators: its clock, next decision state (−1: no next bump), point and
-        heading there."""
-        n = len(heading)
-        out = simulate_bumps(self.model, np.array([float(angle)]), np.zeros(n, dtype=np.int64),
-                             self.position, heading, rng, self.dynamics, self.max_ticks)
-        return self._read(out.ticks), out.next_state, out.end, out.heading
-
-    def _bounce(self, sim: BounceDynamics, angle: float) -> np.ndarray:
-        """Every particle of ``sim`` (`in_place`) bumps with ``angle`` and drives on; clocks."""
-        sim.bounce_each(np.full(sim.n_robots, float(angle)))
-        return self._read(sim.state.clock)
-
     def update(self, angle: float, clock: int) -> None:
         """The robot bounced by ``angle`` (radians, commanded) and read ``clock`` at its next
         bump."""
-        if self.restart > 0:
-            self._redraw(self.rng.random(self.n) < self.restart)
         heading = self.heading
         if self.jitter > 0:  # roughening: every particle's heading, before its bump
             heading = (heading + self.rng.normal(0.0, self.jitter, self.n)) % (2 * np.pi)
-        if self.in_place:
-            self.heading[...] = heading
-            ticks = self._bounce(self.sim, angle)
-            arrived = self.sim.state.blocked
-        else:
-            ticks, states, end, final = self._predict(angle, heading, self.rng)
-            arrived = states >= 0
+        ticks, states, end, final = self._bumps(angle, self.position, heading, self.rng)
         gap = np.abs(ticks - self._read(clock))
         weight = np.where(gap == 0, 1.0, np.where(gap <= self.tolerance, self.slack, 0.0))
-        weight[~arrived] = 0.0
+        weight[states < 0] = 0.0
         weight *= self.weight
-        if weight.sum() <= 0:
-            self.restarts += 1
-            self._place(*self._prior(None, self.n))
+        average = self.likelihood = float(weight.sum())  # w_avg (module docstring)
+        if average <= 0:  # depletion: every particle drawn anew from the latest clock
+            self.depletions += 1
+            self._place(*self._prior(clock, self.n, angle))
+            self.ess = 0.0
             return
-        self.weight = weight / weight.sum()
-        if self.in_place:
-            self._refresh()
-        else:
-            self.position, self.heading, self.states = end, final, states
-        if 1.0 / np.square(self.weight).sum() < 0.5 * self.n:
-            self._resample(self.weight)
+        self.previous, self.states = self.states, states
+        self.position, self.heading = end, final
+        self.weight = weight / average
+        self.ess = float(1.0 / np.square(self.weight).sum())
+        fresh = self._fresh_count(average)
+        if fresh > 0 or self.ess < 0.5 * self.n:
+            self._resample(self.weight, self.n - fresh)
+            if fresh > 0:
+                self._inject(*self._prior(clock, fresh, angle))
+        self.injected = fresh
 
-    def _redraw(self, which: np.ndarray) -> None:
-        """Particles ``which`` replaced by prior poses (at their first contact)."""
-        if not which.any():
-            return
-        start, start_heading, point, heading, z = self._prior(None, int(which.sum()))
-        if self.in_place:
-            fresh = self._simulator(len(start))
-            state = fresh.reset(self.rng, start, start_heading)
-            fresh.backend.drive_each(state)
-            mine = self.sim.state
-            for name in _per_robot(mine):
-                getattr(mine, name)[which] = getattr(state, name)
-            self._refresh()
-        else:
-            self.position[which], self.heading[which], self.states[which] = point, heading, z
-        self.weight[which] = self.weight[~which].mean() if (~which).any() else 1.0
-        self.weight /= self.weight.sum()
+    def _fresh_count(self, average: float) -> int:
+        """Augmented MCL (Table 8.3): the averages follow w_avg; particles to inject,
+        Binomial(n, max(0, 1 − w_fast / (κ w_slow)))."""
+        if self.w_slow is None:
+            self.w_slow = self.w_fast = average
+        self.w_slow += self.alpha_slow * (average - self.w_slow)
+        self.w_fast += self.alpha_fast * (average - self.w_fast)
+        share = max(0.0, 1.0 - self.w_fast / (self.inject_below * self.w_slow))
+        return int(self.rng.binomial(self.n, share)) if share > 0 else 0
 
-    def _resample(self, weight: np.ndarray) -> None:
-        """Low-variance resampling (Thrun et al. 2005, Table 4.4): the poses indexed (the
-        simulator's robot state permuted where the particles live in it)."""
-        cumulative = np.cumsum(weight / weight.sum())
-        cumulative[-1] = 1.0
-        marks = (self.rng.random() + np.arange(self.n)) / self.n
-        pick = np.searchsorted(cumulative, marks, side="right")
-        if self.in_place:
-            state = self.sim.state
-            for name in _per_robot(state):
-                values = getattr(state, name)
-                values[...] = values[pick]
-            self._refresh()
-        else:
-            self.position, self.heading = self.position[pick], self.heading[pick]
-            self.states = self.states[pick]
+    def _inject(self, position: np.ndarray, heading: np.ndarray, states: np.ndarray) -> None:
+        """Fresh particles appended to the resampled ones (all weights equal)."""
+        self.position = np.concatenate((self.position, position))
+        self.heading = np.concatenate((self.heading, heading))
+        self.states = np.concatenate((self.states, states))
+        self.previous = np.concatenate((self.previous, np.full(len(states), -1)))
         self.weight = np.full(self.n, 1.0 / self.n)
 
+    def _resample(self, weight: np.ndarray, m: int | None = None) -> None:
+        """Low-variance resampling (Thrun et al. 2005, Table 4.4) of ``m`` particles (None:
+        all), equally weighted."""
+        m = self.n if m is None else m
+        cumulative = np.cumsum(weight / weight.sum())
+        cumulative[-1] = 1.0
+        marks = (self.rng.random() + np.arange(m)) / max(m, 1)
+        pick = np.searchsorted(cumulative, marks, side="right")
+        self.position, self.heading = self.position[pick], self.heading[pick]
+        self.states, self.previous = self.states[pick], self.previous[pick]
+        self.weight = np.full(m, 1.0 / max(m, 1))
+
     # -- reading the belief -------------------------------------------------------------------
+    def _by_state(self, where: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The decision states holding particles (of those ``where``) and their mass."""
+        states = self.states if where is None else self.states[where]
+        weight = self.weight if where is None else self.weight[where]
+        held = np.bincount(states + 1, minlength=1) > 0
+        mass = np.bincount(states + 1, weights=weight, minlength=1)
+        return np.flatnonzero(held) - 1, mass[held]
+
     def mass(self) -> tuple[np.ndarray, np.ndarray]:
-        """The decision states holding particles and their mass (summing to 1 over the
-        particles at a contact)."""
-        states, inverse = np.unique(self.states, return_inverse=True)
-        return states, np.bincount(inverse.ravel(), weights=self.weight)
+        """The decision states holding particles (−1: particles not at a contact) and their
+        mass (summing to 1)."""
+        return self._by_state()
+
+    def successors(self, state: int) -> tuple[np.ndarray, np.ndarray]:
+        """Where the particles that were in ``state`` before the last bump are now: decision
+        states and their mass (of the whole belief)."""
+        return self._by_state(self.previous == state)
 
     @property
     def max_mass(self) -> float:
@@ -320,36 +325,29 @@ class ParticleBelief:
     @property
     def entropy(self) -> float:
         """Entropy (bits) of the mass over decision states."""
-        return _entropy(self.states, self.weight)
+        return _entropy(self.mass()[1])
 
     def expected_entropy(self, angles: np.ndarray) -> np.ndarray:
         """For every angle: the expected entropy (bits) of the belief over decision states
-        after the next bump, over the clocks it would read (each particle simulated from its
-        pose with a copy of the generator, so the belief's own stream is not advanced)."""
+        after the next bump, over the clocks it would read — the conditional entropy
+        H(state | clock) = H(state, clock) − H(clock) of the particles simulated from their
+        poses (with a copy of the generator, so the belief's own stream is not advanced)."""
         out = np.zeros(len(angles))
         for i, angle in enumerate(np.asarray(angles, dtype=np.float64)):
-            if self.in_place:
-                sim = copy.deepcopy(self.sim, memo={id(self.dynamics["world"]):
-                                                    self.dynamics["world"]})
-                ticks = self._bounce(sim, angle)
-                state = self.states_of.of(sim.state.position, sim.state.heading,
-                                          sim.state.contact_normal)
-            else:
-                ticks, state = self._predict(angle, self.heading, copy.deepcopy(self.rng))[:2]
-            for t in np.unique(ticks):
-                seen = ticks == t
-                out[i] += self.weight[seen].sum() * _entropy(state[seen], self.weight[seen])
+            ticks, states = self._bumps(angle, self.position, self.heading,
+                                        copy.deepcopy(self.rng))[:2]
+            joint = ticks * (self.model.n_cells + 1) + states + 1
+            out[i] = _entropy(_masses(joint, self.weight)) - _entropy(_masses(ticks, self.weight))
         return out
 
 
-def _per_robot(state) -> list[str]:
-    """The fields of a `RobotState` that hold one entry per robot (not the shared tick count)."""
-    return [f.name for f in fields(state) if isinstance(getattr(state, f.name), np.ndarray)]
-
-
-def _entropy(values: np.ndarray, weight: np.ndarray) -> float:
-    """Entropy (bits) of the weighted values."""
+def _masses(values: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """The weight of every distinct value."""
     _, inverse = np.unique(values, return_inverse=True)
-    p = np.bincount(inverse.ravel(), weights=weight)
-    p = p[p > 0] / p.sum()
+    return np.bincount(inverse.ravel(), weights=weight)
+
+
+def _entropy(mass: np.ndarray) -> float:
+    """Entropy (bits) of the masses (normalised)."""
+    p = mass[mass > 0] / mass.sum()
     return float(-(p * np.log2(p)).sum())

@@ -47,14 +47,14 @@ def follow(seed: int, bumps: int, particles: int = 24, jitter: float | None = No
 
 def test_without_noise_the_belief_follows_the_true_pose():
     belief, state, truth = follow(3, 6, jitter=0.0)
-    assert not belief.in_place and belief.restarts == 0
+    assert belief.depletions == 0
     # every particle is the robot itself: same start, no noise, no roughening
     np.testing.assert_allclose(belief.position, np.repeat(state.position, belief.n, axis=0),
                                atol=1e-9)
     assert belief.most_likely == truth and belief.max_mass == pytest.approx(1.0)
     # with the default roughening the true pose's state keeps the mass
     belief, state, truth = follow(3, 6)
-    assert belief.restarts == 0
+    assert belief.depletions == 0
     assert belief.most_likely == truth and belief.max_mass >= 0.5
 
 
@@ -91,7 +91,6 @@ def test_the_localization_task_builds_with_particles_on_dynamic_physics():
                    noise={"type": "reliable", "r": 0.9, "eps_deg": 5}, max_episode_steps=3,
                    task_kwargs={"filter_factory": "particles", "particles": 16})
     _, info = env.reset(seed=10_000)
-    assert not env.unwrapped.task.filter.belief.in_place
     for _ in range(3):
         _, _, terminated, truncated, info = env.step(0)
     assert 0.0 < info["belief_mass"] <= 1.0 and info["candidates"] >= 1

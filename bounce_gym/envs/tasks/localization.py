@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,6 +26,14 @@ BELIEF = "belief"
 PARTICLES = "particles"
 #: default posterior mass of one decision state at which the belief filter claims it
 DEFAULT_CLAIM_THRESHOLD = 0.99
+#: default floor of the particle filter's effective sample size for a claim, a share of particles
+DEFAULT_CLAIM_ESS = 0.1
+#: default bumps in a row the particle filter's evidence must hold before it claims
+DEFAULT_CLAIM_BUMPS = 2
+#: default mass below which the particle filter's followed claim is withdrawn
+DEFAULT_WITHDRAW_BELOW = 0.5
+#: default independent particle sets besides the main one that must agree on a claim
+DEFAULT_CLAIM_REPLICAS = 1
 #: The methods a filter must have (``size`` and ``localized`` may appear only after ``reset``).
 _FILTER_METHODS = ("reset", "update")
 
@@ -52,29 +61,41 @@ class LocalizationTask(Task):
         model_samples: with ``"belief"``, sample points per decision state and angle of the
             sampled GCM (`BounceCore.sampled_model`, default 200).
         particles: with ``"particles"``, the number of particles (default 10,000).
+        claim_ess, claim_bumps, withdraw_below, claim_replicas: with ``"particles"``, the
+            effective sample size a claim needs (a share of the particles, default 0.1), the
+            bumps in a row its evidence must hold (default 2), the followed mass below which it
+            is withdrawn (default 0.5) and the independent particle sets besides the main one
+            that must agree (default 1): `ParticleClaims`.
 
     **Claims.** Every filter's ``localized`` is a claim, judged against the robot's true
-    decision state at that bump (`bounce_gym.cells.bump_states`: the cell of the env's cell model
+    decision state at a bump (`bounce_gym.cells.bump_states`: the cell of the env's cell model
     holding the contact point, and the bin of the heading it drove with). ``info`` carries
-    ``correct`` (the claim is exactly the true state) and ``wrong_claim`` (the true state is not
-    in the claim), both False until a claim is made and fixed from then on (and always False
-    for a user's filter without ``candidates``). The combinatorial
-    filter claims its candidate set once in a knowledge cycle (a set of several states — the
-    world's symmetry — is neither). The belief filter (`bounce_gym.markov.belief`, bounce steps
-    and discrete actions only) is updated at every bump with the index of the angle commanded
-    and the clock the robot reads there; the clock of the reset's drive is not used (the start
+    ``claims`` (claims made so far), ``wrong_claims`` (of them, those whose claim did not hold
+    the true state at the bump they were made), ``wrong_claim`` (``wrong_claims`` > 0),
+    ``withdrawn`` (claims withdrawn) and ``correct`` (below); all False or 0 until a claim is
+    made, and for a user's filter without ``candidates``. The combinatorial, the belief and a
+    user's filter claim once and never withdraw: ``correct`` (the claim is exactly the true
+    state) is fixed at the bump of that claim. The combinatorial filter claims its candidate
+    set once in a knowledge cycle (a set of several states — the world's symmetry — is
+    neither correct nor wrong). The belief filter (`bounce_gym.markov.belief`, bounce steps and
+    discrete actions only) is updated at every bump with the index of the angle commanded and
+    the clock the robot reads there; the clock of the reset's drive is not used (the start
     pose is unknown, so the prior is uniform over the states the model has samples of). It
     claims its most likely state once that state's mass reaches ``claim_threshold``; ``info``
     then also carries ``claim``, and always ``belief_mass`` (the largest mass). Its reward is
     the drop in the belief's entropy (bits) minus ``tick_cost`` per tick until the claim.
     The particle filter (`ParticleClaims`, `bounce_gym.dynamics.particles`, backends with
     continuous headings — kinematic, pymunk ideal or dynamic physics —, bounce steps and
-    discrete actions) starts from the global prior conditioned on the clock of
-    the reset's drive, is updated with the angle commanded and the clock at each bump, and
-    claims, with the same rule and ``info``, the decision state holding at least
-    ``claim_threshold`` of its particles. Its generator is spawned from the env's
-    (`numpy.random.Generator.spawn`: the env's own draws are not changed), so a seed fixes
-    its claims.
+    discrete actions) starts from the global prior conditioned on the clock of the reset's
+    drive and is updated with the angle commanded and the clock at each bump. Its claim is on
+    the robot's state now: it is followed from bump to bump and may be withdrawn and made
+    again (`ParticleClaims` has the rules), so its ``correct`` is judged at every bump (the
+    standing claim is the true state; False while none stands) — at the episode's end, whether
+    the claim standing then is right. It has the same ``claim`` and ``belief_mass``. With
+    ``terminate_when_localized`` the episode ends at the first claim: the evidence a claim
+    needs (mass, effective sample size, bumps in a row) is gathered before it is made, never
+    after. Its generator is spawned from the env's (`numpy.random.Generator.spawn`: the env's
+    own draws are not changed), so a seed fixes its claims.
 
     The task feeds the filter the tick stream: the forward ticks of the drive that ``reset`` made
     (bounce mode), then per step its bump tick first and its forward ticks after. Without a
@@ -102,7 +123,10 @@ class LocalizationTask(Task):
                  terminate_when_localized: bool = True, tick_cost: float = 0.1,
                  claim_threshold: float = DEFAULT_CLAIM_THRESHOLD,
                  model_samples: int = DEFAULT_SAMPLES,
-                 particles: int = DEFAULT_PARTICLES) -> None:
+                 particles: int = DEFAULT_PARTICLES, claim_ess: float = DEFAULT_CLAIM_ESS,
+                 claim_bumps: int = DEFAULT_CLAIM_BUMPS,
+                 withdraw_below: float = DEFAULT_WITHDRAW_BELOW,
+                 claim_replicas: int = DEFAULT_CLAIM_REPLICAS) -> None:
         if filter_factory not in (None, COMBINATORIAL, BELIEF, PARTICLES) \
                 and (isinstance(filter_factory, str) or not callable(filter_factory)):
             raise ConfigError(f"filter_factory: expected {COMBINATORIAL!r}, {BELIEF!r}, "
@@ -115,6 +139,10 @@ class LocalizationTask(Task):
                                       maximum=1.0, strict=True)
         self.model_samples = integer("model_samples", model_samples, minimum=2)
         self.particles = integer("particles", particles, minimum=1)
+        self.claim_ess = number("claim_ess", claim_ess, minimum=0.0, maximum=1.0)
+        self.claim_bumps = integer("claim_bumps", claim_bumps, minimum=1)
+        self.withdraw_below = number("withdraw_below", withdraw_below, minimum=0.0, maximum=1.0)
+        self.claim_replicas = integer("claim_replicas", claim_replicas, minimum=0)
 
     def configure(self, core) -> None:
         super().configure(core)
@@ -122,7 +150,9 @@ class LocalizationTask(Task):
         if self.filter_factory == BELIEF:
             self.filter = BeliefClaims(core, self.claim_threshold, self.model_samples)
         elif self.filter_factory == PARTICLES:
-            self.filter = ParticleClaims(core, self.claim_threshold, self.particles)
+            self.filter = ParticleClaims(core, self.particles, ClaimRule(
+                self.claim_threshold, self.claim_ess, self.claim_bumps, self.withdraw_below,
+                self.claim_replicas))
         elif self.filter_factory == COMBINATORIAL:
             self.filter = combinatorial_filter(core)
         elif self.filter_factory is None:
@@ -139,7 +169,8 @@ class LocalizationTask(Task):
         self.observation: tuple[int, int, float | None] | None = None
         self.observation_count = 0
         self.ticks_to_localize: int | None = None
-        self.judged: tuple[bool, bool] | None = None
+        self.claims = self.wrong_claims = 0
+        self.correct = False
         if isinstance(self.filter, BeliefClaims):
             self.filter.reset()
         elif isinstance(self.filter, ParticleClaims):
@@ -165,8 +196,9 @@ class LocalizationTask(Task):
                     info[extra] = getattr(self.filter, extra)
             if self.ticks_to_localize is not None:
                 info["ticks_to_localize"] = self.ticks_to_localize
-            correct, wrong = self.judged if self.judged is not None else (False, False)
-            info.update(correct=correct, wrong_claim=wrong)
+            withdrawn = self.filter.withdrawn if isinstance(self.filter, ParticleClaims) else 0
+            info.update(correct=self.correct, wrong_claim=self.wrong_claims > 0,
+                        claims=self.claims, wrong_claims=self.wrong_claims, withdrawn=withdrawn)
             if isinstance(self.filter, BeliefClaims | ParticleClaims):
                 info["belief_mass"] = self.filter.max_mass
                 if self.filter.claim is not None:
@@ -174,12 +206,20 @@ class LocalizationTask(Task):
         return info
 
     def _judge(self, state) -> None:
-        """Fix ``correct`` and ``wrong_claim`` at the bump of the first claim."""
+        """Judge a claim made at this bump, and the particle filter's standing claim."""
+        follows = isinstance(self.filter, ParticleClaims)
+        made = self.filter.made if follows else self.claims == 0 and self.filter.localized
+        if follows and self.filter.claim is None:
+            self.correct = False
+        if not made and not (follows and self.filter.claim is not None):
+            return
         truth = int(self.states.of(state.position[:1], state.heading[:1],
                                    np.nan_to_num(state.contact_normal[:1]))[0])
         claimed = np.asarray(self.filter.candidates)
-        self.judged = (claimed.size == 1 and int(claimed[0]) == truth,
-                       not bool(np.isin(truth, claimed)))
+        self.correct = claimed.size == 1 and int(claimed[0]) == truth
+        if made:
+            self.claims += 1
+            self.wrong_claims += int(not np.isin(truth, claimed))
 
     def step(self, state, events):
         bumps = int(events.bumps[0])
@@ -211,9 +251,8 @@ class LocalizationTask(Task):
             reward = (math.log2(before) - math.log2(max(self.filter.size, 1))
                       - self.tick_cost * charged)
             done = self.terminate_when_localized and bool(self.filter.localized)
-        if self.filter is not None and self.judged is None and self.filter.localized \
-                and hasattr(self.filter, "candidates"):  # a user's filter may not name its claim
-            self._judge(state)
+        if self.filter is not None and hasattr(self.filter, "candidates"):  # a user's filter
+            self._judge(state)  # may not name its claim
         return np.array([reward]), np.array([done]), self._info()
 
 
@@ -279,33 +318,144 @@ class BeliefClaims(_Claim):
         return float(self.marginal.max())
 
 
+@dataclass(frozen=True)
+class ClaimRule:
+    """When the particle filter claims a decision state and when it withdraws the claim
+    (`ParticleClaims`): the defaults were chosen on the tuning seeds
+    (benchmarks/claim_rules.py, docs/localization_belief.md).
+
+    Attributes:
+        threshold: the mass one decision state needs.
+        ess: the floor of the effective sample size, a share of the particles.
+        bumps: bumps in a row at which the evidence must hold before the claim is made.
+        withdraw_below: a standing claim is withdrawn once the mass that followed it falls
+            below this.
+        replicas: independent particle sets, besides the main one, that must agree.
+    """
+
+    threshold: float = DEFAULT_CLAIM_THRESHOLD
+    ess: float = DEFAULT_CLAIM_ESS
+    bumps: int = DEFAULT_CLAIM_BUMPS
+    withdraw_below: float = DEFAULT_WITHDRAW_BELOW
+    replicas: int = DEFAULT_CLAIM_REPLICAS
+
+
 class ParticleClaims(_Claim):
     """The particle filter of the task (`LocalizationTask`, "Claims"): Monte Carlo localization
-    moved by the env's own dynamics (`bounce_gym.dynamics.particles.ParticleBelief`), claiming
-    the decision state that holds ``threshold`` of the particles, never earlier."""
+    moved by the env's own dynamics (`bounce_gym.dynamics.particles.ParticleBelief`, augmented
+    MCL with sensor resetting), with claims that need evidence and are withdrawn when the
+    belief turns against them.
 
-    def __init__(self, core, threshold: float, particles: int) -> None:
+    **Replicas.** Besides its main belief (``belief``, whose mass, entropy and candidates the
+    task reports) the filter runs ``rule.replicas`` independent particle sets of the same size
+    (``replicas``), fed the same angles and clocks, with generators spawned from its own. A
+    confident wrong belief here is an artefact of one sample: the few particles near the true
+    pose all died (particle deprivation, Probabilistic Robotics §4.3.4) and a group elsewhere
+    that happened to fit the clocks took the mass — in the two wrong claims traced on the
+    tuning seeds (9010, 9014; 1,000 particles, rotation noise) the true state held no mass
+    from the 1st and the 14th bump on, while the wrong group fitted the clocks well (its w_avg
+    rose to 0.5–0.9, so nothing was injected either). An independent set loses the truth
+    independently and less often settles on the same wrong state at the same bump, so
+    agreement is evidence a single set cannot give about the hypotheses it no longer holds. It
+    is no proof: on recorded tuning episodes the replica removed 7 of 8 wrong claims
+    (benchmarks/claim_rules.py), yet on the evaluation seeds both sets agreed on a wrong state
+    in 4 of 200 episodes at 1,000 particles — once the truth is gone from both, the clocks can
+    favour the same wrong hypothesis (docs/localization_belief.md).
+
+    **Evidence.** At a bump the beliefs are *evident* for a state when in every one of them
+    that state holds at least ``rule.threshold`` of the mass and the effective sample size of
+    the measurement (`ParticleBelief.ess`) is at least ``rule.ess`` × particles. The ESS (not
+    the count of distinct poses: after roughening every pose is distinct) says how many
+    particles carried the mass: the audit of the first version found most wrong claims at mass
+    1.00, held by the few particles that outlived the rest. Evidence followed for ``rule.bumps``
+    bumps in a row — the next bump's evident state is where the particles of the last one went
+    (`ParticleBelief.successors`), in every belief — makes the claim (``made`` is True at that
+    update, ``claims_made`` counts it).
+
+    **Withdrawal.** A standing claim is followed from bump to bump: it moves to the state that
+    most of its particles reached. It is withdrawn (``withdrawn`` counts it) when, in any
+    belief, that state holds less than ``rule.withdraw_below`` of the mass — the clock
+    contradicted the claim, particles were injected in its place, or the belief was depleted
+    and drawn anew (no particle then descends from the claim) —, when the beliefs follow it to
+    different states, or when an ESS falls below the floor. A new claim then needs fresh
+    evidence.
+    """
+
+    def __init__(self, core, particles: int, rule: ClaimRule | None = None) -> None:
         options = core.options
         if options.action_type != "discrete" or options.step_mode != "bounce":
             raise ConfigError("localization filter 'particles': needs discrete actions and "
                               "step_mode='bounce' (it is updated once per bump)")
-        self.belief = ParticleBelief(core.cell_model(), options.robot_dynamics, particles)
-        self.threshold = threshold
+        self.rule = ClaimRule() if rule is None else rule
+        self.beliefs = [ParticleBelief(core.cell_model(), options.robot_dynamics, particles,
+                                       max_clock=int(options.max_clock))
+                        for _ in range(1 + self.rule.replicas)]
+        self.belief, self.replicas = self.beliefs[0], self.beliefs[1:]
         self.claim: int | None = None
 
     def reset(self, rng: np.random.Generator, clock: int) -> None:
-        self.belief.reset(rng, clock)
+        for belief, stream in zip(self.beliefs, (rng, *rng.spawn(len(self.replicas))),
+                                  strict=True):
+            belief.reset(stream, clock)
         self.claim = None  # a claim is judged at a bump after a step: none at the reset
+        self.pending: int | None = None  # the state of the evidence gathered so far
+        self.streak = 0  # bumps in a row the evidence for ``pending`` held
+        self.made = False
+        self.claims_made = self.withdrawn = 0
 
     def update(self, angle: float | None, ticks: int) -> None:
+        self.made = False
         if angle is None:  # no bump in this step: nothing to update
             return
-        self.belief.update(angle, ticks)
-        self._check()
+        for belief in self.beliefs:
+            belief.update(angle, ticks)
+        if self.claim is not None:
+            self.claim = self._follow(self.claim, self.rule.withdraw_below)
+            self.withdrawn += self.claim is None
+        if self.claim is None:
+            self._gather()
 
-    def _check(self) -> None:
-        if self.claim is None and self.belief.max_mass >= self.threshold:
-            self.claim = self.belief.most_likely
+    def _gather(self) -> None:
+        """Evidence followed from the last bump, begun anew, or none; a claim once it held
+        ``rule.bumps`` bumps in a row."""
+        followed = None if self.pending is None \
+            else self._follow(self.pending, self.rule.threshold)
+        if followed is not None:
+            self.pending, self.streak = followed, self.streak + 1
+        elif (evident := self._evident()) is not None:
+            self.pending, self.streak = evident, 1
+        else:
+            self.pending, self.streak = None, 0
+        if self.streak >= self.rule.bumps:
+            self.claim, self.made = self.pending, True
+            self.claims_made += 1
+            self.pending, self.streak = None, 0
+
+    def _enough(self, belief: ParticleBelief) -> bool:
+        """Whether the measurement's effective sample size reaches the floor."""
+        return belief.ess >= self.rule.ess * belief.n
+
+    def _evident(self) -> int | None:
+        """The state every belief holds at least ``rule.threshold`` of its mass in, with the
+        ESS floor reached; else None."""
+        states = {belief.most_likely for belief in self.beliefs}
+        if len(states) > 1 or not all(belief.max_mass >= self.rule.threshold
+                                      and self._enough(belief) for belief in self.beliefs):
+            return None
+        return states.pop()
+
+    def _follow(self, state: int, level: float) -> int | None:
+        """The state the particles that were in ``state`` reached at the last bump, if in every
+        belief they reached the same one, holding at least ``level`` of its mass with the ESS
+        floor reached; else None."""
+        reached = set()
+        for belief in self.beliefs:
+            states, mass = belief.successors(state)
+            mass = np.where(states >= 0, mass, 0.0)
+            if mass.size == 0 or mass.max() < level or not self._enough(belief):
+                return None
+            reached.add(int(states[np.argmax(mass)]))
+        return reached.pop() if len(reached) == 1 else None
 
     @property
     def size(self) -> int:

@@ -46,14 +46,16 @@ def test_claims_are_judged_never_below_the_threshold_and_the_policy_never_reads_
         assert run(env, policy, seed, with_info=True)[0] == actions  # info changes nothing
         first = next((i for i, info in enumerate(infos) if info["localized"]), None)
         for info in infos[:first]:
-            assert info["belief_mass"] < THRESHOLD and not info["correct"] \
-                and not info["wrong_claim"]
+            assert not info["correct"] and not info["wrong_claim"] and info["claims"] == 0
         if first is None:
             continue
         claims += 1
         info = infos[first]
-        assert info["belief_mass"] >= THRESHOLD
-        assert info["correct"] != info["wrong_claim"]
+        # the evidence held at this bump and the one before (the default claim_bumps = 2)
+        assert first >= 1 and min(infos[first - 1]["belief_mass"], info["belief_mass"]) \
+            >= THRESHOLD
+        assert info["claims"] == 1 and info["correct"] != info["wrong_claim"]
+        assert info["wrong_claims"] == int(info["wrong_claim"]) and info["withdrawn"] == 0
         if seed == 10_002:  # the last episode's state is the env's now: judge it by hand
             state = env.unwrapped.core.state
             truth = task.states.of(state.position[:1], state.heading[:1],
