@@ -316,31 +316,3 @@ def first_bumps(model: CellModel, position: np.ndarray, heading: float, n: int,
     after the drive of a bounce-mode reset from the pose (``position``, ``heading``)."""
     point = np.repeat(np.asarray(position, dtype=np.float64).reshape(1, 2), n, axis=0)
     return reset_drives(model, dynamics, point, np.full(n, float(heading)), rng, max_ticks)
-
-
-class SimulatedMotion:
-    """A bump-to-bump motion model that simulates every drive with the env's own dynamics: the
-    functions of this module with the cell model and the dynamics bound.
-
-    It is the default motion of `bounce_gym.dynamics.particles.ParticleBelief`, whose particles
-    move only through ``bumps`` and ``reset_drives``; any object with these two methods (a
-    tabulated bump-to-bump map, say) can take its place.
-
-    Args:
-        model: the cell model whose cell numbers are the decision states.
-        dynamics: keyword arguments of `BounceDynamics` with the ``world``.
-    """
-
-    def __init__(self, model: CellModel, dynamics: dict) -> None:
-        self.model, self.dynamics = model, dict(dynamics)
-
-    def bumps(self, angles: np.ndarray, action: np.ndarray, point: np.ndarray,
-              heading: np.ndarray, rng: np.random.Generator, max_ticks: int) -> BumpOutcomes:
-        """`simulate_bumps`: one outcome per bump pose, in order."""
-        return simulate_bumps(self.model, angles, action, point, heading, rng, self.dynamics,
-                              max_ticks)
-
-    def reset_drives(self, point: np.ndarray, heading: np.ndarray, rng: np.random.Generator,
-                     max_ticks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """`reset_drives`: decision states (−1: none), contact points, headings, clocks."""
-        return reset_drives(self.model, self.dynamics, point, heading, rng, max_ticks)

@@ -1,6 +1,7 @@
 """The particle belief of `bounce_gym.dynamics.particles` on pymunk's dynamic physics (rigid
 bodies, motors, turns that take time): particles kept as bump poses and moved through the
-sampled GCM's seam (`bump_sampler.simulate_bumps`)."""
+simulator itself (`bump_motion(..., tabulated=False)`; the tabulated map, the default there, is
+pinned against the simulator in test_bump_table.py)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from bounce_gym.cells.bump_states import BumpStates
 from bounce_gym.cells.model import CellModel
 from bounce_gym.dynamics import BounceDynamics
 from bounce_gym.dynamics.bump_sampler import simulate_bumps
+from bounce_gym.dynamics.bump_table import bump_motion
 from bounce_gym.dynamics.particles import ParticleBelief
 from bounce_gym.worlds import World
 
@@ -25,6 +27,8 @@ START, HEADING = np.array([[0.6, 0.5]]), np.array([0.3])
 DYNAMICS = {"world": ROOM, "backend": "pymunk", "radius": RADIUS, "step_length": 1.0,
             "backend_options": {"physics": "dynamic"}}
 MODEL = CellModel(ROOM, 1.0, 8, robot_radius=RADIUS)
+#: the simulator, not the table
+SIMULATOR = bump_motion(MODEL, DYNAMICS, tabulated=False)
 
 
 def follow(seed: int, bumps: int, particles: int = 24, jitter: float | None = None):
@@ -34,7 +38,7 @@ def follow(seed: int, bumps: int, particles: int = 24, jitter: float | None = No
     rng = np.random.default_rng(seed)
     state = robot.reset(rng, START, HEADING)
     robot.drive_to_contact()
-    belief = ParticleBelief(MODEL, DYNAMICS, particles, jitter=jitter)
+    belief = ParticleBelief(MODEL, DYNAMICS, particles, jitter=jitter, motion=SIMULATOR)
     belief.reset_at(np.random.default_rng(seed + 1), np.repeat(START, particles, axis=0),
                     np.repeat(HEADING, particles))
     for _ in range(bumps):
