@@ -28,7 +28,10 @@ and pistonball_v6 in the same run, median and min–max over rounds, load averag
 against the raw kinematic simulator in the same run); issue #26: `benchmarks.jax_env` (the
 functional JAX env against the native vector env at N = 1, 64 and 1,024, one XLA thread) and
 `benchmarks.jax_training` (jax_ppo against SB3's PPO, env steps/s on one core each, and DQN
-with hindsight relabelling, JAX and SB3, wall time to 0.90 held-out success).
+with hindsight relabelling, JAX and SB3, wall time to 0.90 held-out success); issue #35:
+`benchmarks.bump_table` (a particle update through the tabulated bump map against the
+simulator, its build time and prediction error) and `benchmarks.physics_planners` (seconds per
+closed-loop planner episode on dynamic physics, against a 10,000-particle simulator update).
 """
 
 from __future__ import annotations
@@ -219,6 +222,13 @@ def main(argv: list[str] | None = None) -> None:
 
     print()
     sampled_model.main(["--quick"] if args.quick else [])
+    # the tabulated bump map and the closed-loop planners on dynamic physics (issue #35)
+    from benchmarks import bump_table, physics_planners
+
+    print()
+    bump_table.main(["--maps", "lab_localization_a"] if args.quick else [])
+    print()
+    physics_planners.main(["--episodes", "2"] if args.quick else [])
     print()
     planners.main(quick=args.quick, repeats=args.repeats)
     # drifters (issue #15): GCM of a 10^6-cell layer, advection vs Parcels, Drifter-v0 steps/s
