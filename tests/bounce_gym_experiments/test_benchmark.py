@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 import yaml
 
 from bounce_gym import worlds
@@ -54,16 +55,31 @@ def test_the_generated_map_is_what_its_description_says():
     assert world == again and "default_rng(3)" in yaml.safe_load(path.read_text())["description"]
 
 
-def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
-    config = yaml.safe_load(BENCHMARK.read_text(encoding="utf-8"))
+def _physics(exp: dict) -> bool:
+    """Whether an experiment runs on pymunk's dynamic physics (its planners read tabulated bump
+    maps, built once per map: minutes in a fresh home folder)."""
+    return exp.get("env_kwargs", {}).get("physics") == "dynamic"
+
+
+def _tiny(config: dict, tmp_path: Path, models: Path | None = None) -> Path:
+    """``config`` with 2 seeds per experiment and its models from ``models`` (None: an empty
+    folder), written under ``tmp_path``."""
     for exp in config["experiments"]:
         exp["seeds"] = {"start": 10_000, "count": 2}
         world = exp.get("env_kwargs", {}).get("world", "")
         if world.endswith(".yaml"):  # the copy lives elsewhere: point at the shipped map
             exp["env_kwargs"]["world"] = str(BENCHMARK.parent / world)
-    config.update(output=str(tmp_path / "runs"), models=str(tmp_path / "models"))
+    config.update(output=str(tmp_path / "runs"), models=str(models or tmp_path / "models"))
     path = tmp_path / "bench.yaml"
     path.write_text(yaml.safe_dump(config), encoding="utf-8")
+    return path
+
+
+def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
+    """Every experiment but the physics ones (a slow test runs those)."""
+    config = yaml.safe_load(BENCHMARK.read_text(encoding="utf-8"))
+    config["experiments"] = [exp for exp in config["experiments"] if not _physics(exp)]
+    path = _tiny(config, tmp_path)
     assert evaluate.main([str(path), "--no-progress"]) == 0
     capsys.readouterr()
     (folder,) = (tmp_path / "runs").iterdir()
@@ -120,3 +136,19 @@ def test_every_policy_of_a_benchmark_experiment_starts_from_the_same_draw():
             assert "planner (cycle start)" in names
         if exp["name"] == "multirobot-coverage-10x10":
             assert "planner (start observed)" in names
+
+
+@pytest.mark.slow
+def test_the_physics_experiments_run_with_their_agents(tmp_path, capsys):
+    """The physics experiments, 2 seeds each, with the shipped agents: every row is there, the
+    agents of both tracks are named by what they observe, and the planners predict."""
+    config = yaml.safe_load(BENCHMARK.read_text(encoding="utf-8"))
+    config["experiments"] = [exp for exp in config["experiments"] if _physics(exp)]
+    assert config["experiments"][0] == next(e for e in yaml.safe_load(
+        BENCHMARK.read_text(encoding="utf-8"))["experiments"])  # the physics rows come first
+    path = _tiny(config, tmp_path, ROOT / "baselines" / "agents")
+    assert evaluate.main([str(path), "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    for name in ("search planner", "continuous-angle planner", "roadmap planner (pose observed)",
+                 "rl dqn (pose observed)", "rl recurrentppo", "particles (expected entropy)"):
+        assert name in out, name
