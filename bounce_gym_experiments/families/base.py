@@ -322,14 +322,23 @@ def trained_motion_model(path: Path) -> str | None:
     import gymnasium
 
     from baselines.rl.model_files import read_model
-    from bounce_gym.envs.options import EnvOptions
 
     config = read_model(path).metadata.get("config")
     if not isinstance(config, Mapping) or not isinstance(config.get("env"), str):
         return None
+    given = dict(config.get("env_kwargs") or {})
     try:
-        kwargs = {**registered_kwargs(config["env"]), **dict(config.get("env_kwargs") or {})}
+        return motion_model_of(str(env_option(config["env"], given, "backend")),
+                               env_option(config["env"], given, "physics"))
     except (gymnasium.error.Error, KeyError):  # an id this version does not register
         return None
-    backend = kwargs.get("backend", EnvOptions.model_fields["backend"].default)
-    return motion_model_of(str(backend), kwargs.get("physics"))
+
+
+def env_option(env_id: str, env_kwargs: Mapping, name: str) -> object:
+    """The value of a bouncing env's option ``name`` (`EnvOptions`) for ``env_id`` made with
+    ``env_kwargs``: given, else registered by the id, else the option's default."""
+    from bounce_gym.envs.options import EnvOptions
+
+    if name in env_kwargs:
+        return env_kwargs[name]
+    return registered_kwargs(env_id).get(name, EnvOptions.model_fields[name].default)

@@ -61,7 +61,12 @@ from baselines.policy import Policy
 from bounce_gym import validate
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError
-from bounce_gym_experiments.families.base import Episode, SingleRobotFamily, env_task
+from bounce_gym_experiments.families.base import (
+    Episode,
+    SingleRobotFamily,
+    env_option,
+    env_task,
+)
 
 #: the planners ``planner_kwargs.models`` may name
 PLANNER_MODELS = ("roadmap", "roadmap_pose", "sampled", "search", "continuous")
@@ -268,14 +273,9 @@ def navigation_planners(experiment: Mapping) -> list[tuple[str, Policy]]:
 
 
 def _motion_model(experiment: Mapping) -> tuple[str, str]:
-    """The backend and the action type of an experiment's env: its ``env_kwargs`` over the
-    arguments its id registers over `EnvOptions`' defaults."""
-    from bounce_gym.envs.options import EnvOptions
-    from bounce_gym_experiments.config import registered_kwargs
-
-    kwargs = {**registered_kwargs(experiment["env"]), **experiment.get("env_kwargs", {})}
-    return (str(kwargs.get("backend", EnvOptions.model_fields["backend"].default)),
-            str(kwargs.get("action_type", EnvOptions.model_fields["action_type"].default)))
+    """The backend and the action type of an experiment's env."""
+    return (str(env_option(experiment["env"], experiment["env_kwargs"], "backend")),
+            str(env_option(experiment["env"], experiment["env_kwargs"], "action_type")))
 
 
 def default_planner_models(experiment: Mapping) -> list[str]:
