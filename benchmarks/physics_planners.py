@@ -1,6 +1,6 @@
 """Closed-loop planners on pymunk's dynamic physics: seconds per planner episode, one core.
 
-Run with ``python -m benchmarks.physics_planners [--episodes N] [--rounds R]``. Rotation noise
+Run with ``python -m benchmarks.physics_planners [--episodes N] [--rounds R] [--rows WORD ...]``. Rotation noise
 ``reliable`` (r = 0.9, ε = 5°), held-out seeds from 10,000, the planners' particles and searches
 reading the tabulated bump map (`bounce_gym.dynamics.bump_table`; its build is timed apart, from
 the cache folder it is in):
@@ -102,6 +102,8 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--bumps", type=int, default=40,
                         help="localization: bumps per episode")
+    parser.add_argument("--rows", nargs="+", metavar="WORD",
+                        help="only the rows whose name contains one of these words")
     args = parser.parse_args(argv)
     rounds = max(3, args.rounds)
     print(f"load average before: {os.getloadavg()[0]:.2f}")
@@ -109,6 +111,8 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"anchor: one bump of 10,000 particles through the simulator: {anchor:.2f} s")
     out = {"anchor_seconds": anchor}
     for row, env_id, kwargs, make in ROWS:
+        if args.rows and not any(word in row for word in args.rows):
+            continue
         env = gym.make(env_id, **kwargs)
         planner = make()
         planner_episode(env, planner, FIRST_SEED - 1 + 10**6, 1)  # builds or loads the table
