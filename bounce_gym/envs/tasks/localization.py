@@ -61,11 +61,14 @@ class LocalizationTask(Task):
         model_samples: with ``"belief"``, sample points per decision state and angle of the
             sampled GCM (`BounceCore.sampled_model`, default 200).
         particles: with ``"particles"``, the number of particles (default 10,000).
-        claim_ess, claim_bumps, withdraw_below, claim_replicas: with ``"particles"``, the
-            effective sample size a claim needs (a share of the particles, default 0.1), the
-            bumps in a row its evidence must hold (default 2), the followed mass below which it
-            is withdrawn (default 0.5) and the independent particle sets besides the main one
-            that must agree (default 1): `ParticleClaims`.
+        claim_ess: with ``"particles"``, the effective sample size a claim needs (a share of
+            the particles, default 0.1; `ParticleClaims`).
+        claim_bumps: with ``"particles"``, the bumps in a row a claim's evidence must hold
+            (default 2).
+        withdraw_below: with ``"particles"``, the followed mass below which a claim is
+            withdrawn (default 0.5).
+        claim_replicas: with ``"particles"``, the independent particle sets besides the main
+            one that must agree on a claim (default 1).
 
     **Claims.** Every filter's ``localized`` is a claim, judged against the robot's true
     decision state at a bump (`bounce_gym.cells.bump_states`: the cell of the env's cell model
