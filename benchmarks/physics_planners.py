@@ -41,6 +41,8 @@ DYNAMIC = {"backend": "pymunk", "physics": "dynamic", "noise": NOISE}
 GOAL = {"goal_radius": 0.3, "heading_tolerance_deg": 10, "observe_task": True}
 GRID_MAP = str(Path(__file__).parents[1] / "configs" / "maps" / "bench_grid_14x22.yaml")
 FIRST_SEED = 10_000
+#: the localization env, whose episodes are cut at ``--bumps`` bumps (no claim filter ends them)
+LOCALIZATION = "bounce_gym/BounceLocalization-v0"
 #: (row, env id, env arguments, planner factory)
 ROWS = (
     ("search planner, lab", "bounce_gym/BounceNavigation-v0",
@@ -52,7 +54,7 @@ ROWS = (
     ("continuous-angle planner, lab", "bounce_gym/BounceNavigation-v0",
      {**DYNAMIC, "action_type": "continuous", "task_kwargs": GOAL},
      lambda: ContinuousNavigationPlanner(horizon=200)),
-    ("particle localization (10,000 particles), lab", "bounce_gym/BounceLocalization-v0",
+    ("particle localization (10,000 particles), lab", LOCALIZATION,
      {**DYNAMIC, "angles": [45, 135], "task_kwargs": {"filter_factory": None}},
      lambda: ParticleLocalizationPolicy(particles=10_000)),
 )
@@ -120,7 +122,7 @@ def main(argv: list[str] | None = None) -> dict:
         for r in range(rounds):
             seeds = range(FIRST_SEED + r * args.episodes, FIRST_SEED + (r + 1) * args.episodes)
             times = [planner_episode(env, planner, seed,
-                                     args.bumps if "localization" in env_id else None)
+                                     args.bumps if env_id == LOCALIZATION else None)
                      for seed in seeds]
             medians.append(float(np.median(times)))
             every += times

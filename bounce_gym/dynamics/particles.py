@@ -161,6 +161,8 @@ class ParticleBelief:
             raise ConfigError(f"particle belief: backend {dynamics.get('backend')!r} is not "
                               "supported (it needs continuous headings)")
         self.depletions = 0
+        #: the simulator whose uniform start poses the prior draws (`_prior`), made on first use
+        self._sampler: BounceDynamics | None = None
 
     # -- construction -------------------------------------------------------------------------
     def _simulator(self, m: int) -> BounceDynamics:
@@ -187,10 +189,12 @@ class ParticleBelief:
         kept: list[tuple[np.ndarray, ...]] = []
         best = np.inf  # the least clock gap of the poses kept so far
         batch = max(_PRIOR_BATCH * n, _PRIOR_MIN)
+        if self._sampler is None or self._sampler.n_robots != batch:
+            self._sampler = self._simulator(batch)  # draws the start poses only, kept
         for _ in range(_PRIOR_TRIES):
-            start = self._simulator(batch).reset(self.rng)
+            position, start_heading = self._sampler.draw_poses(self.rng)
             z, point, heading, ticks = self.motion.reset_drives(
-                start.position, start.heading, self.rng, self.max_ticks)
+                position, start_heading, self.rng, self.max_ticks)
             if angle is not None:  # sensor resetting: poses that explain the latest clock
                 ticks, z, point, heading = self._bumps(angle, point, heading, self.rng)
             gap = np.zeros(len(z)) if clock is None \
