@@ -43,8 +43,15 @@ def test_the_benchmark_covers_every_task_with_200_held_out_episodes():
         assert "horizon_reason" not in exp  # every task at its registered horizon
         if exp["env"] == "bounce_gym/MultiDrifter-v0":  # deployments: all the family runs
             assert exp["policies"] == ["planner", "random"]
+        elif _physics(exp):  # no fixed angles on physics; agents where some were trained there
+            assert exp["policies"][:2] == ["planner", "random"] and "fixed" not in exp["policies"]
         else:
             assert "rl" in exp["policies"] and "fixed" in exp["policies"]
+    physics = [e["name"] for e in experiments if _physics(e)]
+    assert physics == [e["name"] for e in experiments[:len(physics)]]  # they come first
+    assert {"navigation-lab-dynamic-noise", "navigation-lab-v1-dynamic-noise",
+            "localization-lab-dynamic-noise"} <= {e["name"] for e in experiments
+                                                  if _physics(e) and "rl" in e["policies"]}
 
 
 def test_the_generated_map_is_what_its_description_says():
