@@ -294,8 +294,7 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     if "variant" in config and not VARIANT.fullmatch(config["variant"]):
         raise ConfigError(f"config.variant: expected lower-case letters and digits in parts "
                           f"joined by '-' (e.g. stack4), got {config['variant']!r}")
-    defaults = {"vec_env": "native" if native and (multi or _batched(config)) else "sync",
-                "n_envs": 1 if multi or config["algo"] in ("dqn", "jax_dqn") else 4,
+    defaults = {"n_envs": 1 if multi or config["algo"] in ("dqn", "jax_dqn") else 4,
                 **_DEFAULTS}
     for key, value in defaults.items():
         config.setdefault(key, value)
@@ -322,6 +321,8 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     _check_replay_buffer(config["hyperparams"])
     if config["algo"] in JAX_ALGOS:
         jax_hyperparameters(config["algo"], config["hyperparams"])
+    # last: asking the batched env builds an env (heavy imports), after every cheap check
+    config.setdefault("vec_env", "native" if native and (multi or _batched(config)) else "sync")
     return config
 
 
