@@ -31,7 +31,7 @@ the planner follows before searching again.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -62,12 +62,22 @@ class AngleBudget:
 class AnglePlan:
     """A sequence of bounce angles (radians, as executed) and the bump poses the robot is at
     before each (``points[k]``, ``headings[k]``); ``found``: the last angle's drive passes
-    through the goal (else the sequence leads to the search's most promising pose)."""
+    through the goal (else the sequence leads to the search's most promising pose, the bump
+    pose ``end_point``, ``end_heading``; NaN when found or empty)."""
 
     angles: np.ndarray
     points: np.ndarray
     headings: np.ndarray
     found: bool
+    end_point: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
+    end_heading: float = float("nan")
+
+    def then(self, other: AnglePlan) -> AnglePlan:
+        """This plan followed by ``other``, searched from this one's end pose."""
+        return AnglePlan(np.concatenate((self.angles, other.angles)),
+                         np.concatenate((self.points, other.points)),
+                         np.concatenate((self.headings, other.headings)), other.found,
+                         other.end_point, other.end_heading)
 
 
 def search_angles(motion, point: np.ndarray, heading: float, goal: GoalRegion,
@@ -114,8 +124,9 @@ def search_angles(motion, point: np.ndarray, heading: float, goal: GoalRegion,
         return AnglePlan(np.zeros(0), np.zeros((0, 2)), np.zeros(0), False)
     last = len(points) - 1
     node = int(np.argmin(score(points[last], headings[last])))
-    return _trace(points[:last], headings[:last], parents[:last], angles[:last],
+    plan = _trace(points[:last], headings[:last], parents[:last], angles[:last],
                   int(parents[last][node]), float(angles[last][node]), False)
+    return replace(plan, end_point=points[last][node], end_heading=float(headings[last][node]))
 
 
 def _key(point: np.ndarray, heading: np.ndarray) -> list[tuple[int, int, int]]:

@@ -18,11 +18,12 @@ lattice. `ContinuousNavigationPlanner` chooses each bounce angle from that range
   (`baselines.navigation.angle_search`, its poses ranked by `ShotField`): it follows the plan
   found while the belief's most likely pose is the one the plan expects and searches again
   from that pose otherwise (in a noisy world: after a rotation error that the clock revealed).
-  Without a plan within the search's budget it follows the way to the search's most promising
-  pose and searches again at its end (at most ``episode_searches`` fruitless searches per
-  episode). In a noise-free world this replans from the exact pose
-  at every bump where needed; in a noisy one it is determinised replanning (the most likely
-  outcome taken as certain, replanned on surprise; Yoon, Fern & Givan, FF-Replan, ICAPS 2007).
+  When a search finds no plan within its budget, the next one starts from the most promising
+  pose it reached (where the noise-free world takes the robot along the way there), and so on
+  until one finds a plan or ``episode_searches`` fruitless searches are spent; the robot
+  follows the chained way. In a noise-free world this replans from the exact pose at every
+  bump where needed; in a noisy one it is determinised replanning (the most likely outcome
+  taken as certain, replanned on surprise; Yoon, Fern & Givan, FF-Replan, ICAPS 2007).
 
 On an env with discrete actions it is the same planner restricted to Φ: the search tries Φ's
 angles only (no grid, no shots) and ``act`` returns the index of the angle chosen (the
@@ -31,10 +32,10 @@ papers' roadmap runs open loop).
 
 It reads only its observation (the clock) in `act`, never ``info``. ``predicted_success`` is its
 estimate, at its first decision, of the probability of reaching the goal within the episode:
-without noise, 1 when the search found a plan (exact: the world is deterministic and the plan
-was simulated in it) and 0 when it found none; with noise, the share q of ``draws`` simulated
-robots (drawn from the belief, each with its own rotation errors) that the plan takes to the
-goal open loop, turned into the probability that one of the k = ⌊steps left / plan length⌋
+without noise, 1 when the chained searches found a plan (exact: the world is deterministic and
+the plan was simulated in it) and 0 when they found none; with noise, the share q of ``draws``
+simulated robots (drawn from the belief, each with its own rotation errors) that the chained
+plan takes to the goal open loop, turned into the probability that one of the k = ⌊steps left / plan length⌋
 attempts that fit in the episode succeeds, 1 − (1 − q)^k — a model that takes the attempts as
 independent and each failed one as costing a whole plan's bumps.
 """
@@ -71,9 +72,9 @@ class ContinuousNavigationPlanner(Policy):
         frontier: poses kept per level of the search.
         search_bumps: levels (bumps) of one search.
         search_nodes: poses one search expands at most.
-        episode_searches: searches without a plan in one episode at most; once they are spent
-            it keeps turning by the middle of the range (it bounds the time an unreachable goal
-            costs).
+        episode_searches: searches that expanded poses and found no plan, in one episode at
+            most; without a plan (and once they are spent) it bounces by random angles of its
+            range (it bounds the time an unreachable goal costs).
         draws: in a noisy world, poses of the belief simulated to predict every bump.
         field_cell: side of the grid of `ShotField` (world units).
     """
@@ -161,7 +162,9 @@ class ContinuousNavigationPlanner(Policy):
     def _predict(self, angle: float) -> None:
         """The belief's poses (in a noisy world ``draws`` of them by weight, each with its own
         rotation error) bump with ``angle`` and drive on; those that pass through the goal end
-        the episode, so the others are kept (all, if none is)."""
+        the episode and those that get nowhere (lost in the table or the simulator) cannot be
+        where the robot is, so the others are kept (if there are none: those not through the
+        goal, else all)."""
         if self.deterministic:
             point, heading, weight = self.point, self.heading, self.weight
         else:
@@ -171,7 +174,9 @@ class ContinuousNavigationPlanner(Policy):
         out = self.motion.bumps(np.full(len(point), angle), np.arange(len(point)), point,
                                 heading, self.rng, self.max_ticks)
         hit = self._hits(out)
-        keep = ~hit if (~hit).any() else np.ones(len(hit), dtype=bool)
+        keep = ~hit & (out.next_state >= 0)  # neither through the goal nor lost
+        if not keep.any():
+            keep = ~hit if (~hit).any() else np.ones(len(hit), dtype=bool)
         self._next = {"ticks": out.ticks[keep], "end": out.end[keep],
                       "heading": out.heading[keep], "weight": weight[keep]}
 
@@ -198,21 +203,37 @@ class ContinuousNavigationPlanner(Policy):
         if not self._on_plan(point, heading):
             self.plan, self._k = None, 0
             if self.failures < self.episode_searches:
-                self.plan = search_angles(self.exact_motion, point, heading, self.goal,
-                                          self.range if self.phi is None else None, self.budget,
-                                          self.steps_total - self.steps,
-                                          self._score, self.rng, self.max_ticks)
-                self.searches += 1
-                self.failures += int(not self.plan.found)
+                self.plan = self._search(point, heading)
         if self.predicted_success is None:
             self.predicted_success = self._predicted()
-        if self.plan is None or self._k >= len(self.plan.angles):  # no way: turn by the middle
-            middle = 0.5 * (self.range[0] + self.range[1])
-            return middle if self.phi is None else float(self.phi[np.argmin(
-                np.abs(self.phi - middle))])
+        if self.plan is None or self._k >= len(self.plan.angles):  # no way: bounce at random
+            return float(self.rng.uniform(*self.range) if self.phi is None
+                         else self.rng.choice(self.phi))
         angle = float(self.plan.angles[self._k])
         self._k += 1
         return angle
+
+    def _search(self, point: np.ndarray, heading: float) -> AnglePlan:
+        """A plan from the bump pose: the search's, and while it finds none (and fruitless
+        searches and steps are left) the way to its most promising pose followed by a search
+        from there, which the noise-free world makes the pose the robot will be at."""
+        left = self.steps_total - self.steps
+        plan = self._search_once(point, heading, left)
+        while (not plan.found and 0 < len(plan.angles) < left
+               and self.failures < self.episode_searches):
+            way = self._search_once(plan.end_point, plan.end_heading, left - len(plan.angles))
+            if len(way.angles) == 0:
+                break
+            plan = plan.then(way)
+        return plan
+
+    def _search_once(self, point: np.ndarray, heading: float, bumps: int) -> AnglePlan:
+        plan = search_angles(self.exact_motion, point, heading, self.goal,
+                             self.range if self.phi is None else None, self.budget, bumps,
+                             self._score, self.rng, self.max_ticks)
+        self.searches += 1
+        self.failures += int(not plan.found and len(plan.angles) > 0)
+        return plan
 
     def _predicted(self) -> float:
         """The success estimate at the first decision (module docstring)."""

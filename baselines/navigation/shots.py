@@ -26,6 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 from scipy.sparse import csgraph
 
 from bounce_gym.cells.geodesic import GridGeodesic
@@ -109,9 +110,9 @@ class ShotField:
     """How far a point is, through the free space, from a place with a clear shot at the goal.
 
     On the world's occupancy grid of side ``cell`` (for the robot's radius), a free cell is a
-    *shot cell* when the straight segment from its centre to the goal point stays in the free
-    space (tested every ``cell`` / 4) and its bearing is within τ of γ plus the disk's
-    half-width: a robot bumping there with a suitable heading has a shot. `distance` is the
+    *shot cell* when the straight segment from its centre to the goal point stays in the
+    robot's configuration space (`World.eroded`, one vectorised shapely test per cell) and its
+    bearing is within τ of γ plus the disk's half-width: a robot bumping there with a suitable heading has a shot. `distance` is the
     geodesic distance (`bounce_gym.cells.geodesic.GridGeodesic`, king moves) from a point's
     cell to the nearest shot cell; the search ranks its poses by it plus `turn_gap` — a
     cost-to-go estimate that knows the walls, where the bearing alone would send the search
@@ -125,13 +126,12 @@ class ShotField:
         x0, y0 = world.bounds[:2]
         centre = np.column_stack((x0 + (rc[:, 1] + 0.5) * cell, y0 + (rc[:, 0] + 0.5) * cell))
         bearing, half = _disk_arc(centre, goal)
-        facing = np.abs(bearing) <= half + goal.tolerance
-        rel = goal.point - centre
-        steps = int(np.ceil(np.hypot(rel[:, 0], rel[:, 1]).max() / (0.25 * cell))) + 1
-        share = np.linspace(0.0, 1.0, steps)
-        along = centre[:, None, :] + share[None, :, None] * rel[:, None, :]
-        clear = world.contains(along.reshape(-1, 2), robot_radius).reshape(len(centre), steps)
-        sources = self.geodesic.node_of(centre[facing & clear.all(axis=1)])
+        facing = centre[np.abs(bearing) <= half + goal.tolerance]
+        space = world.eroded(robot_radius)
+        shapely.prepare(space)
+        sight = shapely.linestrings(np.stack(
+            (facing, np.broadcast_to(goal.point, facing.shape)), axis=1))
+        sources = self.geodesic.node_of(facing[shapely.covers(space, sight)])
         self.to_shot = (np.full(self.geodesic.n_nodes, np.inf) if len(sources) == 0 else
                         csgraph.dijkstra(self.geodesic.graph, directed=False,
                                          indices=np.unique(sources), min_only=True))

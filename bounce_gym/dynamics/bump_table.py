@@ -68,6 +68,7 @@ import json
 import math
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -118,6 +119,10 @@ LOST, STAYS = -1, -2
 #: the largest rotation whose turn ticks are tabulated (radians): two turns, beyond any noise
 MAX_ROTATION = 4 * math.pi
 _ARRAYS = ("end", "heading", "normal", "end_piece", "seconds")
+#: tables kept in memory per process, by cache file and its version (a planner asks for its
+#: table at every episode's reset; reading and checking a file costs a second on a large map)
+LOADED_TABLES = 4
+_LOADED: dict[Path, tuple[tuple[int, int, int] | None, BumpTable]] = {}
 
 
 def table_applies(dynamics: dict) -> bool:
@@ -179,6 +184,18 @@ class BumpTable:
     build_seconds: float
     fingerprint: str
 
+    @cached_property
+    def _end_section(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each node's end on the boundary: its arc length along its end piece and its offset
+        along the inward normal there (0 for nodes that end nowhere)."""
+        along, off = np.zeros(self.n_nodes), np.zeros(self.n_nodes)
+        ended = np.flatnonzero(self.end_piece >= 0)
+        near = self.pieces.project(self.end[ended])
+        point, normal = self.pieces.locate(self.end_piece[ended], near.s)
+        along[ended] = near.s
+        off[ended] = np.einsum("nc,nc->n", self.end[ended] - point, normal)
+        return along, off
+
     @property
     def n_nodes(self) -> int:
         return len(self.seconds)
@@ -236,15 +253,25 @@ class BumpTable:
         ends, seconds = self.end_piece[corners], self.seconds[corners]
         smooth = ((ends == ends[0]).all(axis=0) & (ends[0] >= 0)
                   & (seconds.max(axis=0) - seconds.min(axis=0) <= CLOSE * self.tick_seconds))
+        along, off = self._end_section
+        s_c = along[corners]
+        smooth &= s_c.max(axis=0) - s_c.min(axis=0) <= 0.5 * self.pieces.length[
+            np.maximum(ends[0], 0)]  # not across a ring's seam
         nearest = corners[np.argmax(weight, axis=0), np.arange(len(psi))]
         status = np.where(smooth, ends[0], self.end_piece[nearest])
-        end = np.where(smooth[:, None], np.einsum("cn,cnk->nk", weight, self.end[corners]),
-                       self.end[nearest])
+        end = self.end[nearest]
+        angle = self.normal[nearest]
+        normal = np.column_stack((np.cos(angle), np.sin(angle)))
+        # the nodes' ends interpolated along the boundary (arc length, and offset along the
+        # normal): a straight line between ends on both sides of a corner would cut into it
+        at, at_normal = self.pieces.locate(ends[0, smooth], np.einsum(
+            "cn,cn->n", weight[:, smooth], s_c[:, smooth]))
+        end[smooth] = at + np.einsum("cn,cn->n", weight[:, smooth],
+                                     off[corners[:, smooth]])[:, None] * at_normal
+        normal[smooth] = at_normal
         turned = np.where(smooth, np.einsum("cn,cn->n", weight, self.heading[corners]),
                           self.heading[nearest])
         duration = np.where(smooth, np.einsum("cn,cn->n", weight, seconds), self.seconds[nearest])
-        angle = self.normal[nearest]
-        normal = np.column_stack((np.cos(angle), np.sin(angle)))
         stays, latched = np.zeros(len(point), dtype=bool), near.normal.copy()
         stays[contact], latched[contact] = _touched_ahead(
             self.walls, point[contact], direction[contact], (1 + TOUCH) * radius, self.front)
@@ -357,21 +384,35 @@ def bump_table(dynamics: dict, spacing: float = DEFAULT_SPACING,
         raise ConfigError(f"bump table: expected spacing > 0 and headings >= 4, got {spacing!r}, "
                           f"{headings!r}")
     key = table_fingerprint(dynamics, spacing, headings)
-    path = None
-    if cache is not False:
-        folder = model_cache.cache_folder("bump_tables") if cache in (None, True) else cache
-        path = Path(folder) / f"{key}.npz"
+    if cache is False:
+        return _build(dynamics, spacing, headings, key)
+    folder = model_cache.cache_folder("bump_tables") if cache in (None, True) else cache
+    path = (Path(folder) / f"{key}.npz").resolve()
+    signature, table = _LOADED.pop(path, (None, None))
+    if table is None or signature != _file_signature(path):
+        table = None
         stored = model_cache.load_cached(path, FORMAT, key)
         if stored is not None:
             table = _from_stored(dynamics, spacing, headings, key, *stored, path)
-            if table is not None:
-                return table
-    table = _build(dynamics, spacing, headings, key)
-    if path is not None:
+    if table is None:
+        table = _build(dynamics, spacing, headings, key)
         header = {"format": FORMAT, "fingerprint": key, "build_seconds": table.build_seconds,
                   "lag": table.lag}
         model_cache.store(path, header, {name: getattr(table, name) for name in _ARRAYS})
+    _LOADED[path] = (_file_signature(path), table)  # the most recently used last
+    while len(_LOADED) > LOADED_TABLES:
+        _LOADED.pop(next(iter(_LOADED)))
     return table
+
+
+def _file_signature(path: Path) -> tuple[int, int, int] | None:
+    """What tells a cache file's versions apart (inode, size, modification time), None
+    without one."""
+    try:
+        stat = path.stat()
+    except OSError:
+        return None
+    return stat.st_ino, stat.st_size, stat.st_mtime_ns
 
 
 def _layout(dynamics: dict, spacing: float, headings: int, key: str

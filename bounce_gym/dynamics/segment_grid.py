@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import shapely
 
 #: where the padding segment lies: farther than any reach from any world
 FAR = 1e30
@@ -38,14 +39,16 @@ class SegmentGrid:
         self.start = np.vstack((start, [FAR, FAR]))
         self.end = np.vstack((end, [FAR, FAR]))
         limit = reach + 0.5 * math.sqrt(2.0) * cell
-        lists = []
-        for lo in range(0, len(centre), 4096):
-            dist = _distances(centre[lo:lo + 4096, None, :], start[None], end[None])
-            lists.extend(np.flatnonzero(row <= limit) for row in dist)
-        width = max(1, max(len(ix) for ix in lists))
-        self.near_table = np.full((len(lists), width), len(start), dtype=np.int64)
-        for i, ix in enumerate(lists):
-            self.near_table[i, :len(ix)] = ix
+        tree = shapely.STRtree(shapely.linestrings(np.stack((start, end), axis=1)))
+        cell_of, segment = tree.query(shapely.points(centre), predicate="dwithin",
+                                      distance=limit)
+        order = np.lexsort((segment, cell_of))
+        cell_of, segment = cell_of[order], segment[order]
+        count = np.bincount(cell_of, minlength=len(centre))
+        rank = np.arange(len(cell_of)) - np.repeat(np.cumsum(count) - count, count)
+        self.near_table = np.full((len(centre), max(1, int(count.max(initial=0)))), len(start),
+                                  dtype=np.int64)
+        self.near_table[cell_of, rank] = segment
 
     def near(self, points: np.ndarray) -> np.ndarray:
         """(n, K) the segments listed for each point's cell (the padding index m where the
@@ -71,12 +74,3 @@ class SegmentGrid:
         away = rel - t[..., None] * vec
         return away, np.hypot(away[..., 0], away[..., 1]), t
 
-
-def _distances(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """Distances from points to segments, broadcast over their leading axes."""
-    vec = end - start
-    rel = points - start
-    length2 = np.maximum(np.einsum("...c,...c->...", vec, vec), 1e-300)
-    t = np.clip(np.einsum("...c,...c->...", rel, vec) / length2, 0.0, 1.0)
-    away = rel - t[..., None] * vec
-    return np.hypot(away[..., 0], away[..., 1])
