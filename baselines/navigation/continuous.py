@@ -7,21 +7,24 @@ lattice. `ContinuousNavigationPlanner` chooses each bounce angle from that range
 
 * at reset it reads the episode's start and goal poses (what the task appends to the
   observation) and predicts the drive of the reset from the start (simulated);
-* its belief is a set of weighted poses, as `baselines.navigation.sampled`'s (a particle
-  filter, Thrun, Burgard & Fox, *Probabilistic Robotics*, 2005, §4.3): after every bump the
-  poses of the belief are moved by the angle it executed — in a noisy world ``draws`` of them,
-  each drawing its own rotation error — and kept where their clock equals the clock it reads
-  (identical poses merged; when none does, those of the nearest clock, counted in
-  ``surprises``). Without noise it is one exact pose;
-* it decides from the belief's most likely pose, by the search over bump poses with a fine
+* its belief is the package's particle belief (`bounce_gym.dynamics.particles.ParticleBelief`:
+  Monte Carlo localization, Thrun, Burgard & Fox, *Probabilistic Robotics*, 2005, §4.3, with
+  augmented-MCL recovery and sensor resetting, §8.3.5), started at the start pose and moved
+  through the same motion model (the tabulated bump map on pymunk's dynamic physics) by the
+  angle it executed, weighted by the clock it reads: ``draws`` particles with rotation noise,
+  one exact pose without (no roughening, no injection). A belief that loses the robot recovers
+  from the clocks instead of following a wrong pose for the rest of the episode. Bumps whose
+  clock not every particle explained are counted in ``surprises``;
+* it decides from the belief's most likely pose (of the particles in the most likely decision
+  state, the one nearest their mean), by the search over bump poses with a fine
   grid of angles and the goal shots in the noise-free simulator
   (`baselines.navigation.angle_search`, its poses ranked by `ShotField`): it follows the plan
-  found while the belief's most likely pose is the one the plan expects and searches again
-  from that pose otherwise (in a noisy world: after a rotation error that the clock revealed).
+  found while the belief's most likely pose is the one the plan expects (within
+  ``PLAN_DISTANCE`` radii and ``PLAN_HEADING``) and searches again from that pose otherwise (in a noisy world: after a rotation error that the clock revealed).
   When a search finds no plan within its budget, the next one starts from the most promising
   pose it reached (where the noise-free world takes the robot along the way there), and so on
-  until one finds a plan or ``episode_searches`` fruitless searches are spent; the robot
-  follows the chained way. In a noise-free world this replans from the exact pose at every
+  until one finds a plan or ``episode_searches`` fruitless searches in a row are spent; the
+  robot follows the chained way. In a noise-free world this replans from the exact pose at every
   bump where needed; in a noisy one it is determinised replanning (the most likely outcome
   taken as certain, replanned on surprise; Yoon, Fern & Givan, FF-Replan, ICAPS 2007).
 
@@ -55,10 +58,14 @@ from baselines.policy import Policy
 from bounce_gym.dynamics.bump_sampler import default_max_ticks
 from bounce_gym.dynamics.bump_table import bump_motion
 from bounce_gym.dynamics.noise import Exact
+from bounce_gym.dynamics.particles import ParticleBelief
 from bounce_gym.errors import ConfigError
 
 #: the weight of `turn_gap` (world units per radian) beside `ShotField.distance`
 TURN_WEIGHT = 1.0
+#: how near (robot radii, radians) the belief's most likely pose must be to the pose a plan
+#: expects for the plan to be followed on
+PLAN_DISTANCE, PLAN_HEADING = 0.25, math.radians(2.0)
 
 
 class ContinuousNavigationPlanner(Policy):
@@ -72,9 +79,10 @@ class ContinuousNavigationPlanner(Policy):
         frontier: poses kept per level of the search.
         search_bumps: levels (bumps) of one search.
         search_nodes: poses one search expands at most.
-        episode_searches: searches that expanded poses and found no plan, in one episode at
-            most; without a plan (and once they are spent) it bounces by random angles of its
-            range (it bounds the time an unreachable goal costs).
+        episode_searches: searches that expanded poses and found no plan, in a row (since the
+            last that found one) at most; without a plan, and once they are spent for the rest
+            of the episode, it bounces by random angles of its range (it bounds the time an
+            unreachable goal costs).
         draws: in a noisy world, poses of the belief simulated to predict every bump.
         field_cell: side of the grid of `ShotField` (world units).
     """
@@ -117,6 +125,7 @@ class ContinuousNavigationPlanner(Policy):
         self.exact_motion = bump_motion(model, noise_free(options.robot_dynamics))
         self.max_ticks = default_max_ticks(options.robot_dynamics)
         self.deterministic = isinstance(options.noise, Exact)
+        self.radius = float(options.robot_radius)
         self.field = ShotField(options.world, options.robot_radius, self.goal, self.field_cell)
         lo, hi = self.range
         if self.phi is None:
@@ -129,10 +138,16 @@ class ContinuousNavigationPlanner(Policy):
         spec_steps = getattr(getattr(env, "spec", None), "max_episode_steps", None)
         self.steps_total = int(self.horizon or spec_steps or DEFAULT_HORIZON)
         self.rng = np.random.default_rng(self.seed)
-        start = np.asarray(task.start[0][0], dtype=np.float64).reshape(1, 2)
-        _, end, heading, clock = self.motion.reset_drives(
-            start, np.array([float(task.start[1][0])]), self.rng, self.max_ticks)
-        self._next = {"ticks": clock, "end": end, "heading": heading, "weight": np.ones(1)}
+        n = 1 if self.deterministic else self.draws
+        self.belief = ParticleBelief(
+            model, options.robot_dynamics, n, max_clock=options.max_clock,
+            jitter=0.0 if self.deterministic else None, max_ticks=self.max_ticks,
+            motion=self.motion,
+            **({"alpha_slow": 0.0, "alpha_fast": 0.0} if self.deterministic else {}))
+        self.belief.reset_at(self.rng, np.repeat(np.asarray(task.start[0][0], dtype=np.float64)
+                                                 .reshape(1, 2), n, axis=0),
+                             np.full(n, float(task.start[1][0])))
+        self._angle: float | None = None  # the last angle executed
         self._clock_index = 1 if env.core.observes_contact else 0
         self._max_clock = options.max_clock
         self.plan: AnglePlan | None = None
@@ -145,40 +160,17 @@ class ContinuousNavigationPlanner(Policy):
                          * self._max_clock))
 
     # -- belief -------------------------------------------------------------------------------
-    def _condition(self, clock: int) -> None:
-        """The belief: the predicted poses whose clock is the one read (or the nearest),
-        identical poses merged."""
-        nxt = self._next
-        gap = np.abs(nxt["ticks"] - clock)
-        keep = gap == gap.min()
-        self.surprises += int(gap.min() > 0)
-        point, heading, weight = nxt["end"][keep], nxt["heading"][keep], nxt["weight"][keep]
-        key = np.round(np.column_stack((point, np.mod(heading, 2 * np.pi))), 9)
-        _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-        weight = np.bincount(inverse.ravel(), weights=weight)
-        self.point, self.heading = point[first], heading[first]
-        self.weight = weight / weight.sum()
-
-    def _predict(self, angle: float) -> None:
-        """The belief's poses (in a noisy world ``draws`` of them by weight, each with its own
-        rotation error) bump with ``angle`` and drive on; those that pass through the goal end
-        the episode and those that get nowhere (lost in the table or the simulator) cannot be
-        where the robot is, so the others are kept (if there are none: those not through the
-        goal, else all)."""
-        if self.deterministic:
-            point, heading, weight = self.point, self.heading, self.weight
-        else:
-            pick = self.rng.choice(len(self.point), self.draws, p=self.weight)
-            point, heading = self.point[pick], self.heading[pick]
-            weight = np.full(self.draws, 1.0 / self.draws)
-        out = self.motion.bumps(np.full(len(point), angle), np.arange(len(point)), point,
-                                heading, self.rng, self.max_ticks)
-        hit = self._hits(out)
-        keep = ~hit & (out.next_state >= 0)  # neither through the goal nor lost
-        if not keep.any():
-            keep = ~hit if (~hit).any() else np.ones(len(hit), dtype=bool)
-        self._next = {"ticks": out.ticks[keep], "end": out.end[keep],
-                      "heading": out.heading[keep], "weight": weight[keep]}
+    def _pose(self) -> tuple[np.ndarray, float]:
+        """The belief's most likely pose: of the particles in its most likely decision state,
+        the one nearest their weighted mean position."""
+        belief = self.belief
+        mine = np.flatnonzero(belief.states == belief.most_likely)
+        if len(mine) == 0:
+            mine = np.arange(len(belief.weight))
+        weight = belief.weight[mine]
+        mean = weight @ belief.position[mine] / weight.sum()
+        best = mine[np.argmin(np.hypot(*(belief.position[mine] - mean).T))]
+        return belief.position[best], float(belief.heading[best])
 
     def _hits(self, out) -> np.ndarray:
         g = self.goal
@@ -191,15 +183,16 @@ class ContinuousNavigationPlanner(Policy):
 
     def _on_plan(self, point: np.ndarray, heading: float) -> bool:
         plan, k = self.plan, self._k
-        return (plan is not None and k < len(plan.angles)
-                and np.allclose(plan.points[k], point, rtol=0, atol=1e-9)
-                and math.isclose(plan.headings[k], heading, abs_tol=1e-9))
+        if plan is None or k >= len(plan.angles):
+            return False
+        turn = abs(math.remainder(plan.headings[k] - heading, 2 * math.pi))
+        return (math.dist(plan.points[k], point) <= PLAN_DISTANCE * self.radius
+                and turn <= PLAN_HEADING)
 
     def _decide(self) -> float:
         """The next angle: the plan's, searched again from the most likely pose when that is
         not the pose the plan expects."""
-        best = int(np.argmax(self.weight))
-        point, heading = self.point[best], float(self.heading[best])
+        point, heading = self._pose()
         if not self._on_plan(point, heading):
             self.plan, self._k = None, 0
             if self.failures < self.episode_searches:
@@ -232,7 +225,7 @@ class ContinuousNavigationPlanner(Policy):
                              self.range if self.phi is None else None, self.budget, bumps,
                              self._score, self.rng, self.max_ticks)
         self.searches += 1
-        self.failures += int(not plan.found and len(plan.angles) > 0)
+        self.failures = 0 if plan.found else self.failures + int(len(plan.angles) > 0)
         return plan
 
     def _predicted(self) -> float:
@@ -242,8 +235,9 @@ class ContinuousNavigationPlanner(Policy):
             return 0.0
         if self.deterministic:
             return 1.0
-        pick = self.rng.choice(len(self.point), self.draws, p=self.weight)
-        point, heading = self.point[pick], self.heading[pick]
+        belief = self.belief
+        pick = self.rng.choice(len(belief.weight), self.draws, p=belief.weight)
+        point, heading = belief.position[pick], belief.heading[pick]
         done = np.zeros(self.draws, dtype=bool)
         for angle in plan.angles:
             out = self.motion.bumps(np.full(len(point), angle), np.arange(len(point)), point,
@@ -256,13 +250,15 @@ class ContinuousNavigationPlanner(Policy):
 
     def act(self, observation, info):
         del info  # the robot's own observation only
-        self._condition(self._clock(observation))
+        if self._angle is not None:  # the reset drive's clock tells nothing: no rotation
+            self.belief.update(self._angle, self._clock(observation))
+            self.surprises += int(self.belief.likelihood < 1.0)
         angle = self._decide()
         self.steps += 1
         if self.phi is not None:
             index = int(np.argmin(np.abs(self.phi - angle)))
-            self._predict(float(self.phi[index]))
+            self._angle = float(self.phi[index])
             return index
         action = continuous_action(np.array([angle]), self.range)
-        self._predict(float(executed_angle(action, self.range)[0]))
+        self._angle = float(executed_angle(action, self.range)[0])
         return action

@@ -56,7 +56,7 @@ def test_reaches_a_goal_that_no_three_angle_sequence_reaches():
     planner = ContinuousNavigationPlanner()
     success, actions = _run(env, planner)
     assert success and planner.predicted_success == 1.0
-    assert len(actions) <= 10 and planner.surprises == 0
+    assert len(actions) <= 10 and planner.surprises == 0 and planner.belief.depletions == 0
 
 
 def test_decisions_never_read_info_and_repeat_with_the_seed():
