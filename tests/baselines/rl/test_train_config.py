@@ -22,16 +22,14 @@ from baselines.seeds import TRAINING_SEEDS  # noqa: E402
 CONFIGS = Path(__file__).parents[3] / "configs"
 TRAIN_CONFIGS = sorted(CONFIGS.glob("train_*.yaml"))
 HYPERPARAMS = sorted((CONFIGS / "hyperparams").glob("*.yaml"))
-#: the smallest budget per seed of a shipped configuration: 10,000 steps, except where one core
-#: steps the env too slowly for that (its particle filter on dynamic physics: ~6 steps/s,
-#: docs/learning.md, "RL on dynamic physics")
-LEAST_BUDGET = {"train_localization_dynamic_recurrent.yaml": 1024}
+#: the smallest budget per seed of a shipped configuration
+LEAST_BUDGET = 10_000
 
 
 @pytest.mark.parametrize("path", TRAIN_CONFIGS, ids=[p.name for p in TRAIN_CONFIGS])
 def test_shipped_training_configs_build_their_model(path):
     config = validate_train_config(yaml.safe_load(path.read_text()), path.parent)
-    assert config["total_timesteps"] >= LEAST_BUDGET.get(path.name, 10_000)
+    assert config["total_timesteps"] >= LEAST_BUDGET
     assert len(config["seeds"]) >= 1
     assert max(config["seeds"]) + config["n_envs"] <= TRAINING_SEEDS.stop
     if config["algo"] in JAX_ALGOS:  # the JAX learner, built (its checks) but not compiled
