@@ -32,7 +32,10 @@ plus a draw of the dynamics' noise model (Alam's relative rule, as the simulator
 that touches a wall ahead of ψ bumps again where it is (its bumper reads the walls it touches,
 within `TOUCH`). Otherwise the drive is interpolated bilinearly in (s, ψ) between the four nodes
 around it where all four end on the same piece with durations within `CLOSE` ticks of each other
-(the map is smooth there); elsewhere — across the corner a drive's target jumps at, or between a
+(the map is smooth there) — the end as a point of that piece, its arc length and its offset
+along the normal interpolated (a straight line between ends on both sides of an obstacle's
+rounded corner would cut into the obstacle, where no later lookup finds a contact), on a
+ring's seam not at all; elsewhere — across the corner a drive's target jumps at, or between a
 drive and a stay — the robot drives straight to the contact ahead, cast with `World.first_hit`
 (a swept disk), taking the distance's time at cruise speed plus the lag (`BumpTable.drives`).
 The clock at the next bump is the turn's ticks plus the drive's: the turn, started at the
