@@ -13,28 +13,84 @@ rule that blocked it. Vectorised over a batch of joint states; shared by the
 **Minimum separation** (``min_sep_cells`` s, for cells smaller than the robot diameter):
 "the same cell" becomes "within Chebyshev distance s" (`too_close`) — a move is blocked when its
 target is that close to another mover's target or to a stayer's cell; s = 0 is the rule above.
+The relation is a `CloseCells`, indexed like the (n, n) bool matrix but computed from the cells'
+grid coordinates on lookup: memory O(n), so maps of 10⁶ cells build.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from bounce_gym.errors import ConfigError
 
+#: Largest n² of a dense `CloseCells` matrix (``np.asarray``): 10⁸ bytes.
+_DENSE_LIMIT = 10**8
 
-def too_close(position_rc: np.ndarray, min_sep_cells: int = 0) -> np.ndarray:
-    """(n, n) bool over position cells with grid coordinates ``position_rc`` (n, 2): True where
-    two robots would collide — Chebyshev distance ≤ ``min_sep_cells`` (0: the identity)."""
+
+class CloseCells:
+    """Which pairs of position cells are too close: the `too_close` relation, looked up on demand.
+
+    ``close[i, j]`` (integer index arrays that broadcast, like a NumPy matrix's fancy indexing)
+    is True where position cells ``i`` and ``j`` are within Chebyshev distance ``min_sep_cells``
+    — the entries of the (n, n) matrix, computed from the two cells' grid coordinates instead of
+    stored: memory O(n), whatever the map's size. ``np.asarray(close)`` builds the dense matrix
+    (small maps only) and `pairs` lists the close pairs with a KD-tree (O(n + pairs) memory).
+    """
+
+    __slots__ = ("min_sep_cells", "position_rc")
+
+    def __init__(self, position_rc: np.ndarray, min_sep_cells: int) -> None:
+        self.position_rc = np.asarray(position_rc).reshape(-1, 2)
+        self.min_sep_cells = int(min_sep_cells)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        n = len(self.position_rc)
+        return n, n
+
+    def __getitem__(self, index: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+        i, j = index
+        row, col = self.position_rc.T  # axis by axis: no (..., 2) temporaries
+        out = np.abs(row[i] - row[j]) <= self.min_sep_cells
+        out &= np.abs(col[i] - col[j]) <= self.min_sep_cells
+        return out
+
+    def pairs(self) -> np.ndarray:
+        """(k, 2) index pairs ``i < j`` of the distinct cells that are too close, sorted: a
+        KD-tree query (`scipy.spatial.cKDTree`) in O(n + pairs) memory."""
+        tree = cKDTree(self.position_rc.astype(np.float64))
+        out = tree.query_pairs(self.min_sep_cells, p=np.inf, output_type="ndarray")
+        return out[np.lexsort((out[:, 1], out[:, 0]))].astype(np.int64, copy=False)
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        """The dense (n, n) bool matrix (n² bytes: for small maps)."""
+        n = len(self.position_rc)
+        if n * n > _DENSE_LIMIT:
+            raise ConfigError(f"too_close: a dense {n} x {n} matrix is too large; index it "
+                              "(close[i, j]) or list its pairs() instead")
+        out = np.eye(n, dtype=bool)
+        i, j = self.pairs().T
+        out[i, j] = out[j, i] = True
+        return out if dtype is None else out.astype(dtype)
+
+    def __repr__(self) -> str:
+        return f"CloseCells(n={len(self.position_rc)}, min_sep_cells={self.min_sep_cells})"
+
+
+def too_close(position_rc: np.ndarray, min_sep_cells: int = 0) -> CloseCells:
+    """Which two robots would collide at position cells with grid coordinates ``position_rc``
+    (n, 2): Chebyshev distance ≤ ``min_sep_cells`` (0: the same cell). A `CloseCells` — index
+    it like the (n, n) bool matrix, ``close[i, j]``; it stores only the coordinates."""
     if isinstance(min_sep_cells, bool) or not isinstance(min_sep_cells, int | np.integer) \
             or min_sep_cells < 0:
         raise ConfigError(f"min_sep_cells: expected a non-negative integer, got {min_sep_cells!r}")
-    rc = np.asarray(position_rc)
-    return np.abs(rc[:, None, :] - rc[None, :, :]).max(axis=2) <= min_sep_cells
+    return CloseCells(position_rc, min_sep_cells)
 
 
-def crowded(position: np.ndarray, close: np.ndarray | None = None) -> np.ndarray:
+def crowded(position: np.ndarray, close: CloseCells | None = None) -> np.ndarray:
     """(batch,) bool: some two robots of a joint state (batch, m) of position cells collide —
-    share a cell, or with a `too_close` matrix are within its separation."""
+    share a cell, or with a `too_close` relation are within its separation."""
     position = np.atleast_2d(position)
     m = position.shape[1]
     if close is None:
@@ -61,14 +117,14 @@ def crossing(from_a: np.ndarray, to_a: np.ndarray, from_b: np.ndarray, to_b: np.
 
 
 def resolve_moves(position: np.ndarray, target: np.ndarray, position_rc: np.ndarray,
-                  close: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                  close: CloseCells | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Which robots stay, given their cells and proposed targets.
 
     Args:
         position: (batch, m) current position cell of every robot.
         target: (batch, m) proposed target position cell, −1 where an obstacle blocks the move.
         position_rc: (n_positions, 2) grid coordinates of the position cells (for `crossing`).
-        close: the `too_close` matrix of a minimum separation; ``None`` = the same cell only.
+        close: the `too_close` relation of a minimum separation; ``None`` = the same cell only.
 
     Returns:
         stays (batch, m) bool; blocker (batch, m): for a robot stopped by another robot, the

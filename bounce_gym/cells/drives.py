@@ -30,10 +30,16 @@ class ContactDrives:
         target = model.targets[k, p]
         moves = target >= 0
         self.next = np.where(moves, k * n_pos + target, z)
-        self.end = z.copy()
-        self.ticks = np.zeros(model.n_cells, dtype=np.int64)
-        going = np.flatnonzero(moves)
-        while len(going):  # a drive is a straight line, so this ends within the grid's size
-            self.end[going] = self.next[self.end[going]]
-            self.ticks[going] += 1
-            going = going[self.next[self.end[going]] != self.end[going]]
+        # pointer doubling: after round j, end[z] is the cell 2^j ticks from z (a blocked cell
+        # maps to itself) and ticks[z] the moves among them, so a drive of L ticks takes
+        # log2(L) + 1 passes over the cells — not one per tick of the longest drive
+        end = self.next.copy()
+        ticks = moves.astype(np.int64)
+        while True:  # a drive is a straight line, so this ends within the grid's size
+            after = end[end]
+            if np.array_equal(after, end):
+                break
+            ticks += ticks[end]
+            end = after
+        self.end = end
+        self.ticks = ticks

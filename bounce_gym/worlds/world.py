@@ -252,8 +252,43 @@ class World:
         centres = np.column_stack((gx.ravel(), gy.ravel()))
         inside = shapely.contains_xy(self.polygon, centres[:, 0], centres[:, 1])
         if radius > 0:
-            inside &= self.boundary_distance(centres) >= radius
+            inside[inside] = self._clear_of_boundary(centres[inside], radius)
         return inside.reshape(rows, cols)
+
+    def _clear_of_boundary(self, points: np.ndarray, radius: float) -> np.ndarray:
+        """``boundary_distance(points) >= radius`` without all the point–edge pairs.
+
+        With many edges (a grid map with many obstacles), an R-tree of the edges
+        (`shapely.STRtree`) gives for every point the edges whose bounding box comes within
+        ``radius`` (plus a margin) of it, and the distances to those alone are computed, with
+        `boundary_distance`'s arithmetic: an edge outside that reach is farther than ``radius``,
+        so the result is the same, in time and memory that grow with the points and the nearby
+        pairs instead of points × edges.
+        """
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        if self.n_edges <= _INDEXED_EDGES:
+            return self.boundary_distance(pts) >= radius
+        reach = radius * (1 + 1e-6) + self.tol
+        vec = self.edge_end - self.edge_start
+        out = np.ones(len(pts), dtype=bool)
+        for k in range(0, len(pts), _POINTS_PER_QUERY):
+            chunk = pts[k : k + _POINTS_PER_QUERY]
+            lo, hi = chunk - reach, chunk + reach
+            boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
+            point, edge = self._edge_tree.query(boxes)
+            rel = chunk[point] - self.edge_start[edge]
+            s = np.clip(np.einsum("pk,pk->p", rel, vec[edge]) / (self.lengths[edge] ** 2),
+                        0.0, 1.0)
+            closest = rel - s[:, None] * vec[edge]
+            near = np.sqrt(np.einsum("pk,pk->p", closest, closest)) < radius
+            out[k + point[near]] = False
+        return out
+
+    @cached_property
+    def _edge_tree(self) -> shapely.STRtree:
+        """An R-tree of the boundary edges (as line segments, in edge order)."""
+        return shapely.STRtree(shapely.linestrings(np.stack((self.edge_start, self.edge_end),
+                                                            axis=1)))
 
     def sample_free(self, rng: np.random.Generator, n: int, radius: float = 0.0) -> np.ndarray:
         """Draw ``n`` points uniformly from the free space more than ``radius`` from the boundary.
@@ -321,6 +356,10 @@ def sample_in(region, rng: np.random.Generator, n: int) -> np.ndarray:
 
 #: Point-edge pairs `World.boundary_distance` handles at once.
 _PAIRS_PER_CHUNK = 1 << 20
+#: Above this many edges, `World.occupancy` finds the edges near a cell centre with an R-tree.
+_INDEXED_EDGES = 64
+#: Points `World.occupancy` queries the R-tree with at once.
+_POINTS_PER_QUERY = 1 << 14
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:

@@ -157,6 +157,28 @@ def test_occupancy_counts_free_cell_centres():
     assert w.occupancy(1.0, radius=0.6).sum() == 8 * 8 - 12
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_occupancy_of_a_disk_robot_needs_no_point_edge_pairs_and_gives_the_same_grid(seed):
+    """With many edges `World.occupancy` finds the edges near each cell centre with an R-tree
+    instead of measuring every centre against every edge: the same grid as the all-pairs
+    `boundary_distance` test, exact ties (radius 0.5 or 1 from a grid wall) included."""
+    from bounce_gym.worlds.generators import random_grid
+    from bounce_gym.worlds.world import _INDEXED_EDGES
+
+    w = random_grid(np.random.default_rng(seed), 40, 30, 25, 4)
+    assert w.n_edges > _INDEXED_EDGES  # the R-tree path
+    for cell in (1.0, 0.5, 0.7):
+        inside = w.occupancy(cell)
+        rows, cols = inside.shape
+        xmin, ymin = w.bounds[:2]
+        gx, gy = np.meshgrid(xmin + (np.arange(cols) + 0.5) * cell,
+                             ymin + (np.arange(rows) + 0.5) * cell)
+        distance = w.boundary_distance(np.column_stack((gx.ravel(), gy.ravel())))
+        for radius in (0.3, 0.5, 1.0, 1.5, 2.25):
+            expected = inside & (distance >= radius).reshape(rows, cols)
+            assert np.array_equal(w.occupancy(cell, radius), expected), (cell, radius)
+
+
 def test_world_from_grid_round_trips_through_occupancy():
     rng = np.random.default_rng(3)
     free = np.ones((6, 9), dtype=bool)
