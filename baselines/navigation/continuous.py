@@ -20,7 +20,8 @@ lattice. `ContinuousNavigationPlanner` chooses each bounce angle from that range
   grid of angles and the goal shots in the noise-free simulator
   (`baselines.navigation.angle_search`, its poses ranked by `ShotField`): it follows the plan
   found while the belief's most likely pose is the one the plan expects (within
-  ``PLAN_DISTANCE`` radii and ``PLAN_HEADING``) and searches again from that pose otherwise (in a noisy world: after a rotation error that the clock revealed).
+  ``PLAN_DISTANCE`` radii and ``PLAN_HEADING``) and searches again from that pose otherwise
+  (in a noisy world: after a rotation error that the clock revealed).
   When a search finds no plan within its budget, the next one starts from the most promising
   pose it reached (where the noise-free world takes the robot along the way there), and so on
   until one finds a plan or ``episode_searches`` fruitless searches in a row are spent; the
@@ -38,8 +39,8 @@ estimate, at its first decision, of the probability of reaching the goal within 
 without noise, 1 when the chained searches found a plan (exact: the world is deterministic and
 the plan was simulated in it) and 0 when they found none; with noise, the share q of ``draws``
 simulated robots (drawn from the belief, each with its own rotation errors) that the chained
-plan takes to the goal open loop, turned into the probability that one of the k = ⌊steps left / plan length⌋
-attempts that fit in the episode succeeds, 1 − (1 − q)^k — a model that takes the attempts as
+plan takes to the goal open loop, turned into the probability that one of the
+k = ⌊steps left / plan length⌋ attempts that fit in the episode succeeds, 1 − (1 − q)^k — a model that takes the attempts as
 independent and each failed one as costing a whole plan's bumps.
 """
 
@@ -83,7 +84,8 @@ class ContinuousNavigationPlanner(Policy):
             last that found one) at most; without a plan, and once they are spent for the rest
             of the episode, it bounces by random angles of its range (it bounds the time an
             unreachable goal costs).
-        draws: in a noisy world, poses of the belief simulated to predict every bump.
+        draws: in a noisy world, the belief's particles and the simulated robots of the
+            success estimate.
         field_cell: side of the grid of `ShotField` (world units).
     """
 
