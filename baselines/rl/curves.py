@@ -79,7 +79,9 @@ def smoothed(values: np.ndarray, window: int) -> np.ndarray:
 
 def learning_curves(folder: Path, window: int = WINDOW) -> list[RunCurves]:
     """The runs of a models folder, each with its seeds' smoothed curves (seeds whose monitor
-    file has no finished episode yet are left out)."""
+    file has no finished episode yet are left out). A monitor file is read as untrusted data
+    (`baselines.rl.monitor.read_monitor`): a link at its name, or a value out of its bounds, is
+    a `ConfigError`."""
     if window < 1:
         raise ConfigError(f"window: expected an integer >= 1, got {window}")
     if not folder.is_dir():
@@ -87,7 +89,8 @@ def learning_curves(folder: Path, window: int = WINDOW) -> list[RunCurves]:
     runs: dict[str, RunCurves] = {}
     for path in sorted(folder.iterdir()):
         match = _MONITOR.fullmatch(path.name)
-        if not match or not path.is_file():  # not a pipe or a folder of that name
+        # not a pipe or a folder of that name; a link is read_monitor's to refuse
+        if not match or not (path.is_symlink() or path.is_file()):
             continue
         columns = read_monitor(path)
         if not len(columns["l"]):

@@ -49,6 +49,7 @@ import json
 import os
 import pickle
 import re
+import struct
 import zipfile
 import zlib
 from dataclasses import dataclass
@@ -101,6 +102,14 @@ POLICY_MODULES = {"ppo": "stable_baselines3.common.policies",
 #: What `zipfile` raises for a damaged, truncated or unsupported archive.
 ZIP_ERRORS = (zipfile.BadZipFile, zlib.error, EOFError, OSError, NotImplementedError,
               RuntimeError)
+#: The compression methods of a model file's entries (and of a JAX learner's ``.npz``
+#: members): stored or deflated, which `zipfile` inflates no further than a read asks (and
+#: never past an entry's declared size). Its bzip2 and LZMA readers inflate a whole chunk of
+#: input at once, however large, before cutting it to that size, so an entry of either could
+#: cost any memory: it is refused.
+COMPRESSIONS = {zipfile.ZIP_STORED: "stored", zipfile.ZIP_DEFLATED: "deflated"}
+#: The bytes `read_entry` inflates at a time.
+ENTRY_PIECE = 1 << 20
 
 
 def run_name(algo: str, variant: str | None = None) -> str:
@@ -263,7 +272,7 @@ class ModelFile:
             return None
         try:
             with zipfile.ZipFile(io.BytesIO(self.data)) as archive:
-                text = archive.read(SB3_SYSTEM_INFO).decode("utf-8", errors="replace")
+                text = read_entry(archive, SB3_SYSTEM_INFO).decode("utf-8", errors="replace")
         except ZIP_ERRORS as exc:
             raise ConfigError(f"model {self.path}: its entry {SB3_SYSTEM_INFO!r} cannot be read "
                               f"({type(exc).__name__}: {exc})") from None
@@ -291,7 +300,7 @@ class ModelFile:
                         "user's runs (no valid signature under the key of the bounce_gym folder, "
                         "$BOUNCE_GYM_HOME), and unpickling it could run anything; if you trust "
                         f"the file, run: bounce-gym trust {self.path}")
-                state = archive.read(RESUME_ENTRY)
+                state = read_entry(archive, RESUME_ENTRY)
         except ZIP_ERRORS as exc:
             raise ConfigError(f"checkpoint {self.path}: its resume state cannot be read "
                               f"({type(exc).__name__}: {exc})") from None
@@ -306,7 +315,7 @@ class ModelFile:
         stream: nothing else of it is read before it is vouched for)."""
         if self.sizes.get(SIGNATURE_ENTRY, _MAX_SIGNATURE_BYTES + 1) > _MAX_SIGNATURE_BYTES:
             return False
-        signature = archive.read(SIGNATURE_ENTRY).decode("ascii", errors="replace")
+        signature = read_entry(archive, SIGNATURE_ENTRY).decode("ascii", errors="replace")
         state_digest = hashlib.sha256()
         with archive.open(RESUME_ENTRY) as state:
             for chunk in iter(lambda: state.read(1 << 20), b""):
@@ -314,12 +323,57 @@ class ModelFile:
         return verify(state_digest.hexdigest().encode(), signature, SIGNATURE_PURPOSE)
 
 
-def _json_entry(archive: zipfile.ZipFile, sizes: dict[str, int], name: str, path: Path) -> dict:
+def check_compression(info: zipfile.ZipInfo, what: str) -> None:
+    """A `ConfigError` (starting with ``what``) unless the zip entry ``info`` is stored or
+    deflated (`COMPRESSIONS`)."""
+    if info.compress_type not in COMPRESSIONS:
+        raise ConfigError(f"{what} {info.filename!r} is compressed with zip method "
+                          f"{info.compress_type}, not stored or deflated as this package and "
+                          "numpy write them")
+
+
+def read_entry(archive: zipfile.ZipFile, entry: str | zipfile.ZipInfo) -> bytes:
+    """The content of a zip entry, inflated `ENTRY_PIECE` bytes at a time, and so never past
+    its declared size: `zipfile`'s own ``read`` of a whole deflated entry inflates all of its
+    compressed input in one call, however far past the declared size that goes, and only then
+    cuts it there (an entry declaring 2 bytes whose stream inflates to 1 GiB costs 2 GiB)."""
+    with archive.open(entry) as stream:
+        return b"".join(iter(lambda: stream.read(ENTRY_PIECE), b""))
+
+
+def check_declared_size(data: bytes, info: zipfile.ZipInfo, what: str) -> None:
+    """A `ConfigError` (starting with ``what``) unless the entry ``info`` of the zip ``data``
+    holds exactly the bytes it declares: stored, that many bytes; deflated, a stream that ends
+    there. For an entry read whole by code other than this package's (SB3 reads ``data`` with
+    `zipfile`'s ``read``, which inflates all of a deflated entry's input at once, past its
+    declared size, and the entry's CRC may well be that of its declared part): it costs at
+    most the declared size, already checked, to inflate it here."""
+    local = data[info.header_offset:info.header_offset + 30]  # then its name and extra field
+    if len(local) < 30 or local[:4] != b"PK\x03\x04":
+        raise ConfigError(f"{what} {info.filename!r} has no local header where the zip's "
+                          "directory says")
+    start = info.header_offset + 30 + sum(struct.unpack("<HH", local[26:30]))
+    raw = memoryview(data)[start:start + info.compress_size]
+    if info.compress_type == zipfile.ZIP_STORED:
+        honest = info.compress_size == info.file_size
+    else:
+        stream = zlib.decompressobj(-zlib.MAX_WBITS)
+        honest = (len(stream.decompress(raw, info.file_size + 1)) == info.file_size
+                  and stream.eof)
+    if not honest:
+        raise ConfigError(f"{what} {info.filename!r} holds more or fewer than the "
+                          f"{info.file_size} bytes it declares")
+
+
+def _json_entry(archive: zipfile.ZipFile, data: bytes, sizes: dict[str, int], name: str,
+                path: Path) -> dict:
+    """The JSON entry ``name`` of the model file ``data`` (opened as ``archive``), a mapping."""
     if sizes[name] > MAX_JSON_BYTES:
         raise ConfigError(f"model {path}: its entry {name!r} holds {sizes[name]} bytes, more than "
                           f"the {MAX_JSON_BYTES} a model file's JSON may")
-    value = parse_document(f"model {path}: its entry {name!r}", archive.read(name), fmt="json",
-                           limits=_JSON_LIMITS)
+    check_declared_size(data, archive.getinfo(name), f"model {path}: its entry")
+    value = parse_document(f"model {path}: its entry {name!r}", read_entry(archive, name),
+                           fmt="json", limits=_JSON_LIMITS)
     if not isinstance(value, dict):
         raise ConfigError(f"model {path}: its entry {name!r} is not a JSON object")
     return value
@@ -333,14 +387,16 @@ def read_model(path: Path) -> ModelFile:
     data = checked_bytes(path)  # loaded from these bytes: the file may not change in between
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            for info in archive.infolist():
+                check_compression(info, f"model {path}: its entry")
             sizes = {info.filename: info.file_size for info in archive.infolist()}
             if algo in JAX_ALGOS:
                 return _jax_model(path, algo, data, archive, sizes)
             if DATA_ENTRY not in sizes:
                 raise ConfigError(f"model {path}: not a readable Stable-Baselines3 model file "
                                   f"(it has no {DATA_ENTRY!r} entry)")
-            sb3_data = _json_entry(archive, sizes, DATA_ENTRY, path)
-            metadata = (_json_entry(archive, sizes, METADATA_ENTRY, path)
+            sb3_data = _json_entry(archive, data, sizes, DATA_ENTRY, path)
+            metadata = (_json_entry(archive, data, sizes, METADATA_ENTRY, path)
                         if METADATA_ENTRY in sizes else {})
     except ZIP_ERRORS as exc:
         raise ConfigError(f"model {path}: not a readable Stable-Baselines3 model file "
@@ -362,8 +418,8 @@ def _jax_model(path: Path, algo: str, data: bytes, archive: zipfile.ZipFile,
         if entry not in sizes:
             raise ConfigError(f"model {path}: not a readable {algo} model file (it has no "
                               f"{entry!r} entry)")
-    return ModelFile(path, algo, data, sizes, {}, _json_entry(archive, sizes, METADATA_ENTRY,
-                                                             path))
+    return ModelFile(path, algo, data, sizes, {}, _json_entry(archive, data, sizes,
+                                                             METADATA_ENTRY, path))
 
 
 def load_model(path: Path, observation_space, action_space, **load_kwargs):

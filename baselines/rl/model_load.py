@@ -28,7 +28,7 @@ import warnings
 import zipfile
 from collections.abc import Iterator
 
-from baselines.rl.model_files import DATA_ENTRY, METADATA_ENTRY, ZIP_ERRORS, ModelFile
+from baselines.rl.model_files import DATA_ENTRY, METADATA_ENTRY, ZIP_ERRORS, ModelFile, read_entry
 from baselines.rl.train_config import (
     algo_class,
     algo_kwargs,
@@ -203,9 +203,9 @@ def _variables(trained: ModelFile) -> object:
     import torch
 
     try:
-        with zipfile.ZipFile(io.BytesIO(trained.data)) as archive, \
-                archive.open(VARIABLES_ENTRY) as entry, _torch_quiet():
-            return torch.load(io.BytesIO(entry.read()), map_location="cpu", weights_only=True)
+        with zipfile.ZipFile(io.BytesIO(trained.data)) as archive, _torch_quiet():
+            variables = read_entry(archive, VARIABLES_ENTRY)
+            return torch.load(io.BytesIO(variables), map_location="cpu", weights_only=True)
     except _LOAD_ERRORS as exc:
         raise ConfigError(f"model {trained.path}: its {VARIABLES_ENTRY!r} cannot be read as "
                           f"torch weights ({_reason(exc)})") from None

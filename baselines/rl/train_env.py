@@ -28,11 +28,8 @@ from pathlib import Path
 
 import gymnasium as gym
 
-from baselines.rl.monitor import open_monitor_file
+from baselines.rl.monitor import MONITOR_KEYS, open_monitor_file
 from bounce_gym.errors import config_errors
-
-#: Per-episode outcomes the monitor records when the env's ``info`` has them.
-MONITOR_KEYS = ("is_success", "localized", "coverage")
 
 
 class SnapshotEnv(gym.Wrapper):

@@ -2,8 +2,9 @@
 
 ``learning_curves.png``: one panel per metric (return, success, …) against env steps; per run
 (``ppo``, ``ppo-stack4``, …) one colour, a thin line per seed, the mean across seeds in bold and
-its 95% confidence interval shaded. ``learning_curves.csv``: the end point of every seed
-(episodes, env steps, each metric's moving mean over the last episodes).
+its 95% confidence interval shaded (a seed's line drawn through at most `SEED_POINTS` of its
+episodes, evenly spaced, its last included). ``learning_curves.csv``: the end point of every
+seed (episodes, env steps, each metric's moving mean over the last episodes).
 """
 
 from __future__ import annotations
@@ -17,6 +18,9 @@ import numpy as np
 from baselines.rl.curves import WINDOW, RunCurves, learning_curves
 from bounce_gym.files import atomic_write
 from bounce_gym_experiments.plots.figures import pyplot, save_figure
+
+#: The most points of a seed's line in the figure (a few per pixel of a panel).
+SEED_POINTS = 4000
 
 
 def write_learning_curves(folder: Path, window: int = WINDOW) -> tuple[list[Path], list[str]]:
@@ -41,7 +45,9 @@ def plot_learning_curves(runs: list[RunCurves], path: Path, window: int) -> Path
                 continue
             colour = colours[k % len(colours)]
             for columns in run.seeds.values():
-                ax.plot(columns["steps"], columns[metric], color=colour, lw=0.6, alpha=0.45)
+                shown = _spaced(len(columns["steps"]), SEED_POINTS)
+                ax.plot(columns["steps"][shown], columns[metric][shown], color=colour, lw=0.6,
+                        alpha=0.45)
             steps, mean, low, high = run.across_seeds(metric)
             ax.plot(steps, mean, color=colour, lw=2,
                     label=f"{run.name} ({len(run.seeds)} seeds)" if len(run.seeds) > 1
@@ -55,6 +61,11 @@ def plot_learning_curves(runs: list[RunCurves], path: Path, window: int) -> Path
     fig.suptitle(f"{path.parent.name}: thin lines seeds, bold mean, band 95% CI of the mean",
                  fontsize=10)
     return save_figure(fig, path)
+
+
+def _spaced(n: int, most: int) -> np.ndarray:
+    """At most ``most`` indices of ``n``, evenly spaced, the first and the last included."""
+    return np.unique(np.linspace(0, n - 1, min(n, most)).round().astype(int))
 
 
 def write_end_points(runs: list[RunCurves], path: Path) -> Path:

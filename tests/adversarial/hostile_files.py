@@ -1,23 +1,33 @@
 """The hostile-input suite's files (`test_hostile_inputs`): malformed map files, NetCDF flow
-files and model files given to ``bounce-gym evaluate`` and ``train``, and unit files planted in
-an evaluation's store, by class (`hostile_cases.Case`).
+files and model files given to ``bounce-gym evaluate`` and ``train``, unit files planted in
+an evaluation's store, and monitor files given to ``bounce-gym curves``, by class
+(`hostile_cases.Case`).
 
 Model cases start from a model this package trained (`Sandbox.trained`, a session fixture's),
 taken apart and put together again with a payload where the attack needs one: a pickle whose
-``__reduce__`` creates `Sandbox.marker`.
+``__reduce__`` creates `Sandbox.marker`. The JAX learners' cases (when JAX is installed) start
+from a model file put together here (`jax_model`): a small jax_ppo network's weights as an
+``.npz`` beside its training configuration.
 """
 
 from __future__ import annotations
 
 import base64
+import bz2
+import functools
+import importlib.util
 import io
 import json
 import os
 import pickle
 import shutil
+import struct
+import warnings
 import zipfile
+import zlib
 from pathlib import Path
 
+import hostile_cases
 import numpy as np
 from hostile_cases import NAV, Case, Sandbox, evaluation, experiment, training
 
@@ -401,7 +411,231 @@ def _models() -> list[Case]:
         "../../ESCAPED": b"x", "../../../ESCAPED": b"x"}), "", status=0))
     out.append(_resume_case("unsigned", b"0" * 64))
     out.append(_resume_case("signed in a foreign script", "\u0663".encode() * 64))
+    out.append(_model_case("data a bzip2 bomb declaring 2 bytes", _bzip2_data,
+                           "its entry 'data' is compressed with zip method 12"))
+    out.append(_model_case("data a deflate bomb declaring its JSON and its CRC", _deflate_data,
+                           "its entry 'data' holds more or fewer than the"))
+    if importlib.util.find_spec("jax") is not None:
+        out += _jax_models()
     return out
+
+
+# -- bzip2: zipfile inflates a whole chunk of it at once, past the entry's declared size -------
+#: bytes of zeros a bzip2 bomb inflates to
+BOMB_BYTES = 320 << 20
+
+
+@functools.cache
+def deflated_zeros(size: int = BOMB_BYTES, prefix: bytes = b"") -> bytes:
+    """``prefix`` and ``size`` zero bytes as a raw deflate stream (about a thousandth of it;
+    made once)."""
+    packer = zlib.compressobj(9, zlib.DEFLATED, -15)
+    chunk = bytes(16 << 20)
+    out = [packer.compress(prefix)]
+    out += [packer.compress(chunk[:min(len(chunk), size - k)]) for k in range(0, size, len(chunk))]
+    return b"".join(out) + packer.flush()
+
+
+@functools.cache
+def bzip2_zeros(size: int = BOMB_BYTES) -> bytes:
+    """``size`` zero bytes, compressed with bzip2 (a few hundred bytes; made once)."""
+    packer = bz2.BZ2Compressor(9)
+    chunk = bytes(16 << 20)
+    out = [packer.compress(chunk[:min(len(chunk), size - k)]) for k in range(0, size, len(chunk))]
+    return b"".join(out) + packer.flush()
+
+
+def with_raw_entry(items: dict[str, bytes], name: str, raw: bytes, method: int,
+                   declared: int, crc: int | None = None) -> bytes:
+    """A zip of ``items`` and the entry ``name`` whose compressed bytes are ``raw`` (already
+    compressed with zip method ``method``), declaring ``declared`` bytes uncompressed (and the
+    CRC ``crc``, if given): written stored, then its central directory record says otherwise
+    (what `zipfile` reads)."""
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        for key, content in items.items():
+            archive.writestr(key, content)
+        archive.writestr(zipfile.ZipInfo(name), raw, compress_type=zipfile.ZIP_STORED)
+    data = bytearray(out.getvalue())
+    at = data.rfind(b"PK\x01\x02")  # the central directory record of the last entry
+    assert data[at + 46:at + 46 + len(name)] == name.encode()
+    struct.pack_into("<H", data, at + 10, method)
+    struct.pack_into("<I", data, at + 24, declared)
+    if crc is not None:
+        struct.pack_into("<I", data, at + 16, crc)
+    return bytes(data)
+
+
+def _bzip2_data(box: Sandbox) -> bytes:
+    items = entries(box.trained)
+    items.pop("data")
+    return with_raw_entry(items, "data", bzip2_zeros(), zipfile.ZIP_BZIP2, 2)
+
+
+def _deflate_data(box: Sandbox) -> bytes:
+    """The trained model whose ``data`` declares (size and CRC) just its JSON, and whose stream
+    inflates 320 MiB of zeros past it (`zipfile`'s ``read``, as SB3's load reads ``data``,
+    inflates all of it before cutting it to the declared size)."""
+    items = entries(box.trained)
+    data = items.pop("data")
+    return with_raw_entry(items, "data", deflated_zeros(prefix=data), zipfile.ZIP_DEFLATED,
+                          len(data), zlib.crc32(data))
+
+
+# -- the JAX learners' model files -----------------------------------------------------------
+#: the hidden layer of the JAX cases' network
+JAX_HIDDEN = 16
+
+
+def jax_shapes() -> dict[str, tuple[int, ...]]:
+    """The arrays of a jax_ppo network for the navigation env of `hostile_cases.NAV`."""
+    import gymnasium as gym
+
+    from baselines.rl.jaxrl.networks import layer_shapes, observation_size
+    from baselines.rl.jaxrl.ppo import actor_critic_sizes
+
+    env = gym.make(hostile_cases.NAVIGATION, **NAV)
+    sizes = actor_critic_sizes(observation_size(env.observation_space),
+                               int(env.action_space.n), {"pi": [JAX_HIDDEN], "vf": [JAX_HIDDEN]})
+    return {name: shape for net, s in sizes.items()
+            for name, shape in layer_shapes(net, s).items()}
+
+
+def npy(shape: tuple[int, ...], data: bytes | None = None, descr: str = "<f4") -> bytes:
+    """An ``.npy`` file: a header declaring ``shape`` of ``descr``, then ``data`` (default:
+    the zeros it declares)."""
+    out = io.BytesIO()
+    np.lib.format.write_array_header_1_0(out, {"descr": descr, "fortran_order": False,
+                                               "shape": shape})
+    if data is None:
+        data = bytes(4 * int(np.prod(shape)))
+    return out.getvalue() + data
+
+
+def jax_npz(**members: bytes | None) -> bytes:
+    """The ``.npz`` of the network's weights (zeros), with ``members`` (array name with ``__``
+    for ``.`` -> the member's bytes, or None to leave it out) in place of the arrays'."""
+    arrays = {name: npy(shape) for name, shape in jax_shapes().items()}
+    arrays.update({name.replace("__", "."): value for name, value in members.items()})
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        for name, content in arrays.items():
+            if content is not None:
+                archive.writestr(f"{name}.npy", content)
+    return out.getvalue()
+
+
+def jax_model(weights: bytes) -> bytes:
+    """A jax_ppo model file (as `baselines.rl.jaxrl.weights` writes one) holding ``weights`` as
+    its ``weights.npz``, for `hostile_cases.NAV`'s env."""
+    from baselines.rl.train_config import validate_train_config
+
+    config = validate_train_config(training(
+        name="m", algo="jax_ppo", models=None, n_envs=None,
+        hyperparams={"policy_kwargs": {"net_arch": [JAX_HIDDEN]}}))
+    return zipped({"weights.npz": weights,
+                   "bounce_gym.json": json.dumps({"config": config,
+                                                  "jax": {"num_timesteps": 64}}).encode()})
+
+
+def _streamed_member(shape: tuple[int, ...], zeros: int) -> bytes:
+    """An ``.npz`` whose ``pi.0.w`` declares ``shape`` and holds ``zeros`` zero bytes, deflated
+    (written in pieces: never whole in memory)."""
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        for name, shape_k in jax_shapes().items():
+            if name != "pi.0.w":
+                archive.writestr(f"{name}.npy", npy(shape_k))
+                continue
+            with archive.open(f"{name}.npy", "w", force_zip64=True) as member:
+                member.write(npy(shape, b""))
+                chunk = bytes(16 << 20)
+                for k in range(0, zeros, len(chunk)):
+                    member.write(chunk[:min(len(chunk), zeros - k)])
+    return out.getvalue()
+
+
+def _lying_member(method: int, stream: bytes) -> bytes:
+    """A model whose ``pi.0.w`` member is ``stream`` (compressed with zip ``method``: a bomb),
+    declaring just the size the network needs."""
+    arrays = {f"{name}.npy": npy(shape) for name, shape in jax_shapes().items()}
+    size = len(arrays.pop("pi.0.w.npy"))
+    return jax_model(with_raw_entry(arrays, "pi.0.w.npy", stream, method, size))
+
+
+def _lying_weights(box: Sandbox) -> bytes:
+    """A model whose ``weights.npz`` entry declares 1,000 bytes and inflates to 320 MiB."""
+    from baselines.rl.train_config import validate_train_config
+
+    config = validate_train_config(training(
+        name="m", algo="jax_ppo", models=None, n_envs=None,
+        hyperparams={"policy_kwargs": {"net_arch": [JAX_HIDDEN]}}))
+    metadata = json.dumps({"config": config, "jax": {"num_timesteps": 64}}).encode()
+    return with_raw_entry({"bounce_gym.json": metadata}, "weights.npz", deflated_zeros(),
+                          zipfile.ZIP_DEFLATED, 1000)
+
+
+def _jax_models() -> list[Case]:
+    """Model cases of a JAX learner: its weights are checked against the network its
+    configuration describes before anything is inflated past it."""
+    right = (17, JAX_HIDDEN)  # the first layer: 17 observations (4 pairs and the goal) -> hidden
+    name = "jax_ppo_seed0.zip"
+    cases = [
+        ("a member declaring 10**12 floats, holding none",
+         lambda box: jax_model(jax_npz(pi__0__w=npy((10**6, 10**6), b""))),
+         f"its weights 'pi.0.w' are float32[1000000, 1000000], the network needs "
+         f"float32{list(right)}"),
+        ("a member of 384 MiB of zeros, declared so",
+         lambda box: jax_model(_streamed_member((3 << 25,), 3 << 27)),
+         "its weights 'pi.0.w' take 402653312 bytes uncompressed, more than"),
+        ("a member of the right header and 384 MiB more",
+         lambda box: jax_model(_streamed_member(right, 3 << 27)),
+         "its weights 'pi.0.w' take 402653312 bytes uncompressed, more than"),
+        ("an entry of 16 MiB of zeros", lambda box: jax_model(bytes(16 << 20)),
+         "its entry 'weights.npz' holds 16777216 bytes, more than the"),
+        ("a member a bzip2 bomb declaring the right size", lambda box: _lying_member(
+            zipfile.ZIP_BZIP2, bzip2_zeros()),
+         "its weights' member 'pi.0.w.npy' is compressed with zip method 12"),
+        ("a member a deflate bomb declaring the right size", lambda box: _lying_member(
+            zipfile.ZIP_DEFLATED, deflated_zeros(prefix=npy(right, b""))),
+         "its weights cannot be read (BadZipFile: Bad CRC-32 for file 'pi.0.w.npy')"),
+        ("the entry a deflate bomb declaring 1,000 bytes", _lying_weights,
+         "its weights cannot be read (BadZipFile: "),
+        ("a header declaring 4 GiB of itself", lambda box: jax_model(jax_npz(
+            pi__0__w=b"\x93NUMPY\x02\x00\xff\xff\xff\xff" + b" " * 100)),
+         "its weights 'pi.0.w' have an .npy header of 4294967295 bytes, not at most 10000"),
+        ("a member cut short", lambda box: jax_model(jax_npz(
+            pi__0__w=npy(right, bytes(100)))), "its weights 'pi.0.w' take 228 bytes "
+         "uncompressed, but a float32[17, 16] array with its .npy header takes 1216"),
+        ("a member of float64", lambda box: jax_model(jax_npz(
+            pi__0__w=npy(right, descr="<f8"))), "its weights 'pi.0.w' are float64[17, 16]"),
+        ("a member of pickled objects", lambda box: jax_model(jax_npz(
+            pi__0__w=npy(right, pickle.dumps(Payload(box.marker)), descr="|O"))),
+         "its weights 'pi.0.w' are object[17, 16]"),
+        ("a member missing", lambda box: jax_model(jax_npz(pi__0__b=None)),
+         "holds weights ['pi.0.w', 'pi.1.b'"),
+        ("a member twice", lambda box: jax_model(_twice("pi.0.b.npy")),
+         "holds weights ['pi.0.b', 'pi.0.b', 'pi.0.w'"),
+        ("a header of 60,000 bytes", lambda box: jax_model(jax_npz(
+            pi__0__w=b"\x93NUMPY\x01\x00\x60\xea" + b" " * 60_000)),
+         "its weights 'pi.0.w' take 60010 bytes uncompressed, more than"),
+        ("a header of 9,000 bytes", lambda box: jax_model(jax_npz(
+            pi__0__w=b"\x93NUMPY\x01\x00\x28\x23" + b" " * 9000)),
+         "its weights cannot be read (ValueError: "),
+        ("weights not a zip", lambda box: jax_model(b"not a zip"),
+         "its weights cannot be read (BadZipFile: "),
+    ]
+    return [_model_case(f"JAX: {label}", content, expect, file_name=name)
+            for label, content, expect in cases]
+
+
+def _twice(member: str) -> bytes:
+    """The network's ``.npz`` with the member ``member`` written a second time."""
+    out = io.BytesIO(jax_npz())
+    with zipfile.ZipFile(out, "a") as archive, warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # zipfile's warning of a duplicate name
+        archive.writestr(member, archive.read(member))
+    return out.getvalue()
 
 
 def _spaces_in_lines(box: Sandbox) -> bytes:
@@ -526,6 +760,82 @@ def _units() -> list[Case]:
     return [_unit_case(name, plant) for name, plant in cases]
 
 
+# -- monitor files -----------------------------------------------------------------------------
+MONITOR_HEAD = '#{"t_start": 0.0, "env_id": "x"}\nr,l,t,is_success\n'
+#: the rows of a monitor file before the hostile one
+MONITOR_ROWS = "-1.0,10,0.1,True\n" * 5
+
+
+def _monitor_case(name: str, content, expect: str) -> Case:
+    """``bounce-gym curves out`` of a folder holding ``content`` (text, or made from the
+    sandbox) as ``ppo_seed0.monitor.csv``."""
+    def build(box: Sandbox) -> list[str]:
+        text = content(box) if callable(content) else content
+        if text is not None:
+            box.write("out/ppo_seed0.monitor.csv", text)
+        return ["curves", "out"]
+    return Case("monitors", name, build, expect)
+
+
+def _monitor_link(target: str):
+    """A monitor file that is a link to ``target`` (in the case folder, or absolute), which
+    holds a valid monitor file if its name ends in ``.csv``."""
+    def plant(box: Sandbox) -> None:
+        if target.endswith(".csv"):
+            box.write(target, MONITOR_HEAD + MONITOR_ROWS)
+        (box.here / "out").mkdir()
+        (box.here / "out/ppo_seed0.monitor.csv").symlink_to(box.here / target)
+    return plant
+
+
+def _monitor_sparse(box: Sandbox) -> None:
+    (box.here / "out").mkdir()
+    _sparse(box, "out/ppo_seed0.monitor.csv", (1 << 30) + 1)
+
+
+def _monitors() -> list[Case]:
+    def row(r="-1.0", l="10", t="0.2", success="True") -> str:  # noqa: E741
+        return MONITOR_HEAD + MONITOR_ROWS + f"{r},{l},{t},{success}\n"
+    number = "not a number in [-1e+12, 1e+12]"
+    length = "not an integer in [1, 1e+09]"
+    cases = [
+        ("r nan", row(r="nan"), f"line 8: column r holds 'nan', {number}"),
+        ("r 1e999", row(r="1e999"), f"line 8: column r holds '1e999', {number}"),
+        ("r -inf", row(r="-inf"), f"column r holds '-inf', {number}"),
+        ("r 1e13", row(r="1e13"), f"column r holds '1e13', {number}"),
+        ("r a word", row(r="many"), f"column r holds 'many', {number}"),
+        ("l 1e32", row(l="1e32"), f"line 8: column l holds '1e32', {length}"),
+        ("l 2.5", row(l="2.5"), f"column l holds '2.5', {length}"),
+        ("l 0", row(l="0"), f"column l holds '0', {length}"),
+        ("l negative", row(l="-3"), f"column l holds '-3', {length}"),
+        ("t nan", row(t="nan"), f"column t holds 'nan', {number}"),
+        ("is_success 7", row(success="7"), "column is_success holds '7', not a number in [0, 1]"),
+        ("a row of five values", row(success="True,1"), "line 8 holds 5 values, its header 4"),
+        ("a row of three values", row(success="").replace(",\n", "\n"),
+         "line 8 holds 3 values, its header 4"),
+        ("nine columns", '#{"t_start": 0}\nr,l,t,a,b,c,d,e,f\n',
+         "expected at most 8 columns, none twice, got 9"),
+        ("a column twice", '#{"t_start": 0}\nr,l,t,r\n', "none twice, got 4"),
+        ("no l column", '#{"t_start": 0}\nr,t\n', "expected the columns r, l, t"),
+        ("a line of 1 MiB", MONITOR_HEAD + "1" * (1 << 20) + "\n",
+         "line 3 is longer than the 65536 bytes a line may hold"),
+        ("a partial line of 1 MiB", MONITOR_HEAD + "1" * (1 << 20),
+         "line 3 is longer than the 65536 bytes a line may hold"),
+        ("a quoted value across lines", MONITOR_HEAD + '"-1.0\n' + "1\n" * 10 + '",10,0.1,1\n',
+         "a quoted value spans lines"),
+        ("not UTF-8", MONITOR_HEAD.encode() + b"\xff,1,1,1\n", "not UTF-8 text (byte 50)"),
+        ("first line not JSON", "#{\nr,l,t\n", "its first line: not valid JSON"),
+        ("no first line", "r,l,t\n-1,1,1\n", "expected a first line '#{...}'"),
+        ("a link to a valid one", _monitor_link("elsewhere.csv"),
+         "ppo_seed0.monitor.csv: is a symbolic link"),
+        ("a dangling link", _monitor_link("nowhere"), "ppo_seed0.monitor.csv: is a symbolic link"),
+        ("a link to a device", _monitor_link("/dev/zero"),
+         "ppo_seed0.monitor.csv: is a symbolic link"),
+        ("larger than 1 GiB", _monitor_sparse, "1073741825 bytes, more than the 1073741824"),
+    ]
+    return [_monitor_case(name, content, expect) for name, content, expect in cases]
+
+
 def cases() -> list[Case]:
     """Every case of this module."""
-    return [*_maps(), *_flows(), *_models(), *_units()]
+    return [*_maps(), *_flows(), *_models(), *_units(), *_monitors()]

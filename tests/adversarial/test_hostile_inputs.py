@@ -206,8 +206,9 @@ def trained(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def warmed(tmp_path_factory, trained) -> None:
-    """Start-up: the imports of a valid evaluation, of loading a model and a flow file, and of
-    every env, made before any case is measured."""
+    """Start-up: the imports of a valid evaluation, of loading a model (and a JAX learner's,
+    where JAX is installed) and a flow file, and of every env, made before any case is
+    measured."""
     import gymnasium as gym
     import pettingzoo
 
@@ -220,6 +221,12 @@ def warmed(tmp_path_factory, trained) -> None:
     assert in_process(["evaluate", str(folder / "c.yaml"), "--no-progress"]).status == 0
     env = gym.make(hostile_cases.NAVIGATION, **hostile_cases.NAV)
     read_model(trained).load(env.observation_space, env.action_space)
+    if importlib.util.find_spec("jax") is not None:
+        from baselines.rl.jaxrl.policy import JaxPolicy
+
+        path = folder / "jax_ppo_seed0.zip"
+        path.write_bytes(hostile_files.jax_model(hostile_files.jax_npz()))
+        JaxPolicy(path, env)
     load_flow(hostile_files.flow_file(folder / "f.nc"))
     for env_id in hostile_api.GYM_IDS:
         gym.make(env_id).reset(seed=0)

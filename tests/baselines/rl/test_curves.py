@@ -112,3 +112,55 @@ def test_the_curves_command_draws_a_models_folder(tmp_path, capsys):
     assert (folder / "learning_curves.png").stat().st_size > 0
     rows = (folder / "learning_curves.csv").read_text().splitlines()
     assert rows[0] == "run,seed,episodes,env_steps,return,success" and len(rows) == 4
+
+
+def test_a_monitor_file_holds_at_most_the_row_cap(tmp_path, monkeypatch):
+    from baselines.rl import monitor
+
+    path = _monitor(tmp_path / "ppo_seed0.monitor.csv", [(-1.0, 10, 0.1, True)] * 11)
+    monkeypatch.setattr(monitor, "MAX_MONITOR_ROWS", 11)
+    assert len(read_monitor(path)["r"]) == 11
+    monkeypatch.setattr(monitor, "MAX_MONITOR_ROWS", 10)
+    with pytest.raises(ConfigError, match="holds more than the 10 episodes a monitor file may"):
+        read_monitor(path)
+
+
+def test_a_monitor_file_is_read_as_a_stream(tmp_path):
+    """Reading holds the columns (float64) and a chunk of lines at a time, never the whole
+    text or a Python object per value: a file of 300,000 episodes (about 8 MB of text) takes at
+    most twice its arrays plus 24 MB at its peak (reading it whole took 106 MiB)."""
+    import tracemalloc
+
+    rows = 300_000
+    path = tmp_path / "ppo_seed0.monitor.csv"
+    path.write_text(f"#{json.dumps({'t_start': 0.0, 'env_id': 'x'})}\nr,l,t,is_success\n"
+                    + "".join(f"{-(k % 97) / 97:.6f},{k % 200 + 1},{k / 100:.2f},{k % 3 == 0}\n"
+                              for k in range(rows)))
+    tracemalloc.start()
+    try:
+        columns = read_monitor(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    arrays = sum(column.nbytes for column in columns.values())
+    assert len(columns["r"]) == rows and columns["steps"][-1] == sum(k % 200 + 1
+                                                                     for k in range(rows))
+    assert columns["is_success"].sum() == len(range(0, rows, 3))
+    assert peak < 2 * arrays + (24 << 20), f"{peak >> 20} MiB at the peak"
+
+
+def test_a_monitor_file_with_windows_line_ends_and_blank_lines(tmp_path):
+    path = tmp_path / "ppo_seed0.monitor.csv"
+    path.write_bytes(b'#{"t_start": 0}\r\nr,l,t,is_success\r\n-1.5,3,0.1,True\r\n\r\n'
+                     b"2,4,0.2,0.0\r\n-3,5,0.3,Fal")
+    columns = read_monitor(path)
+    assert columns["r"].tolist() == [-1.5, 2.0] and columns["steps"].tolist() == [3, 7]
+    assert columns["is_success"].tolist() == [1.0, 0.0]
+
+
+def test_a_seeds_line_is_drawn_through_at_most_its_share_of_points(tmp_path):
+    from bounce_gym_experiments.plots import learning_curves as plots
+
+    assert plots._spaced(3, 10).tolist() == [0, 1, 2]
+    spaced = plots._spaced(1_000_001, plots.SEED_POINTS)
+    assert len(spaced) == plots.SEED_POINTS and spaced[0] == 0 and spaced[-1] == 1_000_000

@@ -188,3 +188,59 @@ def test_a_jax_model_without_jax_installed_is_one_line_naming_the_extra(monkeypa
     with pytest.raises(ConfigError, match=r"pip install 'bounce-gym\[jax\]'") as raised:
         base._jax_policy()
     assert "\n" not in str(raised.value)
+
+
+def _weights_file(tmp_path, npz: bytes):
+    """A ModelFile holding ``npz`` as its weights (the rest of the file is not read here)."""
+    from baselines.rl.model_files import ModelFile
+
+    data = io.BytesIO()
+    with zipfile.ZipFile(data, "w") as archive:
+        archive.writestr(WEIGHTS_ENTRY, npz)
+    return ModelFile(tmp_path / "jax_ppo_seed0.zip", "jax_ppo", data.getvalue(),
+                     {WEIGHTS_ENTRY: len(npz)}, {}, {})
+
+
+@pytest.mark.parametrize("save", [np.savez, np.savez_compressed])
+@pytest.mark.parametrize("order", ["C", "F"])
+def test_weights_are_read_as_numpy_writes_them(tmp_path, save, order):
+    from baselines.rl.jaxrl.weights import read_weights
+
+    arrays = {"pi.0.w": np.arange(12, dtype=np.float32).reshape(3, 4),
+              "pi.0.b": np.array([1.5, -2.0, 0.0, 3.25], np.float32)}
+    npz = io.BytesIO()
+    save(npz, **{k: np.asarray(v, order=order) for k, v in arrays.items()})
+    read = read_weights(_weights_file(tmp_path, npz.getvalue()),
+                        {k: v.shape for k, v in arrays.items()})
+    assert read.keys() == arrays.keys()
+    assert all(np.array_equal(read[k], arrays[k]) and read[k].dtype == np.float32
+               for k in arrays)
+
+
+def test_weights_are_sized_by_the_network_before_they_are_inflated(tmp_path):
+    """An ``.npz`` member is checked against the network's array, by its declared size and its
+    ``.npy`` header, before its data is read; 64 MiB of zeros after a right header are refused
+    without being inflated (the whole check takes under 1 MiB)."""
+    import tracemalloc
+
+    from baselines.rl.jaxrl.weights import read_weights
+
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(header, {"descr": "<f4", "fortran_order": False,
+                                                  "shape": (3, 4)})
+    npz = io.BytesIO()
+    with zipfile.ZipFile(npz, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("pi.0.w.npy", header.getvalue() + bytes(64 << 20))
+    trained = _weights_file(tmp_path, npz.getvalue())
+    tracemalloc.start()
+    try:
+        with pytest.raises(ConfigError, match=r"its weights 'pi.0.w' take 67108992 bytes "
+                                              r"uncompressed, more than a float32\[3, 4\] array"):
+            read_weights(trained, {"pi.0.w": (3, 4)})
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 1 << 20
+    with pytest.raises(ConfigError, match=r"its network needs 4294967296 bytes of weights, "
+                                          r"more than the 1073741824"):
+        read_weights(trained, {"pi.0.w": (1 << 15, 1 << 15)})
