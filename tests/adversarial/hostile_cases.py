@@ -337,6 +337,12 @@ def _config_content() -> list[Case]:
          f"{x}.env_kwargs: history: expected an integer in [0, 10000]"),
         ("history huge", evaluation(experiment(env_kwargs={**NAV, "history": 10**12})),
          f"{x}.env_kwargs: history: expected an integer in [0, 10000]"),
+        ("step_length 1e12", evaluation(experiment(env_kwargs={**NAV, "step_length": 1e12})),
+         f"{x}.env_kwargs: step_length: expected a length in [0.00141, 14.1]"),
+        ("coverage cell_size 1e-3", evaluation(experiment(
+            env="bounce_gym/BounceCoverage-v0", env_kwargs={"task_kwargs": {"cell_size": 1e-3}},
+            max_steps=None, horizon_reason=None)),
+         f"{x}.env_kwargs: task_kwargs.cell_size: expected a length in"),
         ("backend unknown", evaluation(experiment(env_kwargs={**NAV, "backend": "quantum"})),
          f"{x}.env_kwargs: backend: expected one of"),
         ("task_kwargs unknown", evaluation(experiment(env_kwargs={**NAV, "task_kwargs": {
