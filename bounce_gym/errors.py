@@ -49,6 +49,25 @@ class FlowFileError(InvalidFlowError):
     a valid flow field."""
 
 
+class OutputError(BounceGymError, OSError):
+    """A file or folder the package writes could not be written — the disk is full, a folder
+    is not writable, a link was swapped in meanwhile: one line naming the path and the
+    system's reason (``<path>: cannot write it: No space left on device``). The writers
+    (`bounce_gym.files`) raise it for every `OSError` they meet and leave nothing half-written
+    under the path's name. It is also an `OSError` carrying the original ``errno``, so code
+    that handles a failed write as an `OSError` keeps doing so."""
+
+    __str__ = BaseException.__str__  # the message, not OSError's "[Errno n] ..."
+
+    def __init__(self, message: str, errno: int | None = None) -> None:
+        super().__init__(message)
+        if errno is not None:
+            self.errno = errno
+
+    def __reduce__(self):
+        return type(self), (str(self), self.errno)
+
+
 class ActionError(BounceGymError):
     """An action passed to ``step`` has the wrong type, shape or value."""
 

@@ -9,6 +9,12 @@ their name and renamed over it (`atomic_file`, `atomic_path`: a link at the name
 its target untouched), and a file opened in place — a log appended to, a lock file — is opened
 without following a link (`open_no_follow`: a link is refused). A folder the user names (an
 ``output`` that is a link to another disk) is theirs to choose and is followed.
+
+**Faults.** A write that fails — a full disk, a folder that is not writable, a link swapped in
+while the file is written — raises `bounce_gym.errors.OutputError`, one line naming the path
+and the system's reason (``<path>: cannot write it: No space left on device``), and leaves the
+old file, or none, under the path's name: never a partial one. The commands print it as one
+``error:`` line.
 """
 
 from __future__ import annotations
@@ -25,48 +31,76 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import BinaryIO
 
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import ConfigError, OutputError
+
+
+def output_error(path: Path | str, exc: OSError, what: str = "write") -> OutputError:
+    """The package's one-line error for the `OSError` ``exc`` met while writing ``path``
+    (``what``: the verb, e.g. ``create``); an `OutputError` is returned as it is."""
+    if isinstance(exc, OutputError):
+        return exc
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    if exc.errno == errno.ELOOP:
+        reason = f"a symbolic link is in the way, and it is not followed ({reason})"
+    return OutputError(f"{path}: cannot {what} it: {reason}", exc.errno)
 
 
 @contextlib.contextmanager
-def atomic_path(path: Path) -> Iterator[Path]:
+def writing(path: Path | str, what: str = "write") -> Iterator[None]:
+    """Turn an `OSError` raised in the ``with`` block into `output_error` naming ``path``."""
+    try:
+        yield
+    except OSError as exc:
+        raise output_error(path, exc, what) from None
+
+
+@contextlib.contextmanager
+def atomic_path(path: Path, mode: int | None = None) -> Iterator[Path]:
     """A temporary path that becomes ``path`` only once the ``with`` block has finished, for
     writers that need a file name rather than an open file (e.g. a NetCDF library).
 
     The block writes the file at the yielded path: a hidden name in the same folder
-    (``.<name>.<random>.tmp``, created empty). The file is then flushed to disk and renamed over
+    (``.<name>.<random>.tmp``, created empty). The file is then flushed to disk, given
+    ``mode`` (default: 0o666 less the umask, as a file created the usual way) and renamed over
     ``path``, so a crash at any instant leaves either the old ``path`` or the new one, never a
-    partial file under its name; an exception in the block removes the temporary file."""
+    partial file under its name; an exception in the block removes the temporary file. An
+    `OSError` on the way — in the block too — is raised as the `OutputError` naming ``path``
+    (`output_error`)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
+    with writing(path):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        os.close(fd)
     tmp = Path(name)
     try:
         yield tmp
         with open(tmp, "rb+", opener=_no_follow) as fh:  # the writer may have replaced it
             os.fsync(fh.fileno())
-        os.chmod(tmp, _usual(0o666))  # mkstemp makes files private; results are not
+        os.chmod(tmp, _usual(0o666) if mode is None else mode)  # mkstemp makes files private
         os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise output_error(path, exc) from None
         raise
     _fsync(path.parent)  # make the rename itself durable
 
 
 @contextlib.contextmanager
-def atomic_file(path: Path) -> Iterator[BinaryIO]:
+def atomic_file(path: Path, mode: int | None = None) -> Iterator[BinaryIO]:
     """A binary file (opened for writing and reading) that becomes ``path`` only once the
     ``with`` block has finished (`atomic_path`: a temporary file in the same folder, flushed to
-    disk, then renamed over ``path``; an exception in the block removes it)."""
-    with atomic_path(path) as tmp, open(tmp, "w+b", opener=_no_follow) as fh:
+    disk, given ``mode``, then renamed over ``path``; an exception in the block removes it, an
+    `OSError` is raised as the `OutputError` naming ``path``)."""
+    with atomic_path(path, mode) as tmp, open(tmp, "w+b", opener=_no_follow) as fh:
         yield fh
         fh.flush()
 
 
-def atomic_write(path: Path, data: bytes) -> None:
+def atomic_write(path: Path, data: bytes, mode: int | None = None) -> None:
     """Write ``data`` to ``path`` through `atomic_file`."""
-    with atomic_file(path) as fh:
+    with atomic_file(path, mode) as fh:
         fh.write(data)
 
 
@@ -79,10 +113,13 @@ def locked(path: Path) -> Iterator[None]:
     NFSv4 and most cluster file systems); the kernel drops it when the process dies. A link at
     the lock file's name is refused (`open_no_follow`)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd = open_no_follow(path.parent / f".{path.name}.lock", os.O_RDWR | os.O_CREAT)
+    lock = path.parent / f".{path.name}.lock"
+    with writing(lock, "create"):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd = open_no_follow(lock, os.O_RDWR | os.O_CREAT)
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
+        with writing(lock, "lock"):
+            fcntl.flock(fd, fcntl.LOCK_EX)
         yield
     finally:
         os.close(fd)  # closing the descriptor releases the lock
@@ -184,20 +221,27 @@ class NewFolder:
         self._tmp: Path | None = None
 
     def __enter__(self) -> Path:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.tmp-",
-                                          dir=self.path.parent))
+        with writing(self.path, "create"):
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.tmp-",
+                                              dir=self.path.parent))
         return self._tmp
 
     def __exit__(self, kind, exc, traceback) -> None:
         tmp, self._tmp = self._tmp, None
+        assert tmp is not None
         if kind is not None:
             shutil.rmtree(tmp, ignore_errors=True)
+            if isinstance(exc, OSError):  # named by the folder it was to become
+                message = str(output_error(tmp, exc)).replace(str(tmp), str(self.path))
+                raise OutputError(message, exc.errno) from None
             return
         try:
             self.path = _publish(tmp, self.path)
-        except BaseException:
+        except BaseException as exc:
             shutil.rmtree(tmp, ignore_errors=True)
+            if isinstance(exc, OSError):
+                raise output_error(self.path, exc, "create") from None
             raise
 
 

@@ -34,7 +34,11 @@ configuration's (`bounce_gym.documents` reads every file, each command's module 
 numbers) before anything heavy (torch, SB3, Ray) is imported. So is a command whose extra is
 not installed (``evaluate`` and ``curves`` need ``experiments``, ``train`` also ``rl`` or
 ``jax``, ``tune`` also ``rl`` and ``distributed``; `bounce_gym.extras`): ``error: bounce-gym
-evaluate needs the 'experiments' extra: pip install 'bounce-gym[experiments]'``.
+evaluate needs the 'experiments' extra: pip install 'bounce-gym[experiments]'``. A fault of
+the machine — a full disk, a folder that is not writable — is one ``error:`` line naming the
+path too (`bounce_gym.errors.OutputError`; an `OSError` raised elsewhere, e.g. by a library's
+own file, as ``error: <path>: <reason>``), status 2, and leaves no partial file under a name
+the command writes.
 
 ``evaluate`` runs its units — one policy of one experiment on up to ten seeds
 (`bounce_gym_experiments.sweep`) — on the configuration's ``executor`` or the one the flags choose
@@ -511,11 +515,20 @@ def tables_command(write: bool, run: str | None, into: str) -> int:
     return 1 if old else 0
 
 
+def os_error_text(exc: OSError) -> str:
+    """An `OSError` as one line: the file it names (both, for a rename) and the system's
+    reason."""
+    reason = exc.strerror or " ".join(str(exc).split()) or type(exc).__name__
+    names = [str(n) for n in (exc.filename, exc.filename2) if n is not None]
+    return f"{' -> '.join(names)}: {reason}" if names else reason
+
+
 def dispatch(args: argparse.Namespace) -> int:
     """Run the parsed command; an input error of this package (`BounceGymError`: a bad
-    configuration, env argument or model file) becomes ``error: ...`` on stderr and status 2,
-    and so does a missing extra (`bounce_gym.extras`): the command's own (`COMMAND_MODULES`),
-    checked first, or one a configuration's choice needs (e.g. trained agents to evaluate)."""
+    configuration, env argument or model file; a write that failed) becomes ``error: ...`` on
+    stderr and status 2, as does any other `OSError` (`os_error_text`) and a missing extra
+    (`bounce_gym.extras`): the command's own (`COMMAND_MODULES`), checked first, or one a
+    configuration's choice needs (e.g. trained agents to evaluate)."""
     feature = f"bounce-gym {args.command}"
     try:
         require(feature, *COMMAND_MODULES[args.command])
@@ -538,6 +551,9 @@ def dispatch(args: argparse.Namespace) -> int:
                      seeds=args.seeds, flags=executor_flags(args))
     except BounceGymError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a fault met outside the package's own readers and writers
+        print(f"error: {os_error_text(exc)}", file=sys.stderr)
         return 2
     except ImportError as exc:
         missing = from_import_error(feature, exc)

@@ -21,6 +21,11 @@ map — which is also what training uses; a
 different ``max_steps`` (at most `MAX_STEPS`) needs ``horizon_reason``, and then sets the env's
 own limit, so that the env and the episode loop stop together.
 
+**Env arguments.** Each experiment's env is built once while the configuration is checked
+(`env_horizon`, which also reads its horizon off it), before the experiment families and their
+heavy imports (SciPy, the RL libraries) are loaded: a bad ``env_kwargs`` fails as fast as a bad
+key of the document.
+
 A relative map file in ``env_kwargs.world`` (``*.yaml``, ``*.yml``, ``*.json``) or flow file
 in ``env_kwargs.flow`` (a path with a suffix, e.g. ``*.nc``; zoo names have none) of a
 configuration file is read relative to that file's folder.
@@ -53,7 +58,7 @@ from bounce_gym.envs.registration import (
     PETTINGZOO_ENVS,
     is_pettingzoo_id,
 )
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import ConfigError, config_errors
 from bounce_gym.files import check_path_component, check_path_text
 from bounce_gym.validate import integer
 from bounce_gym_experiments.executors import (
@@ -436,11 +441,15 @@ def evaluation_seeds(where: str, seeds: object) -> list[int]:
 def env_horizon(env_id: str, env_kwargs: Mapping[str, Any]) -> int | None:
     """The horizon of ``env_id`` made with ``env_kwargs``: the registered one
     (`registered_horizon`), or for an id of `MAP_HORIZON` the one its env derives from its map
-    (what ``gym.make`` reports as ``env.spec.max_episode_steps``)."""
-    if env_id not in MAP_HORIZON:
-        return registered_horizon(env_id)
-    env = gym.make(env_id, **env_kwargs)
+    (what ``gym.make`` reports as ``env.spec.max_episode_steps``). The env is built (and closed)
+    either way, so bad ``env_kwargs`` raise here, as the env would raise them."""
+    if is_pettingzoo_id(env_id):
+        env = pettingzoo.make("parallel", env_id, **env_kwargs)
+    else:
+        env = gym.make(env_id, **env_kwargs)
     try:
+        if env_id not in MAP_HORIZON:
+            return registered_horizon(env_id)
         return env.spec.max_episode_steps if env.spec is not None else None
     finally:
         env.close()
@@ -449,10 +458,8 @@ def env_horizon(env_id: str, env_kwargs: Mapping[str, Any]) -> int | None:
 def checked_horizon(where: str, exp: Experiment) -> int:
     """The experiment's ``max_steps``: the env's horizon (`env_horizon`), or another with its
     reason."""
-    try:
+    with config_errors(f"{where}.env_kwargs"):
         horizon = env_horizon(exp.env, exp.env_kwargs)
-    except (ConfigError, TypeError) as exc:
-        raise ConfigError(f"{where}.env_kwargs: {exc}") from None
     reason = exp.horizon_reason
     if reason is not None and not reason.strip():
         raise ConfigError(f"{where}.horizon_reason: expected a non-empty explanation")

@@ -25,7 +25,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from baselines.rl.train import RunFiles, finished, prepare, train_seed
-from bounce_gym.errors import ConfigError
+from bounce_gym.errors import ConfigError, OutputError
 from bounce_gym_experiments.executors import (
     Executor,
     InProcessExecutor,
@@ -52,12 +52,14 @@ def train_unit(config: Mapping, seed: int, live: bool, progress: bool) -> dict:
     """One unit of a sweep: train the seed of a prepared configuration. Returns the lines the
     run logged (printed as they come, with SB3's progress bar if ``progress``, when ``live``)
     and the model's path, or the `ConfigError` that stopped it: a mistake in the input (an env
-    argument, a hyperparameter value SB3 refuses) is reported as one, not retried."""
+    argument, a hyperparameter value SB3 refuses) is reported as one, not retried, and so is a
+    write that failed (`OutputError`: a full disk, a folder that is not writable), which
+    another attempt on the same disk would meet again after training as long."""
     lines: list[str] = []
     log = print if live else lines.append
     try:
         model = train_seed(config, seed, progress=live and progress, log=log)
-    except ConfigError as exc:
+    except (ConfigError, OutputError) as exc:
         return {"log": lines, "config_error": str(exc)}
     return {"log": lines, "model": str(model)}
 

@@ -1,15 +1,18 @@
 """`bounce_gym.files`: names that become path components, never writing through a link planted
 at a name the package writes, and folders that appear whole."""
 
+import errno
 import os
 import stat
 
 import pytest
 
-from bounce_gym.errors import ConfigError
+from bounce_gym import files
+from bounce_gym.errors import BounceGymError, ConfigError, OutputError
 from bounce_gym.files import (
     MAX_NAME_BYTES,
     NewFolder,
+    atomic_path,
     atomic_write,
     check_path_component,
     check_writable,
@@ -134,3 +137,80 @@ def test_a_new_folder_whose_block_fails_leaves_nothing(tmp_path):
         (folder / "episodes.csv").write_text("half")
         raise RuntimeError("disk full")
     assert os.listdir(tmp_path) == []
+
+
+# -- faults: every OSError of a write is one line naming the path (issue 36, item 4) ----------
+def fill_the_disk(monkeypatch) -> None:
+    """Every temporary file the writers open is /dev/full from now on: its writes fail with
+    ENOSPC when they reach the disk, as on a full one."""
+    real = files._no_follow
+
+    def opener(path: str, flags: int) -> int:
+        if os.path.basename(path).startswith(".") and path.endswith(".tmp") \
+                and flags & (os.O_WRONLY | os.O_RDWR):
+            return os.open("/dev/full", os.O_RDWR)
+        return real(path, flags)
+    monkeypatch.setattr(files, "_no_follow", opener)
+
+
+def _leftovers(folder) -> list[str]:
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if ".tmp" in p.name)
+
+
+def test_a_full_disk_is_one_line_naming_the_file_and_keeps_the_old_one(tmp_path, monkeypatch):
+    target = tmp_path / "out" / "summary.csv"
+    atomic_write(target, b"old")
+    fill_the_disk(monkeypatch)
+    with pytest.raises(OutputError) as caught:
+        atomic_write(target, b"new" * 100_000)
+    assert str(caught.value) == f"{target}: cannot write it: No space left on device"
+    assert caught.value.errno == errno.ENOSPC
+    assert isinstance(caught.value, BounceGymError) and isinstance(caught.value, OSError)
+    assert target.read_bytes() == b"old"
+    assert _leftovers(tmp_path) == []
+
+
+@pytest.mark.parametrize("call", ["replace", "chmod", "fsync", "mkstemp"])
+def test_every_step_of_an_atomic_write_fails_in_one_line(tmp_path, monkeypatch, call):
+    target = tmp_path / "results.json"
+
+    def fail(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    module = files.tempfile if call == "mkstemp" else files.os
+    with monkeypatch.context() as patched:
+        patched.setattr(module, call, fail)
+        with pytest.raises(OutputError, match=f"^{target}: cannot write it: No space left"):
+            atomic_write(target, b"data")
+    assert not target.exists()
+    assert _leftovers(tmp_path) == []
+
+
+def test_a_link_swapped_in_while_writing_is_one_line_and_not_followed(tmp_path):
+    target, elsewhere = tmp_path / "plot.png", tmp_path / "elsewhere"
+    elsewhere.write_bytes(b"untouched")
+    with pytest.raises(OutputError, match=f"^{target}: cannot write it: a symbolic link is in "
+                                          "the way"), atomic_path(target) as tmp:
+        tmp.unlink()
+        tmp.symlink_to(elsewhere)  # the race: a link where the writer's file was
+    assert elsewhere.read_bytes() == b"untouched"
+    assert not target.exists()
+    assert not any(p.is_symlink() for p in tmp_path.iterdir())
+
+
+def test_a_full_disk_in_a_new_folder_names_the_folder_it_was_to_become(tmp_path, monkeypatch):
+    fill_the_disk(monkeypatch)
+    with pytest.raises(OutputError) as caught, NewFolder(tmp_path / "run-1") as folder:
+        atomic_write(folder / "episodes.csv", b"x" * 10_000)
+    assert str(caught.value) == (f"{tmp_path / 'run-1' / 'episodes.csv'}: cannot write it: No "
+                                 "space left on device")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_lock_that_cannot_be_created_is_one_line(tmp_path, monkeypatch):
+    def refused(path: str, flags: int) -> int:
+        raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), path)
+    monkeypatch.setattr(files, "_no_follow", refused)
+    lock = tmp_path / ".manifest.json.lock"
+    with pytest.raises(OutputError, match=f"^{lock}: cannot create it: Permission denied$"), \
+            locked(tmp_path / "manifest.json"):
+        pass

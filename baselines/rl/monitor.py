@@ -46,7 +46,7 @@ import numpy as np
 
 from bounce_gym.documents import parse_document
 from bounce_gym.errors import ConfigError
-from bounce_gym.files import atomic_write, open_no_follow
+from bounce_gym.files import atomic_write, open_no_follow, writing
 
 SUFFIX = ".monitor.csv"
 #: The per-episode outcomes the monitor records when the env's ``info`` has them
@@ -91,16 +91,21 @@ class MonitorWriter:
     ``ResultsWriter`` does, but never through a symbolic link at the file's name)."""
 
     def __init__(self, path: Path, fields: tuple[str, ...]) -> None:
-        fd = open_no_follow(path, os.O_WRONLY | os.O_APPEND)
+        self.path = path
+        with writing(path, "append to"):
+            fd = open_no_follow(path, os.O_WRONLY | os.O_APPEND)
         self.file = os.fdopen(fd, "a", newline="\n", encoding="utf-8")
         self.writer = csv.DictWriter(self.file, fieldnames=fields)
 
     def write_row(self, episode: dict[str, float]) -> None:
-        self.writer.writerow(episode)
-        self.file.flush()
+        """Append the episode's row (a failed write is `bounce_gym.errors.OutputError`)."""
+        with writing(self.path, "append to"):
+            self.writer.writerow(episode)
+            self.file.flush()
 
     def close(self) -> None:
-        self.file.close()
+        with writing(self.path, "append to"):
+            self.file.close()
 
 
 def _truncate(path: Path, rows: int) -> None:

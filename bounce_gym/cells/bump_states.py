@@ -19,7 +19,6 @@ state is the robot's own cell.
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
 
 from bounce_gym.cells.model import CellModel
 
@@ -32,6 +31,8 @@ class BumpStates:
 
     def __init__(self, model: CellModel) -> None:
         self.model = model
+        from scipy import ndimage  # here: ~0.2 s of import an env's construction does not need
+
         _, (near_r, near_c) = ndimage.distance_transform_edt(~model.free, return_indices=True)
         #: every grid cell (row-major) -> position index of the nearest free cell (itself if free)
         self.position_of_cell = model.position_index[near_r, near_c].ravel()

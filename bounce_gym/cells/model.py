@@ -44,6 +44,20 @@ from bounce_gym.worlds import World
 
 CORNER_RULES = ("target_only", "no_squeeze", "strict")
 _TIE = 1e-9
+#: The most states (grid cells x orientation bins) of a `CellModel`: 2^24, whose next-cell table
+#: takes 128 MiB (the grid itself is at most `bounce_gym.worlds.world.MAX_GRID_CELLS` cells).
+MAX_CELL_STATES = 1 << 24
+
+
+def check_model_size(world: World, cell_size: float, n_bins: int, field: str = "cell_size"
+                     ) -> None:
+    """Raise `ConfigError` naming ``field`` if the cell model of ``world`` at ``cell_size``
+    with ``n_bins`` bins would have a grid of more than
+    `bounce_gym.worlds.world.MAX_GRID_CELLS` cells or more than `MAX_CELL_STATES` states
+    (counting blocked cells: checked before the grid is built)."""
+    world.check_grid(field, cell_size)
+    world.check_grid(field, cell_size, MAX_CELL_STATES, per_cell=n_bins,
+                     what="cell model states")
 
 
 def king_offset(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -107,6 +121,9 @@ class CellModel:
         self.n_bins = int(n_bins)
         self.robot_radius = float(robot_radius)
         self.corner_rule = corner_rule
+        if not (math.isfinite(self.cell_size) and self.cell_size > 0):
+            raise ConfigError(f"cell_size: expected a finite number > 0, got {cell_size!r}")
+        check_model_size(world, self.cell_size, self.n_bins)
         self.free = world.occupancy(self.cell_size, self.robot_radius)
         self.rows, self.cols = self.free.shape
         rc = np.argwhere(self.free)  # sorted by row (bottom first), then column

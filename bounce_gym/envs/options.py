@@ -30,6 +30,7 @@ from pydantic import (
 
 from bounce_gym import worlds
 from bounce_gym.cells import CORNER_RULES
+from bounce_gym.cells.model import check_model_size
 from bounce_gym.dynamics.backends.base import ROBOT_COLLISIONS
 from bounce_gym.dynamics.noise import NoiseModel, make_noise
 from bounce_gym.dynamics.platform import PLATFORM_RADIUS, PhysicsParams, physics_params
@@ -50,6 +51,10 @@ STEP_MODES = StepMode.__args__
 ACTION_TYPES = ActionType.__args__
 #: Largest ``history`` (observation length grows by 2 per entry).
 MAX_HISTORY = 10_000
+#: How large a world may be in metres (its diameter times ``physics_params.world_scale``) under
+#: physics='dynamic': from a tabletop to a country (a smaller world leaves the Create 2 no room to
+#: brake before the next wall, and its contacts then never settle).
+WORLD_METRES = (0.1, 1e7)
 #: Largest ``n_robots`` of an env (every robot is a PettingZoo agent with its own dicts; the
 #: batched dynamics, `bounce_gym.dynamics.BounceDynamics`, takes more).
 MAX_ROBOTS = 10_000
@@ -117,13 +122,15 @@ class EnvOptions(Arguments):
             "eps) or {'type': 'interval', 'lo_deg': -5, 'hi_deg': 5} (off by a uniform "
             "amount in the interval)."))] = None
     robot_radius: Annotated[float, Accepts(Real | None), Field(ge=0.0, description=(
-        "Robot radius in world units, less than the world's diameter. None: a point, or with "
-        "physics='dynamic' (where a body has a size) the Create 2's 0.17 m, i.e. 0.17 / "
-        "world_scale."))] = None
+        "Robot radius in world units: 0 (a point), or from 1e-4 times the world's diameter to "
+        "less than half of it. None: a point, or with physics='dynamic' (where a body has a "
+        "size) the Create 2's 0.17 m, i.e. 0.17 / world_scale, within the same bounds."))] = None
     step_length: Annotated[Real, Field(gt=0.0, description=(
         "Distance driven per tick, in world units (1: one cell per tick; the cell size of the "
-        "cell model). With physics='dynamic', the distance driven in one tick at cruise "
-        "speed."))] = 1.0
+        "cell model), from 1e-4 times the world's diameter (a drive across the world takes at "
+        "most 10^4 ticks) to the diameter; on the cell backend also at most 2^20 cells of the "
+        "bounding box and 2^24 cell-model states (cells x cell_bins). With physics='dynamic', "
+        "the distance driven in one tick at cruise speed."))] = 1.0
     step_mode: Annotated[StepMode, Field(description=(
         "'bounce': one step is a bump and the drive to the next contact; 'tick': one step is "
         "one tick."))] = "bounce"
@@ -172,9 +179,18 @@ class EnvOptions(Arguments):
     @field_validator("physics_params")
     @classmethod
     def _physics_params(cls, value: object, info: ValidationInfo) -> PhysicsParams | None:
-        [physics] = needs(info, "physics")
+        world, physics = needs(info, "world", "physics")
         if physics == "dynamic":
-            return physics_params(value)
+            params = physics_params(value)
+            metres = world.diameter * params.world_scale
+            if not WORLD_METRES[0] <= metres <= WORLD_METRES[1]:
+                low, high = (m / world.diameter for m in WORLD_METRES)
+                raise ConfigError(
+                    f"physics_params.world_scale: expected metres per world unit in [{low:.3g}, "
+                    f"{high:.3g}], so that world {world.name!r} (diameter {world.diameter:.4g} "
+                    f"units) measures {WORLD_METRES[0]:g} m to {WORLD_METRES[1]:g} m across, "
+                    f"got {params.world_scale!r} ({metres:.3g} m)")
+            return params
         if value is not None:
             raise ConfigError(f"physics_params: only physics='dynamic' takes physical "
                               f"parameters, got {value!r} with physics={physics!r}")
@@ -205,15 +221,25 @@ class EnvOptions(Arguments):
     def _radius(cls, value: float | None, info: ValidationInfo) -> float:
         world, params = needs(info, "world", "physics_params")
         if value is None:
-            return 0.0 if params is None else PLATFORM_RADIUS / params.world_scale
-        if value >= world.diameter:  # no pose fits (and 1e308 would overflow the packing check)
-            raise ConfigError(f"robot_radius: expected a number in [0, {world.diameter:g}) (the "
-                              f"world's diameter), got {value!r}")
+            if params is None:
+                return 0.0
+            return world.check_length(  # the Create 2 in this world's units
+                f"robot_radius (None: the Create 2's {PLATFORM_RADIUS} m / world_scale "
+                f"{params.world_scale:g})", PLATFORM_RADIUS / params.world_scale, top=0.5,
+                open_top=True)
+        # half the diameter: no disk fits (and 1e308 would overflow the packing check)
+        world.check_length("robot_radius", value, top=0.5, zero=True, open_top=True)
         if params is not None and value == 0.0:
             raise ConfigError("robot_radius: physics='dynamic' simulates bodies of a size and "
                               "needs robot_radius > 0 (None: the Create 2's 0.17 m / "
                               "world_scale), got 0")
         return value
+
+    @field_validator("step_length")
+    @classmethod
+    def _step(cls, value: float, info: ValidationInfo) -> float:
+        [world] = needs(info, "world")
+        return world.check_length("step_length", value)
 
     @field_validator("cell_bins")
     @classmethod
@@ -250,6 +276,7 @@ class EnvOptions(Arguments):
         if self.action_type != "discrete":
             raise ConfigError("action_type: the cell backend needs discrete actions (angles "
                               "must be whole orientation bins)")
+        check_model_size(self.world, self.step_length, self.cell_bins, "step_length")
         width = 360.0 / self.cell_bins
         for angles in self.angles:
             steps = np.degrees(angles) / width

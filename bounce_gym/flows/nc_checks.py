@@ -18,6 +18,13 @@ where its end is missing, without an error. So before the loader reads an array:
   its counts must fit in the file (the NetCDF library would try to honour a count of 2^31
   dimensions in a 14-byte file) and the file must be as long as its data reach.
 
+* a file may not declare far more values than it holds bytes (`check_expansion`): NetCDF-4
+  compresses, and a file of 400 KB of compressed constants declaring 5·10^7 values loads into
+  1.7 GB. Under the default cap, ``u`` may declare at most `MAX_VALUES_PER_BYTE` (4) values per
+  byte of the file — 16 times the 0.25 of uncompressed float32, more than real ocean fields
+  compress — or `EXPANSION_FLOOR` (2^22) values whatever the file's size; ``max_values=`` or
+  `MAX_VALUES_VARIABLE`, given, accepts what it says instead.
+
 Each refusal is a `FlowFileError` whose one line names the file, the variable or attribute and
 what is allowed.
 """
@@ -32,8 +39,9 @@ from pathlib import Path
 from bounce_gym.errors import ConfigError, FlowFileError
 from bounce_gym.validate import integer
 
-__all__ = ["DEFAULT_MAX_VALUES", "MAX_ATTRIBUTE_VALUES", "MAX_CHUNKS", "MAX_VALUES_VARIABLE",
-           "check_classic", "check_header", "check_variable", "classic_data_end", "max_values"]
+__all__ = ["DEFAULT_MAX_VALUES", "EXPANSION_FLOOR", "MAX_ATTRIBUTE_VALUES", "MAX_CHUNKS",
+           "MAX_VALUES_PER_BYTE", "MAX_VALUES_VARIABLE", "check_classic", "check_expansion",
+           "check_header", "check_variable", "classic_data_end", "max_values"]
 
 #: Values (cells x layers x times) a flow file may declare, unless changed.
 DEFAULT_MAX_VALUES = 50_000_000
@@ -43,6 +51,13 @@ MAX_VALUES_VARIABLE = "BOUNCE_GYM_MAX_FLOW_VALUES"
 MAX_ATTRIBUTE_VALUES = 1 << 20
 #: Chunks of one variable that is read (each costs a lookup and a read of its own).
 MAX_CHUNKS = 1_000_000
+#: Values ``u`` may declare per byte of the file under the default cap (`check_expansion`).
+MAX_VALUES_PER_BYTE = 4
+#: Values ``u`` may declare under the default cap whatever the file's size (about 160 MiB to
+#: load).
+EXPANSION_FLOOR = 1 << 22
+#: Bytes loading takes per declared value of ``u`` at its peak (measured: 38).
+BYTES_PER_VALUE = 40
 
 
 def max_values(value: object = None) -> int:
@@ -58,6 +73,27 @@ def max_values(value: object = None) -> int:
     except ValueError:
         raise ConfigError(f"{MAX_VALUES_VARIABLE}: expected a positive integer, got "
                           f"{text!r}") from None
+
+
+def explicit_cap(value: object = None) -> bool:
+    """Whether the cap was given (``max_values=``, or `MAX_VALUES_VARIABLE` set): then it
+    alone bounds what a file may declare, and `check_expansion` does not apply."""
+    return value is not None or os.environ.get(MAX_VALUES_VARIABLE) is not None
+
+
+def check_expansion(source: str, label: str, sizes: dict, file_bytes: int) -> None:
+    """Refuse ``u`` (``label``; ``sizes``: dimension name -> length) declaring more than
+    `MAX_VALUES_PER_BYTE` values per byte of a file of ``file_bytes`` bytes, and more than
+    `EXPANSION_FLOOR` values: a small compressed file that would load into gigabytes."""
+    total = math.prod(sizes.values())
+    allowed = max(EXPANSION_FLOOR, MAX_VALUES_PER_BYTE * file_bytes)
+    if total > allowed:
+        raise FlowFileError(
+            f"{source}: {label}: declares {total:,} values in a file of {file_bytes:,} bytes "
+            f"({total / max(file_bytes, 1):,.0f} per byte, about "
+            f"{BYTES_PER_VALUE * total / 2**20:,.0f} MiB to load); a file may declare at most "
+            f"{MAX_VALUES_PER_BYTE} per byte (or {EXPANSION_FLOOR:,} in all) unless max_values=..."
+            f" or ${MAX_VALUES_VARIABLE} accepts more")
 
 
 def check_variable(source: str, label: str, sizes: dict, chunks, cap: int) -> None:

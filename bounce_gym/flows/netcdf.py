@@ -27,9 +27,11 @@ without a vertical dimension is one layer at 0 m.
 
 Before any array is read, the file's header is checked (`bounce_gym.flows.nc_checks`): u may
 declare at most ``max_values`` values (cells x layers x times; default 5·10^7, or
-``$BOUNCE_GYM_MAX_FLOW_VALUES``), no variable that is read may have a larger dimension or
-chunk, or more than 10^6 chunks, no attribute more than 2^20 values, and a classic file must be
-as long as its header says; strings where numbers are expected are refused from their dtype.
+``$BOUNCE_GYM_MAX_FLOW_VALUES``) and, under the default cap, at most 4 values per byte of the
+file (or 2^22 in all: a small compressed file would otherwise load into gigabytes), no variable
+that is read may have a larger dimension or chunk, or more than 10^6 chunks, no attribute more
+than 2^20 values, and a classic file must be as long as its header says; strings where numbers
+are expected are refused from their dtype.
 
 Nothing is regridded: a curvilinear grid (2-D longitude/latitude), a dimension that is not x, y,
 depth or time, units other than m/s for velocities, metres or degrees for x/y, metres for depth
@@ -159,9 +161,10 @@ def load_flow(path, mapping: Mapping[str, str] | None = None, *,
     """Read a flow field from a NetCDF file (see the module docstring for ``mapping``).
 
     ``max_values`` caps the values (cells x layers x times) the file may declare
-    (`bounce_gym.flows.nc_checks`: default 5·10^7, or ``$BOUNCE_GYM_MAX_FLOW_VALUES``); it, the
-    chunking, the attributes and a classic file's length are checked from the header before any
-    array is read.
+    (`bounce_gym.flows.nc_checks`: default 5·10^7, or ``$BOUNCE_GYM_MAX_FLOW_VALUES``); under
+    the default cap the file may also declare at most 4 values per byte it holds (or 2^22),
+    which a given cap lifts. These, the chunking, the attributes and a classic file's length
+    are checked from the header before any array is read.
 
     Raises:
         FlowFileError: the file is missing, not NetCDF, truncated or too large, or a variable,
@@ -172,6 +175,8 @@ def load_flow(path, mapping: Mapping[str, str] | None = None, *,
     if not path.is_file():
         raise FlowFileError(f"{path}: no such file")
     cap = nc_checks.max_values(max_values)
+    # under the default cap, a file may not declare far more values than it has bytes
+    file_bytes = None if nc_checks.explicit_cap(max_values) else path.stat().st_size
     xr = _xr()
     _check_file(path, cap)
     try:
@@ -180,7 +185,7 @@ def load_flow(path, mapping: Mapping[str, str] | None = None, *,
     except (OSError, ValueError, RuntimeError) as exc:
         raise FlowFileError(f"{path}: not a readable NetCDF file ({_one_line(exc)})") from None
     with ds:
-        return flow_from_dataset(ds, mapping, source=str(path), name=path.stem, max_values=cap)
+        return _flow(ds, mapping, str(path), path.stem, cap, file_bytes)
 
 
 def _check_file(path: Path, cap: int) -> None:
@@ -208,7 +213,13 @@ def flow_from_dataset(ds: xr.Dataset, mapping: Mapping[str, str] | None = None, 
     """A `FlowField` from an open dataset (see `load_flow`); ``source`` prefixes messages.
     ``max_values`` caps the values u may declare, as in `load_flow`; nothing is read before the
     variables to read are checked against it."""
-    cap = nc_checks.max_values(max_values)
+    return _flow(ds, mapping, source, name, nc_checks.max_values(max_values), None)
+
+
+def _flow(ds: xr.Dataset, mapping: Mapping[str, str] | None, source: str, name: str | None,
+          cap: int, file_bytes: int | None) -> FlowField:
+    """`flow_from_dataset` with the checked cap; ``file_bytes``: the size of the file ``ds``
+    was opened from, whose values `nc_checks.check_expansion` bounds (None: not checked)."""
     names = _check_mapping(mapping, ds, source)
     u_name = names.get("u") or _find_velocity(ds, "u", _U_STANDARD, U_NAMES, source)
     v_name = names.get("v") or _find_velocity(ds, "v", _V_STANDARD, V_NAMES, source)
@@ -220,6 +231,8 @@ def flow_from_dataset(ds: xr.Dataset, mapping: Mapping[str, str] | None = None, 
     for key, var in (("u", u_var), ("v", v_var)):
         _check_velocity_units(var, key, source)
         _check_readable(var, f"{key} ({var.name!r})", source, cap, "real numbers in m/s")
+    if file_bytes is not None:
+        nc_checks.check_expansion(source, f"u ({u_var.name!r})", dict(u_var.sizes), file_bytes)
     roles = _dimension_roles(ds, u_var, names, source)
     coords = {role: _coordinate(ds, dim, role, names, source, cap)
               for role, dim in roles.items()}

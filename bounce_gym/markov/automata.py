@@ -4,12 +4,15 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-import networkx as nx
 import numpy as np
 
 from bounce_gym.errors import BounceGymError, ConfigError
 from bounce_gym.markov.scm import simple_cell_mapping
+
+if TYPE_CHECKING:  # networkx is imported where a graph is built (~0.15 s an env does not need)
+    import networkx as nx
 
 TRAP = -1
 """State index of the implicit trap state (Def. 9); `DFA.delta` holds it for missing transitions."""
@@ -121,6 +124,8 @@ def istate_graph(successor, bump, group: int | None = None) -> nx.DiGraph:
                 or not 0 <= group < r:
             raise ConfigError(f"group: expected an integer in [0, {r}), got {group!r}")
         cells = cells[groups == group]
+    import networkx as nx
+
     graph = nx.DiGraph(group=group, n_groups=r)
     graph.add_nodes_from((int(z), {"periodic": bool(periodic[z]), "group": int(groups[z])})
                          for z in cells)
@@ -319,6 +324,8 @@ class DFA:
         With ``with_trap`` the trap is node `TRAP` with a self-loop on 0 and 1 (Def. 9). A
         DiGraph keeps one edge per pair, so an edge taken on both symbols has ``label = (0, 1)``.
         """
+        import networkx as nx
+
         graph = nx.DiGraph()
         graph.add_nodes_from((i, {"size": int(s.size), "colour": int(self.colour[i])})
                              for i, s in enumerate(self.states))
@@ -393,6 +400,8 @@ def _knowledge_cycles(states: tuple[np.ndarray, ...], delta: np.ndarray):
     Every such SCC is a simple cycle: sizes never grow along an edge, so they are constant in an
     SCC, and a state whose two transitions are both defined loses cells on each of them.
     """
+    import networkx as nx
+
     graph = nx.DiGraph()
     graph.add_nodes_from(range(len(states)))
     src, sym = np.nonzero(delta != TRAP)

@@ -12,7 +12,6 @@ from numbers import Integral, Real
 
 import numpy as np
 import shapely
-from scipy import ndimage
 from shapely.geometry import Polygon, box
 
 from bounce_gym.errors import ConfigError, InvalidWorldError
@@ -237,6 +236,8 @@ def _grid_ok(free: np.ndarray) -> bool:
     c, d = free[:-1, 1:], free[1:, :-1]
     if np.any((a & b & ~c & ~d) | (c & d & ~a & ~b)):
         return False
+    from scipy import ndimage  # imported here: ~0.2 s that building an env does not need
+
     _, n_regions = ndimage.label(free)  # default structure: 4-connectivity
     return n_regions == 1
 

@@ -8,6 +8,7 @@ Edges of all rings are flattened into one array; edge ``k`` starts at vertex ``k
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from functools import cached_property, lru_cache
 
@@ -15,7 +16,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-from bounce_gym.errors import InvalidWorldError
+from bounce_gym.errors import ConfigError, InvalidWorldError
 from bounce_gym.worlds import raycast
 from bounce_gym.worlds.rings import (
     as_ring,
@@ -28,6 +29,13 @@ from bounce_gym.worlds.rings import (
 
 #: Relative tolerance (times the world's diameter) for geometric predicates.
 REL_TOL = 1e-9
+#: The shortest length an argument may give in a world (a step, a robot radius, a cell side, a
+#: goal radius), as a fraction of the world's diameter (`World.check_length`): a drive across the
+#: world then takes at most 10^4 ticks.
+MIN_LENGTH_FRACTION = 1e-4
+#: The most cells of a grid over a world's bounding box that an argument may ask for
+#: (`World.check_grid`): 2^20, a 1024 x 1024 grid.
+MAX_GRID_CELLS = 1 << 20
 
 
 class World:
@@ -168,6 +176,57 @@ class World:
         """Length of the bounding-box diagonal; the scale for tolerances."""
         xmin, ymin, xmax, ymax = self.bounds
         return float(np.hypot(xmax - xmin, ymax - ymin))
+
+    def check_length(self, field: str, value: float, *, top: float = 1.0,
+                     zero: bool = False, open_top: bool = False) -> float:
+        """Raise `ConfigError` naming ``field`` unless the length ``value`` (world units) lies
+        in [`MIN_LENGTH_FRACTION`, ``top``] times the world's `diameter` (``open_top``: below
+        the top; ``zero``: 0 is allowed too); returns it. The bounds of the length arguments
+        of the envs and tasks (docs: Environments, "Lengths and scales")."""
+        low, high = MIN_LENGTH_FRACTION * self.diameter, top * self.diameter
+        if (zero and value == 0) or (low <= value and (value < high if open_top
+                                                       else value <= high)):
+            return value
+        top_text = "the" if top == 1 else f"{top:g} times the"
+        raise ConfigError(
+            f"{field}: expected {'0 or ' if zero else ''}a length in [{low:.3g}, {high:.3g}"
+            f"{')' if open_top else ']'} ({MIN_LENGTH_FRACTION:g} to {top_text} diameter "
+            f"{self.diameter:.4g} of world {self.name!r}), got {value!r}")
+
+    def grid_shape(self, cell_size: float) -> tuple[int, int]:
+        """(rows, cols) of the grid of cells of side ``cell_size`` over the bounding box (as
+        `occupancy` lays it out)."""
+        xmin, ymin, xmax, ymax = self.bounds
+        return (math.ceil((ymax - ymin) / cell_size - 1e-9),
+                math.ceil((xmax - xmin) / cell_size - 1e-9))
+
+    def check_grid(self, field: str, cell_size: float, limit: int = MAX_GRID_CELLS,
+                   per_cell: int = 1, what: str = "cells") -> tuple[int, int]:
+        """Raise `ConfigError` naming ``field`` if the grid of cells of side ``cell_size``
+        over the bounding box has more than ``limit`` cells (times ``per_cell``, e.g. the
+        orientation bins of a cell model's states: ``what`` names them); else its (rows,
+        cols)."""
+        rows, cols = self.grid_shape(cell_size)
+        count = rows * cols * per_cell
+        if count > limit:
+            xmin, ymin, xmax, ymax = self.bounds
+            smallest = self._smallest_cell(limit / per_cell)
+            raise ConfigError(
+                f"{field}: cells of side {cell_size:g} cut world {self.name!r} "
+                f"({xmax - xmin:g} x {ymax - ymin:g}) into {rows:,} x {cols:,} cells"
+                f"{f' x {per_cell:,} bins' if per_cell > 1 else ''} = {count:,} {what}; at most "
+                f"{limit:,} (cells of side >= {smallest:.3g})")
+        return rows, cols
+
+    def _smallest_cell(self, cells: float) -> float:
+        """A cell side, rounded up to three digits, whose grid has at most ``cells`` cells."""
+        xmin, ymin, xmax, ymax = self.bounds
+        side = math.sqrt((xmax - xmin) * (ymax - ymin) / cells)
+        step = 10.0 ** (math.floor(math.log10(side)) - 2)
+        side = math.ceil(side / step) * step
+        while math.prod(self.grid_shape(side)) > cells:
+            side += step
+        return side
 
     @property
     def perimeter(self) -> float:

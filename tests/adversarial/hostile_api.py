@@ -144,13 +144,26 @@ def _env_arguments() -> list[ApiCase]:
             "backend unknown": {"backend": "quantum"},
             "task unknown": {"task": "fly"},
             "noise unknown": {"noise": {"type": "x"}},
-            "robot_radius NaN": {"robot_radius": math.nan}}
+            "robot_radius NaN": {"robot_radius": math.nan},
+            # lengths beyond the world's own (issue 36, item 6): accepted, hung or a RuntimeError
+            "step_length 1e12": {"step_length": 1e12},
+            "step_length 1e-9": {"step_length": 1e-9},
+            "cell backend step_length 1e-3": {"backend": "cell", "step_length": 1e-3},
+            "robot_radius 1e-12 on pymunk": {"backend": "pymunk", "robot_radius": 1e-12},
+            "world_scale 1e12": {"backend": "pymunk", "physics_params": {"world_scale": 1e12}},
+            "world_scale 1e-5": {"backend": "pymunk", "robot_radius": 0.3,
+                                 "physics_params": {"world_scale": 1e-5}}}
     drifter = {"an unknown argument": {"colour": 1},
+               "step_seconds 1e300": {"backend": "continuous", "step_seconds": 1e300},
+               "diffusivity 1e300": {"backend": "continuous", "diffusivity": 1e300},
                "flow unknown": {"flow": "atlantis"},
                "flow a number": {"flow": 3},
                "max_values zero": {"flow_kwargs": {"max_values": 0}}}
     patrol = {"an unknown argument": {"colour": 1},
               "cell_size NaN": {"cell_size": math.nan},
+              "a 600 x 450 grid": {"world": "heptagon"},
+              "cell_size 1e-6": {"cell_size": 1e-6},
+              "sensor_range 1e9": {"sensor_range": 1e9},
               "n_patrollers a string": {"n_patrollers": "2"},
               "attack_time zero": {"attack_time": 0}}
     out = []

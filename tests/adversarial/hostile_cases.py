@@ -337,6 +337,12 @@ def _config_content() -> list[Case]:
          f"{x}.env_kwargs: history: expected an integer in [0, 10000]"),
         ("history huge", evaluation(experiment(env_kwargs={**NAV, "history": 10**12})),
          f"{x}.env_kwargs: history: expected an integer in [0, 10000]"),
+        ("step_length 1e12", evaluation(experiment(env_kwargs={**NAV, "step_length": 1e12})),
+         f"{x}.env_kwargs: step_length: expected a length in [0.00141, 14.1]"),
+        ("coverage cell_size 1e-3", evaluation(experiment(
+            env="bounce_gym/BounceCoverage-v0", env_kwargs={"task_kwargs": {"cell_size": 1e-3}},
+            max_steps=None, horizon_reason=None)),
+         f"{x}.env_kwargs: task_kwargs.cell_size: expected a length in"),
         ("backend unknown", evaluation(experiment(env_kwargs={**NAV, "backend": "quantum"})),
          f"{x}.env_kwargs: backend: expected one of"),
         ("task_kwargs unknown", evaluation(experiment(env_kwargs={**NAV, "task_kwargs": {
@@ -786,11 +792,21 @@ def _tune() -> list[Case]:
 # -- flags -----------------------------------------------------------------------------------
 def _arguments(box: Sandbox, argv: list[str]) -> list[str]:
     """``argv`` after a valid evaluation configuration ``c.yaml``, a valid training
-    configuration ``t.yaml`` and a user folder with a short key are written (``{c}``, ``{t}``
-    and ``{here}`` in ``argv`` name them)."""
+    configuration ``t.yaml``, user folders with a short key, a key others can read, a pipe
+    for a key, a folder anyone may write into, and a file to trust are written (``{c}``,
+    ``{t}`` and ``{here}`` in ``argv`` name them)."""
     box.yaml("c.yaml", evaluation(executor=None))
     box.yaml("t.yaml", training())
     box.write("short-key/secret.key", b"short")
+    (box.here / "short-key/secret.key").chmod(0o600)  # private: the length is what is wrong
+    box.write("open-key/secret.key", os.urandom(32))  # readable by all (umask 022: 0644)
+    (box.here / "open-key/secret.key").chmod(0o644)
+    box.write("open-home/secret.key", os.urandom(32))
+    (box.here / "open-home/secret.key").chmod(0o600)
+    (box.here / "open-home").chmod(0o777)  # anyone may plant a key
+    (box.here / "pipe-key").mkdir(mode=0o700)
+    os.mkfifo(box.here / "pipe-key/secret.key", 0o600)  # reading it would wait for ever
+    box.write("ppo_seed0.zip", b"a file to trust")
     return [arg.format(c="c.yaml", t="t.yaml", here=box.here) for arg in argv]
 
 
@@ -906,6 +922,19 @@ def _flags() -> list[Case]:
          "the key", (("BOUNCE_GYM_HOME", "{here}/c.yaml"),)),
         ("BOUNCE_GYM_HOME with a short key", ["evaluate", "{c}"], "BOUNCE_GYM_HOME: the key",
          (("BOUNCE_GYM_HOME", "{here}/short-key"),)),
+        ("BOUNCE_GYM_HOME with a key others can read", ["evaluate", "{c}"],
+         "can be read or written by others (mode 0644); chmod 600",
+         (("BOUNCE_GYM_HOME", "{here}/open-key"),)),
+        ("BOUNCE_GYM_HOME writable by all", ["evaluate", "{c}"],
+         "can be written by others (mode 0777), who could plant a key",
+         (("BOUNCE_GYM_HOME", "{here}/open-home"),)),
+        ("BOUNCE_GYM_HOME with a pipe for a key", ["evaluate", "{c}"],
+         "secret.key is not a regular file", (("BOUNCE_GYM_HOME", "{here}/pipe-key"),)),
+        ("BOUNCE_GYM_HOME of an unknown user", ["evaluate", "{c}"],
+         "BOUNCE_GYM_HOME: cannot expand '~nosuchuser-bounce-gym/x': no such user",
+         (("BOUNCE_GYM_HOME", "~nosuchuser-bounce-gym/x"),)),
+        ("trust with a key folder writable by all", ["trust", "ppo_seed0.zip"],
+         "chmod go-w", (("BOUNCE_GYM_HOME", "{here}/open-home"),)),
         ("RAY_ADDRESS garbage for auto", ["evaluate", "{c}", "--executor", "ray", "--address",
                                           "auto"], "--address (auto, from RAY_ADDRESS): expected "
                                                    "a Ray address", (("RAY_ADDRESS", "::x"),)),

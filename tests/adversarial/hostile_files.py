@@ -234,6 +234,10 @@ def _flows() -> list[Case]:
         ("a billion cells declared", lambda p: flow_file(p, declared=(10_000, 100_000)),
          "declares 1,000,000,000 values"),
         ("10**8 cells declared", lambda p: flow_file(p, declared=(10_000, 10_000)), "declares 100,000,000 values"),
+        # under the cap, but a file of a few KB (chunks never written read back as the fill
+        # value) that would load into 1.5 GB: issue 36, item 6
+        ("4·10**7 cells in a few KB", lambda p: flow_file(p, declared=(4_000, 10_000)),
+         "declares 40,000,000 values in a file of"),
         ("furlongs per fortnight", lambda p: flow_file(p, units="furlongs/fortnight"),
          "wrong units 'furlongs/fortnight'"),
         ("no units", lambda p: flow_file(p, units=""), "wrong units ''"),

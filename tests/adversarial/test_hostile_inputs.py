@@ -361,3 +361,56 @@ def test_the_suite_is_as_large_as_the_issue_asks():
     assert len(CLI_CASES) + len(API_CASES) >= 200
     assert len(CHILD_CASES) >= 30
     assert len({c.id for c in [*CLI_CASES, *API_CASES]}) == len(CLI_CASES) + len(API_CASES)
+
+
+# -- faults of the machine (issue 36, item 4) ------------------------------------------------
+def _fill_the_disk(monkeypatch, after: str = "") -> None:
+    """The temporary files the package writes (``bounce_gym.files``) are /dev/full from now on
+    — only those whose name contains ``after``, if given — so their writes fail with ENOSPC,
+    as on a full disk."""
+    from bounce_gym import files
+
+    real = files._no_follow
+
+    def opener(path: str, flags: int) -> int:
+        name = os.path.basename(path)
+        if name.startswith(".") and name.endswith(".tmp") and after in name \
+                and flags & (os.O_WRONLY | os.O_RDWR):
+            return os.open("/dev/full", os.O_RDWR)
+        return real(path, flags)
+    monkeypatch.setattr(files, "_no_follow", opener)
+
+
+FULL_DISK = [  # (command, the file whose write fails, where it lies)
+    (["evaluate", "c.yaml", "--no-progress"], "", "out/runs/run-units"),
+    (["evaluate.py", "c.yaml", "--no-progress"], "", "out/runs/run-units"),
+    (["evaluate", "c.yaml", "--no-progress"], "summary.csv", "out/runs/run-"),
+    (["evaluate", "c.yaml", "--no-progress"], ".png", "out/runs/run-"),
+    (["train.py", "t.yaml", "--no-progress"], "monitor.csv", "out/models/nav"),
+    (["train", "t.yaml", "--no-progress"], "_seed0.zip", "out/models/nav/ppo_seed0.zip"),
+]
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize(("argv", "after", "where"), FULL_DISK,
+                         ids=[f"{a[0]} {f or 'first write'}" for a, f, _ in FULL_DISK])
+def test_a_full_disk_is_one_error_line_and_leaves_no_partial_file(argv, after, where, box,
+                                                                   tmp_path, monkeypatch):
+    box.yaml("c.yaml", hostile_cases.evaluation(experiment(policies=["random", "fixed"])))
+    box.yaml("t.yaml", hostile_cases.training())
+    _fill_the_disk(monkeypatch, after)
+    ran = in_process(argv)
+    assert "Traceback" not in ran.err, ran.err
+    lines = ran.err.splitlines()
+    assert ran.status == 2, ran.err[-2000:]
+    assert len(lines) == 1 and lines[0].startswith("error: "), ran.err[-2000:]
+    assert lines[0].endswith(": cannot write it: No space left on device"), lines[0]
+    assert f"{where}" in lines[0] and after in lines[0], lines[0]
+    written = [p for p in (box.here / "out").rglob("*") if p.is_file()]
+    partial = [p for p in written if ".tmp" in str(p.relative_to(box.here))]
+    assert partial == [], partial  # no temporary file left, none renamed into place
+    assert not [p for p in (box.here / "out").glob("runs/run-*") if p.name != "run-units"]
+
+
+def experiment(**overrides) -> dict:
+    return hostile_cases.experiment(**overrides)

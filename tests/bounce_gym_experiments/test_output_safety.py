@@ -155,7 +155,8 @@ def test_a_link_planted_as_the_units_folder_is_refused(tmp_path, capsys):
 
 
 def test_a_report_that_fails_midway_leaves_no_run_folder_and_keeps_the_units(tmp_path,
-                                                                              monkeypatch):
+                                                                              monkeypatch,
+                                                                              capsys):
     import bounce_gym_experiments.report
 
     config = _evaluation(tmp_path)
@@ -164,8 +165,11 @@ def test_a_report_that_fails_midway_leaves_no_run_folder_and_keeps_the_units(tmp
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(bounce_gym_experiments.report, "write_plots", broken)
-    with pytest.raises(OSError, match="No space left"):
-        _evaluate(config)
+    capsys.readouterr()
+    assert _evaluate(config) == 2  # one line naming the run folder, not a traceback
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {_output(tmp_path)}/safe-"), lines
+    assert lines[0].endswith(": cannot write it: No space left on device"), lines
     assert os.listdir(_output(tmp_path)) == ["safe-units"]  # the half-written folder is gone
     monkeypatch.undo()
     assert _evaluate(config) == 0

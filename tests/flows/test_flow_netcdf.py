@@ -284,6 +284,37 @@ def test_a_huge_declared_field_is_refused_before_any_array_is_read(tmp_path, cel
     assert _peak_bytes(lambda: load_flow(path)) < 20 * 2**20  # reading u alone is 400 MB+
 
 
+def test_a_small_file_declaring_far_more_values_than_bytes_is_refused(tmp_path):
+    """Issue 36, item 6: a 1 MB NetCDF-4 file (compressed constants, or chunks never written)
+    declaring 4.8·10^7 values loaded into 1.5 GB. Under the default cap, u may declare at most
+    4 values per byte of the file, or 2^22 in all."""
+    path = tmp_path / "bomb.nc"
+    _declared(path, 4_000, 10_000, chunksizes=(1, 10_000), zlib=True)  # a few KB
+    size = path.stat().st_size
+    with pytest.raises(FlowFileError, match=rf"^{path}: u \('u'\): declares 40,000,000 values "
+                                            rf"in a file of {size:,} bytes \(.* per byte, about "
+                                            r"1,526 MiB to load\); a file may declare at most 4 per "
+                                            r"byte \(or 4,194,304 in all\) unless max_values"):
+        load_flow(path)
+    assert _peak_bytes(lambda: load_flow(path)) < 20 * 2**20
+
+
+def test_a_given_cap_accepts_what_it_says_however_small_the_file(tmp_path, monkeypatch):
+    path = tmp_path / "small.nc"
+    _declared(path, 1_100, 4_000, chunksizes=(1, 4_000), zlib=True)  # 4.4·10^6 values
+    with pytest.raises(FlowFileError, match="per byte"):
+        load_flow(path)
+    with pytest.raises(FlowFileError, match="not monotonic"):  # past the check: its unwritten y
+        load_flow(path, max_values=5_000_000)
+    monkeypatch.setenv("BOUNCE_GYM_MAX_FLOW_VALUES", "5000000")
+    with pytest.raises(FlowFileError, match="not monotonic"):
+        load_flow(path)
+    _declared(path, 2_000, 2_000, chunksizes=(1, 2_000))  # 4·10^6: under 2^22 whatever its size
+    monkeypatch.delenv("BOUNCE_GYM_MAX_FLOW_VALUES")
+    with pytest.raises(FlowFileError, match="not monotonic"):
+        load_flow(path)
+
+
 def test_the_cap_counts_cells_layers_and_times_and_can_be_changed(tmp_path, monkeypatch):
     path = save_flow(field(), tmp_path / "f.nc")  # u: 2 layers x 3 times x 4 x 5 = 120 values
     with pytest.raises(FlowFileError, match=r"u \('u'\): declares 120 values \(depth 2 x time 3 x "

@@ -59,7 +59,8 @@ class DrifterOptions(Arguments):
     flow_kwargs: Annotated[SkipValidation[dict[str, Any] | None], Field(description=(
         "For a zoo name: its builder's keyword arguments; for a file: {'mapping': {...}, "
         "'max_values': n} (`load_flow`'s variable and dimension names, and the most values the "
-        "file may declare, default 5e7); none for a `FlowField`."))] = None
+        "file may declare, default 5e7 and then at most 4 per byte of the file or 2^22 in "
+        "all); none for a `FlowField`."))] = None
     backend: Annotated[Backend, Field(description=(
         "'cell': the discrete model of Alam's thesis ch. 5 (`DrifterCells`) stepped exactly, "
         "one cell transition per step; 'continuous': the RK4 `Drifters` dynamics in the "
@@ -77,11 +78,15 @@ class DrifterOptions(Arguments):
     step_seconds: Annotated[Real | None, Field(gt=0.0, description=(
         "Continuous backend: seconds per step. None: the median over water cells of the time "
         "the start snapshot's current needs to cross one cell, 1 / |(u/dx, v/dy)|, so a step "
-        "is about one step of the cell model."))] = None
+        "is about one step of the cell model. Given: from 1e-4 times that time to that time "
+        "times the cells along the field's longer side (the median current crossing the "
+        "field once), when the start snapshot has a current."))] = None
     substeps: Annotated[Integer, Field(ge=1, le=10_000, description=(
         "Continuous backend: RK4 steps per step."))] = 4
     diffusivity: Annotated[Real, Field(ge=0.0, description=(
-        "Continuous backend: horizontal diffusivity in m²/s (random-walk spreading)."))] = 0.0
+        "Continuous backend: horizontal diffusivity in m²/s (random-walk spreading), at most "
+        "L² / (2 step_seconds) with L the field's diagonal in metres: a step's spread "
+        "sqrt(2 K step_seconds) is at most the field's size."))] = 0.0
     land_rule: Annotated[Literal[LAND_RULES], Field(description=(
         "Continuous backend: what a drifter that would move onto land does "
         "(`bounce_gym.dynamics.advection`)."))] = "stay"
@@ -141,6 +146,35 @@ class DrifterOptions(Arguments):
         if info.field_name == "step_seconds" and backend == "continuous" and value is None:
             return crossing_time(*needs(info, "flow", "start_time"))
         return value
+
+    @model_validator(mode="after")
+    def _scales(self) -> DrifterOptions:
+        """``step_seconds`` and ``diffusivity`` within the field's own scales (their
+        descriptions)."""
+        if self.backend != "continuous":
+            return self
+        field, step = self.flow, float(self.step_seconds)
+        if "step_seconds" in self.model_fields_set:
+            try:
+                crossing = crossing_time(field, self.start_time)
+            except ConfigError:  # no current: nothing moves but by diffusion
+                crossing = None
+            if crossing is not None:
+                low, high = 1e-4 * crossing, crossing * max(field.shape)
+                if not low <= step <= high:
+                    raise ConfigError(
+                        f"step_seconds: expected seconds in [{low:.3g}, {high:.3g}] (1e-4 times "
+                        f"the {crossing:.3g} s the median current of flow {field.name!r} needs to "
+                        f"cross a cell, to the time it needs to cross the field), got {step!r}")
+        dx, dy = field.metric_spacing()
+        size = float(np.hypot(dx.sum(axis=1).max(), dy.sum(axis=0).max()))  # metres
+        top = size**2 / (2.0 * step)
+        if self.diffusivity > top:
+            raise ConfigError(
+                f"diffusivity: expected m²/s in [0, {top:.3g}] (a step's spread sqrt(2 K "
+                f"step_seconds) at most the {size:.3g} m across flow {field.name!r}), got "
+                f"{self.diffusivity!r}")
+        return self
 
     @model_validator(mode="after")
     def _task_arguments(self) -> DrifterOptions:

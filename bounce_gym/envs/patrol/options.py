@@ -5,6 +5,7 @@ against it (each bad value is a `ConfigError` naming the argument and what is al
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from typing import Annotated, Any, Literal
@@ -33,6 +34,12 @@ from bounce_gym.worlds import World
 ROW_SUM_TOLERANCE = 1e-8
 #: Default number of patrollers when ``start`` does not fix it.
 DEFAULT_PATROLLERS = 2
+#: The most cells of the patrol grid (`cell_size`): the strategy and the visibility are dense
+#: (n, n) matrices of its n free cells (4096 cells: 128 MiB of strategy).
+MAX_PATROL_CELLS = 4096
+#: The most (cell, cell within range) lines of sight the board's visibility checks
+#: (`sensor_range`): 2^22, about 0.4 GB at the peak of the check.
+MAX_SIGHT_PAIRS = 1 << 22
 
 
 class PatrolOptions(Arguments):
@@ -44,13 +51,17 @@ class PatrolOptions(Arguments):
             "The map whose free cells are the graph's vertices: a zoo name, a map file path or "
             "a `World`."))] = "patrol_15x15"
     cell_size: Annotated[Real, Field(gt=0.0, description=(
-        "Side of a cell, in world units."))] = 1.0
+        "Side of a cell, in world units: from 1e-4 times the world's diameter to the diameter, "
+        "and at most 4096 cells of the bounding box (the strategy is a dense vertices x "
+        "vertices matrix)."))] = 1.0
     corner_rule: Annotated[Literal[CORNER_RULES], Field(description=(
         "Which diagonal moves past corners are edges (`bounce_gym.cells.model`; 'strict': no "
         "corner cutting)."))] = "strict"
     sensor_range: Annotated[Real, Field(gt=0.0, description=(
         "Range l of each patroller's omnidirectional sensor, in cells (the limited visibility "
-        "polygon of thesis Eq. 4.1)."))] = 6.0
+        "polygon of thesis Eq. 4.1), at most the grid's diagonal (a longer range sees no "
+        "more), and at most 2^22 lines of sight to check (grid cells x cells within "
+        "range)."))] = 6.0
     visibility_rule: Annotated[Literal[RULES], Field(description=(
         "When a cell counts as seen: 'corners' or 'centre' (`bounce_gym.cells.visibility`)."))] = \
         "corners"
@@ -87,6 +98,34 @@ class PatrolOptions(Arguments):
     @classmethod
     def _world(cls, value: object) -> World:
         return resolve_world(value)
+
+    @field_validator("cell_size")
+    @classmethod
+    def _cell_size(cls, value: float, info: ValidationInfo) -> float:
+        [world] = needs(info, "world")
+        world.check_length("cell_size", value)
+        world.check_grid("cell_size", value, MAX_PATROL_CELLS)
+        return value
+
+    @field_validator("sensor_range")
+    @classmethod
+    def _range(cls, value: float, info: ValidationInfo) -> float:
+        world, cell_size = needs(info, "world", "cell_size")
+        rows, cols = world.grid_shape(cell_size)
+        diagonal = math.hypot(rows, cols)
+        if value > diagonal:
+            raise ConfigError(f"sensor_range: expected cells in (0, {diagonal:.4g}] (the "
+                              f"diagonal of the grid of world {world.name!r} at cell_size "
+                              f"{cell_size:g}), got {value!r}")
+        span = math.ceil(value)  # the offsets `cell_visibility` checks from every cell
+        dy, dx = np.mgrid[-span:span + 1, -span:span + 1]
+        pairs = rows * cols * int(np.count_nonzero(np.hypot(abs(dx) + 0.5, abs(dy) + 0.5)
+                                                   <= value))
+        if pairs > MAX_SIGHT_PAIRS:
+            raise ConfigError(f"sensor_range: {value:g} cells on the {rows} x {cols} grid of world "
+                              f"{world.name!r} means checking {pairs:,} lines of sight; at most "
+                              f"{MAX_SIGHT_PAIRS:,}: a shorter range or larger cells")
+        return value
 
     @field_validator("attack_time")
     @classmethod

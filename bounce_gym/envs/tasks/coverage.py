@@ -16,7 +16,9 @@ class CoverageTask(Task):
         target: None (uniform over free cells), an array (rows, cols) with row 0 at the bottom
             (the layout of `World.occupancy`), or a path to a ``.npy`` file of that array.
             Non-negative, positive total, zero on blocked cells; it is normalised to sum 1.
-        cell_size: grid cell size (default: the step length, the cell of the papers' model).
+        cell_size: grid cell size (default: the step length, the cell of the papers' model):
+            from 1e-4 times the world's diameter to the diameter, and at most 2^20 cells of the
+            bounding box (`bounce_gym.worlds.World.check_grid`).
         coverage_weight: reward = coverage_weight × (fraction of free cells newly visited)
             + distance_weight × (decrease of the L2 distance to the target).
         distance_weight: see ``coverage_weight``.
@@ -39,6 +41,9 @@ class CoverageTask(Task):
         super().configure(core)
         options = self.options
         self.cell_size = float(self.cell_size_arg or options.step_length)
+        field = "task_kwargs.cell_size" if self.cell_size_arg else "step_length"
+        options.world.check_length(field, self.cell_size)
+        options.world.check_grid(field, self.cell_size)
         self.free = options.world.occupancy(self.cell_size, options.robot_radius)
         if not self.free.any():
             raise ConfigError("coverage: the world has no free cell of this size for this robot")

@@ -29,7 +29,8 @@ class NavigationTask(Task):
             bin heading).
         goal: as ``start``.
             Both can also be given per episode through ``reset(options={"start": ..., "goal": ...})``.
-        goal_radius: size of the goal region (default: one step length).
+        goal_radius: size of the goal region (default: one step length), from 1e-4 times the
+            world's diameter to the diameter.
         heading_tolerance_deg: heading tolerance at the goal (default 22.5°, half a 45° bin).
         reward: ``"progress"`` (default), ``"sparse"`` or ``"plan_cost"`` — see below.
         goal_bonus: reward on arrival (default 1 for ``sparse`` and ``progress``; 100 for
@@ -125,6 +126,8 @@ class NavigationTask(Task):
         if options.n_robots != 1:
             raise ConfigError("task 'navigation' is a single-robot task (n_robots must be 1)")
         self.goal_radius = float(self.goal_radius_arg or options.step_length)
+        if self.goal_radius_arg is not None:
+            options.world.check_length("task_kwargs.goal_radius", self.goal_radius)
         # on the cell backend, random starts and goals are cells (centre and bin heading): the
         # papers' x_I and x_G
         self._cells = core.cell_model() if options.backend == "cell" else None
@@ -138,6 +141,8 @@ class NavigationTask(Task):
         self.geodesic = None
         self._potentials_by_goal: dict[int, np.ndarray] = {}  # `goal_potentials`' cache
         if self.reward == "progress":
+            options.world.check_grid("step_length (the grid of reward 'progress')",
+                                     options.step_length)
             free = options.world.occupancy(options.step_length, options.robot_radius)
             if not free.any():
                 raise ConfigError("reward: 'progress' measures distances between cells of size "
