@@ -110,9 +110,12 @@ class NavigationPlanner(Policy):
     (``env.cell_model()``): the cell backend's own, or on the other backends the model at cell
     size = step length with the env's ``cell_bins``, where the plan is replayed open-loop.
 
-    The robot follows the plan by counting ticks, as the papers' robot does. Where the plan runs
-    out before the episode ends (the goal was passed during the reset drive: a plan without
-    bumps or start = goal), it replans from the cell it must be in, which it tracks by stepping
+    The plan is `Roadmap.bounce_plan`: the env tests arrival only in the steps after its reset
+    drive, so a minimum plan that meets the goal before its first bump (on the drive, or
+    start = goal) is replaced by the drive and a plan of at least one tick back into the goal
+    region (None if there is none). The robot follows the plan by counting ticks, as the papers'
+    robot does. Where the plan runs out before the episode ends, it replans (a plan of at least
+    one tick) from the cell it must be in, which it tracks by stepping
     the deterministic cell model with its own actions (dead reckoning on the model, no privileged
     state). With ``replan_from_info=True`` it replans from the true pose in ``info`` instead,
     which also recovers from deviations under noise.
@@ -175,7 +178,8 @@ class NavigationPlanner(Policy):
         self.replans = 0
         self.plan = None
         if self.start_cell >= 0 and len(self.goal_cells):
-            self.plan = rm.plan(self.start_cell, self.goal_cells)
+            # the env sees the goal only after the reset drive: `Roadmap.bounce_plan`
+            self.plan = rm.bounce_plan(self.start_cell, self.goal_cells)
         self.executor = PlanExecutor(self.plan)
         self.executor.reset(env)
         self._env = env
@@ -222,7 +226,9 @@ class NavigationPlanner(Policy):
             here = int(self.roadmap.model.cell_of(np.asarray(info["position"])[None],
                                                   [float(info["heading"])])[0])
             self.cell = here
-        new = self.roadmap.plan(here, self.goal_cells) if here >= 0 else None
+        # at least one tick: ``here`` is where a step starts, and the env tests arrival only
+        # in the step (an empty plan from a goal cell would never arrive)
+        new = self.roadmap.plan(here, self.goal_cells, nonempty=True) if here >= 0 else None
         if new is None or new.ticks == 0:
             return  # nothing better to do: the executor repeats its last angle
         self.replans += 1

@@ -257,9 +257,15 @@ class Roadmap:
         raise KeyError(f"no roadmap edge {u} -> {v}")
 
     # -- queries ------------------------------------------------------------------------------
-    def _search(self, start: int) -> tuple[np.ndarray, np.ndarray]:
-        """One Dijkstra from all layers of ``start`` (the free first policy)."""
+    def _search(self, start: int, leave: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """One Dijkstra from all layers of ``start`` (the free first policy); with ``leave``
+        from the nodes one edge after them instead (every such edge costs w1 from the best
+        layer: a forward move keeps the layer, a bump into layer j leaves from layer j)."""
         sources = [self.node(start, i) for i in range(self.n_layers)]
+        if leave:
+            g = self.graph
+            sources = np.unique(np.concatenate(
+                [g.indices[g.indptr[u]:g.indptr[u + 1]] for u in sources])).tolist()
         self.dijkstra_calls += 1
         dist, pred, _ = dijkstra(self.graph, directed=True, indices=sources,
                                  return_predecessors=True, min_only=True)
@@ -272,37 +278,78 @@ class Roadmap:
                               f"got {cell!r}")
         return int(cell)
 
-    def plan(self, start: int, goal: int | Iterable[int]) -> Plan | None:
+    def plan(self, start: int, goal: int | Iterable[int], nonempty: bool = False) -> Plan | None:
         """The minimum plan from cell ``start`` to cell ``goal`` (Problem 1), None if none exists.
 
         ``goal`` may also be a collection of cells (a goal region): the plan ends at the first
         of them it can reach most cheaply. Ties between layers (and goal cells) go to the lowest
-        index. ``plan(z, z)`` is the empty plan.
+        index. ``plan(z, z)`` is the empty plan; with ``nonempty`` the plan takes at least one
+        tick (from a goal cell: the cheapest cycle back into the goal region).
         """
         start = self._check_cell(start, "start")
         goals = [self._check_cell(g, "goal") for g in np.atleast_1d(np.asarray(goal)).tolist()]
         if not goals:
             raise ConfigError("goal: expected at least one cell")
-        if start in goals:
+        if start in goals and not nonempty:
             return self._empty(start)
-        dist, pred = self._search(start)
+        dist, pred = self._search(start, leave=nonempty)
         nodes = np.array([self.node(g, i) for g in goals for i in range(self.n_layers)])
         best = int(nodes[np.argmin(dist[nodes])])
         if not np.isfinite(dist[best]):
             return None
-        return self._decode(pred, best, start)
+        return self._decode(pred, best, start, first=nonempty)
+
+    def bounce_plan(self, start: int, goal: int | Iterable[int]) -> Plan | None:
+        """The minimum plan from ``start`` to ``goal`` that a bounce-mode env counts as arriving.
+
+        In ``step_mode="bounce"`` the env's reset drives the robot from its start to the first
+        contact, and the task tests arrival only on the steps after it, each of which starts
+        with a bump. The roadmap's forced prefix (the forward edges from ``start`` to the first
+        blocked cell) is that drive; a minimum plan without bumps ends in a goal cell on it
+        (``start`` itself when start = goal, the paper's NIL plan ``M[i][i]``), where the env
+        does not see it. Such a plan is replaced by the drive followed by the minimum plan from
+        its blocked end cell that takes at least one tick; None if the goal region cannot be
+        entered again after the drive (the start/goal pair is then not solvable in the env).
+        """
+        plan = self.plan(start, goal)
+        if plan is None or plan.bumps:
+            return plan
+        drive = [plan.start]
+        while not self.blocked[drive[-1]]:
+            drive.append(self._forward(drive[-1]))
+            if len(drive) > self.n_cells:
+                raise AssertionError("a straight drive never reached a wall")
+        tail = self.plan(drive[-1], goal, nonempty=True)
+        if tail is None:
+            return None
+        run = len(drive) - 1
+        return Plan(start=plan.start, goal=tail.goal, cells=(*drive[:-1], *tail.cells),
+                    layers=(tail.layers[0],) * run + tail.layers,
+                    symbols=(0,) * run + tail.symbols, weight=self.w1 * run + tail.weight,
+                    angle_changes=tail.angle_changes)
+
+    def _forward(self, cell: int) -> int:
+        """The cell a forward edge leads to from a cell that is not blocked."""
+        e = int(self.graph.indptr[cell])  # layer 0: its only edge
+        return int(self.graph.indices[e]) % self.n_cells
 
     def _empty(self, cell: int) -> Plan:
         return Plan(start=cell, goal=cell, cells=(cell,), layers=(0,), symbols=(), weight=0.0,
                     angle_changes=0)
 
-    def _decode(self, pred: np.ndarray, end: int, start: int) -> Plan:
-        """Walk a predecessor tree back from node ``end`` and read the symbols off the edges."""
+    def _decode(self, pred: np.ndarray, end: int, start: int, first: bool = False) -> Plan:
+        """Walk a predecessor tree back from node ``end`` and read the symbols off the edges.
+
+        ``first``: the tree was searched from the nodes one edge after ``start`` (``plan``'s
+        ``nonempty``); the edge from ``start`` (in the layer of the node it leads to) is
+        prepended."""
         nodes = [end]
         while pred[nodes[-1]] != _NO_PRED:
             nodes.append(int(pred[nodes[-1]]))
             if len(nodes) > self.n_nodes:
                 raise AssertionError("cycle in a predecessor tree")
+        if first:
+            nodes.append(self.node(start, int(self.split(nodes[-1])[1])))
         nodes.reverse()
         symbols, weight, changes = [], 0.0, 0
         for u, v in zip(nodes[:-1], nodes[1:], strict=True):

@@ -123,7 +123,7 @@ class Feasibility:
         start = int(model.cell_of(task.start[0], task.start[1])[0])
         goals = goal_cells(model, task.goal[0][0], float(task.goal[1][0]), task.goal_radius,
                            task.heading_tolerance)
-        return start >= 0 and len(goals) > 0 and self._roadmap.plan(start, goals) is not None
+        return start >= 0 and len(goals) > 0 and self._roadmap.bounce_plan(start, goals) is not None
 
 
 class WorldReachability:

@@ -18,6 +18,11 @@ REWARDS = ("progress", "sparse", "plan_cost")
 DEFAULT_GAMMA = 1.0
 #: the most floats `NavigationTask.goal_potentials` keeps (2^24: 128 MiB)
 POTENTIAL_CACHE_FLOATS = 1 << 24
+#: world units by which the arrival test widens the goal radius against rounding: the goal
+#: region is the closed disk, so a drive that ends exactly on its circle (a cell centre at
+#: distance ``goal_radius``, which `baselines.navigation.goal_cells` counts with the same slack)
+#: arrives, although its entry point computes one ulp past the drive's end
+GOAL_SLACK = 1e-9
 
 
 class NavigationTask(Task):
@@ -259,14 +264,15 @@ class NavigationTask(Task):
         seg = p1 - p0
         length = float(np.hypot(*seg))
         rel = p0 - g
-        if rel @ rel <= self.goal_radius**2:
+        radius = self.goal_radius + GOAL_SLACK  # the closed disk, robust to rounding
+        if rel @ rel <= radius**2:
             s = 0.0
         elif length == 0:
             return None
         else:
             d = seg / length
             b = float(rel @ d)
-            disc = b * b - (float(rel @ rel) - self.goal_radius**2)
+            disc = b * b - (float(rel @ rel) - radius**2)
             if disc < 0:
                 return None
             s = -b - math.sqrt(disc)  # where the segment's line enters the goal disk

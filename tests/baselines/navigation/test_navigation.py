@@ -489,9 +489,84 @@ def test_navigation_planner_reads_the_episode_and_replans_past_the_reset_drive(l
     assert str(straight) == "00000"
     planner = NavigationPlanner()
     out = run_plan(env, model, straight, policy=planner)
-    assert out["terminated"] and planner.replans == 1
-    assert planner.plan.start == cell(model, 7, 0, E) and planner.plan.goal == 5  # at the block
-    assert out["total"] == pytest.approx(-(planner.plan.weight) + 100)
+    # the env sees no arrival on its reset drive: the plan is the drive, then a cycle back
+    assert out["terminated"] and planner.replans == 0 and planner.plan.bumps
+    assert planner.plan.start == 0 and planner.plan.goal == 5
+    assert planner.plan.cells[7] == cell(model, 7, 0, E)  # the drive ends at the block
+    drive = planner.plan.leading_zeros  # charged at reset, not in the step rewards
+    assert drive == 7
+    assert out["total"] == pytest.approx(-(planner.plan.weight - drive) + 100)
+
+
+def test_nonempty_plan_from_a_goal_cell_is_a_cycle(small):
+    """``plan(z, z)`` is the empty plan; with ``nonempty`` the cheapest cycle back to z."""
+    _, rm, _ = small
+    cycles = 0
+    for z in np.flatnonzero(rm.blocked)[:5].tolist():
+        assert rm.plan(z, z).ticks == 0
+        cycle = rm.plan(z, z, nonempty=True)
+        if cycle is None:
+            continue
+        assert cycle.ticks >= 1 and cycle.cells[0] == cycle.cells[-1] == z
+        assert cycle.weight == pytest.approx(rm.w1 * cycle.ticks
+                                             + (rm.w2 - rm.w1) * cycle.angle_changes)
+        cycles += 1
+    assert cycles
+
+
+#: the L-shaped room of examples/planners_on_custom_map.py
+L_ROOM = [(0, 0), (12, 0), (12, 5), (6, 5), (6, 10), (0, 10)]
+L_PILLAR = [(2, 2), (4, 2), (4, 4), (2, 4)]
+
+
+@pytest.fixture(scope="module")
+def l_room_env(tmp_path_factory):
+    import gymnasium as gym
+
+    import bounce_gym  # noqa: F401  (registers the environments)
+    from bounce_gym import worlds
+    from bounce_gym.worlds import World
+
+    path = worlds.save(World(L_ROOM, [L_PILLAR], name="l_room"),
+                       tmp_path_factory.mktemp("l_room") / "l_room.yaml")
+    env = gym.make("bounce_gym/BounceNavigation-v0", world=str(path), backend="cell")
+    yield env
+    env.close()
+
+
+def run_planner(env, seed: int) -> tuple[NavigationPlanner, dict]:
+    obs, info = env.reset(seed=seed)
+    planner = NavigationPlanner()
+    planner.reset(env)
+    done = False
+    while not done:
+        obs, _, terminated, truncated, info = env.step(planner.act(obs, info))
+        done = terminated or truncated
+    return planner, info
+
+
+@pytest.mark.parametrize("seed", [10045, 10084])
+def test_l_room_plans_ending_on_the_goal_circle_arrive(l_room_env, seed):
+    """The examples' L-shaped room: these plans end in a cell whose centre lies exactly
+    goal_radius from the goal point (a goal cell); the env's arrival test computed the drive's
+    entry into the closed goal disk one ulp past the drive's end and missed it."""
+    planner, info = run_planner(l_room_env, seed)
+    assert planner.plan is not None and planner.replans == 0
+    assert info["is_success"] and info["plan_cost"] == planner.predicted_weight
+
+
+def test_l_room_start_equal_to_goal_is_not_feasible_in_bounce_mode(l_room_env):
+    """Seed 10094 draws start = goal (the empty plan); the reset drive leaves the goal region,
+    the env never tests the start, and no plan enters the region again (its cells head 45°
+    along diagonals from the west wall, where no bump turns to 45°). The pair is infeasible in
+    the env, and the planner and the feasibility check say so."""
+    from bounce_gym_experiments.families.navigation import Feasibility
+
+    planner, info = run_planner(l_room_env, 10094)
+    assert planner.start_cell in planner.goal_cells.tolist()
+    assert planner.roadmap.plan(planner.start_cell, planner.goal_cells).ticks == 0
+    assert planner.plan is None and not info["is_success"]
+    assert not Feasibility()(l_room_env)
 
 
 def test_goal_cells_cover_the_task_goal_region(lab):
