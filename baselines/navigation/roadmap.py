@@ -65,6 +65,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
 from bounce_gym.cells import CellModel
+from bounce_gym.cells.outcomes import GOAL_SLACK
 from bounce_gym.errors import ConfigError
 
 __all__ = ["FORWARD", "BUMP", "Plan", "Roadmap", "AllPlans", "goal_cells"]
@@ -528,7 +529,7 @@ def goal_cells(model: CellModel, position: Sequence[float], heading: float,
     empty array if that is not free."""
     if radius is not None and tolerance is not None:
         gap = np.hypot(*(model.centres - np.asarray(position, dtype=np.float64)).T)
-        positions = np.flatnonzero(gap <= radius + 1e-9)
+        positions = np.flatnonzero(gap <= radius + GOAL_SLACK)
         turn = np.arange(model.n_bins) * model.bin_width - float(heading)
         err = np.abs((turn + math.pi) % (2 * math.pi) - math.pi)
         bins = np.flatnonzero(err <= tolerance + 1e-9)

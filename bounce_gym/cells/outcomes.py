@@ -23,6 +23,13 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+#: world units by which a goal test widens the goal radius against rounding: the goal region
+#: is the closed disk, so a drive that ends exactly on its circle (a cell centre at distance
+#: ``goal_radius``, which `baselines.navigation.goal_cells` counts with the same slack)
+#: arrives, although its entry point may compute one ulp past the drive's end. The env's test
+#: (`bounce_gym.envs.tasks.navigation`), `BumpOutcomes.goal_hits` and the JAX task use it.
+GOAL_SLACK = 1e-9
+
 #: the per-sample arrays of `BumpOutcomes`, in the order they are stored
 SAMPLE_FIELDS = ("state", "action", "next_state", "ticks", "start", "end", "heading")
 
@@ -135,7 +142,7 @@ class BumpOutcomes:
         length = np.hypot(seg[:, 0], seg[:, 1])
         safe = np.where(length > 0, length, 1.0)
         b = np.einsum("ij,ij->i", rel, seg) / safe
-        c = np.einsum("ij,ij->i", rel, rel) - radius**2
+        c = np.einsum("ij,ij->i", rel, rel) - (radius + GOAL_SLACK)**2
         disc = b * b - c
         entry = -b - np.sqrt(np.maximum(disc, 0.0))
         crosses = (length > 0) & (disc >= 0) & (entry >= 0) & (entry <= length)

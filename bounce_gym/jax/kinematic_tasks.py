@@ -15,6 +15,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from bounce_gym.cells.outcomes import GOAL_SLACK
 from bounce_gym.errors import ConfigError
 
 #: the most grid nodes whose potential table (nodes × nodes) `KinematicNavigationTask` keeps
@@ -193,7 +194,8 @@ class KinematicNavigationTask(KinematicFreeTask):
         length = jnp.hypot(seg[0], seg[1])
         rel = step.start - state.goal_position
         rr = rel[0] * rel[0] + rel[1] * rel[1]
-        r2 = params.goal_radius * params.goal_radius
+        radius = params.goal_radius + GOAL_SLACK  # the closed disk, as the env's test
+        r2 = radius * radius
         at_start = rr <= r2
         d = seg / jnp.where(length == 0, 1.0, length)
         b = rel[0] * d[0] + rel[1] * d[1]

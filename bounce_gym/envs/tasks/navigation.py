@@ -8,6 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from bounce_gym.cells.geodesic import GridGeodesic
+from bounce_gym.cells.outcomes import GOAL_SLACK
 from bounce_gym.envs.tasks.base import StepEvents, Task, _normalised, pose_option, tick_length_at
 from bounce_gym.errors import ConfigError
 from bounce_gym.validate import flag, number
@@ -18,11 +19,6 @@ REWARDS = ("progress", "sparse", "plan_cost")
 DEFAULT_GAMMA = 1.0
 #: the most floats `NavigationTask.goal_potentials` keeps (2^24: 128 MiB)
 POTENTIAL_CACHE_FLOATS = 1 << 24
-#: world units by which the arrival test widens the goal radius against rounding: the goal
-#: region is the closed disk, so a drive that ends exactly on its circle (a cell centre at
-#: distance ``goal_radius``, which `baselines.navigation.goal_cells` counts with the same slack)
-#: arrives, although its entry point computes one ulp past the drive's end
-GOAL_SLACK = 1e-9
 
 
 class NavigationTask(Task):
