@@ -302,9 +302,8 @@ class World:
         """
         if not np.isfinite(cell_size) or cell_size <= 0:
             raise InvalidWorldError(f"cell_size must be a finite number > 0, got {cell_size!r}")
-        xmin, ymin, xmax, ymax = self.bounds
-        cols = int(np.ceil((xmax - xmin) / cell_size - 1e-9))
-        rows = int(np.ceil((ymax - ymin) / cell_size - 1e-9))
+        xmin, ymin = self.bounds[:2]
+        rows, cols = self.grid_shape(cell_size)
         cx = xmin + (np.arange(cols) + 0.5) * cell_size
         cy = ymin + (np.arange(rows) + 0.5) * cell_size
         gx, gy = np.meshgrid(cx, cy)
