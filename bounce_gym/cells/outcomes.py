@@ -25,8 +25,8 @@ import scipy.sparse as sp
 
 #: world units by which a goal test widens the goal radius against rounding: the goal region
 #: is the closed disk, so a drive that ends exactly on its circle (a cell centre at distance
-#: ``goal_radius``, which `baselines.navigation.goal_cells` counts with the same slack)
-#: arrives, although its entry point may compute one ulp past the drive's end. The env's test
+#: ``goal_radius``, which the planners' goal cells count with the same slack) arrives,
+#: although its entry point may compute one ulp past the drive's end. The env's test
 #: (`bounce_gym.envs.tasks.navigation`), `BumpOutcomes.goal_hits` and the JAX task use it.
 GOAL_SLACK = 1e-9
 
