@@ -5,8 +5,12 @@ STAMP := $(VENV)/.installed
 DEMO ?= evaluate.py
 PYTEST_ARGS ?=
 # `make test` leaves out the tests marked slow (the long adversarial runs); `make test-slow`
-# runs only those. CI runs both.
+# runs only those. CI runs both. Each runs on one pytest-xdist worker per core (PYTEST_WORKERS=0:
+# in one process), hands idle workers the tests left on busy ones (worksteal), and lists its 20
+# slowest tests; tests/conftest.py prints the run's wall time beside its budget.
 PYTEST_MARK ?= not slow
+PYTEST_WORKERS ?= auto
+PYTEST_RUN = $(BIN)/python -m pytest -q -n $(PYTEST_WORKERS) --dist worksteal --durations=20
 
 .PHONY: install test test-slow demo bench lint docs schema clean
 
@@ -19,10 +23,10 @@ $(STAMP): pyproject.toml setup.py constraints.txt
 	touch $@
 
 test: $(STAMP)
-	SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy $(BIN)/python -m pytest -q -m "$(PYTEST_MARK)" $(PYTEST_ARGS)
+	SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy $(PYTEST_RUN) -m "$(PYTEST_MARK)" $(PYTEST_ARGS)
 
 test-slow: $(STAMP)
-	SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy $(BIN)/python -m pytest -q -m slow $(PYTEST_ARGS)
+	SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy $(PYTEST_RUN) -m slow $(PYTEST_ARGS)
 
 # The main job: evaluate.py on the default config, configs/eval_default.yaml
 # (`make demo DEMO="-m bounce_gym.demo"` runs the short simulator demo instead).

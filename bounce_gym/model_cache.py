@@ -2,8 +2,17 @@
 
 The sampled generalized cell mappings (`bounce_gym.dynamics.sampled_model`,
 `bounce_gym.envs.drifters.model_cache`) take seconds to minutes to build, so each is kept in
-``<home>/cache/<kind>/<fingerprint>.npz`` (``home`` is `bounce_gym.trust.home`). The fingerprint
-is the sha256 of everything that defines the model, computed by its owner.
+``<cache>/<kind>/<fingerprint>.npz``, where ``<cache>`` is ``$BOUNCE_GYM_CACHE`` if set (an
+absolute path; ``~`` expanded) and ``<home>/cache`` otherwise (``home`` is `bounce_gym.trust.home`).
+The fingerprint is the sha256 of everything that defines the model, computed by its owner. Point
+``BOUNCE_GYM_CACHE`` at one folder to share built models between users' homes, the machines of a
+cluster on a shared file system, or the workers of a test run.
+
+An owner gets its model through `cached`: a model that is missing is built and stored while
+holding an exclusive lock on its file (`bounce_gym.files.locked`), and looked up once more under
+the lock first, so that processes asking for the same model at once (the workers of a sweep or of
+a test run) build it once and the others read what the first stored. A model that is there is
+read without the lock, so a read-only cache folder still serves.
 
 A file holds the model's arrays and a JSON header (a ``uint8`` array named ``header``) carrying
 at least ``format`` and ``fingerprint``. It is written atomically (`bounce_gym.files.atomic_file`:
@@ -17,18 +26,26 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 from gymnasium import logger
 
 from bounce_gym.documents import parse_document
-from bounce_gym.errors import BounceGymError
-from bounce_gym.files import atomic_file
+from bounce_gym.errors import BounceGymError, ConfigError
+from bounce_gym.files import atomic_file, check_path_text, locked
 from bounce_gym.trust import home
 
-__all__ = ["MAX_BYTES", "cache_folder", "load_cached", "store"]
+__all__ = ["CACHE_VARIABLE", "MAX_BYTES", "cache_folder", "cached", "load_cached", "store"]
+
+#: the environment variable naming the folder of cached models (default ``<home>/cache``)
+CACHE_VARIABLE = "BOUNCE_GYM_CACHE"
+
+_Model = TypeVar("_Model")
 
 #: The largest cache file read (bytes); a larger one is rebuilt.
 MAX_BYTES = 2 << 30
@@ -36,8 +53,32 @@ _HEADER = "header"
 
 
 def cache_folder(kind: str) -> Path:
-    """``<home>/cache/<kind>``, where the models of one kind are kept."""
-    return home() / "cache" / kind
+    """``<cache>/<kind>``, where the models of one kind are kept (module docstring). A relative
+    or unexpandable ``$BOUNCE_GYM_CACHE`` is a `ConfigError`."""
+    given = os.environ.get(CACHE_VARIABLE)
+    if not given:
+        return home() / "cache" / kind
+    check_path_text(CACHE_VARIABLE, given)
+    try:
+        root = Path(given).expanduser()
+    except RuntimeError:  # ~nosuchuser
+        raise ConfigError(f"{CACHE_VARIABLE}: cannot expand {given!r}: no such user or home "
+                          "folder; give the folder's absolute path") from None
+    if not root.is_absolute():
+        raise ConfigError(f"{CACHE_VARIABLE}: expected an absolute path, got {given!r}")
+    return root / kind
+
+
+def cached(path: Path, load: Callable[[], _Model | None], build: Callable[[], _Model]) -> _Model:
+    """The model kept at ``path``: what ``load()`` returns (None when the file is missing or not
+    usable), else, under the file's lock, ``load()`` again or ``build()``, which also stores it
+    (module docstring)."""
+    found = load()
+    if found is not None:
+        return found
+    with locked(path):
+        found = load()
+        return found if found is not None else build()
 
 
 def store(path: Path, header: dict, arrays: dict[str, np.ndarray]) -> None:

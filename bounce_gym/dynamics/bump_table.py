@@ -393,15 +393,20 @@ def bump_table(dynamics: dict, spacing: float = DEFAULT_SPACING,
     path = (Path(folder) / f"{key}.npz").resolve()
     signature, table = _LOADED.pop(path, (None, None))
     if table is None or signature != _file_signature(path):
-        table = None
-        stored = model_cache.load_cached(path, FORMAT, key)
-        if stored is not None:
-            table = _from_stored(dynamics, spacing, headings, key, *stored, path)
-    if table is None:
-        table = _build(dynamics, spacing, headings, key)
-        header = {"format": FORMAT, "fingerprint": key, "build_seconds": table.build_seconds,
-                  "lag": table.lag}
-        model_cache.store(path, header, {name: getattr(table, name) for name in _ARRAYS})
+
+        def load() -> BumpTable | None:
+            stored = model_cache.load_cached(path, FORMAT, key)
+            return None if stored is None else _from_stored(dynamics, spacing, headings, key,
+                                                            *stored, path)
+
+        def build() -> BumpTable:
+            built = _build(dynamics, spacing, headings, key)
+            header = {"format": FORMAT, "fingerprint": key, "build_seconds": built.build_seconds,
+                      "lag": built.lag}
+            model_cache.store(path, header, {name: getattr(built, name) for name in _ARRAYS})
+            return built
+
+        table = model_cache.cached(path, load, build)
     _LOADED[path] = (_file_signature(path), table)  # the most recently used last
     while len(_LOADED) > LOADED_TABLES:
         _LOADED.pop(next(iter(_LOADED)))

@@ -127,22 +127,32 @@ def sampled_model(model: CellModel, dynamics: dict, angles: np.ndarray,
     if max_ticks is None:
         max_ticks = default_max_ticks(dynamics)
     key = model_fingerprint(model, dynamics, angles, samples, seed, offset, max_ticks)
-    path = None
-    if cache is not False:
-        path = Path(default_cache() if cache is None or cache is True else cache) / f"{key}.npz"
-        stored = _load(path, model, key)
-        if stored is not None:
-            outcomes, convergence = stored
-            return SampledModel(model, outcomes, dict(dynamics), samples, seed, offset, key,
-                                convergence, max_ticks)
-    outcomes = sample_outcomes(model, angles, samples, np.random.default_rng(seed), dynamics,
-                               max_ticks, offset)
-    tv = outcomes.split(0).total_variation(outcomes.split(1))
-    convergence = {"tv_halves_mean": float(np.nanmean(tv)), "tv_halves_max": float(np.nanmax(tv))}
-    if path is not None:
-        _store(path, outcomes, key, convergence)
-    return SampledModel(model, outcomes, dict(dynamics), samples, seed, offset, key, convergence,
-                        max_ticks)
+    path = None if cache is False else \
+        Path(default_cache() if cache is None or cache is True else cache) / f"{key}.npz"
+
+    def finished(outcomes: BumpOutcomes, convergence: dict) -> SampledModel:
+        return SampledModel(model, outcomes, dict(dynamics), samples, seed, offset, key,
+                            convergence, max_ticks)
+
+    def build() -> SampledModel:
+        outcomes = sample_outcomes(model, angles, samples, np.random.default_rng(seed), dynamics,
+                                   max_ticks, offset)
+        tv = outcomes.split(0).total_variation(outcomes.split(1))
+        convergence = {"tv_halves_mean": float(np.nanmean(tv)),
+                       "tv_halves_max": float(np.nanmax(tv))}
+        if path is not None:
+            _store(path, outcomes, key, convergence)
+        return finished(outcomes, convergence)
+
+    if path is None:
+        return build()
+    stored_at = path
+
+    def load() -> SampledModel | None:
+        stored = _load(stored_at, model, key)
+        return None if stored is None else finished(*stored)
+
+    return model_cache.cached(stored_at, load, build)
 
 
 def _store(path: Path, outcomes: BumpOutcomes, key: str, convergence: dict) -> None:

@@ -59,15 +59,22 @@ def sampled_drifter_model(model: DrifterCells, options: DrifterOptions, samples:
     """The sampled model from the cache, built and stored if missing, stale or corrupt."""
     key = drifter_model_fingerprint(options, samples, seed, horizon, refine)
     path = cache_path(key)
-    stored = model_cache.load_cached(path, FORMAT, key)
-    if stored is not None:
-        try:
-            return _read(*stored, grid_model(model, refine))
-        except (ValueError, KeyError, TypeError) as exc:
-            model_cache.warn_unusable(path, exc)
-    built = build_sampled_model(model, options, samples, seed, horizon, refine)
-    _write(path, key, built)
-    return built
+
+    def load() -> SampledDrifterCells | None:
+        stored = model_cache.load_cached(path, FORMAT, key)
+        if stored is not None:
+            try:
+                return _read(*stored, grid_model(model, refine))
+            except (ValueError, KeyError, TypeError) as exc:
+                model_cache.warn_unusable(path, exc)
+        return None
+
+    def build() -> SampledDrifterCells:
+        built = build_sampled_model(model, options, samples, seed, horizon, refine)
+        _write(path, key, built)
+        return built
+
+    return model_cache.cached(path, load, build)
 
 
 def _write(path: Path, key: str, model: SampledDrifterCells) -> None:
