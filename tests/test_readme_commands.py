@@ -116,6 +116,7 @@ def test_the_first_training_commands_run_as_written(tmp_path):
 
 
 @pytest.mark.slow  # 15 training commands, ~2.5 minutes
+@pytest.mark.long
 def test_readme_training_commands_run_as_written(tmp_path):
     imported = _run_as_written(tmp_path, COMMANDS)
     assert (tmp_path / "models/navigation-lab/learning_curves.png").is_file()

@@ -33,9 +33,9 @@ CASES = [("parallel", "cell", 2_000), ("single", "cell", 10_000),
          pytest.param("parallel", "cell", 10_000, marks=SLOW),
          ("parallel", "kinematic", 2_000), ("parallel", "pymunk", 2_000), ("aec", "kinematic", 2_000),
          pytest.param("parallel", "kinematic", 10_000, marks=SLOW),
-         pytest.param("parallel", "pymunk", 10_000, marks=SLOW),
+         pytest.param("parallel", "pymunk", 10_000, marks=[SLOW, pytest.mark.long]),
          pytest.param("aec", "kinematic", 10_000, marks=SLOW),
-         pytest.param("aec", "pymunk", 10_000, marks=SLOW)]
+         pytest.param("aec", "pymunk", 10_000, marks=[SLOW, pytest.mark.long])]
 
 
 @pytest.mark.timeout(600)

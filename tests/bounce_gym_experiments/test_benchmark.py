@@ -82,6 +82,7 @@ def _tiny(config: dict, tmp_path: Path, models: Path | None = None) -> Path:
     return path
 
 
+@pytest.mark.long
 def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
     """Every experiment but the physics ones (a slow test runs those)."""
     config = yaml.safe_load(BENCHMARK.read_text(encoding="utf-8"))
@@ -146,6 +147,7 @@ def test_every_policy_of_a_benchmark_experiment_starts_from_the_same_draw():
 
 
 @pytest.mark.slow
+@pytest.mark.long  # the three worlds' bump tables are built here: ~3.5 min of the ~5
 def test_the_physics_experiments_run_with_their_agents(tmp_path, capsys):
     """The physics experiments, 2 seeds each, with the shipped agents: every row is there, the
     agents of both tracks are named by what they observe, and the planners predict."""

@@ -63,6 +63,7 @@ def test_a_perimeter_evaluation_writes_its_table_files_and_plots(tmp_path, capsy
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_a_tiny_patrol_evaluation_reports_every_rate_with_an_interval(tmp_path, capsys):
     """Every patroller kind (the GλD fits of the p_d plot take most of its ~20 s)."""
     path = tmp_path / "patrol.yaml"

@@ -103,6 +103,7 @@ def _summary(tmp_path, rows: list[dict]) -> list[dict]:
     return json.loads((folder / "results.json").read_text())["summary"]
 
 
+@pytest.mark.long
 def test_every_dynamic_row_runs(tmp_path):
     """Every dynamic row but the sampled planner's (`test_the_sampled_planner_rows_run`)."""
     rows = []

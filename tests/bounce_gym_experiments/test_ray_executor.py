@@ -63,6 +63,7 @@ def test_units_failing_for_good_are_reported_while_the_others_complete(tmp_path)
                         UnitFailure("bad", "ValueError: unit 2 cannot be done", 2)]
 
 
+@pytest.mark.long
 @pytest.mark.slow  # a whole evaluation twice, one on Ray: ~60 s on two cores (the executors
 # benchmark's test compares the same three executors on a smaller evaluation in make test)
 def test_the_evaluation_on_ray_writes_the_same_files_as_one_process(tmp_path):

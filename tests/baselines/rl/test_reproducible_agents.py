@@ -108,6 +108,7 @@ def _differences(a: Path, b: Path) -> dict[str, float]:
 
 
 @pytest.mark.slow  # four retrains twice, ~1 min
+@pytest.mark.long
 def test_retraining_each_kind_twice_on_one_machine_gives_the_same_weights(tmp_path):
     _retrain(tmp_path / "a")
     _retrain(tmp_path / "b")
