@@ -17,7 +17,10 @@ inherit:
 The folder is made by the process that runs pytest (the controller under xdist) and handed to
 its workers through `RUN_VARIABLE`.
 
-Each worker computes on one thread (OpenMP, OpenBLAS, MKL, XLA's CPU backend; torch reads
+Each worker owns one core: with no more workers than cores, worker ``gw<i>`` and every process
+it starts run on the i-th core this run may use (``sched_setaffinity``), so a test's process pool
+or Ray instance sized to "the machine's cores" (`bounce_gym_experiments.executors.machine_cores`)
+takes its worker's core and does not crowd the others'. Each worker computes on one thread (OpenMP, OpenBLAS, MKL, XLA's CPU backend; torch reads
 ``OMP_NUM_THREADS``) unless the caller's environment says otherwise: the workers already fill the
 cores, and a multi-threaded BLAS beside a busy worker spins (a cvxpy solve that takes 0.9 s alone
 took 36 s so). These are set before NumPy is first imported.
@@ -55,6 +58,10 @@ _OWNER = _WORKER is None or RUN_VARIABLE not in os.environ
 if _OWNER:
     os.environ[RUN_VARIABLE] = tempfile.mkdtemp(prefix="bounce-gym-tests-")
 _RUN = os.environ[RUN_VARIABLE]
+if _WORKER is not None and hasattr(os, "sched_setaffinity"):
+    _cores = sorted(os.sched_getaffinity(0))
+    if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", len(_cores) + 1)) <= len(_cores):
+        os.sched_setaffinity(0, {_cores[int(_WORKER.removeprefix("gw"))]})
 _HOME = os.path.join(_RUN, f"home-{_WORKER or 'main'}")
 os.makedirs(_HOME, mode=0o700, exist_ok=True)
 os.environ[HOME_VARIABLE] = _HOME
