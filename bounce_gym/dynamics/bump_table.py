@@ -51,7 +51,8 @@ earlier, b the distance behind.
 **Cache.** A table depends on the world, the backend and its physics parameters, the robot's
 radius, the step length, the rule and the resolution — not on the noise, Φ or the cell model —
 and is stored like the sampled GCM (`bounce_gym.model_cache`: ``<fingerprint>.npz``, written
-atomically, read as data, rebuilt with a warning when unusable), in ``<home>/cache/bump_tables``.
+atomically, read as data, rebuilt with a warning when unusable, built once when processes ask
+for it at once), in ``<cache>/bump_tables`` (``$BOUNCE_GYM_CACHE`` or ``<home>/cache``).
 
 Usage — the factory picks the table where it applies (pymunk's dynamic physics, the relative
 rule; continuous headings) and the simulator otherwise::

@@ -13,8 +13,9 @@ step length —, Φ, the samples, the seed, the heading offset, the re-sampling 
 ``<fingerprint>.npz`` holding the sample arrays and a JSON header, by `bounce_gym.model_cache` (data only, written
 atomically). A file that cannot be read, is inconsistent or whose header names another
 fingerprint is rebuilt and replaced, with a warning. The folder is ``cache`` when given, else
-``<home>/cache/sampled_models`` (`bounce_gym.trust.home`: ``$BOUNCE_GYM_HOME`` or the user's
-config folder); ``cache=False`` keeps the model in memory only.
+``<cache>/sampled_models`` (`bounce_gym.model_cache.cache_folder`: ``$BOUNCE_GYM_CACHE``, or
+``<home>/cache`` with ``$BOUNCE_GYM_HOME`` or the user's config folder); ``cache=False`` keeps
+the model in memory only.
 """
 
 from __future__ import annotations
@@ -107,7 +108,7 @@ def model_fingerprint(model: CellModel, dynamics: dict, angles: np.ndarray, samp
 
 
 def default_cache() -> Path:
-    """``<home>/cache/sampled_models`` (module docstring)."""
+    """``<cache>/sampled_models`` (module docstring)."""
     return model_cache.cache_folder("sampled_models")
 
 

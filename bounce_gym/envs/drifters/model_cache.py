@@ -1,7 +1,7 @@
 """The sampled drifter models on disk: one ``.npz`` file per model, keyed by a fingerprint of
-everything that defines it, under ``<home>/cache/drifter_gcm/`` (``home`` is
-`bounce_gym.trust.home`, the user's bounce_gym folder, ``$BOUNCE_GYM_HOME`` if set), kept by
-`bounce_gym.model_cache`.
+everything that defines it, under ``<cache>/drifter_gcm/`` (``<cache>`` is ``$BOUNCE_GYM_CACHE``
+if set, else ``<home>/cache`` with ``home`` the user's bounce_gym folder), kept and built once
+by `bounce_gym.model_cache`.
 
 The fingerprint is the sha256 of the flow field's arrays (velocities, axes, times, land) and of
 the settings that change the matrices: the refinement, the backend, the start time, the step's duration,
