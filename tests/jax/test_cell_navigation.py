@@ -34,8 +34,9 @@ def _rollouts(env, params, starts, goals, actions):
 
         return obs0, jax.lax.scan(body, state, acts)[1]
 
-    return jax.jit(jax.vmap(episode))(jnp.asarray(starts), jnp.asarray(goals),
-                                      jnp.asarray(actions))
+    out = jax.jit(jax.vmap(episode))(jnp.asarray(starts), jnp.asarray(goals),
+                                     jnp.asarray(actions))
+    return jax.device_get(out)  # NumPy arrays: indexed step by step below, cheaply
 
 
 def _pairs(env, params, rng, v1: bool):
