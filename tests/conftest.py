@@ -20,10 +20,11 @@ its workers through `RUN_VARIABLE`.
 Each worker owns one core: with no more workers than cores, worker ``gw<i>`` and every process
 it starts run on the i-th core this run may use (``sched_setaffinity``), so a test's process pool
 or Ray instance sized to "the machine's cores" (`bounce_gym_experiments.executors.machine_cores`)
-takes its worker's core and does not crowd the others'. Each worker computes on one thread (OpenMP, OpenBLAS, MKL, XLA's CPU backend; torch reads
-``OMP_NUM_THREADS``) unless the caller's environment says otherwise: the workers already fill the
-cores, and a multi-threaded BLAS beside a busy worker spins (a cvxpy solve that takes 0.9 s alone
-took 36 s so). These are set before NumPy is first imported.
+takes its worker's core and does not crowd the others'. Each worker computes on one thread
+(OpenMP, OpenBLAS, MKL, XLA's CPU backend; torch reads ``OMP_NUM_THREADS``) unless the caller's
+environment says otherwise: the workers already fill the cores, and a multi-threaded BLAS beside
+a busy worker spins (a cvxpy solve that takes 0.9 s alone took 36 s so). These are set before
+NumPy is first imported.
 
 Tests marked ``long`` (a minute or more on one core) are run first: a worker that starts one
 near the end of a run would keep the others waiting for it.
