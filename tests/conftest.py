@@ -62,7 +62,8 @@ _RUN = os.environ[RUN_VARIABLE]
 if _WORKER is not None and hasattr(os, "sched_setaffinity"):
     _cores = sorted(os.sched_getaffinity(0))
     if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", len(_cores) + 1)) <= len(_cores):
-        os.sched_setaffinity(0, {_cores[int(_WORKER.removeprefix("gw"))]})
+        # modulo: xdist names a worker that replaces a crashed one with the next number
+        os.sched_setaffinity(0, {_cores[int(_WORKER.removeprefix("gw")) % len(_cores)]})
 _HOME = os.path.join(_RUN, f"home-{_WORKER or 'main'}")
 os.makedirs(_HOME, mode=0o700, exist_ok=True)
 os.environ[HOME_VARIABLE] = _HOME
