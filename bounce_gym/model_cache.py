@@ -37,8 +37,8 @@ from gymnasium import logger
 
 from bounce_gym.documents import parse_document
 from bounce_gym.errors import BounceGymError, ConfigError
-from bounce_gym.files import atomic_file, check_path_text, locked
-from bounce_gym.trust import home
+from bounce_gym.files import atomic_file, locked
+from bounce_gym.trust import folder_variable, home
 
 __all__ = ["CACHE_VARIABLE", "MAX_BYTES", "cache_folder", "cached", "load_cached", "store"]
 
@@ -58,12 +58,7 @@ def cache_folder(kind: str) -> Path:
     given = os.environ.get(CACHE_VARIABLE)
     if not given:
         return home() / "cache" / kind
-    check_path_text(CACHE_VARIABLE, given)
-    try:
-        root = Path(given).expanduser()
-    except RuntimeError:  # ~nosuchuser
-        raise ConfigError(f"{CACHE_VARIABLE}: cannot expand {given!r}: no such user or home "
-                          "folder; give the folder's absolute path") from None
+    root = folder_variable(CACHE_VARIABLE, given)
     if not root.is_absolute():
         raise ConfigError(f"{CACHE_VARIABLE}: expected an absolute path, got {given!r}")
     return root / kind

@@ -60,17 +60,24 @@ TRUSTED_FILE = "trusted.json"
 _KEY_BYTES = 32
 
 
+def folder_variable(variable: str, given: str) -> Path:
+    """The folder that the environment variable ``variable`` names (its value ``given``), ``~``
+    and ``~user`` expanded; a NUL character or a ``~user`` that names no user is a
+    `ConfigError` naming the variable."""
+    check_path_text(variable, given)
+    try:
+        return Path(given).expanduser()
+    except RuntimeError:  # ~nosuchuser, or ~ without $HOME nor a password entry
+        raise ConfigError(f"{variable}: cannot expand {given!r}: no such user or home folder; "
+                          "give the folder's absolute path") from None
+
+
 def home() -> Path:
     """The user's bounce_gym folder (module docstring); not created here. A ``~user`` that
     names no user, or a home folder that cannot be found, is a `ConfigError`."""
     given = os.environ.get(HOME_VARIABLE)
     if given:
-        check_path_text(HOME_VARIABLE, given)
-        try:
-            return Path(given).expanduser()
-        except RuntimeError:  # ~nosuchuser, or ~ without $HOME nor a password entry
-            raise ConfigError(f"{HOME_VARIABLE}: cannot expand {given!r}: no such user or home "
-                              "folder; give the folder's absolute path") from None
+        return folder_variable(HOME_VARIABLE, given)
     config = os.environ.get(XDG_VARIABLE, "")
     if os.path.isabs(config):  # the XDG spec: a relative value is invalid and ignored
         check_path_text(XDG_VARIABLE, config)

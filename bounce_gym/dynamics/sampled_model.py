@@ -128,14 +128,12 @@ def sampled_model(model: CellModel, dynamics: dict, angles: np.ndarray,
     if max_ticks is None:
         max_ticks = default_max_ticks(dynamics)
     key = model_fingerprint(model, dynamics, angles, samples, seed, offset, max_ticks)
-    path = None if cache is False else \
-        Path(default_cache() if cache is None or cache is True else cache) / f"{key}.npz"
 
     def finished(outcomes: BumpOutcomes, convergence: dict) -> SampledModel:
         return SampledModel(model, outcomes, dict(dynamics), samples, seed, offset, key,
                             convergence, max_ticks)
 
-    def build() -> SampledModel:
+    def build(path: Path | None) -> SampledModel:
         outcomes = sample_outcomes(model, angles, samples, np.random.default_rng(seed), dynamics,
                                    max_ticks, offset)
         tv = outcomes.split(0).total_variation(outcomes.split(1))
@@ -145,15 +143,15 @@ def sampled_model(model: CellModel, dynamics: dict, angles: np.ndarray,
             _store(path, outcomes, key, convergence)
         return finished(outcomes, convergence)
 
-    if path is None:
-        return build()
-    stored_at = path
+    if cache is False:
+        return build(None)
+    path = Path(default_cache() if cache is None or cache is True else cache) / f"{key}.npz"
 
     def load() -> SampledModel | None:
-        stored = _load(stored_at, model, key)
+        stored = _load(path, model, key)
         return None if stored is None else finished(*stored)
 
-    return model_cache.cached(stored_at, load, build)
+    return model_cache.cached(path, load, lambda: build(path))
 
 
 def _store(path: Path, outcomes: BumpOutcomes, key: str, convergence: dict) -> None:
