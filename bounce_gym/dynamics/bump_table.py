@@ -67,10 +67,12 @@ docs/bump_table.md; `table_error` computes them.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -374,6 +376,15 @@ def table_fingerprint(dynamics: dict, spacing: float, headings: int) -> str:
     return hashlib.sha256(json.dumps(described, sort_keys=True).encode()).hexdigest()
 
 
+def _check_table_arguments(dynamics: dict, spacing: float, headings: int) -> None:
+    if not table_applies(dynamics):
+        raise ConfigError("bump table: only pymunk's dynamic physics with the relative rule is "
+                          "tabulated")
+    if not (isinstance(headings, int) and headings >= 4) or not spacing > 0:
+        raise ConfigError(f"bump table: expected spacing > 0 and headings >= 4, got {spacing!r}, "
+                          f"{headings!r}")
+
+
 def bump_table(dynamics: dict, spacing: float = DEFAULT_SPACING,
                headings: int = DEFAULT_HEADINGS, cache: Path | str | bool | None = None
                ) -> BumpTable:
@@ -381,12 +392,7 @@ def bump_table(dynamics: dict, spacing: float = DEFAULT_SPACING,
     or built (module docstring). ``spacing``: node spacing along the boundary in robot radii;
     ``headings``: tabulated headings; ``cache``: a folder, None for the default one, False for
     none."""
-    if not table_applies(dynamics):
-        raise ConfigError("bump table: only pymunk's dynamic physics with the relative rule is "
-                          "tabulated")
-    if not (isinstance(headings, int) and headings >= 4) or not spacing > 0:
-        raise ConfigError(f"bump table: expected spacing > 0 and headings >= 4, got {spacing!r}, "
-                          f"{headings!r}")
+    _check_table_arguments(dynamics, spacing, headings)
     key = table_fingerprint(dynamics, spacing, headings)
     if cache is False:
         return _build(dynamics, spacing, headings, key)
@@ -550,11 +556,22 @@ class BumpMotion:
     Attributes:
         model, dynamics: the cell model of the decision states and the `BounceDynamics`
             arguments (with the ``world``).
-        table: the `BumpTable`, or None where the simulator is used.
+        table: the `BumpTable`, or None where the simulator is used. Given as a table or as
+            ``load``, a function that returns it (`bump_table` with its arguments bound): then
+            it is loaded or built at its first use, not when the motion is made — an env that
+            is only constructed (a configuration's validation reads its horizon) builds none.
     """
 
-    def __init__(self, model: CellModel, dynamics: dict, table: BumpTable | None) -> None:
-        self.model, self.dynamics, self.table = model, dict(dynamics), table
+    def __init__(self, model: CellModel, dynamics: dict, table: BumpTable | None = None, *,
+                 load: Callable[[], BumpTable] | None = None) -> None:
+        self.model, self.dynamics = model, dict(dynamics)
+        self._table, self._load = table, load
+
+    @property
+    def table(self) -> BumpTable | None:
+        if self._table is None and self._load is not None:
+            self._table, self._load = self._load(), None
+        return self._table
 
     def bumps(self, angles: np.ndarray, action: np.ndarray, point: np.ndarray,
               heading: np.ndarray, rng: np.random.Generator, max_ticks: int) -> BumpOutcomes:
@@ -583,5 +600,7 @@ def bump_motion(model: CellModel, dynamics: dict, tabulated: bool | None = None,
     (`bump_table`, with ``spacing``, ``headings`` and ``cache``) where it applies and
     ``tabulated`` is not False — True insists on it —, the simulator otherwise."""
     if tabulated is False or (tabulated is None and not table_applies(dynamics)):
-        return BumpMotion(model, dynamics, None)
-    return BumpMotion(model, dynamics, bump_table(dynamics, spacing, headings, cache))
+        return BumpMotion(model, dynamics)
+    _check_table_arguments(dynamics, spacing, headings)
+    return BumpMotion(model, dynamics,
+                      load=functools.partial(bump_table, dynamics, spacing, headings, cache))

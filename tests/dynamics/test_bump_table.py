@@ -166,3 +166,15 @@ def test_boundary_points_project_back_to_their_arc_length():
     np.testing.assert_allclose(near.s, s, atol=1e-9)
     np.testing.assert_allclose(near.distance, 1e-6, rtol=1e-6)
     assert np.isinf(pieces.project(np.array([[1.2, 0.4]])).distance[0])  # far from it
+
+
+def test_the_factory_builds_the_table_at_its_first_use_not_before(tmp_path, table):
+    """Making a motion (an env's construction, a configuration's validation) builds nothing; its
+    first use loads or builds the table, once."""
+    motion = bump_motion(MODEL, DYNAMICS, spacing=SPACING, headings=HEADINGS, cache=tmp_path)
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ConfigError):  # the arguments are checked when it is made
+        bump_motion(MODEL, DYNAMICS, spacing=0.0, cache=tmp_path)
+    assert motion.table is not None and len(list(tmp_path.glob("*.npz"))) == 1
+    assert motion.table is motion.table
+    np.testing.assert_array_equal(motion.table.end, table.end)
