@@ -1,7 +1,8 @@
 """The Ray executor on a local instance of two CPUs (started once for this module, no
 dashboard, shut down after): units, an exception retried, a worker killed and retried by Ray,
 a unit failing for good, the small evaluation giving the same files as in one process, and a
-sweep interrupted by a failing unit and started again."""
+sweep interrupted by a failing unit and started again (the one-process references: conftest.py's
+``sweep_reference`` and ``sweep_rows``, shared with test_sweep.py)."""
 
 import pytest
 import sweep_runs
@@ -64,22 +65,22 @@ def test_units_failing_for_good_are_reported_while_the_others_complete(tmp_path)
 
 
 @pytest.mark.long
-@pytest.mark.slow  # a whole evaluation twice, one on Ray: ~60 s on two cores (the executors
-# benchmark's test compares the same three executors on a smaller evaluation in make test)
-def test_the_evaluation_on_ray_writes_the_same_files_as_one_process(tmp_path):
+@pytest.mark.slow  # a whole evaluation on Ray (and the one-process reference if no test made it
+# yet): ~30-60 s on two cores (the executors benchmark's test compares the same three executors
+# on a smaller evaluation)
+def test_the_evaluation_on_ray_writes_the_same_files_as_one_process(sweep_reference, tmp_path):
     import evaluate
 
     config = sweep_runs.write_config(tmp_path)
-    assert evaluate.main([str(config), "--no-progress", "--workers", "1"]) == 0
-    expected = sweep_runs.checksums(sweep_runs.take_run(tmp_path, "one"))
+    expected = sweep_reference.expected(tmp_path)
     assert evaluate.main([str(config), "--no-progress", "--executor", "ray", "--workers",
                           "2"]) == 0
     assert sweep_runs.checksums(sweep_runs.take_run(tmp_path, "ray")) == expected
 
 
-def test_an_interrupted_sweep_on_ray_resumes_with_only_the_rest(tmp_path, monkeypatch):
+def test_an_interrupted_sweep_on_ray_resumes_with_only_the_rest(tmp_path, monkeypatch, sweep_rows):
     config = validate_config(yaml.safe_load(sweep_runs.write_config(tmp_path).read_text()))
-    expected = [r.row() for r in run(config, progress=False)[0]]
+    expected = sweep_rows
     store, calls, marker = UnitStore(tmp_path / "units"), tmp_path / "calls", tmp_path / "died"
     real = sweep.units
 

@@ -1,7 +1,10 @@
 """An evaluation as a sweep of units (`bounce_gym_experiments.sweep`) on the local executors: the same
 episodes.csv and results.json, byte for byte, in this process and on a pool of two; a sweep
 killed mid-way and started again; a unit's worker that dies; a unit that fails for good; the
-executor flags and config key (Ray: test_ray_executor.py)."""
+executor flags and config key (Ray: test_ray_executor.py).
+
+Each test runs in its own ``tmp_path``. The one-process reference they compare with is made once
+per test run (conftest.py: ``sweep_reference`` for the files, ``sweep_rows`` for the rows)."""
 
 import os
 import signal
@@ -29,26 +32,22 @@ def _evaluate(folder, config, label, *flags):
     return sweep_runs.checksums(sweep_runs.take_run(folder, label))
 
 
-@pytest.fixture(scope="module")
-def reference(tmp_path_factory):
-    """The small evaluation run in this process (``--workers 1``): its folder, configuration
-    and checksums."""
-    folder = tmp_path_factory.mktemp("sweep")
-    config = sweep_runs.write_config(folder)
-    return folder, config, _evaluate(folder, config, "one", "--workers", "1")
+@pytest.mark.slow  # a pool of two over the reference sweep: ~30 s
+def test_a_pool_of_two_writes_the_same_files_as_one_process(sweep_reference, tmp_path):
+    config = sweep_runs.write_config(tmp_path)
+    assert _evaluate(tmp_path, config, "pool", "--workers", "2") == \
+        sweep_reference.expected(tmp_path)
+    assert not (tmp_path / "runs/sweep-units").exists()  # kept only until the run folder is written
 
 
-@pytest.mark.slow  # a pool of two over the reference sweep: ~30 s with its setup
-def test_a_pool_of_two_writes_the_same_files_as_one_process(reference):
-    folder, config, expected = reference
-    assert _evaluate(folder, config, "pool", "--workers", "2") == expected
-    assert not (folder / "runs/sweep-units").exists()  # kept only until the run folder is written
+def test_rows_come_in_the_canonical_order(tmp_path):
+    """Per experiment: per seed, every policy in its order; then the best fixed angle.
 
-
-def test_rows_come_in_the_canonical_order(reference):
-    """Per experiment: per seed, every policy in its order; then the best fixed angle."""
-    folder, _, _ = reference
-    lines = (folder / "one/episodes.csv").read_text().splitlines()[1:]
+    Only the experiment whose rows are checked runs (``--experiments``): the order is made per
+    experiment, and the others' plots (the patrol's detection-curve fit) cost ~25 s."""
+    config = sweep_runs.write_config(tmp_path)
+    _evaluate(tmp_path, config, "one", "--workers", "1", "--experiments", "localization-lab")
+    lines = (tmp_path / "one/episodes.csv").read_text().splitlines()[1:]
     rows = [line.split(",")[:3] for line in lines if line.startswith("localization-lab,")]
     policies = [policy for _, policy, _ in rows[:4]]
     assert len(set(policies)) == 4
@@ -58,8 +57,10 @@ def test_rows_come_in_the_canonical_order(reference):
 
 
 @pytest.mark.slow  # a sweep killed and run again: ~16 s on two cores
-def test_a_killed_sweep_started_again_runs_only_the_rest_and_writes_the_same_files(reference):
-    folder, config, expected = reference
+def test_a_killed_sweep_started_again_runs_only_the_rest_and_writes_the_same_files(
+        sweep_reference, tmp_path):
+    folder, expected = tmp_path, sweep_reference.expected(tmp_path)
+    config = sweep_runs.write_config(folder)
     store = folder / "runs/sweep-units"
     cmd = [sys.executable, str(sweep_runs.ROOT / "evaluate.py"), str(config), "--workers", "1"]
     env = {**os.environ, "PYTHONPATH": str(sweep_runs.ROOT)}
@@ -88,9 +89,8 @@ def _config(tmp_path):
     return validate_config(yaml.safe_load(sweep_runs.write_config(tmp_path).read_text()))
 
 
-def test_a_unit_whose_worker_dies_is_retried_on_a_new_pool(tmp_path, monkeypatch):
-    config = _config(tmp_path)
-    expected = _rows(config)
+def test_a_unit_whose_worker_dies_is_retried_on_a_new_pool(tmp_path, monkeypatch, sweep_rows):
+    config, expected = _config(tmp_path), sweep_rows
     marker = tmp_path / "died"
     real = sweep.units
 
@@ -104,9 +104,9 @@ def test_a_unit_whose_worker_dies_is_retried_on_a_new_pool(tmp_path, monkeypatch
     assert marker.exists()
 
 
-def test_a_failed_unit_is_reported_and_a_rerun_finishes_with_the_same_rows(tmp_path, monkeypatch):
-    config = _config(tmp_path)
-    expected = _rows(config)
+def test_a_failed_unit_is_reported_and_a_rerun_finishes_with_the_same_rows(tmp_path, monkeypatch,
+                                                                           sweep_rows):
+    config, expected = _config(tmp_path), sweep_rows
     store, calls = UnitStore(tmp_path / "units"), tmp_path / "calls"
     real = sweep.units
 
@@ -135,9 +135,10 @@ def test_a_failed_unit_is_reported_and_a_rerun_finishes_with_the_same_rows(tmp_p
 
 
 @pytest.mark.slow  # ~15 s: two full command runs (a failing one and its rerun)
-def test_the_command_reports_failed_units_writes_nothing_and_a_rerun_finishes(reference, capsys,
-                                                                              monkeypatch):
-    folder, config, expected = reference
+def test_the_command_reports_failed_units_writes_nothing_and_a_rerun_finishes(
+        sweep_reference, tmp_path, capsys, monkeypatch):
+    folder, expected = tmp_path, sweep_reference.expected(tmp_path)
+    config = sweep_runs.write_config(folder)
     real = sweep.units
 
     def failing_units(cfg, experiments):
@@ -184,8 +185,8 @@ def test_bad_executor_flags_and_keys_are_one_line_errors(tmp_path, capsys, flags
 
 
 @pytest.mark.slow  # the sweep again on another executor: ~16 s
-def test_the_executor_key_does_not_change_the_episodes(reference, tmp_path):
-    folder, _, expected = reference
+def test_the_executor_key_does_not_change_the_episodes(sweep_reference, tmp_path):
+    expected = sweep_reference.checksums
     config = sweep_runs.write_config(tmp_path)
     data = yaml.safe_load(config.read_text())
     config.write_text(yaml.safe_dump({**data, "executor": {"workers": 2, "retries": 0}}))
