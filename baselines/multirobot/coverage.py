@@ -93,11 +93,31 @@ class _Keys:
         return self.many(joint[None])[0]
 
 
-def _simulate(jm: JointCellModel, starts: np.ndarray, processed: set, keys: _Keys,
+class _Steps:
+    """The joint map with memory: the successor and robot–robot collisions of every joint cell
+    already stepped in one plan, by key. The candidate simulations walk the sequences that the
+    plan then follows, and one another's: each joint cell is stepped once."""
+
+    def __init__(self, jm: JointCellModel) -> None:
+        self.jm = jm
+        self.known: dict = {}
+
+    def __call__(self, cells: np.ndarray, cell_keys: list) -> tuple[np.ndarray, np.ndarray]:
+        """Next joint cells (n, m) and collisions (n,) of joint cells (n, m) with keys."""
+        new = [i for i, key in enumerate(cell_keys) if key not in self.known]
+        if new:
+            nxt, pairs = self.jm.step(cells[new], return_collisions=True)
+            for i, cell, n_pairs in zip(new, nxt, pairs.tolist(), strict=True):
+                self.known[cell_keys[i]] = cell, n_pairs
+        cells, pairs = zip(*map(self.known.__getitem__, cell_keys), strict=True)
+        return np.array(cells), np.array(pairs, dtype=np.int64)
+
+
+def _simulate(steps: _Steps, starts: np.ndarray, processed: set, keys: _Keys,
               covered: np.ndarray, lookahead: int) -> tuple[np.ndarray, np.ndarray]:
     """Score sequences from ``starts`` (n, m) without marking anything: (new cells, collisions)."""
     n = len(starts)
-    npos = jm.model.n_positions
+    npos = steps.jm.model.n_positions
     new = np.zeros((n, npos), dtype=bool)
     coll = np.zeros(n, dtype=np.int64)
     seen = [set() for _ in range(n)]
@@ -108,16 +128,18 @@ def _simulate(jm: JointCellModel, starts: np.ndarray, processed: set, keys: _Key
         idx = np.flatnonzero(active)
         if len(idx) == 0:
             break
+        active_keys = []
         for j, key in zip(idx.tolist(), keys.many(cur[idx]), strict=True):
             if key in processed or key in seen[j]:
                 active[j] = False
             else:
                 seen[j].add(key)
+                active_keys.append(key)
         idx = np.flatnonzero(active)
         if len(idx) == 0:
             break
         new[rows[idx], cur[idx] % npos] = True
-        nxt, pairs = jm.step(cur[idx], return_collisions=True)
+        nxt, pairs = steps(cur[idx], active_keys)
         coll[idx] += pairs
         cur[idx] = nxt
     return (new & ~covered).sum(axis=1), coll
@@ -142,6 +164,7 @@ def plan_coverage(joint_model: JointCellModel, x0, max_steps: int = 10_000,
     rng = np.random.default_rng(seed)
     npos = jm.model.n_positions
     keys = _Keys(jm)
+    steps = _Steps(jm)
     reach = jm.reachable_positions(b % npos)
     n_reach = int(reach.sum())
     covered = np.zeros(npos, dtype=bool)
@@ -171,11 +194,11 @@ def plan_coverage(joint_model: JointCellModel, x0, max_steps: int = 10_000,
         key = keys.one(b)
         while key not in processed and len(traj) - 1 < max_steps:  # while unprocessed
             processed.add(key)
-            nxt, pairs = jm.step(b, return_collisions=True)
-            collisions += int(pairs)
+            nxt, pairs = steps(b[None], [key])
+            collisions += int(pairs[0])
             if steps_to_full is None:
-                collisions_to_full += int(pairs)
-            b = nxt
+                collisions_to_full += int(pairs[0])
+            b = nxt[0]
             visit(b, "step")
             if stop_at_full and steps_to_full is not None:
                 break
@@ -185,7 +208,8 @@ def plan_coverage(joint_model: JointCellModel, x0, max_steps: int = 10_000,
             break
         if len(traj) - 1 >= max_steps:
             break
-        beta, kind = _best_neighbor(jm, b, neighbors, processed, keys, covered, lookahead, rng)
+        beta, kind = _best_neighbor(steps, b, neighbors, processed, keys, covered, lookahead,
+                                    rng)
         if beta is None:
             break
         b = beta
@@ -197,7 +221,8 @@ def plan_coverage(joint_model: JointCellModel, x0, max_steps: int = 10_000,
                           checkpoint, collisions, collisions_to_full, visits, n_reach, npos, jumps)
 
 
-def _best_neighbor(jm, b, mode, processed, keys, covered, lookahead, rng):
+def _best_neighbor(steps, b, mode, processed, keys, covered, lookahead, rng):
+    jm = steps.jm
     for kind in ("jump", "jump2"):
         if kind == "jump":
             cand = jm.neighbors(b, mode)
@@ -213,7 +238,7 @@ def _best_neighbor(jm, b, mode, processed, keys, covered, lookahead, rng):
         cand = cand[keep]
         if len(cand) == 0:
             continue
-        new, coll = _simulate(jm, cand, processed, keys, covered, lookahead)
+        new, coll = _simulate(steps, cand, processed, keys, covered, lookahead)
         best = min(range(len(cand)),
                    key=lambda i: (-int(new[i]), int(coll[i]), jm.index_of(cand[i])))
         return cand[best], kind

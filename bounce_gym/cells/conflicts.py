@@ -19,6 +19,8 @@ grid coordinates on lookup: memory O(n), so maps of 10⁶ cells build.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -111,9 +113,17 @@ def crossing(from_a: np.ndarray, to_a: np.ndarray, from_b: np.ndarray, to_b: np.
     diagonals of one 2×2 block; a robot that stays never crosses anyone.
     """
     from_a, to_a, from_b, to_b = (np.asarray(x) for x in (from_a, to_a, from_b, to_b))
-    same_mid = np.all(from_a + to_a == from_b + to_b, axis=-1)
-    swap = np.all(from_a == to_b, axis=-1) & np.all(to_a == from_b, axis=-1)
+    same_mid = (from_a + to_a == from_b + to_b).all(axis=-1)
+    swap = ((from_a == to_b) & (to_a == from_b)).all(axis=-1)
     return same_mid & ~swap
+
+
+@functools.cache
+def _pair_masks(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """(others, upper) of m robots, read-only (m, m) bool: i ≠ j, and i < j."""
+    others, upper = ~np.eye(m, dtype=bool), np.triu(np.ones((m, m), dtype=bool), 1)
+    others.flags.writeable = upper.flags.writeable = False
+    return others, upper
 
 
 def resolve_moves(position: np.ndarray, target: np.ndarray, position_rc: np.ndarray,
@@ -134,10 +144,9 @@ def resolve_moves(position: np.ndarray, target: np.ndarray, position_rc: np.ndar
     target = np.atleast_2d(target)
     m = position.shape[1]
     stays = target < 0
-    blocker = np.full(position.shape, -1, dtype=np.int64)
     if m == 1:
-        return stays, blocker, np.zeros(len(position), dtype=np.int64)
-    eye = np.eye(m, dtype=bool)[None]
+        return stays, np.full(position.shape, -1, dtype=np.int64), np.zeros(len(position), np.int64)
+    others, upper = _pair_masks(m)
     wants = ~stays
     if close is None:
         same = target[:, :, None] == target[:, None, :]
@@ -146,26 +155,22 @@ def resolve_moves(position: np.ndarray, target: np.ndarray, position_rc: np.ndar
         t = np.where(wants, target, 0)
         same = close[t[:, :, None], t[:, None, :]]
         at = close[t[:, :, None], position[:, None, :]]
-    same &= wants[:, :, None] & wants[:, None, :] & ~eye
-    at &= wants[:, :, None] & ~eye
+    same &= wants[:, :, None] & wants[:, None, :] & others
+    at &= wants[:, :, None] & others
     swap = (target[:, :, None] == position[:, None, :]) & wants[:, :, None]
     swap &= np.swapaxes(swap, 1, 2)
     rc_from = position_rc[position]
     rc_to = position_rc[np.where(wants, target, position)]
     # swapping or crossing: the two robots would pass through each other
     through = swap | (crossing(rc_from[:, :, None], rc_to[:, :, None], rc_from[:, None],
-                               rc_to[:, None]) & ~eye)
-    while True:
-        moving = ~stays
-        mm = moving[:, :, None] & moving[:, None, :]
-        newly = moving & (np.any(same & mm, axis=2) | np.any(through & mm, axis=2)
-                          | np.any(at & stays[:, None, :], axis=2))
+                               rc_to[:, None]) & others)
+    movers = same | through  # conflicts that block i while both i and j move
+    while True:  # i is newly blocked by a moving j's conflict or by moving at a staying j
+        newly = ~stays & np.where(stays[:, None, :], at, movers).any(axis=2)
         if not newly.any():
             break
         stays |= newly
-    by_robot = stays & wants
-    contact = by_robot[:, :, None] & (same | through | (at & stays[:, None, :]))
-    has = contact.any(axis=2)
-    blocker[has] = np.argmax(contact, axis=2)[has]
-    pairs = np.triu(contact | np.swapaxes(contact, 1, 2), 1).sum(axis=(1, 2))
+    contact = (stays & wants)[:, :, None] & (movers | (at & stays[:, None, :]))
+    blocker = np.where(contact.any(axis=2), contact.argmax(axis=2), -1).astype(np.int64)
+    pairs = ((contact | np.swapaxes(contact, 1, 2)) & upper).sum(axis=(1, 2))
     return stays, blocker, pairs
