@@ -270,7 +270,7 @@ def test_a_team_observation_carries_the_robot_id_and_its_region():
     np.testing.assert_array_equal(obs["robot_0"][2:], [1, 0, -1, -1, 0, 1])
     np.testing.assert_array_equal(obs["robot_1"][2:], [0, 1, 0, -1, 1, 1])
     for _ in range(20):
-        obs, *_ = env.step({a: 0 for a in env.agents})
+        obs, *_ = env.step(dict.fromkeys(env.agents, 0))
         assert all(env.observation_space(a).contains(o) for a, o in obs.items())
         np.testing.assert_array_equal(obs["robot_1"][2:4], [0, 1])
     blind = multi_bounce_v0.parallel_env(backend="cell", world="grid_15x15", task="monitoring",
