@@ -31,7 +31,10 @@ functional JAX env against the native vector env at N = 1, 64 and 1,024, one XLA
 with hindsight relabelling, JAX and SB3, wall time to 0.90 held-out success); issue #35:
 `benchmarks.bump_table` (a particle update through the tabulated bump map against the
 simulator, its build time and prediction error) and `benchmarks.physics_planners` (seconds per
-closed-loop planner episode on dynamic physics, against a 10,000-particle simulator update).
+closed-loop planner episode on dynamic physics, against a 10,000-particle simulator update);
+`benchmarks.team_vector_env` (the batched team core, ``TeamVectorEnv`` at 64 teams, against the
+PettingZoo env stepped team by team in the same run, median and min–max over rounds, load
+average).
 """
 
 from __future__ import annotations
@@ -212,6 +215,11 @@ def main(argv: list[str] | None = None) -> None:
                       if args.quick else [])
     print()
     multirobot_scaling.main(["--steps", "4000"] if args.quick else [])
+    # the batched team core against the PettingZoo env team by team
+    from benchmarks import team_vector_env
+
+    print()
+    team_vector_env.main(["--steps", "200", "--rounds", "3"] if args.quick else [])
     # the pymunk backend's dynamic physics (issue #23)
     from benchmarks import dynamic_physics
 

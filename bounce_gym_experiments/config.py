@@ -76,7 +76,7 @@ MAX_SEEDS = 100_000
 #: Longest episode an experiment's ``max_steps`` may ask for.
 MAX_STEPS = 10**6
 #: env options a model folder of ``rl_models`` may set differently (observation only)
-OBSERVATION_OPTIONS = frozenset({"privileged", "history"})
+OBSERVATION_OPTIONS = frozenset({"privileged", "history", "agent_id"})
 _MAP_SUFFIXES = (".yaml", ".yml", ".json")
 #: every registered id an experiment may name
 ENV_IDS = (*GYMNASIUM_IDS, *PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS, *PATROL_PETTINGZOO_ENVS)

@@ -14,6 +14,7 @@ Per robot the observation is what the robot senses (all values in [0, 1] unless 
 * with ``history = k``: the k most recent (segment ticks / max_clock, angle / 360°) pairs, newest
   first, zero-padded — one pair per bump: the clock reading just before it and the angle used;
 * with ``privileged=True``: the true pose (x, y scaled to [0, 1], cos θ, sin θ in [-1, 1]);
+* with ``agent_id=True`` (several robots): the robot's index, one-hot (``n_robots`` values);
 * the task's features, in [-1, 1] (e.g. navigation's start and goal poses).
 
 The true state goes to ``info`` only.
@@ -61,6 +62,9 @@ class BounceCore:
         if options.privileged:
             low += [0.0, 0.0, -1.0, -1.0]
             high += [1.0, 1.0, 1.0, 1.0]
+        if options.agent_id:
+            low += [0.0] * options.n_robots
+            high += [1.0] * options.n_robots
         low += [-1.0] * task.observation_size
         high += [1.0] * task.observation_size
         self.obs_low = np.array(low, dtype=np.float32)
@@ -258,6 +262,8 @@ class BounceCore:
             xmin, ymin, xmax, ymax = opts.world.bounds
             parts.append((state.position - (xmin, ymin)) / (xmax - xmin, ymax - ymin))
             parts.append(state.direction)
+        if opts.agent_id:
+            parts.append(np.eye(opts.n_robots))
         if self.task.observation_size:
             parts.append(self.task.observation(state))
         obs = np.concatenate(parts, axis=1, dtype=np.float32)

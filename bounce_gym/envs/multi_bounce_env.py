@@ -5,7 +5,7 @@
 | Import | ``from bounce_gym.envs import multi_bounce_v0`` (``parallel_env()``, ``env()``) or ``pettingzoo.make("parallel", "bounce_gym/MultiBounce-v0")`` |
 | Agents | ``robot_0`` … ``robot_{m-1}`` |
 | Actions | ``Discrete(len(Φ_i))`` (+ ``len(turn_angles)`` turn commands) or ``Box(-1, 1, (1,), float32)`` per robot |
-| Observations | per robot: contact (not for a lone robot in bounce mode without turn commands, which is always in contact), clock, optional history / privileged pose / task features (`bounce_gym.envs.core`) |
+| Observations | per robot: contact (not for a lone robot in bounce mode without turn commands, which is always in contact), clock, optional history / privileged pose / its index one-hot (``agent_id``) / task features (monitoring: its region with ``observe_region``; `bounce_gym.envs.core`) |
 | State | ``state()``: every robot's true pose (x, y scaled to [0, 1], cos θ, sin θ) |
 
 ## Description

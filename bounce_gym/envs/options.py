@@ -142,6 +142,9 @@ class EnvOptions(Arguments):
         "more bounces than any episode of the papers' experiments has."))] = 0
     privileged: Annotated[Flag, Field(description=(
         "Add the true pose to the observation (an oracle, for comparisons)."))] = False
+    agent_id: Annotated[Flag, Field(description=(
+        "Several robots: add each robot's index, one-hot (n_robots values), to its observation, "
+        "so that one policy shared by the robots can tell them apart."))] = False
     cell_bins: Annotated[Integer, Field(ge=1, le=360, description=(
         "Orientation bins of the env's cell model (a divisor of 360): the cell backend's grid, "
         "and the model the env hands planners on every backend (`env.cell_model()`)."))] = 8
@@ -264,6 +267,13 @@ class EnvOptions(Arguments):
                               f"collide by robot_radius), got {value!r} with backend "
                               f"{backend!r}")
         return value
+
+    @model_validator(mode="after")
+    def _agent_id(self) -> EnvOptions:
+        if self.agent_id and self.n_robots < 2:
+            raise ConfigError("agent_id: a lone robot has no other robot to be told apart from "
+                              "(it needs n_robots >= 2)")
+        return self
 
     @model_validator(mode="after")
     def _cell_backend(self) -> EnvOptions:

@@ -32,6 +32,8 @@ VARIANTS = [
     dict(action_type="continuous", step_mode="tick", history=2, privileged=True),
     dict(task="coverage", n_robots=3, robot_collisions="ignore", robot_radius=0.0),
     dict(world="grid_20x12", task="monitoring", angles=[[90], [135], [45, 90], [120]]),
+    dict(backend="cell", world="grid_15x15", task="monitoring", n_robots=2, agent_id=True,
+         step_mode="tick", task_kwargs={"observe_region": True}),
 ]
 
 
@@ -253,3 +255,34 @@ def test_agent_infos_hold_each_robots_own_row_and_do_not_share_memory():
     infos["robot_0"]["position"][:] = -1.0
     np.testing.assert_array_equal(state.position, before)
     assert infos["robot_1"]["position"][0] != -1.0
+
+
+def test_a_team_observation_carries_the_robot_id_and_its_region():
+    """``agent_id``: robot i's observation ends with the one-hot of i (before the task's
+    features); monitoring's ``observe_region``: then its region's bounds scaled to [-1, 1]."""
+    env = multi_bounce_v0.parallel_env(backend="cell", world="grid_15x15", task="monitoring",
+                                       n_robots=2, step_mode="tick", agent_id=True,
+                                       task_kwargs={"observe_region": True, "regions": [
+                                           [[0, 0], [7.5, 0], [7.5, 15], [0, 15]],
+                                           [[7.5, 0], [15, 0], [15, 15], [7.5, 15]]]})
+    obs, _ = env.reset(seed=3)
+    assert env.observation_space("robot_0").shape == (2 + 2 + 4,)
+    np.testing.assert_array_equal(obs["robot_0"][2:], [1, 0, -1, -1, 0, 1])
+    np.testing.assert_array_equal(obs["robot_1"][2:], [0, 1, 0, -1, 1, 1])
+    for _ in range(20):
+        obs, *_ = env.step(dict.fromkeys(env.agents, 0))
+        assert all(env.observation_space(a).contains(o) for a, o in obs.items())
+        np.testing.assert_array_equal(obs["robot_1"][2:4], [0, 1])
+    blind = multi_bounce_v0.parallel_env(backend="cell", world="grid_15x15", task="monitoring",
+                                         n_robots=2, step_mode="tick")
+    assert blind.observation_space("robot_0").shape == (2,)
+    assert blind.reset(seed=3)[0]["robot_0"].tolist() == obs_at_reset(env, 3)["robot_0"][:2]
+
+
+def obs_at_reset(env, seed):
+    return {a: o.tolist() for a, o in env.reset(seed=seed)[0].items()}
+
+
+def test_agent_id_needs_several_robots():
+    with pytest.raises(ConfigError, match="^agent_id: a lone robot"):
+        multi_bounce_v0.parallel_env(n_robots=1, agent_id=True)

@@ -11,7 +11,7 @@ from shapely.geometry import Polygon, box
 from bounce_gym.dynamics.backends.base import close_pairs
 from bounce_gym.envs.tasks.base import Task, path_samples, tick_length
 from bounce_gym.errors import ConfigError
-from bounce_gym.validate import number, numbers
+from bounce_gym.validate import flag, number, numbers
 
 
 class MonitoringTask(Task):
@@ -21,6 +21,10 @@ class MonitoringTask(Task):
         regions: one polygon (list of (x, y)) per robot; default: the bounding box cut into
             vertical strips of equal width, intersected with the free space.
         contact_penalty: cost per robot–robot bump.
+        observe_region: add robot i's region to its observation — the region's bounding box
+            (x_min, y_min, x_max, y_max), each scaled from the world's bounds to [-1, 1]. Part
+            of the task's statement, like a navigation goal; the robot still does not sense
+            where it is, so this adds no sensing.
 
     Reward of robot i per step: the fraction of the step's ticks it spent in its region minus
     ``contact_penalty`` if it ended the step blocked by another robot.
@@ -35,7 +39,8 @@ class MonitoringTask(Task):
 
     name = "monitoring"
 
-    def __init__(self, regions: list | None = None, contact_penalty: float = 1.0) -> None:
+    def __init__(self, regions: list | None = None, contact_penalty: float = 1.0,
+                 observe_region: bool = False) -> None:
         if regions is not None:
             if isinstance(regions, str | bytes) or not isinstance(regions, Sequence | np.ndarray):
                 raise ConfigError(f"regions: expected a list of polygons (lists of (x, y) "
@@ -43,6 +48,7 @@ class MonitoringTask(Task):
             regions = [_ring(f"regions[{k}]", ring) for k, ring in enumerate(regions)]
         self.regions_arg = regions
         self.contact_penalty = number("contact_penalty", contact_penalty)
+        self.observe_region = flag("observe_region", observe_region)
 
     def configure(self, core) -> None:
         super().configure(core)
@@ -64,6 +70,17 @@ class MonitoringTask(Task):
                     raise ConfigError(f"regions[{k}]: not a valid polygon")
                 polys.append(poly)
         self.regions = polys
+        xmin, ymin, xmax, ymax = world.bounds
+        low, size = np.array([xmin, ymin] * 2), np.array([xmax - xmin, ymax - ymin] * 2)
+        bounds = np.array([poly.bounds for poly in polys], dtype=np.float64)
+        self._features = np.clip(2 * (bounds - low) / size - 1, -1, 1).astype(np.float32)
+
+    @property
+    def observation_size(self) -> int:
+        return 4 if self.observe_region else 0
+
+    def observation(self, state):
+        return self._features.copy() if self.observe_region else super().observation(state)
 
     def reset(self, state, rng, options):
         return {"in_region": self._inside(state.position).tolist()}
