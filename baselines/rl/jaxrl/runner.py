@@ -14,6 +14,7 @@ and, for jax_dqn, the replay buffer of up to ``buffer_size`` transitions — liv
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
@@ -30,6 +31,9 @@ from bounce_gym.provenance import provenance
 
 #: The most env steps of one chunk (iterations are whole; at least one per chunk).
 CHUNK_STEPS = 16384
+#: The learner and jitted chunk of the configuration trained last in this process, by the
+#: configuration less its seeds (`_shared_learner`).
+_SHARED: dict[str, tuple] = {}
 
 
 def jax_env(config: dict):
@@ -54,6 +58,19 @@ def learner(config: dict):
     kind = {"jax_ppo": PPO, "jax_dqn": DQN}[config["algo"]]
     return kind(env, params, hyperparameters(config["algo"], config["hyperparams"]),
                 config["n_envs"], config["total_timesteps"], keys)
+
+
+def _shared_learner(config: dict) -> tuple:
+    """``(learner, chunk)`` of a validated configuration: the seeds of a sweep trained one
+    after another in this process share them, so that the chunk is traced and compiled once,
+    not once per seed (a seed's state is its own: the same weights either way). Only the last
+    configuration's are kept."""
+    key = json.dumps({k: v for k, v in config.items() if k != "seeds"}, sort_keys=True)
+    if key not in _SHARED:
+        _SHARED.clear()
+        agent = learner(config)
+        _SHARED[key] = agent, agent.chunk(chunk_length(agent, config))
+    return _SHARED[key]
 
 
 def chunk_length(agent, config: dict) -> int:
@@ -82,9 +99,8 @@ def write_rows(writer, records: dict, keys: tuple[str, ...], seconds: float) -> 
 def train_run(run, log) -> Path:
     """Train the seed of ``run`` (a `baselines.rl.train.RunFiles`); returns the model path."""
     config = run.config
-    agent = learner(config)
+    agent, chunk = _shared_learner(config)
     state = agent.init(jax.random.PRNGKey(run.seed))
-    chunk = agent.chunk(chunk_length(agent, config))
     every = config["checkpoint_every"]
     due = every
 
