@@ -216,9 +216,9 @@ def train_seed(config: Mapping, seed: int, progress: bool = True, callbacks: Seq
 
         return train_run(RunFiles(config, seed), log or (lambda line: None))
     if config["algo"] in MARL_ALGOS:
-        from baselines.rl.marl.runner import train_run as train_team
+        from baselines.rl.marl.runner import train_team_run
 
-        return train_team(RunFiles(config, seed), log or (lambda line: None))
+        return train_team_run(RunFiles(config, seed), log or (lambda line: None))
     import torch
 
     threads = torch.get_num_threads()

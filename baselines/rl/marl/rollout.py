@@ -39,7 +39,7 @@ def team_env(config: Mapping) -> TeamVectorEnv:
                                                   **config["env_kwargs"]})
 
 
-def monitor_keys(config: Mapping) -> tuple[str, ...]:
+def team_monitor_keys(config: Mapping) -> tuple[str, ...]:
     """The `MONITOR_KEYS` the task of a validated configuration reports in a step's infos (one
     step of one team, aside)."""
     probe = team_env({**config, "n_envs": 1})

@@ -21,20 +21,20 @@ import torch
 
 from baselines.rl.jaxrl.weights import WeightsArchive
 from baselines.rl.marl.ppo import Learner
-from baselines.rl.marl.rollout import monitor_keys
+from baselines.rl.marl.rollout import team_monitor_keys
 from baselines.rl.model_files import save_model
 from baselines.rl.monitor import open_monitor_file
 from bounce_gym.provenance import provenance
 
 
-def train_run(run, log) -> Path:
+def train_team_run(run, log) -> Path:
     """Train the seed of ``run`` (a `baselines.rl.train.RunFiles`) with ``torch_threads``
     threads; returns the model path."""
     config = run.config
     threads = torch.get_num_threads()
     torch.set_num_threads(config["torch_threads"])
     try:
-        agent = Learner(config, run.seed, monitor_keys(config))
+        agent = Learner(config, run.seed, team_monitor_keys(config))
         every = config["checkpoint_every"]
         due = every
         made = provenance()
