@@ -8,9 +8,10 @@
 * checkpoints ``checkpoints/<run>_seed<seed>_<steps>_steps.zip`` (`CHECKPOINT_NAME`), never
   overwritten.
 
-A JAX learner's file (``jax_ppo``, ``jax_dqn``; `JAX_ALGOS`) holds no SB3 part: its weights as an
+A JAX learner's file (``jax_ppo``, ``jax_dqn``; `JAX_ALGOS`) and a multi-robot learner's
+(``ippo``, ``mappo``; `MARL_ALGOS`, `baselines.rl.marl`) hold no SB3 part: their weights as an
 ``.npz`` (`WEIGHTS_ENTRY`, read with ``allow_pickle=False`` by `baselines.rl.jaxrl.weights`) and
-its `METADATA_ENTRY`, saved and listed in the manifest like the others.
+their `METADATA_ENTRY`, saved and listed in the manifest like the others (`WEIGHTS_ALGOS`).
 
 A model zip is Stable-Baselines3's file plus entries of its own, which SB3 ignores:
 ``bounce_gym.json`` (`METADATA_ENTRY`: the training configuration, the observation wrappers
@@ -62,7 +63,11 @@ from bounce_gym.trust import add_trusted, digest, sign, trusted_digests, verify
 
 #: The learners trained in JAX (`baselines.rl.jaxrl`): their files hold weights only.
 JAX_ALGOS = ("jax_ppo", "jax_dqn")
-ALGOS = ("ppo", "dqn", "recurrentppo", *JAX_ALGOS)
+#: The multi-robot learners in torch (`baselines.rl.marl`): their files hold weights only too.
+MARL_ALGOS = ("ippo", "mappo")
+#: The learners whose files are weights only (an ``.npz``) and metadata, no SB3 part.
+WEIGHTS_ALGOS = (*JAX_ALGOS, *MARL_ALGOS)
+ALGOS = ("ppo", "dqn", "recurrentppo", *JAX_ALGOS, *MARL_ALGOS)
 _RUN = r"(?P<algo>" + "|".join(ALGOS) + r")(?:-(?P<variant>[a-z0-9]+(?:-[a-z0-9]+)*))?"
 #: A saved model: ``<algo>[-<variant>]_seed<seed>.zip``.
 MODEL_NAME = re.compile(_RUN + r"_seed(?P<seed>\d+)\.zip")
@@ -390,8 +395,8 @@ def read_model(path: Path) -> ModelFile:
             for info in archive.infolist():
                 check_compression(info, f"model {path}: its entry")
             sizes = {info.filename: info.file_size for info in archive.infolist()}
-            if algo in JAX_ALGOS:
-                return _jax_model(path, algo, data, archive, sizes)
+            if algo in WEIGHTS_ALGOS:
+                return _weights_model(path, algo, data, archive, sizes)
             if DATA_ENTRY not in sizes:
                 raise ConfigError(f"model {path}: not a readable Stable-Baselines3 model file "
                                   f"(it has no {DATA_ENTRY!r} entry)")
@@ -410,10 +415,10 @@ def read_model(path: Path) -> ModelFile:
     return ModelFile(path, algo, data, sizes, sb3_data, metadata)
 
 
-def _jax_model(path: Path, algo: str, data: bytes, archive: zipfile.ZipFile,
-               sizes: dict[str, int]) -> ModelFile:
-    """A JAX learner's file: its weights (`WEIGHTS_ENTRY`, read by `baselines.rl.jaxrl.weights`)
-    and its metadata, no SB3 part."""
+def _weights_model(path: Path, algo: str, data: bytes, archive: zipfile.ZipFile,
+                   sizes: dict[str, int]) -> ModelFile:
+    """A JAX or multi-robot learner's file (`WEIGHTS_ALGOS`): its weights (`WEIGHTS_ENTRY`,
+    read by `baselines.rl.jaxrl.weights`) and its metadata, no SB3 part."""
     for entry in (WEIGHTS_ENTRY, METADATA_ENTRY):
         if entry not in sizes:
             raise ConfigError(f"model {path}: not a readable {algo} model file (it has no "

@@ -10,7 +10,8 @@ checked by `baselines.rl.train_config`, whose docstring gives every number's ran
     env_kwargs: {backend: cell, angles: [45, 90, 135]}
     algo: ppo                        # ppo | dqn | recurrentppo (sb3-contrib; memory for a robot
                                      # that senses only contact and time) | jax_ppo | jax_dqn
-                                     # (trained in JAX, `baselines.rl.jaxrl`)
+                                     # (trained in JAX, `baselines.rl.jaxrl`) | ippo | mappo
+                                     # (several robots, `baselines.rl.marl`)
     variant: stack4                  # optional: files ppo-stack4_seed<N>.zip (several variants
                                      # of one algorithm side by side in models/<name>/)
     hyperparams_file: hyperparams/ppo.yaml  # optional, rl-zoo style, keyed by env id; relative
@@ -74,14 +75,25 @@ device, so ``resume: true`` is a `ConfigError` (`baselines.rl.jaxrl.runner`).
 SB3's SubprocVecEnv. Options the batch cannot run (``step_mode: tick``, the pymunk backend,
 noise) raise `ConfigError` with ``native``: choose ``sync`` for them.
 
-**Several robots.** With a PettingZoo id (``bounce_gym/MultiBounceCoverage-v0``, …) the robots
-share one policy (parameter sharing): the parallel env becomes one SB3 VecEnv with a slot per
-robot (`baselines.rl.parallel_vec_env.ParallelToVecEnv`), so ``n_envs`` must stay 1, ``algo``
-must be ``ppo`` and there is no frame stack or VecNormalize; ``env_kwargs`` may set
-``max_cycles`` (the episode length; see ``configs/train_multirobot_coverage.yaml``). The
+**Several robots.** With a PettingZoo id (``bounce_gym/MultiBounceCoverage-v0``, …) and
+``algo: ppo`` the robots share one policy (parameter sharing): the parallel env becomes one SB3
+VecEnv with a slot per robot (`baselines.rl.parallel_vec_env.ParallelToVecEnv`), so ``n_envs``
+must stay 1 and there is no frame stack or VecNormalize; ``env_kwargs`` may set ``max_cycles``
+(the episode length; see ``configs/train_multirobot_coverage.yaml``). The
 evaluation runs the saved model as one policy for every robot
 (`baselines.rl.policies.SharedSB3Policy`); ``rl_models: <name>`` lets several evaluation
 experiments (e.g. m = 2..5) use it.
+
+**Multi-robot learners.** ``algo: ippo`` and ``algo: mappo`` (`baselines.rl.marl`, torch)
+train the robots of a bouncing-robot PettingZoo id on ``n_envs`` teams of the batched team env
+(`bounce_gym.envs.team_vector_env.TeamVectorEnv`): IPPO's critics see each robot's own
+observation, MAPPO's the global state; ``hyperparams.share`` (default true) gives every robot
+the same actor and critic, false a pair each (`baselines.rl.marl.settings` lists the keys and
+ranges). ``total_timesteps`` counts agent-steps; the files are named
+``<algo>-shared_seed<N>.zip`` or ``<algo>-separate_seed<N>.zip`` unless ``variant`` says
+otherwise, weights only (an ``.npz``), with the same checkpoint and monitor files (a row per
+robot and episode). No ``tensorboard``, no ``resume``. The evaluation plays them with
+`baselines.rl.marl.policy.TeamPolicy`, every robot from its own observation.
 
 **The patrol game.** ``bounce_gym/Patrol-v0`` has two sides, so its configurations say which one
 learns (``role``) and the other is played inside the env (`baselines.rl.patrol`): the patrollers
@@ -97,7 +109,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import bounce_gym  # noqa: F401  (registers the environments)
-from baselines.rl.model_files import JAX_ALGOS, read_model, run_name, save_model
+from baselines.rl.model_files import JAX_ALGOS, MARL_ALGOS, read_model, run_name, save_model
 from baselines.rl.monitor import SUFFIX
 from baselines.rl.train_config import (
     algo_class,
@@ -180,6 +192,12 @@ def prepare(config: Mapping, folder: Path | None = None) -> dict:
 
         learner(config)  # the JAX env exists, the actions are discrete, the sizes fit
         return config
+    if config["algo"] in MARL_ALGOS:
+        require(f"config.algo: {config['algo']}", "torch")
+        from baselines.rl.marl.ppo import Learner
+
+        Learner(config, config["seeds"][0], ())  # the teams are batched, the networks fit
+        return config
     require(f"config.algo: {config['algo']}", "stable_baselines3", "sb3_contrib", "torch", "rich",
             "tqdm")
     check_hyperparams(algo_class(config["algo"]), config["hyperparams"])
@@ -191,12 +209,16 @@ def train_seed(config: Mapping, seed: int, progress: bool = True, callbacks: Seq
                log: Callable[[str], None] | None = None) -> Path:
     """Train (or, with ``resume``, continue from its newest checkpoint) the run of one seed of
     a configuration `prepare` returned; returns the model path. torch uses
-    ``torch_threads`` threads meanwhile. A JAX learner trains in `baselines.rl.jaxrl.runner`
-    (it cannot resume)."""
+    ``torch_threads`` threads meanwhile. A JAX learner trains in `baselines.rl.jaxrl.runner`,
+    a multi-robot learner in `baselines.rl.marl.runner` (neither can resume)."""
     if config["algo"] in JAX_ALGOS:
         from baselines.rl.jaxrl.runner import train_run
 
         return train_run(RunFiles(config, seed), log or (lambda line: None))
+    if config["algo"] in MARL_ALGOS:
+        from baselines.rl.marl.runner import train_team_run
+
+        return train_team_run(RunFiles(config, seed), log or (lambda line: None))
     import torch
 
     threads = torch.get_num_threads()

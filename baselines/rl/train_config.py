@@ -54,7 +54,9 @@ from pydantic import BaseModel, Field
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.config_model import ConfigModel
 from baselines.rl.jaxrl.settings import hyperparameters as jax_hyperparameters
-from baselines.rl.model_files import ALGOS, JAX_ALGOS, VARIANT, check_folder_name
+from baselines.rl.marl.settings import default_variant
+from baselines.rl.marl.settings import settings as marl_settings
+from baselines.rl.model_files import ALGOS, JAX_ALGOS, MARL_ALGOS, VARIANT, check_folder_name
 from baselines.rl.patrol import PATROL_ID, ROLES
 from baselines.seeds import TRAINING_SEEDS
 from bounce_gym.documents import read_document
@@ -68,13 +70,16 @@ from bounce_gym.errors import ConfigError, config_errors
 from bounce_gym.files import check_path_text
 from bounce_gym.validate import did_you_mean, integer, number, unknown_keys
 
-MULTI_ALGOS = ("ppo",)
+#: the learners of a multi-robot env: SB3's PPO shared by the robots, and the multi-robot
+#: learners of `baselines.rl.marl` (those on the bouncing-robot ids only)
+MULTI_ALGOS = ("ppo", *MARL_ALGOS)
 VEC_ENVS = ("native", "sync", "subproc")
 #: The SB3 policy each algorithm trains on a flat observation, and on a ``Dict`` one (the
 #: goal-conditioned envs); a hyperparameter file's ``policy`` must be one of the two.
 #: (The JAX learners read the same hyperparameter file entries as their SB3 twins.)
 POLICIES = {"ppo": "MlpPolicy", "dqn": "MlpPolicy", "recurrentppo": "MlpLstmPolicy",
-            "jax_ppo": "MlpPolicy", "jax_dqn": "MlpPolicy"}
+            "jax_ppo": "MlpPolicy", "jax_dqn": "MlpPolicy", "ippo": "MlpPolicy",
+            "mappo": "MlpPolicy"}
 DICT_POLICIES = {"ppo": "MultiInputPolicy", "dqn": "MultiInputPolicy",
                  "recurrentppo": "MultiInputLstmPolicy", "jax_ppo": "MultiInputPolicy",
                  "jax_dqn": "MultiInputPolicy"}
@@ -164,16 +169,17 @@ class TrainingConfig(ConfigModel):
     env_kwargs: dict[str, Any] = Field(default_factory=dict,
                                        description="Keyword arguments of the env over the ones "
                                                    "its id registers (docs: Environments).")
-    algo: str = Field(description="The learner: PPO, DQN, RecurrentPPO (sb3-contrib) or the "
-                                  "JAX learners.", json_schema_extra={"enum": list(ALGOS)})
+    algo: str = Field(description="The learner: PPO, DQN, RecurrentPPO (sb3-contrib), the "
+                                  "JAX learners, or IPPO and MAPPO on a multi-robot env.",
+                      json_schema_extra={"enum": list(ALGOS)})
     variant: str | None = Field(default=None, description="A label of the run in the model "
                                                           "file names (<algo>-<variant>_seed<N>),"
                                                           " e.g. stack4: lower-case letters and "
                                                           "digits in parts joined by '-'.")
     total_timesteps: int | None = Field(
         default=None, ge=1, le=MAX_TIMESTEPS,
-        description="Env steps per seed. Required unless the hyperparameter file's entry gives "
-                    "n_timesteps.")
+        description="Env steps per seed (agent-steps on a multi-robot env). Required unless "
+                    "the hyperparameter file's entry gives n_timesteps.")
     seed: int | None = Field(default=None, ge=0, description="One run's seed (default 0); not "
                                                              "with seeds.")
     seeds: list[int] | None = Field(default=None, min_length=1,
@@ -182,7 +188,8 @@ class TrainingConfig(ConfigModel):
                                                 f"{TRAINING_SEEDS.stop} (the training seeds).")
     n_envs: int | None = Field(default=None, ge=1, le=MAX_ENVS,
                                description="Envs stepped together (default: 4; 1 for DQN and "
-                                           "multi-robot envs).")
+                                           "ppo on a multi-robot env; teams for ippo and "
+                                           "mappo, default 8).")
     n_stack: int = Field(default=1, ge=1, le=MAX_STACK, description="Frames stacked in the "
                                                                     "observation.")
     normalize: bool | Normalize = Field(default=False, description="VecNormalize: true, or its "
@@ -282,8 +289,10 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
         raise ConfigError("config: missing key 'total_timesteps' (or n_timesteps in the "
                           "hyperparams_file entry)")
     if multi and config["algo"] not in MULTI_ALGOS:
-        raise ConfigError(f"config.algo: a multi-robot env trains one shared policy with one of "
-                          f"{MULTI_ALGOS}, got {config['algo']!r}")
+        raise ConfigError(f"config.algo: a multi-robot env trains with one of {MULTI_ALGOS}, "
+                          f"got {config['algo']!r}")
+    if config["algo"] in MARL_ALGOS:
+        _check_marl(config)
     native = multi or "role" not in config and \
         gym.spec(config["env"]).vector_entry_point is not None
     if config["algo"] in JAX_ALGOS:
@@ -294,8 +303,10 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     if "variant" in config and not VARIANT.fullmatch(config["variant"]):
         raise ConfigError(f"config.variant: expected lower-case letters and digits in parts "
                           f"joined by '-' (e.g. stack4), got {config['variant']!r}")
-    defaults = {"n_envs": 1 if multi or config["algo"] in ("dqn", "jax_dqn") else 4,
-                **_DEFAULTS}
+    defaults = {"n_envs": MARL_TEAMS if config["algo"] in MARL_ALGOS
+                else 1 if multi or config["algo"] in ("dqn", "jax_dqn") else 4, **_DEFAULTS}
+    if config["algo"] in MARL_ALGOS:
+        defaults["variant"] = default_variant(config.get("hyperparams", {}))
     for key, value in defaults.items():
         config.setdefault(key, value)
     check_path_text("config.models", config["models"])
@@ -321,9 +332,34 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
     _check_replay_buffer(config["hyperparams"])
     if config["algo"] in JAX_ALGOS:
         jax_hyperparameters(config["algo"], config["hyperparams"])
+    if config["algo"] in MARL_ALGOS:
+        marl_settings(config["hyperparams"], config["n_envs"])
     # last: asking the batched env builds an env (heavy imports), after every cheap check
     config.setdefault("vec_env", "native" if native and (multi or _batched(config)) else "sync")
     return config
+
+
+#: The teams (``n_envs``) of ippo and mappo when neither the configuration nor its
+#: hyperparameter file says.
+MARL_TEAMS = 8
+#: Keys of a configuration the multi-robot learners do not honour, with the value they need.
+_MARL_FIXED = {"tensorboard": False, "resume": False}
+
+
+def _check_marl(config: dict) -> None:
+    """ippo and mappo (`baselines.rl.marl`) train the bouncing robots of a PettingZoo id on
+    the batched team env: no TensorBoard, no resuming (their checkpoints hold weights only)."""
+    algo = config["algo"]
+    if config["env"] not in PETTINGZOO_ENVS:
+        raise ConfigError(f"config.env: {algo} trains the robots of one of "
+                          f"{sorted(PETTINGZOO_ENVS)} (the batched team env), not "
+                          f"{config['env']}")
+    for key, value in _MARL_FIXED.items():
+        if config.get(key, value) != value:
+            why = ("its checkpoints hold weights only (not the optimiser, the generator or the "
+                   "teams mid-episode); train again without resume") if key == "resume" \
+                else "not supported by the multi-robot learners; remove the key"
+            raise ConfigError(f"config.{key}: {algo}: {why}")
 
 
 #: Keys of a configuration the JAX learners do not honour, each with the value they need.
@@ -426,7 +462,7 @@ def _check_vec_env(config: dict, multi: bool, native: bool) -> None:
 
 
 def _check_multi(config: dict) -> None:
-    if config["n_envs"] != 1:
+    if config["algo"] == "ppo" and config["n_envs"] != 1:
         raise ConfigError("config.n_envs: a multi-robot env is one VecEnv with a slot per robot; "
                           "n_envs must be 1")
     if config["n_stack"] != 1 or config["normalize"] is not None:
@@ -572,11 +608,13 @@ def _merge_file(config: dict, folder: Path | None) -> None:
     if not isinstance(entry, dict):
         raise ConfigError(f"{field}: the entry {key} of {path} is not a mapping")
     entry = dict(entry)
-    policy = entry.pop("policy", POLICIES[config["algo"]])
-    if policy not in (POLICIES[config["algo"]], DICT_POLICIES[config["algo"]]):
-        raise ConfigError(f"{field}: {key} names policy {policy!r}, but "
-                          f"{config['algo']} trains {POLICIES[config['algo']]!r} (or "
-                          f"{DICT_POLICIES[config['algo']]!r} on a Dict observation)")
+    algo = config["algo"]
+    policy = entry.pop("policy", POLICIES[algo])
+    if policy not in (POLICIES[algo], DICT_POLICIES.get(algo)):
+        on_dict = f" (or {DICT_POLICIES[algo]!r} on a Dict observation)" \
+            if algo in DICT_POLICIES else ""
+        raise ConfigError(f"{field}: {key} names policy {policy!r}, but {algo} trains "
+                          f"{POLICIES[algo]!r}{on_dict}")
     timesteps = entry.get("n_timesteps")
     if isinstance(timesteps, float) and timesteps.is_integer():  # rl-zoo writes !!float 1e5
         entry["n_timesteps"] = int(timesteps)

@@ -199,13 +199,21 @@ class Family:
         with the group it is aggregated into; ``label`` prefixes the names (``""`` or
         ``"<folder>/"``). Gymnasium env: `baselines.rl.policies.SB3Policy`; parallel env: one
         `baselines.rl.policies.SharedSB3Policy` for every robot; a JAX learner's model
-        (``jax_ppo``, ``jax_dqn``): `baselines.rl.jaxrl.policy.JaxPolicy`. Each model plays twice: its
+        (``jax_ppo``, ``jax_dqn``): `baselines.rl.jaxrl.policy.JaxPolicy`; a multi-robot
+        learner's (``ippo``, ``mappo``): `baselines.rl.marl.policy.TeamPolicy`, its rows named
+        by what it plays (``rl mappo (shared, id)``, ``rl mappo (shared, id) seed0``). Each model plays twice: its
         sampled actions (``rl <algo>_seed<N>``, group ``rl <algo>``) and its greedy ones (the
         same names with `baselines.rl.policies.GREEDY_SUFFIX`), two groups of their own. On an
         env whose observation holds the pose (``env.unwrapped.observes_pose``: v1's
         ``achieved_goal``, ``privileged=True``) the models are `POSE_OBSERVED` and their names
         say so."""
-        from baselines.rl.model_files import JAX_ALGOS, MODEL_NAME, model_files, run_name
+        from baselines.rl.model_files import (
+            JAX_ALGOS,
+            MARL_ALGOS,
+            MODEL_NAME,
+            model_files,
+            run_name,
+        )
         from baselines.rl.policies import GREEDY_SUFFIX, SB3Policy, SharedSB3Policy
 
         sb3 = SharedSB3Policy if is_parallel_env(env) else SB3Policy
@@ -222,13 +230,17 @@ class Family:
                 if None not in (here, trained) and trained != here else ""
             group = labelled(f"rl {label}{run_name(name['algo'], name['variant'])}",
                              information) + elsewhere
-            kind = _jax_policy() if name["algo"] in JAX_ALGOS else sb3
+            kind = _jax_policy() if name["algo"] in JAX_ALGOS else _team_policy() \
+                if name["algo"] in MARL_ALGOS else sb3
             for deterministic in (False, True):
                 suffix = GREEDY_SUFFIX if deterministic else ""
                 policy = kind(path, env, deterministic)
                 policy.information = information
-                policy.name = labelled(f"rl {label}{path.stem}", information) + elsewhere \
-                    + suffix
+                played, seed = f"rl {label}{path.stem}", f"seed{name['seed']}"
+                if name["algo"] in MARL_ALGOS:  # e.g. rl mappo (shared, id)
+                    group = labelled(f"rl {label}{policy.described}", information) + elsewhere
+                    played = f"rl {label}{policy.described} {seed}"
+                policy.name = labelled(played, information) + elsewhere + suffix
                 out.append((policy, group + suffix))
         return out
 
@@ -305,6 +317,15 @@ def _jax_policy():
     from baselines.rl.jaxrl.policy import JaxPolicy
 
     return JaxPolicy
+
+
+def _team_policy():
+    """`baselines.rl.marl.policy.TeamPolicy`, imported only for a multi-robot learner's model
+    (it needs torch: without it, a `ConfigError` naming the extra)."""
+    require("models: an ippo or mappo model", "torch")
+    from baselines.rl.marl.policy import TeamPolicy
+
+    return TeamPolicy
 
 
 def motion_model_of(backend: str, physics: str | None) -> str:

@@ -591,7 +591,7 @@ def _training() -> list[Case]:
         train_case("unknown key", training(colour=1), "config: unknown keys ['colour']"),
         train_case("missing algo", training(algo=None), "config: missing key 'algo'"),
         train_case("algo unknown", training(algo="a2c"), "config.algo: expected one of "
-                   "('ppo', 'dqn', 'recurrentppo', 'jax_ppo', 'jax_dqn')"),
+                   "('ppo', 'dqn', 'recurrentppo', 'jax_ppo', 'jax_dqn', 'ippo', 'mappo')"),
         train_case("env unknown", training(env="bounce_gym/Nothing-v0"),
                    "config.env: unknown environment id"),
         train_case("env of another package", training(env="CartPole-v1"),

@@ -96,7 +96,7 @@ def test_trust_refuses_missing_files_and_other_names(tmp_path):
     with pytest.raises(ConfigError, match="does not exist"):
         trust(tmp_path / "ppo_seed0.zip")
     (tmp_path / "x.zip").write_bytes(io.BytesIO(b"zip").getvalue())
-    with pytest.raises(ConfigError, match=r"x.zip: expected a name <ppo\|dqn\|recurrentppo\|jax_ppo\|jax_dqn>"):
+    with pytest.raises(ConfigError, match=r"x.zip: expected a name <ppo\|dqn\|recurrentppo\|jax_ppo\|jax_dqn\|ippo\|mappo>"):
         trust(tmp_path / "x.zip")
 
 
