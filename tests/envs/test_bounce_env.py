@@ -235,7 +235,7 @@ def test_memory_flat_over_10000_resets(backend):
 
     sys.getallocatedblocks counts live pymalloc blocks at no tracing cost, so the full 10,000
     resets run untraced; a window of 1,000 resets is then measured with tracemalloc (< 100 kB,
-    i.e. < 1 MB per 10,000 resets). The pymunk backend rebuilds its Space on every reset.
+    i.e. < 1 MB per 10,000 resets). A pymunk reset places the bodies of its one Space again.
     """
     envs = [gym.make(env_id, **backend).unwrapped for env_id in IDS]
     for seed, env in enumerate(envs):
