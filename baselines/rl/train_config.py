@@ -354,12 +354,8 @@ def _check_marl(config: dict) -> None:
         raise ConfigError(f"config.env: {algo} trains the robots of one of "
                           f"{sorted(PETTINGZOO_ENVS)} (the batched team env), not "
                           f"{config['env']}")
-    for key, value in _MARL_FIXED.items():
-        if config.get(key, value) != value:
-            why = ("its checkpoints hold weights only (not the optimiser, the generator or the "
-                   "teams mid-episode); train again without resume") if key == "resume" \
-                else "not supported by the multi-robot learners; remove the key"
-            raise ConfigError(f"config.{key}: {algo}: {why}")
+    _refuse_fixed(config, _MARL_FIXED, "the multi-robot learners",
+                  "not the optimiser, the generator or the teams mid-episode")
 
 
 #: Keys of a configuration the JAX learners do not honour, each with the value they need.
@@ -374,12 +370,19 @@ def _check_jax(config: dict, multi: bool) -> None:
         raise ConfigError(f"config.algo: {algo} trains single-robot envs; use ppo here")
     if "vec_env" in config:
         raise ConfigError(f"config.vec_env: {algo} steps its envs in JAX; remove the key")
-    for key, value in _JAX_FIXED.items():
+    _refuse_fixed(config, _JAX_FIXED, "the JAX learners",
+                  "the optimiser, key, envs and replay buffer live on the device")
+
+
+def _refuse_fixed(config: dict, fixed: dict, learners: str, kept_out: str) -> None:
+    """A `ConfigError` for the first key of ``fixed`` the configuration sets otherwise than to
+    its value: ``resume`` says what the weights-only checkpoints leave out (``kept_out``), any
+    other key that ``learners`` do not support it."""
+    for key, value in fixed.items():
         if config.get(key, value) != value:
-            why = ("its checkpoints hold weights only (the optimiser, key, envs and replay "
-                   "buffer live on the device); train again without resume") if key == "resume" \
-                else "not supported by the JAX learners; remove the key"
-            raise ConfigError(f"config.{key}: {algo}: {why}")
+            why = (f"its checkpoints hold weights only ({kept_out}); train again without "
+                   "resume") if key == "resume" else f"not supported by {learners}; remove the key"
+            raise ConfigError(f"config.{key}: {config['algo']}: {why}")
 
 
 def policy_name(algo: str, observation_space) -> str:

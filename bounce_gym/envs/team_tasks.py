@@ -23,6 +23,7 @@ import shapely
 
 from bounce_gym.envs.tasks import CoverageTask, MonitoringTask
 from bounce_gym.envs.tasks.base import path_samples, tick_length
+from bounce_gym.envs.tasks.coverage import CoverageHistograms
 
 
 class TeamFree:
@@ -43,34 +44,26 @@ class TeamFree:
 
 
 class TeamCoverage(TeamFree):
-    """`CoverageTask` with one visit histogram and visited grid per team."""
+    """`CoverageTask` with one visit histogram and visited grid per team
+    (`CoverageHistograms`)."""
 
     def __init__(self, task: CoverageTask, n_teams: int, m: int, model) -> None:
         super().__init__(task, n_teams, m, model)
         self.single = task
+        self.histograms = CoverageHistograms(task, n_teams)
         self.centres = model.centres
         self.bin_heading = np.arange(model.n_bins) * model.bin_width
-        shape = (n_teams, *task.free.shape)
-        self.visits = np.zeros(shape)
-        self.visited = np.zeros(shape, dtype=bool)
-        self.distance = np.zeros(n_teams)
-        self.n_free = task.free.sum()
         self.team = np.repeat(np.arange(n_teams), m)
 
     def start(self, b, task):
-        self.visits[b] = task.visits
-        self.visited[b] = task.visited
-        self.distance[b] = task.distance
+        h = self.histograms
+        h.visits[b] = task.visits
+        h.visited[b] = task.visited
+        h.distance[b] = task.distance
 
     def info(self) -> dict:
         """``coverage``, ``distance`` and ``tv_distance`` of every team (`CoverageTask`'s)."""
-        flat = self.visits.reshape(self.n, -1)
-        total = flat.sum(axis=1)
-        hist = np.where(total[:, None] > 0, flat / np.where(total > 0, total, 1.0)[:, None], flat)
-        gap = hist - self.single.target.reshape(1, -1)
-        return {"coverage": self.visited[:, self.single.free].mean(axis=1),
-                "distance": np.hypot.reduce(gap, axis=1),
-                "tv_distance": 0.5 * np.abs(gap).sum(axis=1)}
+        return self.histograms.info()
 
     def step(self, start_p, start_k, drive, bump, cells):
         task = self.single
@@ -81,18 +74,7 @@ class TeamCoverage(TeamFree):
         heading = self.bin_heading.take(cells.k.ravel())
         robot, points, spent = path_samples(events, tick_length(task.options, heading),
                                             task.cell_size / 4)
-        team = self.team.take(robot)
-        row, col = task.cells(points)
-        np.add.at(self.visits, (team, row, col), spent)
-        new = ~self.visited[team, row, col] & task.free[row, col]
-        self.visited[team, row, col] = True
-        seen = np.unique(np.ravel_multi_index((team[new], row[new], col[new]),
-                                              self.visits.shape))
-        new_cells = np.bincount(seen // task.free.size, minlength=self.n)
-        info = self.info()
-        reward = (task.coverage_weight * new_cells / self.n_free
-                  + task.distance_weight * (self.distance - info["distance"]))
-        self.distance = info["distance"].copy()
+        reward, info = self.histograms.visit(self.team.take(robot), points, spent)
         return np.repeat((reward / self.m)[:, None], self.m, axis=1), info
 
 

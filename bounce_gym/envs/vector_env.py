@@ -38,6 +38,7 @@ from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.reset_options import checked_reset_options
 from bounce_gym.envs.tasks import CoverageTask, NavigationTask
 from bounce_gym.envs.tasks.base import StepEvents, path_samples, tick_length
+from bounce_gym.envs.tasks.coverage import CoverageHistograms
 from bounce_gym.envs.vector_cells import CellRobots
 from bounce_gym.errors import ActionError, ConfigError
 from bounce_gym.validate import integer
@@ -644,48 +645,30 @@ class _NavigationBatch(_FreeBatch):
         return gx * gx + gy * gy <= (self.single.goal_radius + 1e-6) ** 2
 
 class _CoverageBatch(_FreeBatch):
-    """`CoverageTask` for N robots: one visit histogram and visited grid per env."""
+    """`CoverageTask` for N robots: one visit histogram and visited grid per env
+    (`CoverageHistograms`)."""
 
     def __init__(self, task: CoverageTask, n: int, model=None, bounds=None) -> None:
         super().__init__(task, n)
         self.single = task
-        shape = (n, *task.free.shape)
-        self.visits = np.zeros(shape)
-        self.visited = np.zeros(shape, dtype=bool)
-        self.distance = np.zeros(n)
-        self.n_free = task.free.sum()
+        self.histograms = CoverageHistograms(task, n)
 
     def start(self, rows, state, ticks, positions=None):
-        self.visits[rows] = 0.0
-        self.visited[rows] = False
+        h = self.histograms
+        h.visits[rows] = 0.0
+        h.visited[rows] = False
         row, col = self.single.cells(state.position[rows])
-        self.visited[rows, row, col] = True
-        self.distance[rows] = self.single.initial_distance
+        h.visited[rows, row, col] = True
+        h.distance[rows] = self.single.initial_distance
 
     def info(self, state, rows=_EVERY):
-        flat = self.visits[rows].reshape(-1, self.visits[0].size)
-        total = flat.sum(axis=1)
-        hist = np.where(total[:, None] > 0, flat / np.where(total > 0, total, 1.0)[:, None], flat)
-        gap = hist - self.single.target.reshape(1, -1)
-        return {"coverage": self.visited[rows][:, self.single.free].mean(axis=1),
-                "distance": np.hypot.reduce(gap, axis=1),
-                "tv_distance": 0.5 * np.abs(gap).sum(axis=1)}
+        return self.histograms.info(rows)
 
     def step(self, state, events, ticks, positions=None):
         task = self.single
         robot, points, spent = path_samples(events, tick_length(task.options, events.heading),
                                             task.cell_size / 4)
-        row, col = task.cells(points)
-        np.add.at(self.visits, (robot, row, col), spent)
-        new = ~self.visited[robot, row, col] & task.free[row, col]
-        self.visited[robot, row, col] = True
-        cells = np.unique(np.ravel_multi_index((robot[new], row[new], col[new]),
-                                               self.visits.shape))
-        new_cells = np.bincount(cells // (task.free.size), minlength=self.n)
-        info = self.info(state)
-        reward = (task.coverage_weight * new_cells / self.n_free
-                  + task.distance_weight * (self.distance - info["distance"]))
-        self.distance = info["distance"].copy()
+        reward, info = self.histograms.visit(robot, points, spent)
         return reward, np.zeros(self.n, dtype=bool), info
 
 

@@ -113,3 +113,51 @@ class CoverageTask(Task):
         return {"heatmap": (self.visits.copy(), origin, self.cell_size)}
 
 
+
+
+class CoverageHistograms:
+    """`CoverageTask`'s bookkeeping for ``n`` episodes at once (the batched envs'): a visit
+    histogram, a visited grid and the distance to the target per episode, with the task's
+    formulas on arrays.
+
+    Attributes:
+        visits, visited: (n, rows, cols) time spent and whether visited, per episode.
+        distance: (n,) each episode's last L2 distance to the target.
+    """
+
+    def __init__(self, task: CoverageTask, n: int) -> None:
+        self.task, self.n = task, n
+        shape = (n, *task.free.shape)
+        self.visits = np.zeros(shape)
+        self.visited = np.zeros(shape, dtype=bool)
+        self.distance = np.zeros(n)
+        self.n_free = task.free.sum()
+
+    def info(self, rows: np.ndarray | slice = slice(None)) -> dict:
+        """``coverage``, ``distance`` and ``tv_distance`` of the episodes ``rows``."""
+        flat = self.visits[rows].reshape(-1, self.visits[0].size)
+        total = flat.sum(axis=1)
+        hist = np.where(total[:, None] > 0, flat / np.where(total > 0, total, 1.0)[:, None], flat)
+        gap = hist - self.task.target.reshape(1, -1)
+        return {"coverage": self.visited[rows][:, self.task.free].mean(axis=1),
+                "distance": np.hypot.reduce(gap, axis=1),
+                "tv_distance": 0.5 * np.abs(gap).sum(axis=1)}
+
+    def visit(self, episode: np.ndarray, points: np.ndarray, spent: np.ndarray
+              ) -> tuple[np.ndarray, dict]:
+        """Add path samples (`path_samples`: ``points`` with their ``spent`` ticks) to their
+        ``episode``'s histogram; returns each episode's reward (n,) — the coverage and distance
+        terms of `CoverageTask` — and the `info` of every episode."""
+        task = self.task
+        row, col = task.cells(points)
+        np.add.at(self.visits, (episode, row, col), spent)
+        new = ~self.visited[episode, row, col] & task.free[row, col]
+        self.visited[episode, row, col] = True
+        cells = np.unique(np.ravel_multi_index((episode[new], row[new], col[new]),
+                                               self.visits.shape))
+        new_cells = np.bincount(cells // task.free.size, minlength=self.n)
+        info = self.info()
+        reward = (task.coverage_weight * new_cells / self.n_free
+                  + task.distance_weight * (self.distance - info["distance"]))
+        self.distance = info["distance"].copy()
+        return reward, info
