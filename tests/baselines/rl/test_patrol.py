@@ -166,17 +166,20 @@ def test_same_seed_same_weights_and_the_model_plays_its_side(tmp_path, role):
         assert 0 <= action <= 25
 
 
-@pytest.mark.parametrize("role", ["patrollers", "adversary"])
-def test_the_shipped_training_command_runs_as_written(tmp_path, monkeypatch, capsys, role):
+@pytest.mark.parametrize(("config_file", "folder"), [
+    ("train_patrol_patrollers", "patrol-patrollers"), ("train_patrol_adversary", "patrol-adversary"),
+    ("train_patrol_patrollers_best_response", "patrol-patrollers-br")])
+def test_the_shipped_training_command_runs_as_written(tmp_path, monkeypatch, capsys, config_file,
+                                                      folder):
     sys.path.insert(0, str(ROOT))
     import train as command
 
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("BOUNCE_GYM_MAX_TIMESTEPS", "256")
-    yaml_file = ROOT / "configs" / f"train_patrol_{role}.yaml"
+    yaml_file = ROOT / "configs" / f"{config_file}.yaml"
     assert command.main([str(yaml_file), "--seeds", "0", "--no-progress"]) == 0
-    model = tmp_path / "models" / f"patrol-{role}" / "ppo_seed0.zip"
-    assert f"saved models/patrol-{role}/ppo_seed0.zip" in capsys.readouterr().out
+    model = tmp_path / "models" / folder / "ppo_seed0.zip"
+    assert f"saved models/{folder}/ppo_seed0.zip" in capsys.readouterr().out
     env = patrol_env(world="patrol_15x15", n_patrollers=2, sensor_range=6.0, attack_time=20)
     assert patrol_policy(model, env).model.num_timesteps >= 256
 
