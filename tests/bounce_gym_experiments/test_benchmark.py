@@ -34,7 +34,7 @@ def test_the_benchmark_covers_every_task_with_200_held_out_episodes():
         "bounce_gym/BounceLocalization-v0",
         "bounce_gym/BounceCoverage-v0", "bounce_gym/MultiBounceCoverage-v0",
         "bounce_gym/MultiBounceMonitoring-v0", "bounce_gym/Drifter-v0",
-        "bounce_gym/MultiDrifter-v0"}
+        "bounce_gym/MultiDrifter-v0", "bounce_gym/Patrol-v0"}
     navigation = [w for env, w in tasks if env == "bounce_gym/BounceNavigation-v0"]
     assert len(navigation) == 2 and any(w.endswith("bench_grid_14x22.yaml") for w in navigation)
     for exp in experiments:
@@ -43,6 +43,9 @@ def test_the_benchmark_covers_every_task_with_200_held_out_episodes():
         assert "horizon_reason" not in exp  # every task at its registered horizon
         if exp["env"] == "bounce_gym/MultiDrifter-v0":  # deployments: all the family runs
             assert exp["policies"] == ["planner", "random"]
+        elif exp["env"] == "bounce_gym/Patrol-v0":  # patrollers (no fixed angle) vs the Stackelberg
+            assert exp["policies"] == ["planner", "random", "rl"]  # best response
+            assert exp["adversaries"] == ["best_response"]
         elif _physics(exp):  # no fixed angles on physics; agents where some were trained there
             assert exp["policies"][:2] == ["planner", "random"] and "fixed" not in exp["policies"]
         else:
