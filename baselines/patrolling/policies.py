@@ -14,7 +14,7 @@ adversary observes). docs/choices/patrolling.md, "The patrol evaluation", gives 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import networkx as nx
 import numpy as np
@@ -28,7 +28,8 @@ from bounce_gym.errors import ConfigError
 
 __all__ = ["ADVERSARY", "BestResponseAdversary", "JointPatrolPolicy", "LearnedAdversary",
            "LearnedPatrollers", "MarkovPatrolPolicy", "PerimeterPatrolPolicy", "induced_chain",
-           "patrollers_of", "perimeter_walk", "sub_seed"]
+           "patrollers_of", "perimeter_walk", "policy_chains", "strategy_capture",
+           "sub_seed"]
 
 #: The adversary's agent name in ``Patrol-v0``.
 ADVERSARY = "adversary"
@@ -347,23 +348,8 @@ class LearnedPatrollers(MultiPolicy):
     def _induced(self, env) -> tuple[np.ndarray, np.ndarray]:
         inner = env.unwrapped
         if id(inner) not in self._chains:
-            n = inner.n_vertices
-            alone = np.zeros((n, 2 * n), dtype=np.float32)
-            alone[np.arange(n), np.arange(n)] = 1.0
-            probs = action_probabilities(self.policy.model, alone)
-            neighbours = inner.neighbour_table
-            legal = neighbours >= 0
-            told = np.zeros((n, n))
-            rows, dirs = np.nonzero(legal)
-            np.add.at(told, (rows, neighbours[rows, dirs]), probs[rows, dirs])
-            told[np.arange(n), np.arange(n)] += np.where(legal, 0.0, probs).sum(axis=1)
-            moving = told.copy()
-            np.fill_diagonal(moving, 0.0)
-            mass = moving.sum(axis=1, keepdims=True)
-            # a vertex where the policy never moves: the uniform walk (the env's default)
-            moving = np.where(mass > 0, moving / np.where(mass > 0, mass, 1.0),
-                              inner.board.uniform_walk())
-            self._chains[id(inner)] = (told, moving)
+            self._chains[id(inner)] = policy_chains(
+                inner, lambda alone: action_probabilities(self.policy.model, alone))
         return self._chains[id(inner)]
 
     def told(self, env) -> list[tuple[float, np.ndarray]]:
@@ -380,6 +366,43 @@ class LearnedPatrollers(MultiPolicy):
 
     def act(self, observations, infos):
         return self.policy.act(observations, infos)
+
+
+def policy_chains(env, probabilities_of: Callable[[np.ndarray], np.ndarray]
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The chains a shared patroller policy induces on a Patrol-v0 env (`LearnedPatrollers`):
+    ``(told, moving)``, both (n, n) over the graph's node order. ``probabilities_of`` maps
+    (k, 2n) observations to (k, actions) action distributions (`action_probabilities` of a
+    model); it is asked about the n observations of a patroller alone at each vertex (one-hot v,
+    no other patroller in sight). ``told``: a move along an edge in each direction, a direction
+    without an edge a stay at v (the env's no-op). ``moving``: ``told`` conditioned on moving (a
+    vertex where the policy never moves: the uniform walk, the env's default strategy)."""
+    inner = env.unwrapped
+    n = inner.n_vertices
+    alone = np.zeros((n, 2 * n), dtype=np.float32)
+    alone[np.arange(n), np.arange(n)] = 1.0
+    probs = np.asarray(probabilities_of(alone), dtype=np.float64)
+    neighbours = inner.neighbour_table
+    legal = neighbours >= 0
+    told = np.zeros((n, n))
+    rows, dirs = np.nonzero(legal)
+    np.add.at(told, (rows, neighbours[rows, dirs]), probs[rows, dirs])
+    told[np.arange(n), np.arange(n)] += np.where(legal, 0.0, probs).sum(axis=1)
+    moving = told.copy()
+    np.fill_diagonal(moving, 0.0)
+    mass = moving.sum(axis=1, keepdims=True)
+    moving = np.where(mass > 0, moving / np.where(mass > 0, mass, 1.0),
+                      inner.board.uniform_walk())
+    return told, moving
+
+
+def strategy_capture(env, chain: np.ndarray) -> np.ndarray:
+    """(n,) capture probability of an attack on each target started at step 0 against m
+    patrollers following ``chain`` from distinct uniformly random vertices (the env's
+    placement): what `BestResponseAdversary` in ``"strategy"`` mode minimises over targets."""
+    inner = env.unwrapped
+    S = capture.survival(chain, inner.board.seen, inner.attack_time)
+    return capture.capture_from_distinct_uniform(S, inner.n_patrollers)
 
 
 def action_probabilities(model, observations: np.ndarray) -> np.ndarray:

@@ -16,6 +16,26 @@ one side learns while the other plays a fixed policy inside a wrapper.
     computed from the chain the env *announces* (``strategy``; default the uniform random walk),
     not from the policy being learned, which announces none: the target is the same every
     episode and the patrollers learn to guard one vertex. Hence not the default.
+  - ``"fictitious_play"`` and ``"softmin"``: the Stackelberg adversary of the evaluation
+    (`baselines.patrolling.policies.BestResponseAdversary`, strategy mode) played against the
+    policy being learned itself. Before every rollout, `response_callback` (added to the
+    training by `training_callbacks`) tells the env the policy's action distributions, from
+    which `PatrollersEnv.respond` builds the chain the policy induces when a patroller is alone
+    at each vertex (`baselines.patrolling.policies.policy_chains`, what the evaluation tells
+    its adversary about learned patrollers) and its exact capture probability of an attack on
+    each target at step 0 from distinct uniform starts (`policy_capture`). Every episode then
+    attacks at step 0; the target is drawn
+
+    - ``fictitious_play``: from the history of best responses (fictitious play, Brown 1951):
+      each `respond` adds one to the count of the target of least capture probability, and
+      the target is drawn in proportion to the counts — the adversary's empirical mixed
+      strategy, which a pure best response (a new argmin each rollout) would make cycle;
+    - ``softmin``: with probability ∝ exp(−(c_z − min c) / ``temperature``) over the current
+      capture probabilities c (a smoothed best response: ``temperature`` → 0 is the argmin).
+
+    Before the first `respond` (the first episode) the target is uniformly random. A fraction
+    ``random_fraction`` of the episodes (default 0) attack a uniformly random target at step 0
+    instead, so that no target goes untrained.
 
 * `AdversaryEnv` — the adversary learns; the patrollers follow a Markov chain drawn per episode,
   uniformly, from ``strategies`` (default MAECT, §4.4.1, and the uniform random walk), and the
@@ -41,6 +61,7 @@ import gymnasium as gym
 import numpy as np
 from pettingzoo import ParallelEnv
 
+from bounce_gym import validate
 from bounce_gym.errors import ConfigError
 
 PATROL_ID = "bounce_gym/Patrol-v0"
@@ -48,7 +69,9 @@ ADVERSARY = "adversary"
 #: What a training configuration of Patrol-v0 trains (``role``): the wrapper of each.
 ROLES = ("patrollers", "adversary")
 #: The adversaries `PatrollersEnv` can play against.
-ADVERSARIES = ("random", "best_response")
+ADVERSARIES = ("random", "best_response", "fictitious_play", "softmin")
+#: Those of `ADVERSARIES` that best-respond to the policy being learned (`PatrollersEnv.respond`).
+RESPONDING = ("fictitious_play", "softmin")
 #: The chains `AdversaryEnv` can draw for the patrollers.
 STRATEGIES = ("maect", "random_walk")
 #: Second entropy word of the wrappers' random stream, so it differs from the env's.
@@ -84,10 +107,18 @@ class PatrollersEnv(ParallelEnv):
 
     metadata = {"name": "patrol_patrollers_v0", "render_modes": ["rgb_array"]}
 
-    def __init__(self, adversary: str = "random", **patrol_kwargs) -> None:
+    def __init__(self, adversary: str = "random", temperature: float = 0.02,
+                 random_fraction: float = 0.0, **patrol_kwargs) -> None:
         if adversary not in ADVERSARIES:
             raise ConfigError(f"adversary: expected one of {ADVERSARIES}, got {adversary!r}")
         self.adversary = adversary
+        self.temperature = validate.number("temperature", temperature, minimum=0.0, strict=True)
+        self.random_fraction = validate.number("random_fraction", random_fraction, minimum=0.0,
+                                               maximum=1.0)
+        #: The adversary's weights over the targets (`respond`); None: not told yet.
+        self.weights: np.ndarray | None = None
+        #: The capture probabilities of the last `respond`.
+        self.capture: np.ndarray | None = None
         self.env = patrol_env(**patrol_kwargs)
         self.possible_agents = [a for a in self.env.possible_agents if a != ADVERSARY]
         self.agents: list[str] = []
@@ -109,8 +140,10 @@ class PatrollersEnv(ParallelEnv):
         if self.adversary == "random":
             self.target = int(self.rng.integers(inner.n_vertices))
             self.start = int(self.rng.integers(inner.max_cycles - inner.attack_time + 1))
-        else:
+        elif self.adversary == "best_response":
             self.target, self.start = int(np.argmin(inner.capture_probabilities())), 0
+        else:
+            self.target, self.start = self._draw_target(inner.n_vertices), 0
         self.clock = 0
         self.agents = [a for a in self.env.agents if a != ADVERSARY]
         return self._ours(observations), self._infos(infos)
@@ -124,6 +157,28 @@ class PatrollersEnv(ParallelEnv):
         return (self._ours(observations), self._ours(rewards), self._ours(terminations),
                 self._ours(truncations), self._infos(infos))
 
+    def respond(self, probabilities_of) -> np.ndarray:
+        """Best-respond to a patroller policy (module docstring; adversaries `RESPONDING`):
+        ``probabilities_of`` maps (k, 2n) observations to (k, actions) action distributions
+        (`baselines.patrolling.policies.action_probabilities` of the model). Updates the
+        adversary's target weights; returns the per-target capture probabilities."""
+        probabilities = policy_capture(self.env, probabilities_of)
+        if self.adversary == "fictitious_play":
+            if self.weights is None:
+                self.weights = np.zeros(len(probabilities))
+            self.weights[int(np.argmin(probabilities))] += 1.0
+        else:
+            self.weights = np.exp(-(probabilities - probabilities.min()) / self.temperature)
+        self.capture = probabilities
+        return probabilities
+
+    def _draw_target(self, n: int) -> int:
+        if self.weights is None or self.rng.random() < self.random_fraction:
+            return int(self.rng.integers(n))
+        cumulative = np.cumsum(self.weights)
+        return int(min(np.searchsorted(cumulative, self.rng.random() * cumulative[-1],
+                                       side="right"), n - 1))
+
     def render(self):
         return self.env.render()
 
@@ -136,6 +191,53 @@ class PatrollersEnv(ParallelEnv):
     def _infos(self, infos: dict) -> dict:
         return {a: {**info, "is_success": info["outcome"] in PATROLLER_WINS}
                 for a, info in self._ours(infos).items()}
+
+
+def policy_capture(env, probabilities_of) -> np.ndarray:
+    """(n,) exact capture probability of an attack on each target of a Patrol-v0 ``env`` at step
+    0, the patrollers starting on distinct uniform vertices and following the chain a policy
+    induces alone at each vertex (``probabilities_of``: `PatrollersEnv.respond`) — what the
+    evaluation's best response (strategy mode) minimises against learned patrollers."""
+    from baselines.patrolling.policies import policy_chains, strategy_capture
+
+    return strategy_capture(env, policy_chains(env, probabilities_of)[0])
+
+
+def training_callbacks(config) -> list:
+    """The SB3 callbacks a validated training configuration of Patrol-v0 needs: the
+    `response_callback` when its patrollers learn against an adversary that responds to them
+    (`RESPONDING`). (The policy sees the raw observations: the shared multi-robot policy trains
+    without frame stacking and normalisation, `baselines.rl.train_config`.)"""
+    if config.get("env") != PATROL_ID or config.get("role") != "patrollers" or \
+            config["env_kwargs"].get("adversary") not in RESPONDING:
+        return []
+    return [response_callback()]
+
+
+def response_callback():
+    """An SB3 callback that, before every rollout, tells the `PatrollersEnv` under the training
+    VecEnv the current policy (`PatrollersEnv.respond`) and keeps the least capture probability
+    of each rollout in ``least`` (the policy's exact value against the best response)."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from baselines.patrolling.policies import action_probabilities
+
+    class PolicyResponse(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.least: list[float] = []
+
+        def _on_rollout_start(self) -> None:
+            model = self.model
+            probabilities = self.training_env.env_method(
+                "respond", lambda obs: action_probabilities(model, obs), indices=[0])[0]
+            self.least.append(float(probabilities.min()))
+            self.logger.record("patrol/least_capture", self.least[-1])
+
+        def _on_step(self) -> bool:
+            return True
+
+    return PolicyResponse()
 
 
 def strategy_chain(name: str, graph) -> np.ndarray:

@@ -111,6 +111,7 @@ from pathlib import Path
 import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.rl.model_files import JAX_ALGOS, MARL_ALGOS, read_model, run_name, save_model
 from baselines.rl.monitor import SUFFIX
+from baselines.rl.patrol import training_callbacks
 from baselines.rl.train_config import (
     algo_class,
     algo_kwargs,
@@ -300,6 +301,7 @@ def _train_run(run: RunFiles, progress: bool, extra_callbacks: list, log) -> Pat
     from bounce_gym.provenance import provenance
 
     config = run.config
+    own_callbacks = training_callbacks(config)
     env = make_train_env(config, run.seed)
     try:
         found = run.checkpoints() if config["resume"] else {}
@@ -318,7 +320,8 @@ def _train_run(run: RunFiles, progress: bool, extra_callbacks: list, log) -> Pat
         if model.num_timesteps < config["total_timesteps"]:
             model.learn(config["total_timesteps"] - model.num_timesteps,
                         callback=[checkpoint_callback(config["checkpoint_every"],
-                                                      save_checkpoint), *extra_callbacks],
+                                                      save_checkpoint), *own_callbacks,
+                                  *extra_callbacks],
                         progress_bar=progress, reset_num_timesteps=not found)
         if model.num_timesteps not in run.checkpoints():
             save_checkpoint(model)

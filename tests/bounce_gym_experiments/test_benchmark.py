@@ -34,7 +34,7 @@ def test_the_benchmark_covers_every_task_with_200_held_out_episodes():
         "bounce_gym/BounceLocalization-v0",
         "bounce_gym/BounceCoverage-v0", "bounce_gym/MultiBounceCoverage-v0",
         "bounce_gym/MultiBounceMonitoring-v0", "bounce_gym/Drifter-v0",
-        "bounce_gym/MultiDrifter-v0"}
+        "bounce_gym/MultiDrifter-v0", "bounce_gym/Patrol-v0"}
     navigation = [w for env, w in tasks if env == "bounce_gym/BounceNavigation-v0"]
     assert len(navigation) == 2 and any(w.endswith("bench_grid_14x22.yaml") for w in navigation)
     for exp in experiments:
@@ -43,6 +43,9 @@ def test_the_benchmark_covers_every_task_with_200_held_out_episodes():
         assert "horizon_reason" not in exp  # every task at its registered horizon
         if exp["env"] == "bounce_gym/MultiDrifter-v0":  # deployments: all the family runs
             assert exp["policies"] == ["planner", "random"]
+        elif exp["env"] == "bounce_gym/Patrol-v0":  # patrollers (no fixed angle) vs the Stackelberg
+            assert exp["policies"] == ["planner", "random", "rl"]  # best response
+            assert exp["adversaries"] == ["best_response"]
         elif _physics(exp):  # no fixed angles on physics; agents where some were trained there
             assert exp["policies"][:2] == ["planner", "random"] and "fixed" not in exp["policies"]
         else:
@@ -126,7 +129,8 @@ def test_a_tiny_budget_benchmark_run_writes_the_leaderboard(tmp_path, capsys):
 def test_every_policy_of_a_benchmark_experiment_starts_from_the_same_draw():
     """Policies compared in one row start from the same draw (issue 34): no policy picks its own
     start unless the experiment imposes one start on all of them (monitoring's cycle start);
-    the drifter deployments, whose policies are starts, are the one exception."""
+    the drifter deployments, whose policies are starts, are the one exception. (A patrol
+    policy's options also announce its strategy to the env, ``strategy``: not a start.)"""
     config = validate_config(load_config(BENCHMARK))
     for exp in config["experiments"]:
         if exp["env"] == "bounce_gym/MultiDrifter-v0":
@@ -137,6 +141,8 @@ def test_every_policy_of_a_benchmark_experiment_starts_from_the_same_draw():
             for entrant in prepared.entrants:
                 episode = prepared.family.episode(entrant.env, entrant.policy, entrant.setup)
                 own = entrant.policy.start_options(entrant.env, seed)
+                if exp["env"] == "bounce_gym/Patrol-v0":
+                    own = {k: v for k, v in (own or {}).items() if k != "strategy"} or None
                 imposed = episode.start_options(seed)
                 assert own is None or own == imposed, (exp["name"], entrant.policy.name)
         names = [e.policy.name for e in prepared.entrants]

@@ -44,6 +44,10 @@ CASES = {
                                     "step_mode": "tick", "max_cycles": 50}, hyperparams=SMALL),
     "patrol-patrollers": dict(algo="ppo", env="bounce_gym/Patrol-v0", role="patrollers",
                               env_kwargs=PATROL, hyperparams=SMALL),
+    # the adversary's weights over the targets (PatrollersEnv.respond) resume with the env
+    "patrol-patrollers-softmin": dict(algo="ppo", env="bounce_gym/Patrol-v0", role="patrollers",
+                                      env_kwargs={**PATROL, "adversary": "softmin"},
+                                      hyperparams=SMALL),
     "patrol-adversary": dict(algo="ppo", env="bounce_gym/Patrol-v0", role="adversary", n_envs=2,
                              env_kwargs=PATROL, hyperparams=SMALL),
 }
