@@ -113,8 +113,6 @@ class CoverageTask(Task):
         return {"heatmap": (self.visits.copy(), origin, self.cell_size)}
 
 
-
-
 class CoverageHistograms:
     """`CoverageTask`'s bookkeeping for ``n`` episodes at once (the batched envs'): a visit
     histogram, a visited grid and the distance to the target per episode, with the task's
