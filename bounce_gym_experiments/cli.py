@@ -94,11 +94,12 @@ from bounce_gym.extras import from_import_error, require
 
 def evaluate_command(config_path: str | None, progress: bool = True,
                      flags: Mapping[str, str] | None = None,
-                     experiments: list[str] | None = None) -> int:
+                     experiments: list[str] | None = None, show_tables: bool = False) -> int:
     """Run an evaluation configuration on its executor (``flags``: the executor flags given,
-    `executor_from`), print the tables and write the run folder; if units fail for good, say
-    which and return 1, keeping the finished units for the next run. ``experiments``: run only
-    the experiments of these names (`select_experiments`)."""
+    `executor_from`), print who wins (and with ``show_tables`` every table) and write the run
+    folder (the tables in ``tables.txt``); if units fail for good, say which and return 1,
+    keeping the finished units for the next run. ``experiments``: run only the experiments of
+    these names (`select_experiments`)."""
     from bounce_gym_experiments.config import load_config, validate_config
 
     # before the heavy imports below
@@ -106,10 +107,10 @@ def evaluate_command(config_path: str | None, progress: bool = True,
     import shutil
 
     from bounce_gym.errors import ConfigError
-    from bounce_gym.files import check_writable, refuse_links
+    from bounce_gym.files import atomic_write, check_writable, refuse_links
     from bounce_gym.provenance import provenance
     from bounce_gym_experiments.executors import UnitStore
-    from bounce_gym_experiments.leaderboard import write_leaderboard
+    from bounce_gym_experiments.leaderboard import verdicts, who_wins_text, write_leaderboard
     from bounce_gym_experiments.report import (
         families_of,
         format_table,
@@ -138,16 +139,20 @@ def evaluate_command(config_path: str | None, progress: bool = True,
         return 1
     families, notes, made = families_of(plots), notes_of(plots), provenance()
     summary, per_seed = table_rows(rows, families)
-    print(format_table(summary, families))
+    episodes = [r.row() for r in rows]
+    decided = verdicts(summary, episodes, families)  # the bootstraps, once
+    table_text = format_table(summary, families)
+    if show_tables:
+        print(table_text)
     for note in notes:
         print(f"note: {note}")
     run_folder = new_run_folder(config)
     with run_folder as folder:  # appears whole, once everything is written
-        episodes = [r.row() for r in rows]
         write_results(folder, episodes, summary, config, per_seed, notes, made)
+        atomic_write(folder / TABLES_FILE, (table_text + "\n").encode())
         written = write_plots(folder, plots, summary, per_seed)
         if config["leaderboard"]:
-            written += write_leaderboard(folder, config, summary, episodes, families, notes,
+            written += write_leaderboard(folder, config, summary, decided, families, notes,
                                          made)
     try:  # the run folder now holds the results; never delete through a planted link
         refuse_links("config.output", output, store.folder)
@@ -157,10 +162,16 @@ def evaluate_command(config_path: str | None, progress: bool = True,
         shutil.rmtree(store.folder, ignore_errors=True)
         with contextlib.suppress(OSError):  # the sweeps' folder, once no other sweep is kept
             store.folder.parent.rmdir()
-    print(f"\nwrote {run_folder.path}/episodes.csv, summary.csv, results.json and "
-          f"{len(written)} other files" + (" (leaderboard.md, leaderboard.csv, plots)"
-                                           if config["leaderboard"] else " (plots)"))
+    print(f"\nwrote {run_folder.path}/episodes.csv, summary.csv, results.json, {TABLES_FILE} "
+          f"and {len(written)} other files" + (" (leaderboard.md, leaderboard.csv, plots)"
+                                               if config["leaderboard"] else " (plots)"))
+    report = run_folder.path / ("leaderboard.md" if config["leaderboard"] else TABLES_FILE)
+    print("\n" + who_wins_text(decided, f"{report}"))
     return 0
+
+
+#: the file of a run folder holding every table of the evaluation as text
+TABLES_FILE = "tables.txt"
 
 
 def select_experiments(config: dict, names: list[str] | None) -> dict:
@@ -413,6 +424,9 @@ def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--experiments", nargs="+", metavar="NAME",
                         help="run only these experiments of the configuration")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    parser.add_argument("--tables", action="store_true",
+                        help="also print every table (always written to the run folder's "
+                             "tables.txt)")
     return parser
 
 
@@ -534,7 +548,8 @@ def dispatch(args: argparse.Namespace) -> int:
         require(feature, *COMMAND_MODULES[args.command])
         if args.command == "evaluate":
             return evaluate_command(args.config, progress=not args.no_progress,
-                                    flags=executor_flags(args), experiments=args.experiments)
+                                    flags=executor_flags(args), experiments=args.experiments,
+                                    show_tables=args.tables)
         if args.command == "trust":
             return trust_command(args.models)
         if args.command == "curves":

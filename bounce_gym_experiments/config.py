@@ -49,6 +49,7 @@ import bounce_gym  # noqa: F401  (registers the environments)
 from baselines.config_model import ConfigModel, located, shorten, where
 from baselines.rl.model_files import check_folder_name
 from baselines.seeds import EVALUATION_SEEDS_START, MAX_SEED, reserved_overlap
+from baselines.shipped_agents import models_folder
 from bounce_gym.documents import read_document
 from bounce_gym.envs.registration import (
     DRIFTER_PETTINGZOO_ENVS,
@@ -209,6 +210,9 @@ class Experiment(ConfigModel):
         default=None,
         description="The folders of the models folder whose models rl runs (default: the "
                     "experiment's name): a name, or a list of names and {folder, env_kwargs}.")
+    greedy: bool = Field(default=True, description="Also play every trained model's greedy "
+                                                  "actions, rows named '(greedy)', beside its "
+                                                  "sampled ones.")
     difficulty: Literal[DIFFICULTIES] | None = Field(  # type: ignore[valid-type]
         default=None, description="Labels the experiment in a leaderboard.")
 
@@ -299,7 +303,7 @@ class EvaluationConfig(ConfigModel):
     @classmethod
     def _path(cls, value: str, info: ValidationInfo) -> str:
         check_path_text(located(info), value)
-        return value
+        return models_folder(value) if info.field_name == "models" else value
 
     @field_validator("executor", mode="before")
     @classmethod
@@ -332,6 +336,24 @@ def configs_folder() -> Path:
     here = Path(__file__).resolve().parent
     installed = here / "configs"
     return installed if installed.is_dir() else here.parent / "configs"
+
+
+def training_configs_for(folder: str) -> list[str]:
+    """The shipped training configurations (`configs_folder`) whose models go to the models'
+    folder ``folder`` (their ``name``), as paths from the current folder where they lie below it."""
+    found = []
+    for path in sorted(configs_folder().glob("train_*.yaml")):
+        document = read_document(path, "config")
+        if isinstance(document, dict) and document.get("name") == folder:
+            found.append(_shown(path))
+    return found
+
+
+def _shown(path: Path) -> str:
+    try:
+        return str(path.relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
 
 
 def load_config(path: str | Path | None = None) -> dict:

@@ -14,6 +14,7 @@ interval).
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -165,6 +166,48 @@ def headline_markdown(rows: list[dict]) -> list[str]:
     return lines
 
 
+#: the widest line of `who_wins_text`
+WHO_WINS_WIDTH = 100
+#: how `who_wins_text` names the rows a verdict compares
+_SHOWN_AS = {"planner": "planner", "rl": "RL", "random": "random"}
+
+
+def winners(verdict: dict) -> list[str]:
+    """The keys (``planner``, ``rl``, ``random``) of the rows of an experiment's verdict that
+    beat at least one other and that none beats, by its comparisons (`verdicts`)."""
+    beats: dict[str, set[str]] = {key: set() for key in _SHOWN_AS}
+    for first, second in (("rl", "planner"), ("rl", "random"), ("planner", "random")):
+        comparison = verdict[f"{first}_vs_{second}"]
+        if comparison is None or comparison["winner"] is None:
+            continue
+        won, lost = ((first, second) if comparison["winner"] == verdict[first]["policy"]
+                     else (second, first))
+        beats[won].add(lost)
+    beaten = set().union(*beats.values())
+    return [key for key in _SHOWN_AS if beats[key] and key not in beaten]
+
+
+def who_wins_text(verdict_list: list[dict], report: str) -> str:
+    """The verdicts as plain text no wider than `WHO_WINS_WIDTH`: per experiment, its score
+    and who wins (`winners`; "none apart" where no comparison decides), then each compared
+    row's value with its 95% interval and count; ``report`` names where the full tables are."""
+    lines = ["Who wins: per experiment, the best planner, the best trained agent (sampled "
+             "actions) and random", "bouncing on the task's score, value [95% interval] n; "
+             "the winner beats another by",
+             "P(improvement) and none beats it. Names, P values and every table: " , f"  {report}"]
+    for v in verdict_list:
+        top = winners(v)
+        better = "higher" if v["higher_is_better"] else "lower"
+        head = (f"{v['experiment']}: {v['score']} ({better} is better); winner: "
+                + (" and ".join(_SHOWN_AS[key] for key in top) if top else "none apart"))
+        values = [f"{_SHOWN_AS[key]} {cell(v[key], v['score'])}" for key in _SHOWN_AS
+                  if v[key] is not None]
+        lines += ["", *textwrap.wrap(head, WHO_WINS_WIDTH, subsequent_indent="    "),
+                  *textwrap.wrap("; ".join(values), WHO_WINS_WIDTH, initial_indent="    ",
+                                 subsequent_indent="    ")]
+    return "\n".join(lines)
+
+
 def _verdict_lines(rows: list[dict]) -> list[str]:
     lines = ["## Who wins", "",
              "Per experiment, the best planner, the best trained agent (sampled actions, at "
@@ -248,13 +291,13 @@ def plot(folder: Path, summary: list[dict], families: Mapping) -> Path | None:
     return save_figure(fig, folder / "leaderboard.png")
 
 
-def write_leaderboard(folder: Path, config: Mapping, summary: list[dict], episodes: list[dict],
+def write_leaderboard(folder: Path, config: Mapping, summary: list[dict], verdict_list: list[dict],
                       families: Mapping, notes: list[str], provenance: Mapping) -> list[Path]:
     """Write ``leaderboard.md``, ``leaderboard.csv``, ``verdicts.csv`` (the headline rows,
-    `verdict_rows`) and ``leaderboard.png``; returns them. ``episodes``: the episode rows."""
+    `verdict_rows`) and ``leaderboard.png``; returns them. ``verdict_list``: the `verdicts`."""
     md, table, verdict_file = (folder / "leaderboard.md", folder / "leaderboard.csv",
                                folder / "verdicts.csv")
-    decided = verdict_rows(verdicts(summary, episodes, families))  # the bootstraps, once
+    decided = verdict_rows(verdict_list)
     atomic_write(md, markdown(config, summary, decided, families, notes, provenance).encode())
     atomic_write(table, csv_text(csv_rows(config, summary, families),
                                  ("experiment", "difficulty", "env", "policy", "episodes",

@@ -32,7 +32,7 @@ import numpy as np
 from baselines.policy import Policy, is_parallel_env, labelled
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import config_errors
-from bounce_gym_experiments.config import validate_config
+from bounce_gym_experiments.config import training_configs_for, validate_config
 from bounce_gym_experiments.executors import Executor, UnitStore, make_executor
 from bounce_gym_experiments.families.base import Episode, Family
 from bounce_gym_experiments.registry import family_of
@@ -184,8 +184,16 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
             entrants += [Entrant(p, own_env, own_setup, group) for p, group in found]
             if not found:
                 notes.append(f"{experiment['name']}: no trained models in {folder} "
-                             "(<algo>_seed<N>.zip), so no rl rows")
+                             f"(<algo>_seed<N>.zip), so no rl rows; {_to_train(entry['folder'])}")
     return Prepared(experiment, env, family, setup, entrants, notes)
+
+
+def _to_train(folder: str) -> str:
+    """What makes the models of ``folder``: the shipped training configurations of that name."""
+    found = training_configs_for(folder)
+    if not found:
+        return "no shipped training configuration makes them"
+    return "train them with " + " or ".join(f"`bounce-gym train {path}`" for path in found)
 
 
 def run(config: Mapping, progress: bool = True, executor: Executor | None = None,

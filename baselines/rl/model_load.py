@@ -60,15 +60,12 @@ def load_model_file(trained: ModelFile, observation_space, action_space, **load_
     """The SB3 model of ``trained`` for an env with these spaces (``load_kwargs`` go to SB3's
     ``load``, e.g. the env to resume training on); a `ConfigError` naming the file for a
     file that does not fit them or is not a model this package saved."""
-    template = _template(trained, observation_space, action_space)
+    acting = load_kwargs.get("env") is None
+    template = _template(trained, observation_space, action_space, acting)
     saved, weights = _saved(template)
     _check_spaces(trained, saved)
     _check_weights(trained, weights)
     custom_objects = _custom_objects(trained, template, saved)
-    if load_kwargs.get("env") is None and "replay_buffer_class" in custom_objects:
-        # hindsight relabelling needs the env it relabels with; a model loaded to act has none
-        # and fills no buffer, so it gets SB3's plain one
-        custom_objects.update(replay_buffer_class=None, replay_buffer_kwargs={})
     try:
         with _torch_quiet():
             return type(template).load(io.BytesIO(trained.data), device="cpu",
@@ -100,20 +97,43 @@ def _config(trained: ModelFile) -> dict:
     return config
 
 
-def _template(trained: ModelFile, observation_space, action_space):
-    """A fresh model of the file's configuration, for an env with these spaces."""
+def _template(trained: ModelFile, observation_space, action_space, acting: bool):
+    """A fresh model of the file's configuration, for an env with these spaces; ``acting``: for
+    a model loaded to act (`_acting_kwargs`)."""
     config = _config(trained)
     env = Feed(copy.deepcopy(observation_space), copy.deepcopy(action_space))
+    kwargs = algo_kwargs(config["hyperparams"])
+    if acting:
+        kwargs = _acting_kwargs(kwargs, trained.algo)
     try:
         with warnings.catch_warnings():  # e.g. a mini-batch that does not divide one env's steps
             warnings.simplefilter("ignore")
             return algo_class(trained.algo)(
-                policy_name(trained.algo, observation_space), env, seed=config["seeds"][0], device="cpu", verbose=0,
-                **algo_kwargs(config["hyperparams"]))
+                policy_name(trained.algo, observation_space), env, seed=config["seeds"][0],
+                device="cpu", verbose=0, **kwargs)
     except (AssertionError, TypeError, ValueError, KeyError) as exc:
         raise ConfigError(f"model {trained.path}: no {trained.algo} model for observations "
                           f"{observation_space} and actions {action_space} can be built from its "
                           f"configuration ({_reason(exc)})") from None
+
+
+#: the SB3 algorithms whose policies are actor-critics (SB3 initialises their weights
+#: orthogonally unless ``policy_kwargs.ortho_init`` is False)
+ACTOR_CRITIC = ("ppo", "recurrentppo")
+
+
+def _acting_kwargs(kwargs: dict, algo: str) -> dict:
+    """The template's arguments for a model loaded to act, which neither trains nor fills a
+    buffer: SB3's plain replay buffer (hindsight relabelling needs the env it relabels with, and
+    the model has none) and, for the actor-critic algorithms, no orthogonal initialisation of
+    weights that the file's replace (the template's arguments become the loaded model's, so
+    neither is built twice; a quarter to half a second per model)."""
+    kwargs = dict(kwargs)
+    if "replay_buffer_class" in kwargs:
+        kwargs.update(replay_buffer_class=None, replay_buffer_kwargs={})
+    if algo in ACTOR_CRITIC:
+        kwargs["policy_kwargs"] = {**(kwargs.get("policy_kwargs") or {}), "ortho_init": False}
+    return kwargs
 
 
 def _saved(template) -> tuple[dict, dict[str, int]]:

@@ -52,7 +52,10 @@ earlier, b the distance behind.
 radius, the step length, the rule and the resolution — not on the noise, Φ or the cell model —
 and is stored like the sampled GCM (`bounce_gym.model_cache`: ``<fingerprint>.npz``, written
 atomically, read as data, rebuilt with a warning when unusable, built once when processes ask
-for it at once), in ``<cache>/bump_tables`` (``$BOUNCE_GYM_CACHE`` or ``<home>/cache``).
+for it at once), in ``<cache>/bump_tables`` (``$BOUNCE_GYM_CACHE`` or ``<home>/cache``). The
+tables of the shipped evaluations' dynamic-physics experiments come with the package
+(`SHIPPED_TABLES`, compressed) and are read before that folder, so a fresh install builds none
+for them; any other table is built once per cache folder.
 
 Usage — the factory picks the table where it applies (pymunk's dynamic physics, the relative
 rule; continuous headings) and the simulator otherwise::
@@ -125,6 +128,10 @@ LOST, STAYS = -1, -2
 #: the largest rotation whose turn ticks are tabulated (radians): two turns, beyond any noise
 MAX_ROTATION = 4 * math.pi
 _ARRAYS = ("end", "heading", "normal", "end_piece", "seconds")
+#: the tables that ship with the package (package data, ``<fingerprint>.npz``, compressed), read
+#: before the cache folder: those of the shipped evaluations' dynamic-physics experiments, so
+#: that these build none on a fresh install (`bounce_gym_experiments.shipped_tables` writes them)
+SHIPPED_TABLES = Path(__file__).parent / "tables"
 #: tables kept in memory per process, by cache file and its version (a planner asks for its
 #: table at every episode's reset; reading and checking a file costs a second on a large map)
 LOADED_TABLES = 4
@@ -390,21 +397,27 @@ def bump_table(dynamics: dict, spacing: float = DEFAULT_SPACING,
                ) -> BumpTable:
     """The table of ``dynamics`` (`BounceDynamics` arguments with the ``world``), from the cache
     or built (module docstring). ``spacing``: node spacing along the boundary in robot radii;
-    ``headings``: tabulated headings; ``cache``: a folder, None for the default one, False for
-    none."""
+    ``headings``: tabulated headings; ``cache``: a folder, None for the default one (and the
+    package's own tables first, `SHIPPED_TABLES`), False for none."""
     _check_table_arguments(dynamics, spacing, headings)
     key = table_fingerprint(dynamics, spacing, headings)
     if cache is False:
         return _build(dynamics, spacing, headings, key)
-    folder = model_cache.cache_folder("bump_tables") if cache in (None, True) else cache
+    default = cache in (None, True)
+    folder = model_cache.cache_folder("bump_tables") if default else cache
     path = (Path(folder) / f"{key}.npz").resolve()
+    files = (SHIPPED_TABLES / f"{key}.npz", path) if default else (path,)
     signature, table = _LOADED.pop(path, (None, None))
     if table is None or signature != _file_signature(path):
 
         def load() -> BumpTable | None:
-            stored = model_cache.load_cached(path, FORMAT, key)
-            return None if stored is None else _from_stored(dynamics, spacing, headings, key,
-                                                            *stored, path)
+            for file in files:
+                stored = model_cache.load_cached(file, FORMAT, key)
+                found = None if stored is None else _from_stored(dynamics, spacing, headings,
+                                                                 key, *stored, file)
+                if found is not None:
+                    return found
+            return None
 
         def build() -> BumpTable:
             built = _build(dynamics, spacing, headings, key)

@@ -203,7 +203,8 @@ class Family:
         learner's (``ippo``, ``mappo``): `baselines.rl.marl.policy.TeamPolicy`, its rows named
         by what it plays (``rl mappo (shared, id)``, ``rl mappo (shared, id) seed0``). Each model plays twice: its
         sampled actions (``rl <algo>_seed<N>``, group ``rl <algo>``) and its greedy ones (the
-        same names with `baselines.rl.policies.GREEDY_SUFFIX`), two groups of their own. On an
+        same names with `baselines.rl.policies.GREEDY_SUFFIX`), two groups of their own; with the
+        experiment's ``greedy: false``, its sampled actions only. On an
         env whose observation holds the pose (``env.unwrapped.observes_pose``: v1's
         ``achieved_goal``, ``privileged=True``) the models are `POSE_OBSERVED` and their names
         say so."""
@@ -232,7 +233,7 @@ class Family:
                              information) + elsewhere
             kind = _jax_policy() if name["algo"] in JAX_ALGOS else _team_policy() \
                 if name["algo"] in MARL_ALGOS else sb3
-            for deterministic in (False, True):
+            for deterministic in (False, True)[:1 + experiment["greedy"]]:
                 suffix = GREEDY_SUFFIX if deterministic else ""
                 policy = kind(path, env, deterministic)
                 policy.information = information

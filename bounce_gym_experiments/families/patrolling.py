@@ -202,7 +202,8 @@ class Patrolling(Family):
         tells which side a model learned). Models of both sides may come from different folders
         of ``rl_models``: each folder's models also meet those loaded before them (kept in the
         setup). A trained adversary plays twice, sampling and greedy (its names and group with
-        `baselines.rl.policies.GREEDY_SUFFIX`); trained patrollers always sample."""
+        `baselines.rl.policies.GREEDY_SUFFIX`; the experiment's ``greedy: false``: sampling
+        only); trained patrollers always sample."""
         from baselines.rl.model_files import MODEL_NAME, model_files, run_name
         from baselines.rl.policies import GREEDY_SUFFIX, PatrollerSB3Policy, patrol_policy
 
@@ -215,10 +216,11 @@ class Patrolling(Family):
             if isinstance(model, PatrollerSB3Policy):
                 patrollers.append((LearnedPatrollers(model), group))
                 continue
-            greedy = patrol_policy(path, env, deterministic=True)
-            greedy.name = model.name + GREEDY_SUFFIX
-            adversaries += [(LearnedAdversary(model), group),
-                            (LearnedAdversary(greedy), group + GREEDY_SUFFIX)]
+            adversaries.append((LearnedAdversary(model), group))
+            if experiment["greedy"]:
+                greedy = patrol_policy(path, env, deterministic=True)
+                greedy.name = model.name + GREEDY_SUFFIX
+                adversaries.append((LearnedAdversary(greedy), group + GREEDY_SUFFIX))
         if "rl" not in experiment["policies"]:
             patrollers = []
         if "rl" not in experiment["adversaries"]:

@@ -81,7 +81,8 @@ def test_bad_training_configs_raise(config, message):
 def test_evaluate_cli_writes_table_csv_json_and_plots(tmp_path, capsys):
     config = {"name": "loc", "output": str(tmp_path / "runs"), "experiments": [
         dict(_experiment("localization-lab"), seeds=[10_000, 10_001])]}
-    assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
+    assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress",
+                          "--tables"]) == 0
     out = capsys.readouterr().out
     assert "planner (angle switching)" in out and "fixed 45°" in out
     (folder,) = (tmp_path / "runs").iterdir()

@@ -347,7 +347,8 @@ def test_evaluate_cli_prints_multi_tables_with_intervals(tmp_path, capsys):
     config = {"name": "multi", "output": str(tmp_path / "runs"),
               "experiments": [coverage_exp(seeds=[10_000, 10_001, 10_002], policies=["random"]),
                               monitoring_exp(seeds=[10_000])]}
-    assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
+    assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress",
+                          "--tables"]) == 0
     out = capsys.readouterr().out
     assert "multi-robot coverage" in out and "multi-robot monitoring" in out
     assert "n=3" in out and "n=1" in out and "±" not in out

@@ -50,7 +50,7 @@ def test_a_perimeter_evaluation_writes_its_table_files_and_plots(tmp_path, capsy
     path = tmp_path / "patrol.yaml"
     path.write_text(yaml.safe_dump(config(tmp_path, patrol(policies=["perimeter"]))),
                     encoding="utf-8")
-    assert evaluate.main([str(path), "--no-progress"]) == 0
+    assert evaluate.main([str(path), "--no-progress", "--tables"]) == 0
     out = capsys.readouterr().out
     lines = [line for line in out.splitlines() if line.startswith("patrol ")]
     assert len(lines) == 4 and all(len(CELL.findall(line)) >= 3 for line in lines)
@@ -68,7 +68,7 @@ def test_a_tiny_patrol_evaluation_reports_every_rate_with_an_interval(tmp_path, 
     """Every patroller kind (the GλD fits of the p_d plot take most of its ~20 s)."""
     path = tmp_path / "patrol.yaml"
     path.write_text(yaml.safe_dump(config(tmp_path, patrol())), encoding="utf-8")
-    assert evaluate.main([str(path), "--no-progress"]) == 0
+    assert evaluate.main([str(path), "--no-progress", "--tables"]) == 0
     out = capsys.readouterr().out
     assert "patrolling: capture of the adversary (thesis ch. 4)" in out
     lines = [line for line in out.splitlines() if line.startswith("patrol ")]

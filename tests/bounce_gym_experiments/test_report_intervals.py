@@ -145,8 +145,10 @@ def test_results_record_provenance_config_seeds_and_interval_columns(tmp_path, c
     config = {"name": "tiny", "output": str(tmp_path / "runs"), "models": str(tmp_path / "m"),
               "experiments": [_square(seeds={"start": 10_000, "count": 4},
                                       policies=["planner", "random", "fixed", "rl"])]}
-    note = f"nav: no trained models in {tmp_path / 'm' / 'nav'} (<algo>_seed<N>.zip), so no rl rows"
-    assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
+    note = (f"nav: no trained models in {tmp_path / 'm' / 'nav'} (<algo>_seed<N>.zip), so no rl "
+            "rows; no shipped training configuration makes them")
+    assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress",
+                          "--tables"]) == 0
     out = capsys.readouterr().out
     table = [line for line in out.splitlines() if line.startswith("nav ")]
     assert table and all(len(CELL.findall(line)) >= 5 for line in table)
@@ -201,7 +203,8 @@ def test_a_second_model_folder_with_the_privileged_observation(tmp_path):
     fixed = {r.seed: r.metrics["feasible"] for r in rows if r.policy == "fixed 90°"}
     assert {r.seed: r.metrics["feasible"] for r in privileged} == fixed  # the same episodes
     assert plots["nav"]["notes"] == [f"nav: no trained models in {tmp_path / 'models' / 'nav'} "
-                                     "(<algo>_seed<N>.zip), so no rl rows"]
+                                     "(<algo>_seed<N>.zip), so no rl rows; no shipped training "
+                                     "configuration makes them"]
     assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0
     (folder,) = (tmp_path / "runs").iterdir()
     assert (folder / "nav-profile.png").stat().st_size > 1000
