@@ -424,7 +424,8 @@ def test_tune_checks_everything_before_it_prepares_a_trial(tmp_path, capsys, mon
 @pytest.mark.parametrize(("argv", "message"), [
     (["tune", "t.yaml", "--trials", "many"], "error: argument --trials: invalid int value: "
                                              "'many' (see bounce-gym tune --help)"),
-    (["evaluate", "--colour"], "error: unrecognized arguments: --colour (see bounce-gym --help)"),
+    (["evaluate", "--colour"], "error: unrecognized arguments: --colour (see bounce-gym evaluate "
+                                "--help)"),
     (["train"], "error: the following arguments are required: config (see bounce-gym train "
                 "--help)"),
 ])
