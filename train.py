@@ -1,4 +1,5 @@
-"""Train a Stable-Baselines3 agent on a bounce_gym environment from a YAML configuration.
+"""Train agents on a bounce_gym environment from a YAML configuration (any learner of
+``bounce-gym train``: Stable-Baselines3, JAX or multi-robot).
 
     python train.py configs/train_navigation.yaml
 

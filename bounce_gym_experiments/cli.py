@@ -10,6 +10,7 @@
     bounce-gym trust models/<name>/checkpoints/<algo>_seed<N>_<steps>_steps.zip ...
     bounce-gym schema evaluation|training | --write
     bounce-gym tables [--write] [--from RUN_FOLDER [--into docs/results/benchmark]]
+    bounce-gym envs
 
 ``evaluate`` prints tables (per experiment and policy, every cell with its 95% interval and
 count) and writes ``episodes.csv``, ``summary.csv``, ``results.json``, plots and, for a
@@ -68,9 +69,14 @@ cite (exit 1 and one ``stale:`` line each where they differ); ``--write`` regene
 after ``--from RUN_FOLDER`` copied a run's leaderboard files into ``--into``
 (`bounce_gym_experiments.published`).
 
-``bounce-gym --version`` (and ``train.py --version``, ``evaluate.py --version``) prints the
-installed distribution's version, ``bounce-gym <version>``. Flags are never abbreviated:
-``--worker 2`` is an unknown flag, not ``--workers 2``.
+``envs`` lists every registered environment id with what sets it apart, one line each.
+
+``bounce-gym --version`` or ``-V`` (and ``train.py``'s, ``evaluate.py``'s) prints the installed
+distribution's version, ``bounce-gym <version>``. Flags are never abbreviated: ``--worker 2`` is
+an unknown flag, not ``--workers 2``, and the error names the flag meant and the positional that
+took the word after it (``evaluate --worker 1`` reads 1 as the configuration). A configuration
+must be an existing file or a name ending ``.yaml``/``.yml``. ``--help`` is plain text: the
+docstrings' markup is left out.
 
 The environment variable ``BOUNCE_GYM_MAX_TIMESTEPS=N`` caps every training run at N env steps
 (SB3 still finishes the iteration it is in): a smoke test of a documented training command,
@@ -83,11 +89,13 @@ import argparse
 import contextlib
 import importlib.metadata
 import os
+import re
 import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import NoReturn
 
+from baselines.rl.model_files import ALGO_FAMILIES
 from bounce_gym.errors import BounceGymError
 from bounce_gym.extras import from_import_error, require
 
@@ -378,15 +386,91 @@ def schema_command(name: str | None, write: bool) -> int:
 class Parser(argparse.ArgumentParser):
     """argparse's parser, whose usage mistakes (an unknown flag, a value of the wrong type or
     not among the choices) are one line ``error: ...`` and exit status 2, as every mistake of
-    the command is; ``--help`` shows the usage. A flag is given in full: argparse's
-    abbreviations (``--worker`` for ``--workers``) are refused as unknown flags, so that a
-    typo never becomes another flag. Its subcommands' parsers are of this class."""
+    the command is; ``--help`` shows the usage, as plain text (`plain`). A flag is given in
+    full: argparse's abbreviations (``--worker`` for ``--workers``) are refused as unknown
+    flags, so that a typo never becomes another flag, and the error says which flag it likely
+    stands for and which positional took the word after it (`usage_mistake`). Its subcommands'
+    parsers are of this class."""
+
+    #: the subcommands' action, once `add_subparsers` made it
+    commands: argparse._SubParsersAction | None = None
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **{**kwargs, "allow_abbrev": False})
 
+    def add_subparsers(self, **kwargs) -> argparse._SubParsersAction:
+        self.commands = super().add_subparsers(**kwargs)
+        return self.commands
+
+    def parse_args(self, args=None, namespace=None) -> argparse.Namespace:
+        argv = sys.argv[1:] if args is None else list(args)
+        parsed, extras = self.parse_known_args(argv, namespace)
+        command = self.commands.choices[parsed.command] if self.commands else self
+        mistake = usage_mistake(command, [self, command], parsed, argv, extras)
+        if mistake:
+            command.error(mistake)
+        return parsed
+
+    def format_help(self) -> str:
+        return plain(super().format_help())
+
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"error: {message} (see {self.prog} --help)\n")
+
+
+#: reST and Sphinx markup in docstrings: the backticks around a name and a role before them
+_MARKUP = re.compile(r"(?::[\w.:-]+:)?`+")
+
+
+def plain(text: str) -> str:
+    """``text`` without its reST markup (````name````, ```name```, ``:role:`name```): help is
+    read in a terminal."""
+    return _MARKUP.sub("", text)
+
+
+#: the positional that names a configuration file (evaluate, train, tune)
+CONFIG = "config"
+
+
+def usage_mistake(command: argparse.ArgumentParser, parsers: list[argparse.ArgumentParser],
+                  parsed: argparse.Namespace, argv: list[str], extras: list[str]) -> str:
+    """What is wrong with a command line (``argv``) that argparse parsed into ``parsed`` and
+    ``extras``, the words it did not recognise (``""``: nothing): those words, with the flag
+    each unknown flag likely stands for (among the flags of ``parsers``), and the positionals of
+    ``command`` that took a word they should not have (`misread_words`)."""
+    unknown = [word for word in extras if word.startswith("-")]
+    misread = misread_words(command, parsed, argv, unknown)
+    if not extras:
+        return "; ".join(f"argument {dest}: {word} is neither a file nor a .yaml/.yml name"
+                         for dest, word in misread)
+    from bounce_gym.validate import did_you_mean
+
+    flags = [flag for parser in parsers for action in parser._actions
+             for flag in action.option_strings]
+    hint = did_you_mean([word.split("=")[0] for word in unknown], flags)
+    return (f"unrecognized arguments: {' '.join(extras)}" + (f" ({hint})" if hint else "")
+            + "".join(f"; {word} was read as the {dest} argument" for dest, word in misread))
+
+
+def misread_words(command: argparse.ArgumentParser, parsed: argparse.Namespace,
+                  argv: list[str], unknown: list[str]) -> list[tuple[str, str]]:
+    """The positionals of ``command`` (name, word) that took a word right after an unknown
+    flag — ``--worker 1`` reads 1 as the configuration — or a configuration (`CONFIG`) that is
+    neither a file nor named ``.yaml``/``.yml``."""
+    followers = {argv[i + 1] for i, word in enumerate(argv[:-1]) if word in unknown}
+    return [(action.dest, word) for action in command._actions if not action.option_strings
+            for word in _words(getattr(parsed, action.dest, None))
+            if word in followers or action.dest == CONFIG and not _config_like(word)]
+
+
+def _words(value: object) -> list[str]:
+    """The words a positional took: its value, or the values of one with ``nargs``."""
+    return [value] if isinstance(value, str) else value if isinstance(value, list) else []
+
+
+def _config_like(path: str) -> bool:
+    """Whether ``path`` can name a configuration: an existing file, or a YAML name."""
+    return path.endswith((".yaml", ".yml")) or Path(path).exists()
 
 
 #: the distribution whose version ``--version`` prints (pyproject.toml's ``[project] name``)
@@ -394,9 +478,9 @@ DISTRIBUTION = "bounce-gym"
 
 
 class VersionAction(argparse.Action):
-    """``--version``: print ``bounce-gym <version>`` (the installed distribution's metadata,
-    `importlib.metadata`) and exit 0; from a checkout that is not installed, a one-line error
-    (status 2) that says so."""
+    """``--version`` (or ``-V``): print ``bounce-gym <version>`` (the installed distribution's
+    metadata, `importlib.metadata`) and exit 0; from a checkout that is not installed, a
+    one-line error (status 2) that says so."""
 
     def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs) -> None:
         super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS,
@@ -413,13 +497,14 @@ class VersionAction(argparse.Action):
 
 
 def add_version_flag(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    """Give ``parser`` the ``--version`` flag (`VersionAction`)."""
-    parser.add_argument("--version", action=VersionAction)
+    """Give ``parser`` the ``-V``/``--version`` flag (`VersionAction`)."""
+    parser.add_argument("-V", "--version", action=VersionAction)
     return parser
 
 
 def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    parser.add_argument("config", nargs="?", help="YAML configuration (default: eval_default.yaml)")
+    parser.add_argument(CONFIG, nargs="?",
+                        help="YAML configuration (default: eval_default.yaml)")
     add_executor_flags(parser)
     parser.add_argument("--experiments", nargs="+", metavar="NAME",
                         help="run only these experiments of the configuration")
@@ -430,8 +515,14 @@ def evaluate_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     return parser
 
 
+def learners() -> str:
+    """Every learner ``train`` trains, by family (`baselines.rl.model_files.ALGO_FAMILIES`)."""
+    return ", ".join(f"{', '.join(algos)} ({family})" for family, algos in ALGO_FAMILIES.items())
+
+
 def train_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    parser.add_argument("config", help="YAML training configuration")
+    parser.add_argument(CONFIG, help=f"YAML training configuration; its algo is one of "
+                                     f"{learners()}")
     parser.add_argument("--timesteps", type=int, help="override total_timesteps (per seed)")
     parser.add_argument("--seeds", type=int, nargs="+", metavar="S",
                         help="override the configuration's seeds")
@@ -443,7 +534,7 @@ def train_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
 
 
 def tune_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    parser.add_argument("config", help="YAML training configuration")
+    parser.add_argument(CONFIG, help="YAML training configuration")
     parser.add_argument("--space", help="search space YAML (default: "
                                         "hyperparams/search/<algo>.yaml beside the config)")
     parser.add_argument("--trials", type=int, default=8, help="trials (default 8; at most "
@@ -488,6 +579,7 @@ COMMAND_MODULES = {
     "trust": (),
     "schema": (),
     "tables": (),
+    "envs": (),
 }
 
 
@@ -529,6 +621,40 @@ def tables_command(write: bool, run: str | None, into: str) -> int:
     return 1 if old else 0
 
 
+#: the width of the lines ``envs`` prints
+ENVS_WIDTH = 100
+
+
+def envs_command() -> int:
+    """List every registered id, Gymnasium's then PettingZoo's, each beside what it is in one
+    line (`env_summary`), cut with an ellipsis to fit `ENVS_WIDTH` columns."""
+    from bounce_gym.envs.registration import ABOUT, ENV_IDS
+
+    column = max(map(len, ENV_IDS)) + 2
+    room = ENVS_WIDTH - column
+    for env_id in ENV_IDS:
+        summary = env_summary(env_id, ABOUT)
+        if len(summary) > room:
+            summary = summary[:room - 1].rstrip() + "…"
+        print(f"{env_id:<{column}}{summary}")
+    return 0
+
+
+#: where one sentence of a description ends and the next begins
+_SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=[A-Z])")
+
+
+def env_summary(env_id: str, about: Mapping[str, str]) -> str:
+    """The first sentence of ``env_id``'s description (``about``:
+    `bounce_gym.envs.registration.ABOUT`) that no other id's has — what sets it apart, not the
+    robots several ids share — as plain text."""
+    sentences = _SENTENCE_END.split(about[env_id])
+    others = {sentence for other, text in about.items() if other != env_id
+              for sentence in _SENTENCE_END.split(text)}
+    own = [sentence for sentence in sentences if sentence not in others]
+    return plain((own or sentences)[0])
+
+
 def os_error_text(exc: OSError) -> str:
     """An `OSError` as one line: the file it names (both, for a rename) and the system's
     reason."""
@@ -558,6 +684,8 @@ def dispatch(args: argparse.Namespace) -> int:
             return schema_command(args.name, args.write)
         if args.command == "tables":
             return tables_command(args.write, args.run, args.into)
+        if args.command == "envs":
+            return envs_command()
         if args.command == "tune":
             return tune_command(args.config, args.space, args.trials, args.metric, args.scheduler,
                         args.seed, args.timesteps, args.resume, args.workers, args.address,
@@ -592,7 +720,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = add_version_flag(Parser(prog="bounce-gym", description=__doc__.splitlines()[0]))
     commands = parser.add_subparsers(dest="command", required=True)
     evaluate_parser(commands.add_parser("evaluate", help="evaluate policies side by side"))
-    train_parser(commands.add_parser("train", help="train a Stable-Baselines3 agent"))
+    train_parser(commands.add_parser("train", help=f"train agents: {learners()}"))
     tune_parser(commands.add_parser("tune", help="search hyperparameters with Ray Tune"))
     curves_parser(commands.add_parser("curves", help="draw the learning curves of trained "
                                                      "agents"))
@@ -603,6 +731,7 @@ def main(argv: list[str] | None = None) -> int:
     tables_parser(commands.add_parser("tables", help="check or regenerate the result tables of "
                                                      "README.md and docs/ from a run's "
                                                      "leaderboard"))
+    commands.add_parser("envs", help="list the registered environment ids")
     return dispatch(parser.parse_args(argv))
 
 

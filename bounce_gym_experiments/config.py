@@ -51,14 +51,7 @@ from baselines.rl.model_files import check_folder_name
 from baselines.seeds import EVALUATION_SEEDS_START, MAX_SEED, reserved_overlap
 from baselines.shipped_agents import models_folder
 from bounce_gym.documents import read_document
-from bounce_gym.envs.registration import (
-    DRIFTER_PETTINGZOO_ENVS,
-    GYMNASIUM_IDS,
-    MAP_HORIZON,
-    PATROL_PETTINGZOO_ENVS,
-    PETTINGZOO_ENVS,
-    is_pettingzoo_id,
-)
+from bounce_gym.envs.registration import ENV_IDS, MAP_HORIZON, is_pettingzoo_id
 from bounce_gym.errors import ConfigError, config_errors
 from bounce_gym.files import check_path_component, check_path_text
 from bounce_gym.validate import integer
@@ -79,8 +72,6 @@ MAX_STEPS = 10**6
 #: env options a model folder of ``rl_models`` may set differently (observation only)
 OBSERVATION_OPTIONS = frozenset({"privileged", "history", "agent_id"})
 _MAP_SUFFIXES = (".yaml", ".yml", ".json")
-#: every registered id an experiment may name
-ENV_IDS = (*GYMNASIUM_IDS, *PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS, *PATROL_PETTINGZOO_ENVS)
 #: env options no experiment sets: its horizon is ``max_steps``
 _HORIZON_OPTIONS = ("max_episode_steps", "max_cycles")
 #: the description of ``env_kwargs`` (`bounce_gym_experiments.schema` plugs in each env's own)

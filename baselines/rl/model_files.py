@@ -61,13 +61,17 @@ from bounce_gym.errors import ConfigError
 from bounce_gym.files import atomic_file, atomic_write, check_path_component, locked
 from bounce_gym.trust import add_trusted, digest, sign, trusted_digests, verify
 
+#: The learners of Stable-Baselines3 and sb3-contrib (`baselines.rl.train`).
+SB3_ALGOS = ("ppo", "dqn", "recurrentppo")
 #: The learners trained in JAX (`baselines.rl.jaxrl`): their files hold weights only.
 JAX_ALGOS = ("jax_ppo", "jax_dqn")
 #: The multi-robot learners in torch (`baselines.rl.marl`): their files hold weights only too.
 MARL_ALGOS = ("ippo", "mappo")
 #: The learners whose files are weights only (an ``.npz``) and metadata, no SB3 part.
 WEIGHTS_ALGOS = (*JAX_ALGOS, *MARL_ALGOS)
-ALGOS = ("ppo", "dqn", "recurrentppo", *JAX_ALGOS, *MARL_ALGOS)
+#: Every learner, by the library that implements it (``bounce-gym train --help`` lists them so).
+ALGO_FAMILIES = {"SB3": SB3_ALGOS, "JAX": JAX_ALGOS, "multi-robot": MARL_ALGOS}
+ALGOS = tuple(algo for family in ALGO_FAMILIES.values() for algo in family)
 _RUN = r"(?P<algo>" + "|".join(ALGOS) + r")(?:-(?P<variant>[a-z0-9]+(?:-[a-z0-9]+)*))?"
 #: A saved model: ``<algo>[-<variant>]_seed<seed>.zip``.
 MODEL_NAME = re.compile(_RUN + r"_seed(?P<seed>\d+)\.zip")

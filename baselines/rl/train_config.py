@@ -60,12 +60,7 @@ from baselines.rl.model_files import ALGOS, JAX_ALGOS, MARL_ALGOS, VARIANT, chec
 from baselines.rl.patrol import PATROL_ID, ROLES
 from baselines.seeds import TRAINING_SEEDS
 from bounce_gym.documents import read_document
-from bounce_gym.envs.registration import (
-    DRIFTER_PETTINGZOO_ENVS,
-    GYMNASIUM_IDS,
-    PETTINGZOO_ENVS,
-    is_pettingzoo_id,
-)
+from bounce_gym.envs.registration import ENV_IDS, PETTINGZOO_ENVS, is_pettingzoo_id
 from bounce_gym.errors import ConfigError, config_errors
 from bounce_gym.files import check_path_text
 from bounce_gym.validate import did_you_mean, integer, number, unknown_keys
@@ -138,8 +133,6 @@ HYPERPARAM_RANGES = {
 }
 #: The same for the sizes in ``policy_kwargs`` (`MAX_WIDTH` units, `MAX_LAYERS` layers).
 _POLICY_SIZES = {"lstm_hidden_size": MAX_WIDTH, "n_lstm_layers": MAX_LAYERS}
-#: the registered ids a configuration may train on
-ENV_IDS = (*GYMNASIUM_IDS, *PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS, PATROL_ID)
 
 
 class Normalize(ConfigModel):
@@ -279,9 +272,9 @@ def validate_train_config(config: object, folder: Path | None = None) -> dict:
         raise ConfigError(f"config.algo: expected one of {ALGOS}, got {config['algo']!r}")
     _check_role(config)
     multi = is_multi(config)
-    if not is_pettingzoo_id(config["env"]) and config["env"] not in GYMNASIUM_IDS:
+    if config["env"] not in ENV_IDS:
         raise ConfigError(f"config.env: unknown environment id {config['env']!r}; registered: "
-                          f"{[*GYMNASIUM_IDS, *PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS]}")
+                          f"{list(ENV_IDS)}")
     if "hyperparams_file" in config:
         _merge_file(config, folder)
         _check_types(config)

@@ -153,12 +153,15 @@ ABOUT: dict[str, str] = {
 #: the Gymnasium ids of this package (another package's, e.g. ``CartPole-v1``, has none of its
 #: tasks, planners or evaluation families)
 GYMNASIUM_IDS = (*GYM_ENVS, *DRIFTER_GYM_ENVS)
+#: the multi-robot PettingZoo ids of this package
+PETTINGZOO_IDS = (*PETTINGZOO_ENVS, *DRIFTER_PETTINGZOO_ENVS, *PATROL_PETTINGZOO_ENVS)
+#: every id this package registers: the Gymnasium ids, then the PettingZoo ones
+ENV_IDS = (*GYMNASIUM_IDS, *PETTINGZOO_IDS)
 
 
 def is_pettingzoo_id(env_id: str) -> bool:
     """Whether ``env_id`` is one of the multi-robot PettingZoo ids (not a Gymnasium id)."""
-    return (env_id in PETTINGZOO_ENVS or env_id in DRIFTER_PETTINGZOO_ENVS
-            or env_id in PATROL_PETTINGZOO_ENVS)
+    return env_id in PETTINGZOO_IDS
 
 
 def is_drifter_id(env_id: str) -> bool:

@@ -424,7 +424,8 @@ def test_tune_checks_everything_before_it_prepares_a_trial(tmp_path, capsys, mon
 @pytest.mark.parametrize(("argv", "message"), [
     (["tune", "t.yaml", "--trials", "many"], "error: argument --trials: invalid int value: "
                                              "'many' (see bounce-gym tune --help)"),
-    (["evaluate", "--colour"], "error: unrecognized arguments: --colour (see bounce-gym --help)"),
+    (["evaluate", "--colour"], "error: unrecognized arguments: --colour (see bounce-gym evaluate "
+                                "--help)"),
     (["train"], "error: the following arguments are required: config (see bounce-gym train "
                 "--help)"),
 ])
@@ -505,3 +506,17 @@ def test_a_bad_env_argument_is_reported_before_the_heavy_imports(tmp_path, env_k
     assert done.stdout.split() == ["2"], (done.stdout, done.stderr)
     assert len(done.stderr.splitlines()) == 1
     assert done.stderr.startswith("error: config.experiments[0].env_kwargs: "), done.stderr
+
+
+@pytest.mark.parametrize("command", ["train", "evaluate"])
+def test_an_unknown_env_id_lists_every_registered_id(tmp_path, capsys, command):
+    """The list comes from the registry (`bounce_gym.envs.registration.ENV_IDS`): training's
+    once left out ``bounce_gym/Patrol-v0``."""
+    from bounce_gym.envs.registration import ENV_IDS
+
+    env = "bounce_gym/Nothing-v0"
+    config = ({"name": "x", "experiments": [_experiment(env=env)]} if command == "evaluate"
+              else {"name": "x", "env": env, "algo": "ppo", "total_timesteps": 64})
+    line = _one_error(capsys, [command, str(_write(tmp_path / "c.yaml", config))])
+    assert line.endswith(f"unknown environment id {env!r}; registered: {list(ENV_IDS)}")
+    assert "bounce_gym/Patrol-v0" in ENV_IDS

@@ -1,5 +1,6 @@
-"""``--version`` on every command line of the package, and no abbreviated flags: a flag is
-given in full, or it is an unknown flag (exit status 2, one line), never another flag."""
+"""``--version`` (``-V``) on every command line of the package, and no abbreviated flags: a flag
+is given in full, or it is an unknown flag (exit status 2, one line), never another flag; the
+line names the flag meant and the positional that took the word after it."""
 
 import importlib.metadata
 import re
@@ -35,9 +36,10 @@ def _exit(capsys, main, argv) -> tuple[int, str, str]:
     return stop.value.code, captured.out, captured.err
 
 
+@pytest.mark.parametrize("flag", ["--version", "-V"])
 @pytest.mark.parametrize("main", [cli.main, train.main, evaluate.main])
-def test_version_prints_the_installed_distributions_version(capsys, main):
-    code, out, err = _exit(capsys, main, ["--version"])
+def test_version_prints_the_installed_distributions_version(capsys, main, flag):
+    code, out, err = _exit(capsys, main, [flag])
     assert (code, err) == (0, "")
     assert out == f"bounce-gym {importlib.metadata.version('bounce-gym')}\n"
     assert re.fullmatch(r"bounce-gym \d+\.\d+\.\d+\S*\n", out)
@@ -84,3 +86,62 @@ def test_no_flag_of_any_command_can_be_abbreviated(capsys, command):
         code, out, err = _exit(capsys, main, [*prefix, short, *positional])
         assert (code, out) == (2, ""), short
         assert f"unrecognized arguments: {short}" in err and err.count("\n") == 1, err
+
+
+#: the line of a word read as a positional after an unknown flag, by command line
+MISREAD = [
+    (cli.main, ["evaluate", "--worker", "1"],
+     "error: unrecognized arguments: --worker (did you mean '--workers'?); 1 was read as the "
+     "config argument (see bounce-gym evaluate --help)"),
+    (cli.main, ["train", "--timestep", "100", "c.yaml"],
+     "error: unrecognized arguments: --timestep c.yaml (did you mean '--timesteps'?); 100 was "
+     "read as the config argument (see bounce-gym train --help)"),
+    (cli.main, ["tune", "--trial", "5", "c.yaml"],
+     "error: unrecognized arguments: --trial c.yaml (did you mean '--trials'?); 5 was read as "
+     "the config argument (see bounce-gym tune --help)"),
+    (cli.main, ["curves", "--win", "3", "models/x"],
+     "error: unrecognized arguments: --win models/x (did you mean '--window'?); 3 was read as "
+     "the folder argument (see bounce-gym curves --help)"),
+    (cli.main, ["trust", "--sha", "a.zip", "b.zip"],
+     "error: unrecognized arguments: --sha; a.zip was read as the models argument (see "
+     "bounce-gym trust --help)"),
+    (cli.main, ["schema", "--wrte", "training"],
+     "error: unrecognized arguments: --wrte (did you mean '--write'?); training was read as the "
+     "name argument (see bounce-gym schema --help)"),
+    (cli.main, ["tables", "--wrte"],
+     "error: unrecognized arguments: --wrte (did you mean '--write'?) (see bounce-gym tables "
+     "--help)"),
+    (evaluate.main, ["--worker", "1"],
+     "error: unrecognized arguments: --worker (did you mean '--workers'?); 1 was read as the "
+     "config argument (see "),
+    (train.main, ["--timestep", "5"],
+     "error: unrecognized arguments: --timestep (did you mean '--timesteps'?); 5 was read as "
+     "the config argument (see "),
+]
+
+
+@pytest.mark.parametrize(("main", "argv", "line"), MISREAD)
+def test_a_word_after_an_unknown_flag_names_the_positional_it_became(capsys, main, argv, line):
+    code, out, err = _exit(capsys, main, argv)
+    assert (code, out) == (2, "")
+    assert err.startswith(line) and err.count("\n") == 1, err
+
+
+@pytest.mark.parametrize(("argv", "line"), [
+    (["evaluate", "1"], "error: argument config: 1 is neither a file nor a .yaml/.yml name (see "
+                        "bounce-gym evaluate --help)"),
+    (["train", "--resume", "3", "c.yaml"], "error: unrecognized arguments: c.yaml; 3 was read as "
+                                           "the config argument (see bounce-gym train --help)"),
+])
+def test_a_configuration_is_a_file_or_a_yaml_name(capsys, argv, line):
+    code, out, err = _exit(capsys, cli.main, argv)
+    assert (code, out, err) == (2, "", line + "\n")
+
+
+def test_an_existing_file_of_any_name_is_read_as_the_configuration(capsys, tmp_path):
+    """The name check leaves a file that exists to the configuration's own checks."""
+    config = tmp_path / "settings"
+    config.write_text("name: x\n", encoding="utf-8")
+    assert cli.main(["evaluate", str(config)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: config") and "argument config" not in err, err
