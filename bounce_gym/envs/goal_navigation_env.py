@@ -107,6 +107,13 @@ class GoalNavigationEnv(BounceEnv):
         #: which only ``draw="any"`` allows)
         self.horizon = max(1, math.ceil(HORIZON_FACTOR * self.task.longest_plan))
 
+    def observation_labels(self, agent: str | None = None) -> dict[str, tuple[str, ...]]:
+        """What each index of each key of the observation is."""
+        pose = (("position cell, one-hot",) * self.n_positions
+                + ("heading bin, one-hot",) * self.n_bins)
+        return {"observation": super().observation_labels(), "achieved_goal": pose,
+                "desired_goal": pose}
+
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         sensed, info = super().reset(seed=seed, options=options)
         return self._observe(sensed), info

@@ -303,6 +303,24 @@ class PatrolEnv(TakesArguments[PatrolOptions], RendererOwner, ParallelEnv):
             return mask
         return (self.board.neighbours[self._pos[self.agent_index[agent]]] >= 0).astype(np.int8)
 
+    def action_labels(self, agent: str) -> tuple[str, ...]:
+        """What each action of ``agent`` is."""
+        if agent != ADVERSARY:
+            return tuple(f"move {direction}" for direction in DIRECTIONS)
+        return ("wait", *("start the attack on vertex action − 1",) * self.board.n)
+
+    def observation_labels(self, agent: str) -> tuple[str, ...]:
+        """What each index of ``agent``'s observation is (`_observations`)."""
+        n = self.board.n
+        if agent != ADVERSARY:
+            return ("own vertex, one-hot",) * n + ("another patroller seen at the vertex",) * n
+        labels = (("capture probability of an attack on the vertex started at step 0",) * n
+                  + ("attack started", "attack progress: steps elapsed / attack_time",
+                     "clock: steps / max_cycles"))
+        if self.options.adversary_observes == "positions":
+            labels += ("a patroller at the vertex",) * n
+        return labels
+
     def _observations(self) -> dict[str, np.ndarray]:
         m, n = self.n_patrollers, self.board.n
         pos = self._pos
