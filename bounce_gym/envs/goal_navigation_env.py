@@ -34,6 +34,12 @@ class GoalNavigationEnv(BounceEnv):
     joined start/goal pairs, a horizon a few times the longest optimal plan of the map
     (`horizon`), the sparse reward, and the goal-conditioned observation below.
 
+    ## Action Space
+
+    ``Discrete(len(angles))``: the index of the bounce angle in Φ, as in v0. Discrete actions
+    only: the angles must be whole heading bins of the cell model, so that every bounce ends in
+    a pose of the model.
+
     ## Observation Space
 
     ``Dict`` of three float32 ``Box`` es:
@@ -72,13 +78,7 @@ class GoalNavigationEnv(BounceEnv):
 
     Those of `BounceEnv` (the "Arguments" table), with ``task_kwargs`` for `GoalNavigationTask` (``draw``,
     ``heading_tolerance_deg``, ``start``, ``goal``, ``goal_bonus``, ``w1``, ``w2``); the task is
-    always ``goal_navigation``. Discrete actions only (the bounce angle is an index into Φ,
-    whose angles must be whole bins of the cell model).
-
-    ## Version History
-
-    * v1: goal-conditioned navigation (this env). v0 (`BounceEnv` with ``task="navigation"``)
-      is unchanged, for reproducibility.
+    always ``goal_navigation``.
     """
 
     tasks = ("goal_navigation",)
