@@ -110,8 +110,8 @@ ABOUT: dict[str, str] = {
         "(`HORIZON_FACTOR`; 42 steps on the lab: its longest plan is 14 bounces, the mean "
         "4.8), so `world=...` gets the same slack. Start and goal poses only where the cell model joins them "
         "(`info[\"optimal_bounces\"]`: the fewest bounces). Observation: a `Dict` of "
-        "`observation` (clock and the one-hot cell pose), `achieved_goal` (the poses the step "
-        "passed) and `desired_goal` (the goal pose); reward 1 on reaching the goal, else 0, "
+        "`observation` (the clock, as v0's robot senses it), `achieved_goal` (the one-hot cell "
+        "pose after the step) and `desired_goal` (the goal pose, encoded alike); reward 1 on reaching the goal, else 0, "
         "equal to `env.compute_reward(achieved_goal, desired_goal, info)` as SB3's "
         "`HerReplayBuffer` needs."),
     "bounce_gym/BounceCoverage-v0": (
