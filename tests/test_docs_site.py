@@ -66,10 +66,13 @@ def test_every_registered_id_has_a_page(site):
     for env_id in IDS:
         text = _article(site / "envs" / env_id.split("/")[-1] / "index.html")
         assert env_id in text and env_id in overview
-        # the spaces the env reports and its class's documentation
-        assert re.search(r"Observation spaces?", text) and re.search(r"Action spaces?", text)
-        assert "Documentation (from the docstring of" in text
-        assert "Version History" in text
+        # the sections of Gymnasium's env pages (tests/test_env_pages.py checks their order),
+        # from the env's docstring and the env as built, and the env's picture
+        assert all(title in text for title in ("Description", "Action Space",
+                                               "Observation Space", "Rewards", "Starting State",
+                                               "Episode End", "Arguments", "Version History"))
+        assert "The sections below follow the docstring of" in text
+        assert (site / "envs" / f"{env_id.split('/')[-1]}.gif").stat().st_size > 1000
         assert len(text) > 1500
 
 
@@ -80,10 +83,11 @@ def test_gymnasium_pages_show_the_registered_horizon_and_bounds(site):
         steps = registered or gym.make(env_id).spec.max_episode_steps
         assert re.search(rf"horizon \( ?max_episode_steps ?\) {steps}\b", text)
         assert f"world='{kwargs['world']}'" in text
-        assert "index low high" in text
+        assert "index low high meaning" in text and "action meaning" in text
     navigation = _article(site / "envs" / "BounceNavigation-v0" / "index.html")
-    # the history's angles are in [-1, 1], the clock in [0, 1]
-    assert "0–8 0 1" in navigation and "9–16 -1 1" in navigation
+    # the clock and the history in [0, 1], the start and goal poses in [-1, 1]
+    assert "0 0 1 clock" in navigation and "9 -1 1 task: start x" in navigation
+    assert "16 -1 1 task: goal sin θ" in navigation
 
 
 def test_every_docs_page_and_reference_page_is_built(site):
@@ -125,5 +129,5 @@ def test_every_id_page_shows_its_description_before_its_spaces(site):
         # the article's text without spaces: code spans split the text into separate parts
         flat, words = "".join(text.split()), "".join(about.replace("`", "").split())
         assert "Aboutthisid" in flat and words in flat, env_id
-        assert flat.index("Aboutthisid") < flat.index(words) < flat.index("Observationspace"), \
+        assert flat.index("Aboutthisid") < flat.index(words) < flat.index("ObservationSpace"), \
             env_id

@@ -285,17 +285,27 @@ def type_name(annotation: object) -> str:
     return getattr(annotation, "__name__", str(annotation))
 
 
-def arguments_table(cls: type[TakesArguments]) -> list[str]:
-    """The Markdown table (name, type, default, description) of the arguments ``cls`` takes."""
+def arguments_table(cls: type[TakesArguments], registered: Mapping | None = None) -> list[str]:
+    """The Markdown table (name, type, default, description) of the arguments ``cls`` takes;
+    with ``registered`` (an id's registered keyword arguments) a column of the id's values
+    beside the class's defaults ("—" where the id keeps the default)."""
     fields = cls.options_model.model_fields
-    lines = ["| argument | type | default | description |", "|---|---|---|---|"]
+    header = ["argument", "type", *(["registered value"] if registered is not None else []),
+              "default", "description"]
+    lines = [_row(header), _row(["---"] * len(header))]
     for name in cls.taken():
         default = cls.option_defaults.get(name, fields[name].default)
-        description = " ".join((fields[name].description or "").split()).replace("|", "\\|")
+        cells = [f"`{name}`", f"`{type_name(accepted(fields[name]))}`"]
+        if registered is not None:
+            cells.append(f"`{registered[name]!r}`" if name in registered else "—")
         # a pipe inside a code span does not split a cell (Python-Markdown's tables)
-        lines.append(f"| `{name}` | `{type_name(accepted(fields[name]))}` | `{default!r}` | "
-                     f"{description} |")
+        description = " ".join((fields[name].description or "").split()).replace("|", "\\|")
+        lines.append(_row([*cells, f"`{default!r}`", description]))
     return lines
+
+
+def _row(cells: Sequence[str]) -> str:
+    return "| " + " | ".join(cells) + " |"
 
 
 def json_schema(env: str | type[TakesArguments]) -> dict:

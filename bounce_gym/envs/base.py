@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
+import numpy as np
 from gymnasium import logger
 
 from bounce_gym.cells import CellModel
@@ -46,6 +47,23 @@ class EnvBase(TakesArguments[EnvOptions], RendererOwner):
     def task(self):
         """The task that owns reward and termination (shared by every robot)."""
         return self.core.task
+
+    def action_labels(self, agent: str | None = None) -> tuple[str, ...]:
+        """What each action of a robot (``agent``; None: the lone robot) is: per discrete action
+        its bounce angle, then its turn commands; for continuous actions the angles the one
+        number maps onto."""
+        robot = 0 if agent is None else self.agent_index[agent]
+        if self.options.action_type == "continuous":
+            low, high = np.degrees(self.options.angle_range[robot])
+            return (f"bounce angle: a ∈ [-1, 1] maps linearly onto [{low:g}°, {high:g}°]",)
+        return (*(f"bounce angle {angle:g}°" for angle in np.degrees(self.options.angles[robot])),
+                *(f"turn in place by {angle:g}° (a command tick)"
+                  for angle in np.degrees(self.options.turn_angles)))
+
+    def observation_labels(self, agent: str | None = None) -> tuple[str, ...]:
+        """What each index of an observation is (every robot's observation is laid out
+        alike; `bounce_gym.envs.core`)."""
+        return self.core.obs_labels
 
     @property
     def observes_pose(self) -> bool:

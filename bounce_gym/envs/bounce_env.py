@@ -70,10 +70,6 @@ class BounceEnv(EnvBase, gym.Env):
     in `bounce_gym.envs.options.EnvOptions` (type, default and meaning of each: the model, the
     signature of this class and the "Arguments" table of its docs page), the multi-robot ones
     excepted. Planners get the env's discrete model from `cell_model` (on ``env.unwrapped``).
-
-    ## Version History
-
-    * v0: initial release.
     """
 
     #: the task names this env accepts

@@ -55,20 +55,11 @@ class BounceCore:
         #: without turn commands, whose every step ends in contact (it would always read 1)
         self.observes_contact = (options.step_mode == "tick" or options.n_robots > 1
                                  or len(options.turn_angles) > 0)
-        k = options.history
-        sensed = 2 if self.observes_contact else 1
-        low = [0.0] * sensed + [0.0] * (2 * k)
-        high = [1.0] * sensed + [1.0] * (2 * k)
-        if options.privileged:
-            low += [0.0, 0.0, -1.0, -1.0]
-            high += [1.0, 1.0, 1.0, 1.0]
-        if options.agent_id:
-            low += [0.0] * options.n_robots
-            high += [1.0] * options.n_robots
-        low += [-1.0] * task.observation_size
-        high += [1.0] * task.observation_size
-        self.obs_low = np.array(low, dtype=np.float32)
-        self.obs_high = np.array(high, dtype=np.float32)
+        layout = _observation_layout(options, task, self.observes_contact)
+        #: what each index of a robot's observation is (the module docstring), its bounds
+        self.obs_labels = tuple(label for label, _, _ in layout)
+        self.obs_low = np.array([low for _, low, _ in layout], dtype=np.float32)
+        self.obs_high = np.array([high for _, _, high in layout], dtype=np.float32)
         self.option_keys = frozenset({"start"}) | task.option_keys
         #: whether the task's step does anything (the free task's does not: reward 0, no end,
         #: no info), so whether a step needs `StepEvents`
@@ -325,3 +316,21 @@ class BounceCore:
         }
         info.update(task_info)
         return info
+
+
+def _observation_layout(options: EnvOptions, task: Task, observes_contact: bool
+                        ) -> list[tuple[str, float, float]]:
+    """(label, low, high) of each index of a robot's observation, in order."""
+    layout = [("contact", 0.0, 1.0)] if observes_contact else []
+    layout.append(("clock: ticks since the last bump / max_clock", 0.0, 1.0))
+    for k in range(1, options.history + 1):
+        layout += [(f"history, bump {k} back: segment ticks / max_clock", 0.0, 1.0),
+                   (f"history, bump {k} back: angle / 360°", 0.0, 1.0)]
+    if options.privileged:
+        layout += [("pose (privileged): x scaled to [0, 1]", 0.0, 1.0),
+                   ("pose (privileged): y scaled to [0, 1]", 0.0, 1.0),
+                   ("pose (privileged): cos θ", -1.0, 1.0),
+                   ("pose (privileged): sin θ", -1.0, 1.0)]
+    if options.agent_id:
+        layout += [("the robot's index, one-hot", 0.0, 1.0)] * options.n_robots
+    return layout + [(f"task: {label}", -1.0, 1.0) for label in task.observation_labels]

@@ -34,6 +34,12 @@ class GoalNavigationEnv(BounceEnv):
     joined start/goal pairs, a horizon a few times the longest optimal plan of the map
     (`horizon`), the sparse reward, and the goal-conditioned observation below.
 
+    ## Action Space
+
+    ``Discrete(len(angles))``: the index of the bounce angle in Φ, as in v0. Discrete actions
+    only: the angles must be whole heading bins of the cell model, so that every bounce ends in
+    a pose of the model.
+
     ## Observation Space
 
     ``Dict`` of three float32 ``Box`` es:
@@ -72,13 +78,7 @@ class GoalNavigationEnv(BounceEnv):
 
     Those of `BounceEnv` (the "Arguments" table), with ``task_kwargs`` for `GoalNavigationTask` (``draw``,
     ``heading_tolerance_deg``, ``start``, ``goal``, ``goal_bonus``, ``w1``, ``w2``); the task is
-    always ``goal_navigation``. Discrete actions only (the bounce angle is an index into Φ,
-    whose angles must be whole bins of the cell model).
-
-    ## Version History
-
-    * v1: goal-conditioned navigation (this env). v0 (`BounceEnv` with ``task="navigation"``)
-      is unchanged, for reproducibility.
+    always ``goal_navigation``.
     """
 
     tasks = ("goal_navigation",)
@@ -106,6 +106,13 @@ class GoalNavigationEnv(BounceEnv):
         #: optimal plan of the map, rounded up (one step where no start/goal pair is joined,
         #: which only ``draw="any"`` allows)
         self.horizon = max(1, math.ceil(HORIZON_FACTOR * self.task.longest_plan))
+
+    def observation_labels(self, agent: str | None = None) -> dict[str, tuple[str, ...]]:
+        """What each index of each key of the observation is."""
+        pose = (("position cell, one-hot",) * self.n_positions
+                + ("heading bin, one-hot",) * self.n_bins)
+        return {"observation": super().observation_labels(), "achieved_goal": pose,
+                "desired_goal": pose}
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         sensed, info = super().reset(seed=seed, options=options)

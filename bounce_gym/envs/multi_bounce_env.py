@@ -4,9 +4,6 @@
 |---|---|
 | Import | ``from bounce_gym.envs import multi_bounce_v0`` (``parallel_env()``, ``env()``) or ``pettingzoo.make("parallel", "bounce_gym/MultiBounce-v0")`` |
 | Agents | ``robot_0`` … ``robot_{m-1}`` |
-| Actions | ``Discrete(len(Φ_i))`` (+ ``len(turn_angles)`` turn commands) or ``Box(-1, 1, (1,), float32)`` per robot |
-| Observations | per robot: contact (not for a lone robot in bounce mode without turn commands, which is always in contact), clock, optional history / privileged pose / its index one-hot (``agent_id``) / task features (monitoring: its region with ``observe_region``; `bounce_gym.envs.core`) |
-| State | ``state()``: every robot's true pose (x, y scaled to [0, 1], cos θ, sin θ) |
 
 ## Description
 
@@ -17,6 +14,12 @@ are blocked use it, the others drive on. In ``step_mode="bounce"`` a step runs u
 is blocked again. **AEC form** (`MultiBounceAEC`): event-driven — the agent to act is the next
 robot that bumps; once every blocked robot has chosen, the world runs until the next bump.
 
+## Action Space
+
+Per robot: ``action_type="discrete"`` — ``Discrete(len(Φ_i) + len(turn_angles))``, the index of
+an angle of the robot's own set Φ_i, then the turn commands; ``action_type="continuous"`` —
+``Box(-1, 1, (1,), float32)``, mapped linearly onto the robot's ``angle_range``.
+
 **Turn commands** (parallel form, discrete actions): with ``turn_angles=[45, -45]`` each robot
 has ``len(turn_angles)`` extra actions after its angles — index ``len(Φ_i) + j`` is a
 clock-timed turn in place by ``turn_angles[j]`` degrees (CCW positive), the one-robot ±Δθ
@@ -26,10 +29,27 @@ the step is one *command tick*: the robots that picked a turn turn, every other 
 place (`bounce_gym.dynamics.BounceDynamics.turn`); no bump happens and every clock advances by
 one. Otherwise the step is an ordinary one.
 
+## Observation Space
+
+Per robot, a flat ``Box`` of float32: ``contact`` (bump sensor pressed; left out only for a
+lone robot in bounce mode without turn commands, which is always in contact), ``clock`` (ticks
+since its last bump / max_clock), then the optional ``history``, ``privileged`` pose, its index
+one-hot (``agent_id``) and the task's features (monitoring: its region with
+``observe_region``); `bounce_gym.envs.core` has the layout. ``state()`` is every robot's true
+pose (x, y scaled to [0, 1], cos θ, sin θ), for centralised critics.
+
 ## Rewards
 
 From the task: ``free`` (0), ``coverage`` (shared: new cells and distance to the target, split
 evenly), ``monitoring`` (time in the robot's own region minus a penalty per robot contact).
+
+## Starting State
+
+Every robot at a uniformly random point of the free space with a uniformly random heading;
+robots that collide are placed one after another so that none overlaps another (on the cell
+backend: distinct free cells, ``min_sep_cells`` + 1 apart), unless
+``reset(options={"start": ...})`` gives the poses. In bounce mode the robots then drive until
+one of them is blocked.
 
 ## Episode End
 
@@ -45,10 +65,6 @@ conflicts on the grid") — with this env's own defaults (`_MultiBase.option_def
 ``grid_15x15`` world, 4 robots of radius 0.3, collisions on); each argument's type, default and
 meaning are in the signature of the class and the "Arguments" table of its docs page. Planners
 get the env's discrete model from ``env.unwrapped.cell_model()``.
-
-## Version History
-
-* v0: initial release.
 """
 
 from __future__ import annotations

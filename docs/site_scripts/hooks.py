@@ -1,11 +1,11 @@
 """MkDocs hooks of the docs site (mkdocs.yml, ``hooks:``): the generated pages.
 
 Nothing on the environment pages is typed by hand: each registered id (the tables of
-`bounce_gym.envs.registration`) is built with its registered arguments, and its page shows
-the registration, the observation and action spaces the env reports (a Box's bounds per
-index) and the sections of its env class's docstring. The API reference has one page per
-module of `REFERENCE`, rendered by mkdocstrings. The pages exist only in the build (virtual
-paths under ``envs/`` and ``reference/``); the site's navigation lists them.
+`bounce_gym.envs.registration`) is built with its registered arguments, and its page has the
+sections of Gymnasium's env pages, from the env's docstring and the env as built, with a short
+animation the env renders (`site_pages`). The API reference has one page per module of
+`REFERENCE`, rendered by mkdocstrings. The pages and pictures exist only in the build (virtual
+paths under ``envs/`` and ``reference/``); the site's navigation lists the pages.
 """
 
 from __future__ import annotations
@@ -61,8 +61,8 @@ def _on_path() -> None:
             sys.path.insert(0, str(folder))
 
 
-def _env_pages() -> dict[str, str]:
-    """Page path -> Markdown of every registered id."""
+def _env_pages() -> tuple[dict[str, str], dict[str, bytes]]:
+    """Page path -> Markdown of every registered id, and picture path -> GIF."""
     _on_path()
     from site_pages import env_pages
 
@@ -87,13 +87,18 @@ def _reference_pages() -> dict[str, str]:
 
 
 _PAGES: dict[str, str] = {}
+#: the generated pictures: path -> image file
+_PICTURES: dict[str, bytes] = {}
 
 
 def on_config(config):
     """Build the generated pages once and list them in the navigation's placeholders:
     ``Environments: envs/`` and ``API reference: reference/``."""
     _PAGES.clear()
-    _PAGES.update(_env_pages())
+    _PICTURES.clear()
+    env_pages, pictures = _env_pages()
+    _PAGES.update(env_pages)
+    _PICTURES.update(pictures)
     _PAGES.update(_config_pages())
     _PAGES.update(_reference_pages())
     _fill(config["nav"])
@@ -118,7 +123,7 @@ def _title(path: str) -> str:
 
 
 def on_files(files, config):
-    """Add the generated pages to the site's files."""
-    for path, text in _PAGES.items():
-        files.append(File.generated(config, path, content=text))
+    """Add the generated pages and pictures to the site's files."""
+    for path, content in {**_PAGES, **_PICTURES}.items():
+        files.append(File.generated(config, path, content=content))
     return files

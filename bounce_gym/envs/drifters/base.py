@@ -7,7 +7,7 @@ from collections.abc import Mapping
 
 from gymnasium import logger
 
-from bounce_gym.cells.drifter import DrifterCells
+from bounce_gym.cells.drifter import ACTIONS, DrifterCells
 from bounce_gym.envs.arguments import TakesArguments, parse
 from bounce_gym.envs.drifters.core import DrifterCore
 from bounce_gym.envs.drifters.model_cache import sampled_drifter_model
@@ -29,6 +29,15 @@ class DrifterEnvBase(TakesArguments[DrifterOptions], RendererOwner):
 
     metadata = {"render_modes": RENDER_MODES, "render_fps": 8}
     options_model = DrifterOptions
+
+    def action_labels(self, agent: str | None = None) -> tuple[str, ...]:
+        """What each action of a drifter is (`bounce_gym.cells.drifter.ACTIONS`)."""
+        return ACTIONS
+
+    def observation_labels(self, agent: str | None = None) -> tuple[str, ...]:
+        """What each index of an observation is (every drifter's observation is laid out
+        alike; `bounce_gym.envs.drifters.core`)."""
+        return self.core.obs_labels
 
     @property
     def observes_pose(self) -> bool:

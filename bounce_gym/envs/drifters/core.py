@@ -68,10 +68,10 @@ class DrifterCore:
         self.task = make_drifter_task(options, self.model, self.normalise)
         self.default_start = options.start if start_key == "start" else options.deploy
         self._check_placement(self.default_start, start_key)
-        size = 2 + 3 * options.observe_fix + 2 * options.observe_pose
-        size += self.task.observation_size
-        self.obs_low = np.zeros(size, dtype=np.float32)
-        self.obs_high = np.ones(size, dtype=np.float32)
+        #: what each index of a drifter's observation is (the module docstring)
+        self.obs_labels = _observation_labels(options, clock_steps, self.task.observation_labels)
+        self.obs_low = np.zeros(len(self.obs_labels), dtype=np.float32)
+        self.obs_high = np.ones(len(self.obs_labels), dtype=np.float32)
         self.option_keys = frozenset({start_key}) | self.task.option_keys
         #: whether steps extend the trails and visited cells (only drawings read them)
         self.keep_trails = False
@@ -248,3 +248,14 @@ def _edge(nodes: np.ndarray, end: int) -> float:
     if end == 0:
         return float(nodes[0] - 0.5 * (nodes[1] - nodes[0]))
     return float(nodes[-1] + 0.5 * (nodes[-1] - nodes[-2]))
+
+
+def _observation_labels(options: DrifterOptions, clock_steps: int,
+                        task_labels: Sequence[str]) -> tuple[str, ...]:
+    """What each index of a drifter's observation is, in order (every value in [0, 1])."""
+    labels = ["layer / (L − 1)", f"clock: steps / {clock_steps} (then 1)"]
+    if options.observe_fix:
+        labels += ["last surface fix: x", "last surface fix: y", "fresh: at the surface now"]
+    if options.observe_pose:
+        labels += ["position (privileged): x", "position (privileged): y"]
+    return (*labels, *(f"task: {label}" for label in task_labels))

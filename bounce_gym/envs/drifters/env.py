@@ -41,6 +41,12 @@ class DrifterEnv(DrifterEnvBase, gym.Env):
     position (``observe_pose``), and the goal's or region's mean position and layer (reach,
     stay). See `bounce_gym.envs.drifters.core`.
 
+    ``info`` holds the true state: ``cell`` (layer, j, i), ``state`` (the cell model's state),
+    ``position`` (x, y in the field's coordinates), ``layer``, ``steps``, ``action_mask`` (int8,
+    3), ``illegal_action``; ``time`` (field seconds, continuous backend); reach:
+    ``is_success``, ``distance_to_goal`` (metres); stay: ``in_region``, ``steps_in_region``;
+    cover: ``coverage`` (fraction of the region visited), ``new_cells``.
+
     ## Rewards
 
     ``reach``: ``reward="success"`` 1 on the step that reaches the goal, else 0 (the mean
@@ -59,14 +65,6 @@ class DrifterEnv(DrifterEnvBase, gym.Env):
     Terminated when the drifter reaches the goal (reach; the goal is absorbing) or has visited
     the whole region (cover). Truncated by the registered ``max_episode_steps``.
 
-    ## Info
-
-    ``cell`` (layer, j, i), ``state`` (the cell model's state), ``position`` (x, y in the
-    field's coordinates), ``layer``, ``steps``, ``action_mask`` (int8, 3), ``illegal_action``;
-    ``time`` (field seconds, continuous backend); reach: ``is_success``,
-    ``distance_to_goal`` (metres); stay: ``in_region``, ``steps_in_region``; cover:
-    ``coverage`` (fraction of the region visited), ``new_cells``.
-
     ## Arguments
 
     ``render_mode`` (None, ``"human"``, ``"rgb_array"``) and ``field_style`` (``"arrows"`` or
@@ -75,10 +73,6 @@ class DrifterEnv(DrifterEnvBase, gym.Env):
     ``deploy`` (type, default and meaning of each: the model, the signature of this class and
     the "Arguments" table of its docs page). Planners get the model from
     ``env.unwrapped.cell_model()``.
-
-    ## Version History
-
-    * v0: initial release.
     """
 
     option_defaults = {"n_drifters": 1}

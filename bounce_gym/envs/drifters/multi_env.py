@@ -4,9 +4,6 @@
 |---|---|
 | Import | ``pettingzoo.make("parallel", "bounce_gym/MultiDrifter-v0")`` or ``from bounce_gym.envs.drifters import multi_drifter_v0`` (``parallel_env()``, ``env()``) |
 | Agents | ``drifter_0`` … ``drifter_{n-1}`` |
-| Actions | ``Discrete(3)`` per drifter: 0 drift, 1 up, 2 down |
-| Observations | per drifter: layer, clock (steps / ``max_cycles``), optional surface fix and pose (`bounce_gym.envs.drifters.core`) |
-| State | ``state()``: every drifter's (x, y, layer), each in [0, 1] |
 
 ## Description
 
@@ -17,12 +14,29 @@ drifters visit every surface cell) and carried by the currents; each can rise, s
 drifters choose in turn and the fleet moves once all have chosen; each action is checked
 (`check_action`) as it is given.
 
+## Action Space
+
+Per drifter, ``Discrete(3)`` as `DrifterEnv`'s: 0 drift, 1 up (one layer shallower), 2 down
+(one layer deeper); an illegal move drifts instead (its info's ``action_mask`` and
+``illegal_action``).
+
+## Observation Space
+
+Per drifter, a ``Box(0, 1)`` of float32: its layer and the clock (steps / ``max_cycles``), then
+optionally its last surface fix and the true position (`bounce_gym.envs.drifters.core`).
+``state()`` is every drifter's (x, y, layer), each in [0, 1].
+
 ## Rewards
 
 Shared surface coverage: the number of surface cells that some drifter visits for the first
 time in the step (a drifter is at the surface and in that cell at the end of the step; the
 deployment cells count as visited at reset), split evenly over the drifters.
 ``info["coverage"]`` is the fraction of surface water cells visited so far.
+
+## Starting State
+
+Each drifter in a surface water cell drawn at random, distinct cells while there are enough,
+unless ``deploy`` (or ``reset(options={"deploy": [...]})``) gives each its region.
 
 ## Episode End
 
@@ -39,10 +53,6 @@ with ``reset(options={"deploy": [...]})``); each argument's type, default and me
 the signature of the class and the "Arguments" table of its docs page. Each agent's info holds
 its own ``cell``, ``state``, ``position``, ``layer``, ``action_mask``, ``illegal_action`` and the
 shared ``coverage``, ``new_cells``, ``steps``.
-
-## Version History
-
-* v0: initial release.
 """
 
 from __future__ import annotations

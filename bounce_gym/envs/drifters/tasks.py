@@ -37,11 +37,16 @@ class DrifterTask:
     name = ""
     #: the reset option that replaces the task's region for one episode
     region_key = "region"
-    #: features appended to each drifter's observation
-    observation_size = 0
+    #: what each feature appended to a drifter's observation is (in [0, 1]), in order
+    observation_labels: tuple[str, ...] = ()
     #: whether drawings mark the region (a goal or a region to stay in; a region to cover is
     #: shown by its visited cells instead)
     marked = True
+
+    @property
+    def observation_size(self) -> int:
+        """Number of features appended to each drifter's observation."""
+        return len(self.observation_labels)
 
     def __init__(self, region: object, model: DrifterCells, normalise=None) -> None:
         if region is None:
@@ -102,7 +107,7 @@ class DrifterTask:
 class ReachTask(DrifterTask):
     name = "reach"
     region_key = "goal"
-    observation_size = 3
+    observation_labels = ("goal: mean x", "goal: mean y", "goal: mean layer")
 
     def __init__(self, goal: object, model: DrifterCells, reward: str, normalise) -> None:
         super().__init__(goal, model, normalise)
@@ -134,7 +139,7 @@ class ReachTask(DrifterTask):
 
 class StayTask(DrifterTask):
     name = "stay"
-    observation_size = 3
+    observation_labels = ("region: mean x", "region: mean y", "region: mean layer")
 
     def start(self, states, positions):
         self.steps_in_region = np.zeros(len(states), dtype=np.int64)

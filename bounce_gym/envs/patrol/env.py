@@ -5,9 +5,6 @@ PettingZoo parallel environment.
 |---|---|
 | Import | ``pettingzoo.make("parallel", "bounce_gym/Patrol-v0")`` or ``from bounce_gym.envs.patrol import patrol_v0`` (``parallel_env()``, ``env()``) |
 | Agents | ``patroller_0`` … ``patroller_{m-1}``, ``adversary`` |
-| Actions | patroller: ``Discrete(8)``, move along the edge in direction k clockwise from north (0 N, 1 NE, 2 E, 3 SE, 4 S, 5 SW, 6 W, 7 NW); adversary: ``Discrete(n + 1)``, 0 wait, 1 + z start the attack on vertex z |
-| Observations | patroller: Box [0, 1]^(2n), one-hot of its vertex, then the vertices of the other patrollers it sees; adversary: Box [0, 1]^(n + 3) (or ^(2n + 3)), see below |
-| State | ``state()``: each patroller's one-hot vertex, the one-hot attack target, attack started, attack progress, clock; Box [0, 1]^(mn + n + 3) |
 
 ## Description
 
@@ -27,18 +24,36 @@ adversary starts it) or at the end of any of the t_a steps that follow (the star
 first); otherwise it succeeds at the end of the t_a-th step. `capture_probabilities` gives
 p_d(t_a) = Pr[T_detect ≤ t_a] exactly from P (`bounce_gym.envs.patrol.capture`).
 
-Adversary observation: `capture_probabilities()` for an attack that starts at the episode's
-start (n), attack started (1), attack progress elapsed / t_a (1), clock steps / ``max_cycles``
-(1); with ``adversary_observes="positions"`` also which vertices a patroller occupies (n).
-
 The **AEC form** (``env()``) is PettingZoo's ``parallel_to_aec`` conversion: the agents choose
 in turn and the world moves once all have chosen; each action is checked (`check_action`) as it
 is given.
+
+## Action Space
+
+Patroller: ``Discrete(8)``, move along the edge in direction k clockwise from north (0 N, 1 NE,
+2 E, 3 SE, 4 S, 5 SW, 6 W, 7 NW); a direction without an edge from the patroller's vertex is
+illegal (``action_mask``) and leaves it where it is. Adversary: ``Discrete(n + 1)``, 0 wait,
+1 + z start the attack on vertex z; once the attack has started only 0 is legal.
+
+## Observation Space
+
+Patroller: ``Box(0, 1, (2n,))``, a one-hot of its vertex, then the vertices of the other
+patrollers its sensor sees. Adversary: ``Box(0, 1, (n + 3,))``, `capture_probabilities()` for
+an attack that starts at the episode's start (n), attack started (1), attack progress
+elapsed / t_a (1), clock steps / ``max_cycles`` (1); with ``adversary_observes="positions"``
+also which vertices a patroller occupies (n more). ``state()``: each patroller's one-hot
+vertex, the one-hot attack target, attack started, attack progress, clock; Box [0, 1]^(mn + n
++ 3).
 
 ## Rewards
 
 Zero-sum, paid in the step the episode ends: capture (or deterred) gives each patroller +1/m and
 the adversary −1; success gives each patroller −1/m and the adversary +1; every other step 0.
+
+## Starting State
+
+The patrollers on distinct vertices drawn uniformly, unless ``start`` (or
+``reset(options={"start": [...]})``) gives them; the adversary has not chosen a target yet.
 
 ## Episode End
 
@@ -56,10 +71,6 @@ constructor's. Each agent's info holds ``outcome`` (None,
 "capture", "success", "deterred"), ``attack_target`` (-1 before the attack),
 ``attack_started`` (its step, or -1), ``attack_elapsed``, ``step``, ``action_mask`` (int8) and
 ``illegal_action``; a patroller's also its ``vertex``.
-
-## Version History
-
-* v0: initial release.
 """
 
 from __future__ import annotations
@@ -302,6 +313,24 @@ class PatrolEnv(TakesArguments[PatrolOptions], RendererOwner, ParallelEnv):
                 mask[1:] = 0
             return mask
         return (self.board.neighbours[self._pos[self.agent_index[agent]]] >= 0).astype(np.int8)
+
+    def action_labels(self, agent: str) -> tuple[str, ...]:
+        """What each action of ``agent`` is."""
+        if agent != ADVERSARY:
+            return tuple(f"move {direction}" for direction in DIRECTIONS)
+        return ("wait", *("start the attack on vertex action − 1",) * self.board.n)
+
+    def observation_labels(self, agent: str) -> tuple[str, ...]:
+        """What each index of ``agent``'s observation is (`_observations`)."""
+        n = self.board.n
+        if agent != ADVERSARY:
+            return ("own vertex, one-hot",) * n + ("another patroller seen at the vertex",) * n
+        labels = (("capture probability of an attack on the vertex started at step 0",) * n
+                  + ("attack started", "attack progress: steps elapsed / attack_time",
+                     "clock: steps / max_cycles"))
+        if self.options.adversary_observes == "positions":
+            labels += ("a patroller at the vertex",) * n
+        return labels
 
     def _observations(self) -> dict[str, np.ndarray]:
         m, n = self.n_patrollers, self.board.n

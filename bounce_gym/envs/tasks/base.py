@@ -41,9 +41,15 @@ class Task:
         self.options = core.options
 
     @property
+    def observation_labels(self) -> tuple[str, ...]:
+        """What each task feature appended to a robot's observation is (values in [-1, 1]), in
+        order; none by default."""
+        return ()
+
+    @property
     def observation_size(self) -> int:
-        """Number of task features appended to each robot's observation (values in [-1, 1])."""
-        return 0
+        """Number of task features appended to each robot's observation."""
+        return len(self.observation_labels)
 
     def start_poses(self, rng: np.random.Generator, options: Mapping) -> tuple | None:
         """Start (positions, headings) chosen by the task, or None for random poses."""

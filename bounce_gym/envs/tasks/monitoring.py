@@ -76,8 +76,12 @@ class MonitoringTask(Task):
         self._features = np.clip(2 * (bounds - low) / size - 1, -1, 1).astype(np.float32)
 
     @property
-    def observation_size(self) -> int:
-        return 4 if self.observe_region else 0
+    def observation_labels(self) -> tuple[str, ...]:
+        """With ``observe_region``: the bounding box of the robot's region, scaled to [-1, 1]
+        over the world's bounds."""
+        if not self.observe_region:
+            return ()
+        return ("region x min", "region y min", "region x max", "region y max")
 
     def observation(self, state):
         return self._features.copy() if self.observe_region else super().observation(state)

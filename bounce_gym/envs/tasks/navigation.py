@@ -153,8 +153,13 @@ class NavigationTask(Task):
                                          options.corner_rule)
 
     @property
-    def observation_size(self) -> int:
-        return 8 if self.observe_task else 0
+    def observation_labels(self) -> tuple[str, ...]:
+        """The start pose, then the goal pose: x and y scaled to [-1, 1] over the world's
+        bounds, cos θ, sin θ (`pose_features`)."""
+        if not self.observe_task:
+            return ()
+        return tuple(f"{pose} {part}" for pose in ("start", "goal")
+                     for part in ("x", "y", "cos θ", "sin θ"))
 
     def start_poses(self, rng, options):
         chosen = {k: pose_option(options, k, 1) or pose_option(self._fixed, k, 1)
