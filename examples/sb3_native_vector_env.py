@@ -22,10 +22,9 @@ from pathlib import Path
 
 from bounce_gym.extras import exit_unless_installed
 
-# the extra this example needs, checked before anything imports it (tqdm and rich draw SB3's
-# progress bar)
-exit_unless_installed("examples/sb3_native_vector_env.py", "stable_baselines3", "torch", "tqdm",
-                      "rich")
+# the extra this example needs, checked before anything imports it (rich, with the tqdm that
+# the extra also installs, draws SB3's progress bar)
+exit_unless_installed("examples/sb3_native_vector_env.py", "stable_baselines3", "torch", "rich")
 
 import gymnasium as gym
 from stable_baselines3 import PPO
