@@ -27,6 +27,7 @@ from bounce_gym.extras import exit_unless_installed
 exit_unless_installed("examples/sb3_native_vector_env.py", "stable_baselines3", "torch", "rich")
 
 import gymnasium as gym
+import torch
 from stable_baselines3 import PPO
 
 import bounce_gym  # noqa: F401  (registers the environments)
@@ -45,6 +46,9 @@ def train(steps: int, seed: int) -> PPO:
                           **ENV_KWARGS)
     venv = VectorToVecEnv(vector)
     venv.seed(seed)  # env i starts from seed + i: training seeds stay below 10,000
+    # one thread for a small MLP on small batches, as `baselines.rl.train` trains by default
+    # (torch_threads: 1): more only contend with the env and, on a busy machine, spin
+    torch.set_num_threads(1)
     model = PPO("MlpPolicy", venv, n_steps=128, batch_size=256, seed=seed, verbose=0)
     return model.learn(total_timesteps=steps, progress_bar=True)
 
@@ -67,9 +71,8 @@ def successes(model: PPO, episodes: int) -> int:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    # defaults that finish within a minute on two cores; train longer with --steps
-    parser.add_argument("--steps", type=int, default=30_000, help="training env steps")
-    parser.add_argument("--episodes", type=int, default=100, help="held-out episodes")
+    parser.add_argument("--steps", type=int, default=100_000, help="training env steps")
+    parser.add_argument("--episodes", type=int, default=200, help="held-out episodes")
     parser.add_argument("--seed", type=int, default=0, help="training seed (< 10,000 - 8)")
     parser.add_argument("--out", type=Path, default=None,
                         help="folder for the model (default: a fresh temporary folder)")
