@@ -1,8 +1,9 @@
 """The core install and its extras (`bounce_gym.extras`): without any extra every registered
 Gymnasium and PettingZoo env is made, reset and stepped; a feature whose extra is missing is one
 line naming the extra and its ``pip install``; the docs list exactly the extras pyproject.toml
-declares. Missing extras are simulated in a subprocess by an import hook that refuses their
-modules; the slow test installs the core into a fresh virtual environment."""
+declares. Missing extras are simulated in a subprocess whose start-up marks their modules
+missing (tests/refuse_imports); the slow test installs the core into a fresh virtual
+environment."""
 
 import importlib.metadata
 import json
