@@ -8,11 +8,15 @@ importable module. A feature checks its modules with `require` before it starts,
 one is a `MissingExtraError` of one line:
 
     executor ray needs the 'distributed' extra: pip install 'bounce-gym[distributed]'
+
+A script run from the command line (the ``examples/``) checks with `exit_unless_installed`,
+which prints that line as the ``bounce-gym`` commands do and exits with status 2.
 """
 
 from __future__ import annotations
 
 import importlib.util
+import sys
 
 from bounce_gym.errors import MissingExtraError
 
@@ -69,6 +73,16 @@ def require(feature: str, *modules: str) -> None:
     extras = [MODULE_EXTRAS[module] for module in modules if not installed(module)]
     if extras:
         raise missing_extra(feature, list(dict.fromkeys(extras)))
+
+
+def exit_unless_installed(feature: str, *modules: str) -> None:
+    """`require` for a script: where an extra is missing, print ``error: <its one line>`` on
+    stderr and exit with status 2, without a traceback (as the ``bounce-gym`` commands do)."""
+    try:
+        require(feature, *modules)
+    except MissingExtraError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
 
 
 def from_import_error(feature: str, exc: ImportError) -> MissingExtraError | None:

@@ -21,6 +21,11 @@ import argparse
 import tempfile
 from pathlib import Path
 
+from bounce_gym.extras import exit_unless_installed
+
+# the extra this example needs, checked before anything imports it
+exit_unless_installed("examples/drifter_from_netcdf.py", "xarray", "netCDF4")
+
 import gymnasium as gym
 import numpy as np
 import xarray as xr

@@ -4,7 +4,8 @@ Run with ``python examples/jax_ppo_navigation.py`` (``--steps``, ``--episodes``,
 the run is ``FOLDER/jax-ppo-example/``, by default in a fresh temporary folder). It trains
 the ``jax_ppo`` configuration of ``configs/train_navigation_v1_jax_ppo.yaml`` (one seed, the
 hyperparameters of SB3's PPO entry for v1: 8 envs, 128 steps each per rollout, 10 epochs of
-256-transition mini-batches) through ``baselines.rl.train`` into that folder, then plays
+256-transition mini-batches) through ``baselines.rl.train`` into that folder, printing the
+steps done after each chunk of iterations (up to 16,384 steps, one compiled call), then plays
 the model's sampled actions (the evaluation's default) on held-out episode seeds (from 10,000)
 of the NumPy env and prints the success rate with its 95 % Wilson interval and the wall time.
 """
@@ -16,6 +17,11 @@ import contextlib
 import tempfile
 import time
 from pathlib import Path
+
+from bounce_gym.extras import exit_unless_installed
+
+# the extra this example needs, checked before anything imports it
+exit_unless_installed("examples/jax_ppo_navigation.py", "jax", "optax")
 
 import gymnasium as gym
 
@@ -46,13 +52,14 @@ def train_and_score(steps: int = 200_000, episodes: int = 200, seed: int = 0,
                     out: Path | None = None) -> dict:
     """Train ``steps`` env steps into the models folder ``out`` (None: a temporary folder,
     removed afterwards), score on ``episodes`` held-out seeds: the success rate, its Wilson
-    interval, the seconds training took (compiling included) and the model's path."""
+    interval, the seconds training took (compiling included) and the model's path. Training
+    prints a line per chunk of iterations (the runner's progress)."""
     with contextlib.ExitStack() as stack:
         folder = out if out is not None else stack.enter_context(tempfile.TemporaryDirectory())
         start = time.perf_counter()
         (path,) = train({"name": "jax-ppo-example", "env": ENV, "algo": "jax_ppo",
                          "hyperparams_file": str(HYPERPARAMS), "total_timesteps": steps,
-                         "seed": seed, "models": str(folder)}, progress=False)
+                         "seed": seed, "models": str(folder)}, log=print)
         seconds = time.perf_counter() - start
         reached = success(path, episodes)
     return {"success": reached / episodes, "interval": wilson_interval(reached, episodes),

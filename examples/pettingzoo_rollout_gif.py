@@ -17,6 +17,11 @@ import argparse
 import tempfile
 from pathlib import Path
 
+from bounce_gym.extras import exit_unless_installed
+
+# the extra this example needs, checked before anything imports it
+exit_unless_installed("examples/pettingzoo_rollout_gif.py", "pygame", "PIL")
+
 import pettingzoo
 from PIL import Image
 

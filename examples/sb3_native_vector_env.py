@@ -20,7 +20,14 @@ import tempfile
 import time
 from pathlib import Path
 
+from bounce_gym.extras import exit_unless_installed
+
+# the extra this example needs, checked before anything imports it (rich, with the tqdm that
+# the extra also installs, draws SB3's progress bar)
+exit_unless_installed("examples/sb3_native_vector_env.py", "stable_baselines3", "torch", "rich")
+
 import gymnasium as gym
+import torch
 from stable_baselines3 import PPO
 
 import bounce_gym  # noqa: F401  (registers the environments)
@@ -39,8 +46,11 @@ def train(steps: int, seed: int) -> PPO:
                           **ENV_KWARGS)
     venv = VectorToVecEnv(vector)
     venv.seed(seed)  # env i starts from seed + i: training seeds stay below 10,000
+    # one thread for a small MLP on small batches, as `baselines.rl.train` trains by default
+    # (torch_threads: 1): more only contend with the env and, on a busy machine, spin
+    torch.set_num_threads(1)
     model = PPO("MlpPolicy", venv, n_steps=128, batch_size=256, seed=seed, verbose=0)
-    return model.learn(total_timesteps=steps)
+    return model.learn(total_timesteps=steps, progress_bar=True)
 
 
 def successes(model: PPO, episodes: int) -> int:

@@ -1,11 +1,13 @@
 """The core install and its extras (`bounce_gym.extras`): without any extra every registered
 Gymnasium and PettingZoo env is made, reset and stepped; a feature whose extra is missing is one
 line naming the extra and its ``pip install``; the docs list exactly the extras pyproject.toml
-declares. Missing extras are simulated in a subprocess by an import hook that refuses their
-modules; the slow test installs the core into a fresh virtual environment."""
+declares. Missing extras are simulated in a subprocess whose start-up marks their modules
+missing (tests/refuse_imports); the slow test installs the core into a fresh virtual
+environment."""
 
 import importlib.metadata
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -29,19 +31,8 @@ EXTRAS = PROJECT["optional-dependencies"]
 #: what the core must do without: every module an extra installs, and pandas (xarray's)
 BLOCKED = sorted({*MODULE_EXTRAS, "pandas", "jaxlib"})
 
-#: code run first in a subprocess: an import hook that refuses the modules of $BLOCKED
-BLOCKER = textwrap.dedent("""
-    import sys
-    BLOCKED = set(sys.argv[1].split(","))
-
-    class Refuse:
-        def find_spec(self, name, path=None, target=None):
-            if name.split(".")[0] in BLOCKED:
-                raise ModuleNotFoundError(f"No module named {name!r} (refused)", name=name)
-
-    sys.meta_path.insert(0, Refuse())
-    del sys.argv[1]
-""")
+#: the folder whose ``sitecustomize`` refuses the modules of $REFUSED_MODULES in a subprocess
+REFUSER = ROOT / "tests" / "refuse_imports"
 
 #: makes, resets and steps every id of the package's registries, then prints what it made and
 #: which of the modules of argv[1] got imported (JSON)
@@ -86,9 +77,9 @@ EVERY_ENV = textwrap.dedent("""
 
 def _run(code: str, *args: str, cwd: Path = ROOT, blocked=BLOCKED, timeout: int = 300):
     """Run ``code`` in a fresh interpreter of this environment with ``blocked`` refused."""
-    env = {"PYTHONPATH": str(ROOT), "SDL_VIDEODRIVER": "dummy", "PATH": "/usr/bin:/bin",
-           "HOME": str(cwd)}
-    return subprocess.run([sys.executable, "-c", BLOCKER + code, ",".join(blocked), *args],
+    env = {"PYTHONPATH": f"{REFUSER}{os.pathsep}{ROOT}", "REFUSED_MODULES": ",".join(blocked),
+           "SDL_VIDEODRIVER": "dummy", "PATH": "/usr/bin:/bin", "HOME": str(cwd)}
+    return subprocess.run([sys.executable, "-c", code, *args],
                           cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout,
                           check=False)
 
@@ -222,10 +213,10 @@ def test_a_command_without_its_extra_is_one_line_and_status_2(tmp_path, argv, bl
     (tmp_path / "configs").symlink_to(ROOT / "configs")
     (tmp_path / "jax.yaml").write_text(TRAIN_JAX, encoding="utf-8")
     if argv[0] == "bounce-gym":
-        code = ("from bounce_gym_experiments.cli import main\n"
+        code = ("import sys\nfrom bounce_gym_experiments.cli import main\n"
                 "sys.exit(main(sys.argv[1:]))\n")
     else:
-        code = ("import runpy\n"
+        code = ("import runpy\nimport sys\n"
                 f"sys.argv[0] = {str(ROOT / argv[0])!r}\n"
                 "runpy.run_path(sys.argv[0], run_name='__main__')\n")
     done = _run(code, *argv[1:], cwd=tmp_path, blocked=blocked)

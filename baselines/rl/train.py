@@ -210,12 +210,13 @@ def train_seed(config: Mapping, seed: int, progress: bool = True, callbacks: Seq
                log: Callable[[str], None] | None = None) -> Path:
     """Train (or, with ``resume``, continue from its newest checkpoint) the run of one seed of
     a configuration `prepare` returned; returns the model path. torch uses
-    ``torch_threads`` threads meanwhile. A JAX learner trains in `baselines.rl.jaxrl.runner`,
-    a multi-robot learner in `baselines.rl.marl.runner` (neither can resume)."""
+    ``torch_threads`` threads meanwhile. A JAX learner trains in `baselines.rl.jaxrl.runner`
+    (``progress``: a ``log`` line per chunk instead of SB3's progress bar), a multi-robot
+    learner in `baselines.rl.marl.runner` (neither can resume)."""
     if config["algo"] in JAX_ALGOS:
         from baselines.rl.jaxrl.runner import train_run
 
-        return train_run(RunFiles(config, seed), log or (lambda line: None))
+        return train_run(RunFiles(config, seed), log or (lambda line: None), progress)
     if config["algo"] in MARL_ALGOS:
         from baselines.rl.marl.runner import train_team_run
 

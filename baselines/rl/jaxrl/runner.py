@@ -96,8 +96,10 @@ def write_rows(writer, records: dict, keys: tuple[str, ...], seconds: float) -> 
     return len(steps)
 
 
-def train_run(run, log) -> Path:
-    """Train the seed of ``run`` (a `baselines.rl.train.RunFiles`); returns the model path."""
+def train_run(run, log, progress: bool = False) -> Path:
+    """Train the seed of ``run`` (a `baselines.rl.train.RunFiles`); returns the model path.
+    With ``progress``, ``log`` also gets a line after each chunk: the steps done and the
+    seconds since the start (compiling included)."""
     config = run.config
     agent, chunk = _shared_learner(config)
     state = agent.init(jax.random.PRNGKey(run.seed))
@@ -122,6 +124,9 @@ def train_run(run, log) -> Path:
         while int(state.iteration) < agent.iterations:
             state, records = chunk(state)
             write_rows(writer, records, agent.monitor_keys, time.time() - start)
+            if progress:
+                log(f"{run.stem}: {agent.steps(state)} of {config['total_timesteps']} steps, "
+                    f"{time.time() - start:.0f} s")
             if every and agent.steps(state) >= due:
                 save_checkpoint()
                 due = (agent.steps(state) // every + 1) * every
