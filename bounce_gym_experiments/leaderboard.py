@@ -191,19 +191,22 @@ def who_wins_text(verdict_list: list[dict], report: str) -> str:
     """The verdicts as plain text no wider than `WHO_WINS_WIDTH`: per experiment, its score
     and who wins (`winners`; "none apart" where no comparison decides), then each compared
     row's value with its 95% interval and count; ``report`` names where the full tables are."""
-    lines = ["Who wins: per experiment, the best planner, the best trained agent (sampled "
-             "actions) and random", "bouncing on the task's score, value [95% interval] n; "
-             "the winner beats another by",
-             "P(improvement) and none beats it. Names, P values and every table: " , f"  {report}"]
+    lines = ["Who wins: per experiment, the best planner, the best trained agent (sampled actions)",
+             "and random bouncing on its score: value [95% interval] n=episodes. The winner beats",
+             "another by P(improvement) and none beats it. The rows' names, the P values and every",
+             f"table: {report}"]
     for v in verdict_list:
+        shown = [key for key in _SHOWN_AS if v[key] is not None]
         top = winners(v)
+        verdict = (" and ".join(_SHOWN_AS[key] for key in top) if top
+                   else "none apart" if len(shown) > 1 else "one row, nothing to compare")
         better = "higher" if v["higher_is_better"] else "lower"
-        head = (f"{v['experiment']}: {v['score']} ({better} is better); winner: "
-                + (" and ".join(_SHOWN_AS[key] for key in top) if top else "none apart"))
-        values = [f"{_SHOWN_AS[key]} {cell(v[key], v['score'])}" for key in _SHOWN_AS
-                  if v[key] is not None]
-        lines += ["", *textwrap.wrap(head, WHO_WINS_WIDTH, subsequent_indent="    "),
-                  *textwrap.wrap("; ".join(values), WHO_WINS_WIDTH, initial_indent="    ",
+        values = "; ".join(f"{_SHOWN_AS[key]} {cell(v[key], v['score'], small=2)}"
+                           for key in shown)
+        lines += ["", *textwrap.wrap(f"{v['experiment']}: {v['score']} ({better} is better); "
+                                     f"winner: {verdict}", WHO_WINS_WIDTH,
+                                     subsequent_indent="    "),
+                  *textwrap.wrap(values, WHO_WINS_WIDTH, initial_indent="    ",
                                  subsequent_indent="    ")]
     return "\n".join(lines)
 

@@ -118,10 +118,12 @@ def format_number(value) -> str:
     return str(value)
 
 
-def estimate_text(value: float, lo: float | None, hi: float | None, n: int) -> str:
-    """``value [lo, hi] n=count``, with as many decimals as the value's size calls for."""
+def estimate_text(value: float, lo: float | None, hi: float | None, n: int,
+                  small: int = 3) -> str:
+    """``value [lo, hi] n=count``, with as many decimals as the value's size calls for
+    (``small`` below 10)."""
     size = abs(float(value))
-    digits = 0 if size >= 100 else 1 if size >= 10 else 3
+    digits = 0 if size >= 100 else 1 if size >= 10 else small
     interval = "-, -" if lo is None or hi is None else f"{lo:.{digits}f}, {hi:.{digits}f}"
     return f"{float(value):.{digits}f} [{interval}] n={n}"
 
@@ -135,16 +137,17 @@ def row_name(row: dict) -> str:
     return row["policy"]
 
 
-def cell(row: dict, column: str) -> str:
-    """One table cell: an estimate with its interval and count, a plain value, or ``-``; the
-    ``policy`` column is the `row_name`."""
+def cell(row: dict, column: str, small: int = 3) -> str:
+    """One table cell: an estimate with its interval and count (``small`` decimals below 10,
+    `estimate_text`), a plain value, or ``-``; the ``policy`` column is the `row_name`."""
     if column == "policy":
         return row_name(row)
     value = row.get(column)
     if value is None:
         return "-"
     if f"{column}_n" in row:
-        return estimate_text(value, row[f"{column}_lo"], row[f"{column}_hi"], row[f"{column}_n"])
+        return estimate_text(value, row[f"{column}_lo"], row[f"{column}_hi"], row[f"{column}_n"],
+                             small)
     return format_number(value)
 
 

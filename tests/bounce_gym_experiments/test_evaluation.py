@@ -180,8 +180,13 @@ def test_evaluate_commands_run_a_config_and_report_bad_ones(tmp_path, command):
     done = subprocess.run([*run_it, str(_tiny_config(tmp_path)), "--no-progress"], cwd=ROOT,
                           capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
-    assert "localization-lab" in done.stdout and "random" in done.stdout
+    # who wins, in 100 columns (the report's path aside), and every table in tables.txt
+    summary = done.stdout.split("\nWho wins: ")[1]
+    assert "localization-lab: steps_to_correct (lower is better); winner: " in summary
+    assert max(len(line) for line in summary.splitlines() if str(tmp_path) not in line) <= 100
     (folder,) = (tmp_path / "runs").iterdir()
+    assert f"table: {folder}/tables.txt" in summary
+    assert "localization-lab  random" in (folder / "tables.txt").read_text()
     assert (folder / "episodes.csv").read_text().count("\n") == 2
     bad = subprocess.run([*run_it, str(tmp_path / "missing.yaml")], cwd=ROOT,
                          capture_output=True, text=True, check=False)

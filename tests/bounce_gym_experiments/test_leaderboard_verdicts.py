@@ -8,11 +8,14 @@ from bounce_gym_experiments import stats
 from bounce_gym_experiments.families.coverage import FAMILY as COVERAGE
 from bounce_gym_experiments.families.navigation import FAMILY as NAVIGATION
 from bounce_gym_experiments.leaderboard import (
+    WHO_WINS_WIDTH,
     headline_markdown,
     kind,
     runs_of,
     verdict_rows,
     verdicts,
+    who_wins_text,
+    winners,
 )
 from bounce_gym_experiments.report import table_rows
 
@@ -144,3 +147,25 @@ def test_a_gap_of_five_points_over_200_episodes_and_5_seeds_is_found():
     # measured power 0.80 (docs/benchmark.md gives it for other rates and seed spreads): the
     # two-level bootstrap is conservative, it counts episode noise at both levels
     assert found.count(1) >= 0.7 * len(found)
+
+
+def test_who_wins_names_the_rows_none_beats_in_100_columns():
+    """The summary `evaluate` prints: the winner of each experiment by its comparisons, every
+    compared row's value with its interval and count, no line wider than 100 characters."""
+    rng = np.random.default_rng(2)
+    names = ("a-long-experiment-name-of-forty-letters-", "planner-and-rl", "none", "alone")
+    episodes = (_experiment(rng, names[0], 0.4, 0.99, 0.3)
+                + _experiment(rng, names[1], 1.0, 1.0, 0.3)
+                + _experiment(rng, names[2], 1.0, 1.0, 1.0)
+                + _episodes(names[3], "roadmap planner", _bernoulli(rng, 0.5, 50)))
+    families = dict.fromkeys(names, NAVIGATION)
+    summary, _ = table_rows(episodes, families)
+    decided = verdicts(summary, episodes, families)
+    assert [winners(v) for v in decided] == [["rl"], ["planner", "rl"], [], []]
+    text = who_wins_text(decided, "runs/x/leaderboard.md")
+    assert max(len(line) for line in text.splitlines()) <= WHO_WINS_WIDTH
+    assert "runs/x/leaderboard.md" in text
+    for name, verdict in zip(names, ("RL", "planner and RL", "none apart",
+                                     "one row, nothing to compare"), strict=True):
+        assert f"{name}: success (higher is better); winner: {verdict}" in text
+    assert "RL 0.99 [0.98, 1.00] n=1000" in text.replace("\n    ", " ")
