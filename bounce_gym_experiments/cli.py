@@ -158,7 +158,7 @@ def evaluate_command(config_path: str | None, progress: bool = True,
     with run_folder as folder:  # appears whole, once everything is written
         write_results(folder, episodes, summary, config, per_seed, notes, made)
         atomic_write(folder / TABLES_FILE, (table_text + "\n").encode())
-        written = write_plots(folder, plots, summary, per_seed)
+        written = write_plots(folder, plots, summary, per_seed) if config["plots"] else []
         if config["leaderboard"]:
             written += write_leaderboard(folder, config, summary, decided, families, notes,
                                          made)
@@ -170,9 +170,10 @@ def evaluate_command(config_path: str | None, progress: bool = True,
         shutil.rmtree(store.folder, ignore_errors=True)
         with contextlib.suppress(OSError):  # the sweeps' folder, once no other sweep is kept
             store.folder.parent.rmdir()
-    print(f"\nwrote {run_folder.path}/episodes.csv, summary.csv, results.json, {TABLES_FILE} "
-          f"and {len(written)} other files" + (" (leaderboard.md, leaderboard.csv, plots)"
-                                               if config["leaderboard"] else " (plots)"))
+    others = ["leaderboard.md, leaderboard.csv, verdicts.csv"] if config["leaderboard"] else []
+    others += ["plots"] if config["plots"] else []
+    print(f"\nwrote {run_folder.path}/episodes.csv, summary.csv, results.json, {TABLES_FILE}"
+          + (f" and {len(written)} other files ({', '.join(others)})" if written else ""))
     report = run_folder.path / ("leaderboard.md" if config["leaderboard"] else TABLES_FILE)
     print("\n" + who_wins_text(decided, f"{report}"))
     return 0

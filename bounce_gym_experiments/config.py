@@ -281,6 +281,10 @@ class EvaluationConfig(ConfigModel):
                                                                     "with its own name.")
     leaderboard: bool = Field(default=False, description="Also write leaderboard.md and "
                                                          "leaderboard.csv.")
+    plots: bool = Field(default=True, description="Draw the figures into the run folder: each "
+                                                  "experiment's trajectories, its family's "
+                                                  "figures, the trained agents' profiles and "
+                                                  "the leaderboard's.")
     executor: ExecutorSettings | None = Field(default=None, description="Where the units run "
                                                                         "(default: locally).")
 

@@ -297,7 +297,8 @@ def plot(folder: Path, summary: list[dict], families: Mapping) -> Path | None:
 def write_leaderboard(folder: Path, config: Mapping, summary: list[dict], verdict_list: list[dict],
                       families: Mapping, notes: list[str], provenance: Mapping) -> list[Path]:
     """Write ``leaderboard.md``, ``leaderboard.csv``, ``verdicts.csv`` (the headline rows,
-    `verdict_rows`) and ``leaderboard.png``; returns them. ``verdict_list``: the `verdicts`."""
+    `verdict_rows`) and, unless the configuration draws no ``plots``, ``leaderboard.png``;
+    returns them. ``verdict_list``: the `verdicts`."""
     md, table, verdict_file = (folder / "leaderboard.md", folder / "leaderboard.csv",
                                folder / "verdicts.csv")
     decided = verdict_rows(verdict_list)
@@ -306,5 +307,5 @@ def write_leaderboard(folder: Path, config: Mapping, summary: list[dict], verdic
                                  ("experiment", "difficulty", "env", "policy", "episodes",
                                   "seeds", "score")).encode())
     atomic_write(verdict_file, csv_text(decided, VERDICT_COLUMNS).encode())
-    figure = plot(folder, summary, families)
+    figure = plot(folder, summary, families) if config["plots"] else None
     return [md, table, verdict_file] + ([figure] if figure is not None else [])
