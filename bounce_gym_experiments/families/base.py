@@ -7,6 +7,8 @@ import math
 from collections.abc import Mapping
 from pathlib import Path
 
+from gymnasium import logger
+
 from baselines.policy import (
     CONTACT_AND_CLOCK,
     POSE_OBSERVED,
@@ -18,7 +20,7 @@ from baselines.policy import (
 )
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError
-from bounce_gym.extras import require
+from bounce_gym.extras import installed, missing_extra, require
 from bounce_gym_experiments.config import registered_kwargs
 
 #: the kinds of policy most families run (``planner``, ``random``, ``fixed``, ``rl``;
@@ -224,7 +226,7 @@ class Family:
         here = motion_model_of(options.backend, options.physics) \
             if hasattr(options, "physics") else None  # the drifters' flows have none
         out = []
-        for path in model_files(folder):
+        for path in _playable(model_files(folder), folder):
             name = MODEL_NAME.fullmatch(path.name)
             trained = trained_motion_model(path)
             elsewhere = f" (trained on {trained})" \
@@ -311,10 +313,28 @@ class SingleRobotFamily(Family):
         return {}
 
 
+def _playable(paths: list[Path], folder: Path) -> list[Path]:
+    """The model files whose learner's extra is installed; the JAX learners' models are left
+    out with one warning naming the extra when JAX is not (the others still play)."""
+    from baselines.rl.model_files import JAX_ALGOS, MODEL_NAME
+
+    if all(installed(module) for module in JAX_MODULES):
+        return paths
+    jax = [p for p in paths if MODEL_NAME.fullmatch(p.name)["algo"] in JAX_ALGOS]
+    if jax:
+        logger.warn(f"{missing_extra(f'the {len(jax)} JAX models of {folder}', ['jax'])}; "
+                    "they are left out")
+    return [p for p in paths if p not in jax]
+
+
+#: what a JAX learner's model needs to play (the `jax` extra)
+JAX_MODULES = ("jax", "optax")
+
+
 def _jax_policy():
     """`baselines.rl.jaxrl.policy.JaxPolicy`, imported only for a JAX learner's model (it needs
     JAX: without it, a `ConfigError` naming the extra)."""
-    require("models: a jax_ppo or jax_dqn model", "jax", "optax")
+    require("models: a jax_ppo or jax_dqn model", *JAX_MODULES)
     from baselines.rl.jaxrl.policy import JaxPolicy
 
     return JaxPolicy
