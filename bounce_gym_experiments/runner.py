@@ -32,9 +32,10 @@ import numpy as np
 from baselines.policy import Policy, is_parallel_env, labelled
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import config_errors
+from bounce_gym.extras import missing_extra
 from bounce_gym_experiments.config import training_configs_for, validate_config
 from bounce_gym_experiments.executors import Executor, UnitStore, make_executor
-from bounce_gym_experiments.families.base import Episode, Family
+from bounce_gym_experiments.families.base import Episode, Family, unplayable
 from bounce_gym_experiments.registry import family_of
 
 
@@ -182,6 +183,10 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
             label = f"{entry['folder']}/" if len(folders) > 1 else ""
             found = family.trained_policies(folder, own_env, label, experiment, own_setup)
             entrants += [Entrant(p, own_env, own_setup, group) for p, group in found]
+            if left_out := unplayable(folder):
+                notes.append(f"{experiment['name']}: " + str(missing_extra(
+                    f"playing the {len(left_out)} JAX models of {folder}", ["jax"]))
+                    + "; they are left out")
             if not found:
                 notes.append(f"{experiment['name']}: no trained models in {folder} "
                              f"(<algo>_seed<N>.zip), so no rl rows; {_to_train(entry['folder'])}")

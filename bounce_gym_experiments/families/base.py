@@ -7,8 +7,6 @@ import math
 from collections.abc import Mapping
 from pathlib import Path
 
-from gymnasium import logger
-
 from baselines.policy import (
     CONTACT_AND_CLOCK,
     POSE_OBSERVED,
@@ -20,7 +18,7 @@ from baselines.policy import (
 )
 from bounce_gym.envs.registration import is_pettingzoo_id
 from bounce_gym.errors import ConfigError
-from bounce_gym.extras import installed, missing_extra, require
+from bounce_gym.extras import installed, require
 from bounce_gym_experiments.config import registered_kwargs
 
 #: the kinds of policy most families run (``planner``, ``random``, ``fixed``, ``rl``;
@@ -226,7 +224,8 @@ class Family:
         here = motion_model_of(options.backend, options.physics) \
             if hasattr(options, "physics") else None  # the drifters' flows have none
         out = []
-        for path in _playable(model_files(folder), folder):
+        left_out = unplayable(folder)
+        for path in (p for p in model_files(folder) if p not in left_out):
             name = MODEL_NAME.fullmatch(path.name)
             trained = trained_motion_model(path)
             elsewhere = f" (trained on {trained})" \
@@ -313,18 +312,14 @@ class SingleRobotFamily(Family):
         return {}
 
 
-def _playable(paths: list[Path], folder: Path) -> list[Path]:
-    """The model files whose learner's extra is installed; the JAX learners' models are left
-    out with one warning naming the extra when JAX is not (the others still play)."""
-    from baselines.rl.model_files import JAX_ALGOS, MODEL_NAME
+def unplayable(folder: Path) -> list[Path]:
+    """The model files of ``folder`` whose learner's extra is not installed: the JAX learners'
+    where JAX is not (`trained_policies` leaves them out; the runner says so in a note)."""
+    from baselines.rl.model_files import JAX_ALGOS, MODEL_NAME, model_files
 
     if all(installed(module) for module in JAX_MODULES):
-        return paths
-    jax = [p for p in paths if MODEL_NAME.fullmatch(p.name)["algo"] in JAX_ALGOS]
-    if jax:
-        logger.warn(f"{missing_extra(f'the {len(jax)} JAX models of {folder}', ['jax'])}; "
-                    "they are left out")
-    return [p for p in paths if p not in jax]
+        return []
+    return [p for p in model_files(folder) if MODEL_NAME.fullmatch(p.name)["algo"] in JAX_ALGOS]
 
 
 #: what a JAX learner's model needs to play (the `jax` extra)

@@ -6,13 +6,9 @@ from __future__ import annotations
 
 import shutil
 
-import gymnasium as gym
-import pytest
-
 from baselines.shipped_agents import SHIPPED_MODELS, models_folder, shipped_agents
 from bounce_gym_experiments.config import load_config, validate_config
 from bounce_gym_experiments.families import base
-from bounce_gym_experiments.registry import family_of
 from bounce_gym_experiments.runner import prepare_experiment
 
 
@@ -26,24 +22,21 @@ def test_the_shipped_agents_folder_is_found_from_anywhere(tmp_path, monkeypatch)
     assert models_folder(SHIPPED_MODELS) == SHIPPED_MODELS  # a folder of that name wins
 
 
-def test_jax_models_are_left_out_with_one_warning_without_jax(tmp_path, monkeypatch):
+def test_jax_models_are_left_out_with_a_note_without_jax(tmp_path, monkeypatch):
     folder = tmp_path / "navigation-lab-v1"
     folder.mkdir()
     source = shipped_agents() / "navigation-lab-v1"
     for name in ("manifest.json", "dqn_seed0.zip", "jax_dqn_seed0.zip"):
         shutil.copy(source / name, folder / name)
     monkeypatch.setattr(base, "installed", lambda module: module not in base.JAX_MODULES)
-    env = gym.make("bounce_gym/BounceNavigation-v1")
-    experiment = validate_config({"name": "t", "experiments": [{
+    config = validate_config({"name": "t", "models": str(tmp_path), "experiments": [{
         "name": "v1", "env": "bounce_gym/BounceNavigation-v1", "greedy": False,
-        "seeds": {"start": 10_000, "count": 1}}]})["experiments"][0]
-    try:
-        with pytest.warns(UserWarning, match=r"the 1 JAX models of .* needs the 'jax' extra: "
-                                             r"pip install 'bounce-gym\[jax\]'; they are left out"):
-            found = family_of(experiment, "x").trained_policies(folder, env, "", experiment, None)
-    finally:
-        env.close()
-    assert [policy.name for policy, _ in found] == ["rl dqn_seed0 (pose observed)"]
+        "policies": ["rl"], "rl_models": ["navigation-lab-v1"],
+        "seeds": {"start": 10_000, "count": 1}}]})
+    prepared = prepare_experiment(config["experiments"][0], tmp_path, "config.experiments[0]")
+    assert [who.policy.name for who in prepared.entrants] == ["rl dqn_seed0 (pose observed)"]
+    assert prepared.notes == [f"v1: playing the 1 JAX models of {folder} needs the 'jax' extra: "
+                              "pip install 'bounce-gym[jax]'; they are left out"]
 
 
 def test_a_folder_without_models_names_the_configurations_that_train_them(tmp_path):
