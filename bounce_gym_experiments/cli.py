@@ -12,10 +12,12 @@
     bounce-gym tables [--write] [--from RUN_FOLDER [--into docs/results/benchmark]]
     bounce-gym envs
 
-``evaluate`` prints tables (per experiment and policy, every cell with its 95% interval and
-count) and writes ``episodes.csv``, ``summary.csv``, ``results.json``, plots and, for a
-configuration with ``leaderboard: true``, ``leaderboard.md``, ``leaderboard.csv`` and
-``verdicts.csv`` into
+``evaluate`` prints who wins (`bounce_gym_experiments.leaderboard.who_wins_text`: per
+experiment, the best planner, trained agent and random bouncing, in 100 columns) and writes
+``episodes.csv``, ``summary.csv``, ``results.json``, ``tables.txt`` (per experiment and policy,
+every cell with its 95% interval and count; ``--tables`` prints them too), unless the
+configuration says ``plots: false`` the plots, and for a configuration with
+``leaderboard: true`` ``leaderboard.md``, ``leaderboard.csv`` and ``verdicts.csv`` into
 ``<output>/<name>-<timestamp>/``, which appears only once all of them are written (they are
 written into a hidden ``.<name>-<timestamp>.tmp-<random>`` beside it, `bounce_gym_experiments.run_folders`);
 without a configuration it runs the default one (``eval_default.yaml``; format:
