@@ -126,6 +126,7 @@ def evaluate_command(config_path: str | None, progress: bool = True,
         format_table,
         notes_of,
         table_rows,
+        warnings_of,
         write_plots,
         write_results,
     )
@@ -147,15 +148,19 @@ def evaluate_command(config_path: str | None, progress: bool = True,
               f"kept in {exc.store}; run the same command again to run only the others",
               file=sys.stderr)
         return 1
-    families, notes, made = families_of(plots), notes_of(plots), provenance()
+    families, made = families_of(plots), provenance()
+    warned, notes = warnings_of(plots), notes_of(plots)
     summary, per_seed = table_rows(rows, families)
     episodes = [r.row() for r in rows]
     decided = verdicts(summary, episodes, families)  # the bootstraps, once
     table_text = format_table(summary, families)
     if show_tables:
         print(table_text)
+    for line in warned:
+        print(f"warning: {line}", file=sys.stderr)
     for note in notes:
         print(f"note: {note}")
+    notes = warned + notes  # the files keep both
     run_folder = new_run_folder(config)
     with run_folder as folder:  # appears whole, once everything is written
         write_results(folder, episodes, summary, config, per_seed, notes, made)

@@ -41,8 +41,14 @@ def families_of(plots: Mapping) -> dict[str, Family]:
 
 
 def notes_of(plots: Mapping) -> list[str]:
-    """The experiments' notes (e.g. model folders without models), from the plot data."""
+    """The experiments' notes, from the plot data."""
     return [note for data in plots.values() for note in data.get("notes", [])]
+
+
+def warnings_of(plots: Mapping) -> list[str]:
+    """The experiments' warnings (rows asked for that cannot play, e.g. model folders without
+    models), from the plot data."""
+    return [line for data in plots.values() for line in data.get("warnings", [])]
 
 
 def _row(result) -> dict:

@@ -144,15 +144,16 @@ class Entrant:
 
 @dataclass
 class Prepared:
-    """A validated experiment with its env, family, the family's setup, its entrants and notes
-    for the report (e.g. a model folder with no models)."""
+    """A validated experiment with its env, family, the family's setup, its entrants, and for
+    the report its warnings: rows the configuration asks for that cannot play (a model folder
+    with no models, a learner whose extra is missing)."""
 
     experiment: Mapping
     env: object
     family: Family
     setup: object
     entrants: list[Entrant]
-    notes: list[str]
+    warnings: list[str]
 
 
 def _named(policy: Policy) -> Policy:
@@ -170,7 +171,7 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
     setup = family.prepare(env, experiment)
     entrants = [Entrant(_named(p), env, setup)
                 for p in policies_for(experiment, env, family, setup)]
-    notes = []
+    warnings = []
     if "rl" in experiment["policies"] or "rl" in experiment.get("adversaries", ()):
         folders = experiment["rl_models"]
         for k, entry in enumerate(folders):
@@ -184,13 +185,13 @@ def prepare_experiment(experiment: Mapping, models_dir: Path, where: str) -> Pre
             found = family.trained_policies(folder, own_env, label, experiment, own_setup)
             entrants += [Entrant(p, own_env, own_setup, group) for p, group in found]
             if left_out := unplayable(folder):
-                notes.append(f"{experiment['name']}: " + str(missing_extra(
+                warnings.append(f"{experiment['name']}: " + str(missing_extra(
                     f"playing the {len(left_out)} JAX models of {folder}", ["jax"]))
                     + "; they are left out")
             if not found:
-                notes.append(f"{experiment['name']}: no trained models in {folder} "
+                warnings.append(f"{experiment['name']}: no trained models in {folder} "
                              f"(<algo>_seed<N>.zip), so no rl rows; {_to_train(entry['folder'])}")
-    return Prepared(experiment, env, family, setup, entrants, notes)
+    return Prepared(experiment, env, family, setup, entrants, warnings)
 
 
 def _to_train(folder: str) -> str:

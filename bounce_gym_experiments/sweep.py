@@ -161,7 +161,7 @@ def assemble_results(experiments: list[Prepared], results: Mapping[str, UnitResu
     for k, one in enumerate(experiments):
         family = one.family
         data: dict = {"paths": {}, "world": family.world(one.env), "family": family,
-                      "notes": list(one.notes)}
+                      "warnings": list(one.warnings), "notes": []}
         by_seed: dict[int, list[EpisodeResult]] = {s: [] for s in one.experiment["seeds"]}
         for e, who in enumerate(one.entrants):
             for j in range(len(chunks(one.experiment["seeds"]))):

@@ -149,10 +149,10 @@ def test_results_record_provenance_config_seeds_and_interval_columns(tmp_path, c
             "rows; no shipped training configuration makes them")
     assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress",
                           "--tables"]) == 0
-    out = capsys.readouterr().out
+    out, err = capsys.readouterr()
     table = [line for line in out.splitlines() if line.startswith("nav ")]
     assert table and all(len(CELL.findall(line)) >= 5 for line in table)
-    assert f"note: {note}" in out
+    assert f"warning: {note}" in err
     (folder,) = (tmp_path / "runs").iterdir()
     results = json.loads((folder / "results.json").read_text())
     made = results["provenance"]
@@ -184,7 +184,7 @@ def test_git_state_outside_a_checkout_or_without_git_is_unknown(tmp_path, monkey
 
 def test_a_second_model_folder_with_the_privileged_observation(tmp_path):
     """An agent trained with the true pose in its observation runs on its own copy of the env,
-    on the same episodes; a missing folder is a note, not a crash."""
+    on the same episodes; a missing folder is a warning, not a crash."""
     train_config = {"name": "nav-priv", "env": NAV,
                     "env_kwargs": dict(SQUARE, privileged=True), "algo": "ppo",
                     "total_timesteps": 64, "n_envs": 1,
@@ -202,7 +202,7 @@ def test_a_second_model_folder_with_the_privileged_observation(tmp_path):
     assert {r.group for r in privileged} == {"rl nav-priv/ppo (pose observed)"}
     fixed = {r.seed: r.metrics["feasible"] for r in rows if r.policy == "fixed 90°"}
     assert {r.seed: r.metrics["feasible"] for r in privileged} == fixed  # the same episodes
-    assert plots["nav"]["notes"] == [f"nav: no trained models in {tmp_path / 'models' / 'nav'} "
+    assert plots["nav"]["warnings"] == [f"nav: no trained models in {tmp_path / 'models' / 'nav'} "
                                      "(<algo>_seed<N>.zip), so no rl rows; no shipped training "
                                      "configuration makes them"]
     assert evaluate.main([str(_write(tmp_path / "c.yaml", config)), "--no-progress"]) == 0

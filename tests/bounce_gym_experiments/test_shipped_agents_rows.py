@@ -35,7 +35,7 @@ def test_jax_models_are_left_out_with_a_note_without_jax(tmp_path, monkeypatch):
         "seeds": {"start": 10_000, "count": 1}}]})
     prepared = prepare_experiment(config["experiments"][0], tmp_path, "config.experiments[0]")
     assert [who.policy.name for who in prepared.entrants] == ["rl dqn_seed0 (pose observed)"]
-    assert prepared.notes == [f"v1: playing the 1 JAX models of {folder} needs the 'jax' extra: "
+    assert prepared.warnings == [f"v1: playing the 1 JAX models of {folder} needs the 'jax' extra: "
                               "pip install 'bounce-gym[jax]'; they are left out"]
 
 
@@ -44,7 +44,7 @@ def test_a_folder_without_models_names_the_configurations_that_train_them(tmp_pa
         "name": "nav", "env": "bounce_gym/BounceNavigation-v0", "policies": ["rl"],
         "rl_models": ["navigation-lab"], "seeds": {"start": 10_000, "count": 1}}]})
     prepared = prepare_experiment(config["experiments"][0], tmp_path, "config.experiments[0]")
-    (note,) = prepared.notes
+    (note,) = prepared.warnings
     assert note.endswith("so no rl rows; train them with `bounce-gym train "
                          "configs/train_navigation.yaml` or `bounce-gym train "
                          "configs/train_navigation_dqn.yaml` or `bounce-gym train "
