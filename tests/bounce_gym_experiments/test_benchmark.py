@@ -162,7 +162,7 @@ def test_the_physics_experiments_run_with_their_agents(tmp_path, capsys):
     assert config["experiments"][0] == next(e for e in yaml.safe_load(
         BENCHMARK.read_text(encoding="utf-8"))["experiments"])  # the physics rows come first
     path = _tiny(config, tmp_path, ROOT / "baselines" / "agents")
-    assert evaluate.main([str(path), "--no-progress"]) == 0
+    assert evaluate.main([str(path), "--no-progress", "--tables"]) == 0
     out = capsys.readouterr().out
     for name in ("search planner", "continuous-angle planner", "roadmap planner (pose observed)",
                  "rl dqn (pose observed)", "rl recurrentppo", "particles (expected entropy)"):

@@ -68,7 +68,7 @@ def test_a_tiny_drifter_evaluation_reports_every_cell_with_an_interval(tmp_path,
     path.write_text(yaml.safe_dump(config(
         tmp_path, reach(), {**reach("reach-continuous", 2, backend="continuous"), **short},
         {**deployment(), **short})), encoding="utf-8")
-    assert evaluate.main([str(path), "--no-progress"]) == 0
+    assert evaluate.main([str(path), "--no-progress", "--tables"]) == 0
     out = capsys.readouterr().out
     assert "drifters: reach the goal (Alg. 5.5)" in out
     assert "drifter deployment: surface coverage (Alg. 5.2)" in out
