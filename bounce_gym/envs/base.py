@@ -18,6 +18,10 @@ from bounce_gym.envs.render.owner import RENDER_MODES, RendererOwner, checked_re
 from bounce_gym.envs.tasks import make_task
 from bounce_gym.errors import ConfigError
 
+#: what each index of an observation is: one label per index of a ``Box``, or per key of a
+#: ``Dict`` observation the labels of that key's ``Box``
+ObservationLabels = tuple[str, ...] | dict[str, tuple[str, ...]]
+
 
 class EnvBase(TakesArguments[EnvOptions], RendererOwner):
     """Mixin of `BounceEnv` and the multi-robot envs; it comes before the Gymnasium or
@@ -60,9 +64,10 @@ class EnvBase(TakesArguments[EnvOptions], RendererOwner):
                 *(f"turn in place by {angle:g}° (a command tick)"
                   for angle in np.degrees(self.options.turn_angles)))
 
-    def observation_labels(self, agent: str | None = None) -> tuple[str, ...]:
+    def observation_labels(self, agent: str | None = None) -> ObservationLabels:
         """What each index of an observation is (every robot's observation is laid out
-        alike; `bounce_gym.envs.core`)."""
+        alike; `bounce_gym.envs.core`); an env whose observation is a ``Dict`` gives them per
+        key."""
         return self.core.obs_labels
 
     @property

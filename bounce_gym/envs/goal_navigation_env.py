@@ -111,7 +111,7 @@ class GoalNavigationEnv(BounceEnv):
         """What each index of each key of the observation is."""
         pose = (("position cell, one-hot",) * self.n_positions
                 + ("heading bin, one-hot",) * self.n_bins)
-        return {"observation": super().observation_labels(), "achieved_goal": pose,
+        return {"observation": self.core.obs_labels, "achieved_goal": pose,
                 "desired_goal": pose}
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
