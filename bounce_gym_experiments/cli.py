@@ -629,38 +629,17 @@ def tables_command(write: bool, run: str | None, into: str) -> int:
     return 1 if old else 0
 
 
-#: the width of the lines ``envs`` prints
-ENVS_WIDTH = 100
 
 
 def envs_command() -> int:
     """List every registered id, Gymnasium's then PettingZoo's, each beside what it is in one
-    line (`env_summary`), cut with an ellipsis to fit `ENVS_WIDTH` columns."""
-    from bounce_gym.envs.registration import ABOUT, ENV_IDS
+    line (`bounce_gym.envs.registration.SUMMARY`)."""
+    from bounce_gym.envs.registration import ENV_IDS, SUMMARY
 
     column = max(map(len, ENV_IDS)) + 2
-    room = ENVS_WIDTH - column
     for env_id in ENV_IDS:
-        summary = env_summary(env_id, ABOUT)
-        if len(summary) > room:
-            summary = summary[:room - 1].rstrip() + "…"
-        print(f"{env_id:<{column}}{summary}")
+        print(f"{env_id:<{column}}{SUMMARY[env_id]}")
     return 0
-
-
-#: where one sentence of a description ends and the next begins
-_SENTENCE_END = re.compile(r"(?<=[.!?])\s+(?=[A-Z])")
-
-
-def env_summary(env_id: str, about: Mapping[str, str]) -> str:
-    """The first sentence of ``env_id``'s description (``about``:
-    `bounce_gym.envs.registration.ABOUT`) that no other id's has — what sets it apart, not the
-    robots several ids share — as plain text."""
-    sentences = _SENTENCE_END.split(about[env_id])
-    others = {sentence for other, text in about.items() if other != env_id
-              for sentence in _SENTENCE_END.split(text)}
-    own = [sentence for sentence in sentences if sentence not in others]
-    return plain((own or sentences)[0])
 
 
 def os_error_text(exc: OSError) -> str:

@@ -152,6 +152,25 @@ ABOUT: dict[str, str] = {
 }
 
 
+#: what each registered id is in one line of at most `SUMMARY_WIDTH` characters (`bounce-gym
+#: envs`, the overview of the env pages); `ABOUT` says it in full
+SUMMARY: dict[str, str] = {
+    "bounce_gym/Bounce-v0": "one robot in two rooms, no reward and no end: a sandbox",
+    "bounce_gym/BounceNavigation-v0": "reach a random goal pose in the lab on contact and clock",
+    "bounce_gym/BounceNavigation-v1": "the navigation as a goal-conditioned task (Dict, HER-ready)",
+    "bounce_gym/BounceCoverage-v0": "cover the lab towards a uniform target distribution",
+    "bounce_gym/BounceLocalization-v0": "find the robot's own pose with two bounce angles",
+    "bounce_gym/Drifter-v0": "a profiling drifter reaching a goal through layered currents",
+    "bounce_gym/MultiBounce-v0": "4 robots bumping into walls and each other: a sandbox",
+    "bounce_gym/MultiBounceCoverage-v0": "4 robots sharing the coverage of a 15×15 grid",
+    "bounce_gym/MultiBounceMonitoring-v0": "4 robots each keeping to its own region, no contact",
+    "bounce_gym/MultiDrifter-v0": "4 drifters covering the surface of a layered flow",
+    "bounce_gym/Patrol-v0": "2 patrollers against an attacker on a cell graph, zero-sum",
+}
+#: the widest `SUMMARY` line
+SUMMARY_WIDTH = 62
+
+
 #: the Gymnasium ids of this package (another package's, e.g. ``CartPole-v1``, has none of its
 #: tasks, planners or evaluation families)
 GYMNASIUM_IDS = (*GYM_ENVS, *DRIFTER_GYM_ENVS)

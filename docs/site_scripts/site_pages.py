@@ -111,12 +111,13 @@ def _overview(rows: list[tuple[str, ...]]) -> str:
         "short animation rendered by the env, a table of what each action and each index of "
         "the observation is, and its arguments with the id's registered values.",
         "",
-        "| id | API | class | horizon | observation space | action space |",
-        "|---|---|---|---|---|---|",
+        "| id | what it is | API | class | horizon | observation space | action space |",
+        "|---|---|---|---|---|---|---|",
     ]
     for env_id, api, cls, horizon, obs, act in rows:
         page = _path(env_id).removeprefix("envs/")
-        lines.append(f"| [`{env_id}`]({page}) | {api} | `{cls}` | {horizon} | {obs} | {act} |")
+        lines.append(f"| [`{env_id}`]({page}) | {registration.SUMMARY[env_id]} | {api} | "
+                     f"`{cls}` | {horizon} | {obs} | {act} |")
     return "\n".join(lines) + "\n"
 
 
