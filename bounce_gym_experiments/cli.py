@@ -71,7 +71,7 @@ cite (exit 1 and one ``stale:`` line each where they differ); ``--write`` regene
 after ``--from RUN_FOLDER`` copied a run's leaderboard files into ``--into``
 (`bounce_gym_experiments.published`).
 
-``envs`` lists every registered environment id with what sets it apart, one line each.
+``envs`` lists every registered environment id with what it is, one line each (`bounce_gym.envs.registration.SUMMARY`).
 
 ``bounce-gym --version`` or ``-V`` (and ``train.py``'s, ``evaluate.py``'s) prints the installed
 distribution's version, ``bounce-gym <version>``. Flags are never abbreviated: ``--worker 2`` is
