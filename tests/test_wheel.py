@@ -61,10 +61,15 @@ def test_an_installed_wheel_plays_a_trained_agent_outside_the_checkout(wheel, tm
     of multi-robot monitoring play beside random bouncing (``models: baselines/agents``)."""
     venv.EnvBuilder(with_pip=True).create(tmp_path / "venv")
     bin_folder = tmp_path / "venv" / "bin"
+    # pip's own settings only (where it finds wheels), none that could show it another install
+    # of the package (PYTHONPATH, a virtual environment's variables)
+    clean = {"PATH": f"{bin_folder}:/usr/bin:/bin", "HOME": str(tmp_path),
+             **{k: v for k, v in os.environ.items() if k.startswith("PIP_") or k == "TMPDIR"}}
     done = subprocess.run([str(bin_folder / "python"), "-m", "pip", "install", "-q", "-c",
                            str(ROOT / "constraints.txt"), f"{wheel}[experiments,rl]"],
-                          capture_output=True, text=True, timeout=1800, check=False)
+                          capture_output=True, text=True, timeout=1800, check=False, env=clean)
     assert done.returncode == 0, done.stderr[-3000:]
+    assert (bin_folder / "bounce-gym").is_file(), done.stdout[-3000:]
     default = yaml.safe_load((ROOT / "configs" / "eval_default.yaml").read_text())
     (experiment,) = [exp for exp in default["experiments"]
                      if exp["name"] == "multirobot-monitoring-15x15"]
@@ -77,10 +82,7 @@ def test_an_installed_wheel_plays_a_trained_agent_outside_the_checkout(wheel, tm
          "experiments": [experiment]}))
     done = subprocess.run([str(bin_folder / "bounce-gym"), "evaluate", "c.yaml", "--no-progress",
                            "--workers", "1"], cwd=outside, capture_output=True, text=True,
-                          timeout=600, check=False,
-                          env={"PATH": f"{bin_folder}:/usr/bin:/bin", "HOME": str(tmp_path),
-                               "MPLBACKEND": "Agg", **{k: os.environ[k] for k in ("TMPDIR",)
-                                                       if k in os.environ}})
+                          timeout=600, check=False, env={**clean, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr[-3000:]
     assert "multirobot-monitoring-15x15: in_region (higher is better); winner:" in done.stdout
     (run,) = (outside / "runs").iterdir()
