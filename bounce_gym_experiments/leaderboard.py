@@ -10,6 +10,9 @@ as model folders without models at the end),
 ``_n``), ``verdicts.csv`` (the "Who wins" rows as text, what README.md's and the docs' result
 tables are generated from) and ``leaderboard.png`` (each experiment's score per policy with its
 interval).
+
+`who_wins_text` is the same verdicts as plain text in 100 columns, with the winner of each
+experiment (`winners`): what ``bounce-gym evaluate`` prints at the end of every evaluation.
 """
 
 from __future__ import annotations
