@@ -24,6 +24,11 @@ Run with ``python -m benchmarks.jax_training`` (``--rounds``, ``--ppo-steps``, `
   held-out episodes (seeds from 10,000; sampled actions, the evaluation's default); the row is
   the wall time from the start of training to the first checkpoint whose success is ≥ 0.90, with
   that success and its Wilson interval.
+* **PPO end to end at the configured budget** (``--e2e-rounds``, default 5): ``train.py`` on
+  configs/train_navigation_v1_ppo.yaml and configs/train_navigation_v1_jax_ppo.yaml (seed 0,
+  200 k steps) in fresh processes pinned to one core, start-up and compilation included; JAX
+  twice per round in one fresh cache folder, cold then warm (its persistent compilation cache,
+  `baselines.rl.jaxrl.compile_cache`); the ratio is SB3's time over JAX's, target ≥ 20 warm.
 """
 
 from __future__ import annotations
@@ -150,6 +155,58 @@ def ppo_rows(rounds: int, jax_steps: int, sb3_steps: int, task: str = "v1") -> N
           f"min–max {min(ratios):.1f}–{max(ratios):.1f}  target ≥ 20: {verdict}")
 
 
+#: the end-to-end rows' training configurations (configs/): the v1 budget as shipped
+E2E_CONFIGS = {"jax_ppo": "train_navigation_v1_jax_ppo.yaml", "ppo": "train_navigation_v1_ppo.yaml"}
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _train_seconds(algo: str, cache: str, folder: str) -> float:
+    """Wall seconds of ``train.py`` on the shipped configuration of ``algo`` (seed 0, its
+    budget) in a fresh process pinned to core 0, start-up and compilation included, with
+    ``cache`` as ``$BOUNCE_GYM_CACHE`` (the JAX compilation cache lives there)."""
+    import yaml
+
+    config = yaml.safe_load((ROOT / "configs" / E2E_CONFIGS[algo]).read_text(encoding="utf-8"))
+    config.update(models=folder, seeds=[0],
+                  hyperparams_file=str(ROOT / "configs" / config["hyperparams_file"]))
+    path = Path(folder) / f"{algo}.yaml"
+    path.write_text(yaml.safe_dump(config), encoding="utf-8")
+    env = {**os.environ, "XLA_FLAGS": ONE_THREAD_XLA, "OMP_NUM_THREADS": "1",
+           "MKL_NUM_THREADS": "1", "BOUNCE_GYM_CACHE": cache}
+    command = [sys.executable, str(ROOT / "train.py"), str(path), "--no-progress"]
+    if shutil.which("taskset"):
+        command = ["taskset", "-c", "0", *command]
+    start = time.perf_counter()
+    subprocess.run(command, env=env, check=True, capture_output=True, cwd=folder)
+    return time.perf_counter() - start
+
+
+def end_to_end_rows(rounds: int) -> None:
+    """PPO on v1 at the configured budget, end to end: per round, SB3 once and JAX twice in
+    one fresh cache folder — cold (every program compiled) and warm (read from JAX's
+    persistent compilation cache, `baselines.rl.jaxrl.compile_cache`)."""
+    load_before = os.getloadavg()[0]
+    times: dict[str, list[float]] = {"ppo": [], "jax_ppo cold": [], "jax_ppo warm": []}
+    for _ in range(rounds):
+        with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as folder:
+            times["ppo"].append(_train_seconds("ppo", cache, folder))
+            for kind in ("cold", "warm"):
+                shutil.rmtree(Path(folder) / "navigation-lab-v1", ignore_errors=True)
+                times[f"jax_ppo {kind}"].append(_train_seconds("jax_ppo", cache, folder))
+    print(f"PPO on {ENV} end to end at the configured budget (train.py, seed 0, fresh process, "
+          f"one core), {rounds} rounds (load {load_before:.2f} before, "
+          f"{os.getloadavg()[0]:.2f} after)")
+    for name, values in times.items():
+        print(f"  {name:<13} s  median {statistics.median(values):>7.1f}  "
+              f"min–max {min(values):.1f}–{max(values):.1f}")
+    for kind in ("cold", "warm"):
+        ratios = [s / j for s, j in zip(times["ppo"], times[f"jax_ppo {kind}"], strict=True)]
+        verdict = "ok" if statistics.median(ratios) >= 20 else "below target"
+        print(f"  ppo ÷ jax_ppo {kind} (time, within a round)  median "
+              f"{statistics.median(ratios):.1f}  min–max {min(ratios):.1f}–{max(ratios):.1f}"
+              + (f"  target ≥ 20: {verdict}" if kind == "warm" else ""))
+
+
 def _success(path: Path, episodes: int) -> int:
     import gymnasium as gym
 
@@ -206,6 +263,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--checkpoint-every", type=int, default=5_000)
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--skip-dqn", action="store_true")
+    parser.add_argument("--e2e-rounds", type=int, default=5,
+                        help="rounds of the end-to-end rows (0: none)")
     args = parser.parse_args(argv)
     if args.worker:
         kind, *rest = args.worker
@@ -217,6 +276,8 @@ def main(argv: list[str] | None = None) -> None:
         return
     for task in PPO_TASKS:
         ppo_rows(args.rounds, args.ppo_steps, args.sb3_steps, task)
+    if args.e2e_rounds:
+        end_to_end_rows(args.e2e_rounds)
     if not args.skip_dqn:
         dqn_rows(args.dqn_steps, args.checkpoint_every, args.episodes)
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from baselines.policy import Policy, is_parallel_env
 from baselines.rl.action_draws import categorical, episode_stream, epsilon_draw
-from baselines.rl.jaxrl import dqn, ppo
+from baselines.rl.jaxrl import compile_cache, dqn, ppo
 from baselines.rl.jaxrl.networks import (
     apply_mlp,
     flatten_observation,
@@ -52,6 +52,7 @@ class JaxPolicy(Policy):
         trained = read_model(path)
         if trained.algo not in _SIZES:
             raise ConfigError(f"model {path}: not a JAX learner's model")
+        compile_cache.enable()  # its forward pass, compiled once per machine
         config = saved_config(trained)
         settings = hyperparameters(trained.algo, config["hyperparams"])
         n_actions = getattr(env.action_space, "n", None)

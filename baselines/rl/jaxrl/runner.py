@@ -21,6 +21,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from baselines.rl.jaxrl import compile_cache
 from baselines.rl.jaxrl.settings import hyperparameters
 from baselines.rl.jaxrl.weights import WeightsArchive
 from baselines.rl.model_files import save_model
@@ -47,9 +48,12 @@ def jax_env(config: dict):
 
 
 def learner(config: dict):
-    """The learner of a validated configuration (its checks done: nothing compiled yet)."""
+    """The learner of a validated configuration (its checks done: nothing compiled yet; what
+    it compiles is kept in the persistent compilation cache, `compile_cache`)."""
     from baselines.rl.jaxrl.dqn import DQN
     from baselines.rl.jaxrl.ppo import PPO
+
+    compile_cache.enable()
 
     env, params = jax_env(config)
     info = jax.eval_shape(env.step, jax.random.PRNGKey(0), env.reset(
