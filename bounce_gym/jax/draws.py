@@ -21,10 +21,3 @@ def uniforms(key: jax.Array, count: int) -> jax.Array:
 def index(u: jax.Array, n) -> jax.Array:
     """An index in [0, n) from a uniform ``u`` (int32; ``n`` may be traced)."""
     return jnp.minimum(jnp.floor(u * n).astype(jnp.int32), jnp.asarray(n, jnp.int32) - 1)
-
-
-def weighted_index(u: jax.Array, weights: jax.Array) -> jax.Array:
-    """An index drawn with probability proportional to non-negative ``weights`` (one row)."""
-    total = jnp.cumsum(weights.astype(jnp.float32))
-    chosen = jnp.searchsorted(total, u * total[-1], side="right").astype(jnp.int32)
-    return jnp.minimum(chosen, weights.shape[0] - 1)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import bounce_gym  # noqa: F401  (registers the ids)
-from bounce_gym.jax import make, pose_options
+from bounce_gym.jax import draws, make, pose_options
 from bounce_gym.worlds.generators import random_grid
 
 EPISODES = 128
@@ -43,9 +43,9 @@ def _pairs(env, params, rng, v1: bool):
     if not v1:
         return rng.integers(env.model.n_cells, size=(2, EPISODES))
     starts = rng.choice(np.asarray(params.task.starts), EPISODES)
-    choices = np.asarray(params.task.goal_choices)
+    choices, counts = np.asarray(params.task.goal_choices), np.asarray(params.task.goal_counts)
     decisions = np.asarray(params.task.decisions)
-    goals = [decisions[rng.choice(np.flatnonzero(choices[s]))] for s in starts]
+    goals = [decisions[rng.choice(choices[s, :counts[s]])] for s in starts]
     return starts, np.array(goals)
 
 
@@ -137,6 +137,25 @@ def test_reset_draws_and_autoreset():
             assert (np.asarray(state.robot.steps)[done] == 0).all()
             assert (np.asarray(state.robot.steps)[~done] > 0).all()
     assert done_seen
+
+
+@pytest.mark.parametrize("world", ["lab_navigation", GRID])
+def test_v1_draws_each_goal_a_start_joins_alike(world):
+    """The goal of a v1 reset is one index into the start's listed goals (O(1) per env): every
+    pose lists, in order, the decision poses it joins in at least one bounce other than where
+    it arrives (the NumPy task's choice), and evenly spaced uniforms draw each once."""
+    env, params = make("bounce_gym/BounceNavigation-v1", world=world)
+    numpy_task = gym.make("bounce_gym/BounceNavigation-v1", world=world).unwrapped.task
+    reach = numpy_task.reach
+    bounces = numpy_task.bounces[reach.arrival]
+    listed, counts = np.asarray(params.task.goal_choices), np.asarray(params.task.goal_counts)
+    others = np.arange(len(reach.decisions))
+    for pose in np.asarray(params.task.starts):
+        joined = np.flatnonzero((bounces[pose] > 0) & (others != reach.arrival[pose]))
+        assert listed[pose, :counts[pose]].tolist() == joined.tolist()
+        u = (jnp.arange(counts[pose], dtype=jnp.float32) + 0.5) / counts[pose]
+        picks = np.asarray(jax.vmap(lambda x, n=int(counts[pose]): draws.index(x, n))(u))
+        assert listed[pose, picks].tolist() == joined.tolist()
 
 
 def test_unsupported_options_say_why():

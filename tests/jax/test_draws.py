@@ -15,13 +15,3 @@ def test_indices_are_uniform_and_in_range():
     assert i.min() == 0 and i.max() == 47
     assert stats.chisquare(np.bincount(i, minlength=48)).pvalue > 1e-3
     assert int(draws.index(jnp.float32(np.nextafter(np.float32(1), np.float32(0))), 7)) == 6
-
-
-def test_weighted_index_follows_the_weights():
-    weights = jnp.array([0.0, 1.0, 0.0, 3.0, 0.0])
-    keys = jax.random.split(jax.random.PRNGKey(1), 100_000)
-    u = jax.vmap(lambda k: draws.uniforms(k, 1)[0])(keys)
-    i = np.asarray(jax.vmap(lambda x: draws.weighted_index(x, weights))(u))
-    counts = np.bincount(i, minlength=5)
-    assert counts[[0, 2, 4]].sum() == 0
-    assert stats.chisquare(counts[[1, 3]], np.array([0.25, 0.75]) * len(i)).pvalue > 1e-3

@@ -19,7 +19,9 @@ from bounce_gym.jax.tasks.base import CellFreeTask
 class GoalParams(NamedTuple):
     starts: jax.Array  # the poses starts are drawn from
     decisions: jax.Array  # the decision poses (goals)
-    goal_choices: jax.Array  # (n_cells, D) per first-bump pose: the goals it may draw
+    goal_choices: jax.Array  # (n_cells, C) per first-bump pose: the indices of the goals it
+    #                          may draw, in order, padded (C: the most any pose has)
+    goal_counts: jax.Array  # (n_cells,) how many goals each first-bump pose may draw
     bounces: jax.Array  # (n_cells, D) fewest bounces from a first-bump pose to each goal (−1)
     goal_index: jax.Array  # per pose: its index among the decision poses (−1)
     reward: jax.Array  # (w1, w2, goal_bonus)
@@ -46,10 +48,17 @@ class CellGoalNavigationTask(CellFreeTask):
         bounces = task.bounces[reach.arrival]  # (n_cells, D): from each start's first bump
         choices = (bounces > 0) & (np.arange(len(reach.decisions))[None, :]
                                    != reach.arrival[:, None])
+        counts = choices.sum(axis=1)
+        # each pose's goals listed in order: the k-th of a row is what a cumulative search of
+        # its row of ``choices`` finds for k, so a draw is one index, O(1) however many goals
+        listed = np.zeros((len(choices), max(int(counts.max(initial=0)), 1)), np.int32)
+        rows, columns = np.nonzero(choices)
+        listed[rows, np.arange(len(rows)) - np.repeat(np.cumsum(counts) - counts, counts)] = \
+            columns
         self._params = GoalParams(
             starts=jnp.asarray(task.starts, jnp.int32),
             decisions=jnp.asarray(reach.decisions, jnp.int32),
-            goal_choices=jnp.asarray(choices),
+            goal_choices=jnp.asarray(listed), goal_counts=jnp.asarray(counts, jnp.int32),
             bounces=jnp.asarray(np.where(bounces > 0, bounces, -1), jnp.int32),
             goal_index=jnp.asarray(task.goal_index, jnp.int32),
             reward=jnp.asarray([task.w1, task.w2, task.goal_bonus], jnp.float32))
@@ -61,7 +70,8 @@ class CellGoalNavigationTask(CellFreeTask):
         u_start, u_goal = draws.uniforms(key, 2)
         if self.reachable:
             start = params.starts[draws.index(u_start, params.starts.shape[0])]
-            goal = params.decisions[draws.weighted_index(u_goal, params.goal_choices[start])]
+            pick = draws.index(u_goal, params.goal_counts[start])
+            goal = params.decisions[params.goal_choices[start, pick]]
         else:
             start = draws.index(u_start, tables.drive_end.shape[0])
             goal = params.decisions[draws.index(u_goal, params.decisions.shape[0])]
