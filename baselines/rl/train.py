@@ -189,9 +189,9 @@ def prepare(config: Mapping, folder: Path | None = None) -> dict:
         require("config.tensorboard: true", "tensorboard")
     if config["algo"] in JAX_ALGOS:
         require(f"config.algo: {config['algo']}", "jax", "optax")
-        from baselines.rl.jaxrl.runner import learner
+        from baselines.rl.jaxrl.runner import shared_learner
 
-        learner(config)  # the JAX env exists, the actions are discrete, the sizes fit
+        shared_learner(config)  # the JAX env exists, the actions are discrete, the sizes fit
         return config
     if config["algo"] in MARL_ALGOS:
         require(f"config.algo: {config['algo']}", "torch")

@@ -33,7 +33,7 @@ from bounce_gym.provenance import provenance
 #: The most env steps of one chunk (iterations are whole; at least one per chunk).
 CHUNK_STEPS = 16384
 #: The learner and jitted chunk of the configuration trained last in this process, by the
-#: configuration less its seeds (`_shared_learner`).
+#: configuration less its seeds (`shared_learner`).
 _SHARED: dict[str, tuple] = {}
 
 
@@ -64,11 +64,12 @@ def learner(config: dict):
                 config["n_envs"], config["total_timesteps"], keys)
 
 
-def _shared_learner(config: dict) -> tuple:
-    """``(learner, chunk)`` of a validated configuration: the seeds of a sweep trained one
-    after another in this process share them, so that the chunk is traced and compiled once,
-    not once per seed (a seed's state is its own: the same weights either way). Only the last
-    configuration's are kept."""
+def shared_learner(config: dict) -> tuple:
+    """``(learner, chunk)`` of a validated configuration: its check before training
+    (`baselines.rl.train.prepare`) and the seeds of a sweep trained one after another in this
+    process share them, so that the learner is built and the chunk traced and compiled once,
+    not once per seed (a seed's state is its own: the same weights either way; the chunk is
+    compiled at its first call). Only the last configuration's are kept."""
     key = json.dumps({k: v for k, v in config.items() if k != "seeds"}, sort_keys=True)
     if key not in _SHARED:
         _SHARED.clear()
@@ -105,7 +106,7 @@ def train_run(run, log, progress: bool = False) -> Path:
     With ``progress``, ``log`` also gets a line after each chunk: the steps done and the
     seconds since the start (compiling included)."""
     config = run.config
-    agent, chunk = _shared_learner(config)
+    agent, chunk = shared_learner(config)
     state = agent.init(jax.random.PRNGKey(run.seed))
     every = config["checkpoint_every"]
     due = every
