@@ -10,7 +10,14 @@ time, so resets included:
   ``jax.vmap(env.step)``, one key per env and step as the gymnax convention asks) ÷ the native
   vector env (``gym.make_vec(..., vectorization_mode="vector_entry_point")``), both with the
   same random actions drawn beforehand, at
-  N = 1, 64 and 1,024 envs (targets: ≥ 10 at N = 64, ≥ 1 at N = 1,024).
+  N = 1, 64 and 1,024 envs (targets, issue 39: ≥ 10 at N = 64, ≥ 3 at N = 1,024), also on a
+  generated map (``random_grid``, seed 7, 9 × 12: a map nobody tuned for);
+* on the cell backend, both against the **bare lookup** — the native env's own tables of the
+  bump-to-bump map (`bounce_gym.envs.vector_cells.CellRobots`: next cell of (cell, action)),
+  gathered for the batch with nothing else: native ÷ bare (target ≥ 1/10 at N = 1,024) and
+  JAX ÷ bare (target ≥ 1/3 at N = 1,024);
+* the JAX env of ``BounceNavigation-v1`` (the lab and the generated map), reported: there is no
+  native NumPy vector env of v1 to compare it with.
 
 Both run on one CPU thread (`benchmarks.one_core`; NumPy's loops are single-threaded). The
 JAX function is compiled before timing. The envs are built once and interleaved: each round
@@ -39,13 +46,26 @@ import bounce_gym  # noqa: F401  (registers the environments)
 from benchmarks.rounds import interleaved, ratio, spread, verdict
 from benchmarks.vector_env import CELL_NAVIGATION
 from bounce_gym.jax import make
+from bounce_gym.worlds.generators import random_grid
 
 #: how many times more steps the JAX env runs per round than the native one
 JAX_MORE = 10
-#: the envs: label -> (id, keyword arguments); the kinematic one is the registered v0
-ENVS = {"cell": CELL_NAVIGATION, "kinematic": ("bounce_gym/BounceNavigation-v0", {})}
+#: a map nobody tuned the envs for
+GENERATED = random_grid(np.random.default_rng(7), 9, 12, 6, 3)
+#: the envs with a native vector env: label -> (id, keyword arguments); the kinematic one is
+#: the registered v0
+ENVS = {"cell": CELL_NAVIGATION,
+        "cell generated": (CELL_NAVIGATION[0], {**CELL_NAVIGATION[1], "world": GENERATED}),
+        "kinematic": ("bounce_gym/BounceNavigation-v0", {})}
+#: the cell envs, whose bare lookup anchors the rows against it
+CELL_ENVS = ("cell", "cell generated")
+#: the JAX envs without a native vector env (reported)
+JAX_ONLY = {"v1": ("bounce_gym/BounceNavigation-v1", {}),
+            "v1 generated": ("bounce_gym/BounceNavigation-v1", {"world": GENERATED})}
 #: the batch sizes, and the target of the JAX ÷ native ratio at each (None: reported)
-SIZES = {1: None, 64: 10.0, 1024: 1.0}
+SIZES = {1: None, 64: 10.0, 1024: 3.0}
+#: the targets of the ratios against the bare lookup, at N = 1,024
+BARE_TARGETS = {"native": 1 / 10, "JAX": 1 / 3}
 
 
 def jax_steps(n: int, steps: int, env_id: str, kwargs: dict) -> Callable[[], float]:
@@ -97,6 +117,29 @@ def native_steps(n: int, steps: int, env_id: str, kwargs: dict) -> Callable[[], 
     return rate
 
 
+def bare_steps(n: int, steps: int, env_id: str, kwargs: dict) -> Callable[[], float]:
+    """Lookups/s of the bare bump-to-bump map of the native env's cell robots: per step, the
+    next cell of each robot's (cell, action), gathered for the batch (`CellRobots.bounce`'s
+    first two ``take``s), nothing else."""
+    env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+    env.reset(seed=0)
+    robots = env.unwrapped.cell_robots
+    ends, ticks, width = robots.step_end, robots.step_ticks, robots.n_actions
+    actions = np.random.default_rng(1).integers(0, width, (steps, n))
+    z = robots.z.copy()
+
+    def rate() -> float:
+        nonlocal z
+        start = time.perf_counter()
+        for row in actions:
+            at = z * width + row
+            ticks.take(at)
+            z = ends.take(at)
+        return n * steps / (time.perf_counter() - start)
+
+    return rate
+
+
 def measure(steps: int, rounds: int, sizes: dict) -> dict[str, list[float]]:
     """Env-steps/s of every env and size in every round, interleaved within each round; the
     native env runs about ``steps`` × 64 env-steps per size (at least ``steps`` steps of the
@@ -108,6 +151,13 @@ def measure(steps: int, rounds: int, sizes: dict) -> dict[str, list[float]]:
             batch_steps = max(steps * 64 // n, steps)
             runs[f"{label} JAX N={n}"] = jax_steps(n, JAX_MORE * batch_steps, env_id, kwargs)
             runs[f"{label} native N={n}"] = native_steps(n, batch_steps, env_id, kwargs)
+            if label in CELL_ENVS:
+                runs[f"{label} bare N={n}"] = bare_steps(n, JAX_MORE * batch_steps, env_id,
+                                                         kwargs)
+    for label, (env_id, kwargs) in JAX_ONLY.items():
+        for n in sizes:
+            runs[f"{label} JAX N={n}"] = jax_steps(n, JAX_MORE * max(steps * 64 // n, steps),
+                                                   env_id, kwargs)
     return interleaved(runs, rounds)
 
 
@@ -124,7 +174,7 @@ def main(argv: list[str] | None = None) -> dict:
     rates = measure(args.steps, args.rounds, sizes)
     load_after = os.getloadavg()[0]
     threads = "one XLA thread" if one_core.PINNED else "XLA threads NOT pinned (jax imported first)"
-    print(f"JAX env (issue 26): {args.rounds} rounds, interleaved; {threads}; load average "
+    print(f"JAX env (issues 26, 39): {args.rounds} rounds, interleaved; {threads}; load average "
           f"{load_before:.1f} before, {load_after:.1f} after, {os.cpu_count()} cores; "
           f"device {jax.devices()[0].device_kind}")
     print(f"{'environment':<26} {'env-steps/s':>14} {'min–max':>24}")
@@ -132,13 +182,16 @@ def main(argv: list[str] | None = None) -> dict:
         print(f"{label:<26} {statistics.median(values):>14,.0f} {spread(values, ',.0f'):>24}")
     print(f"{'ratio (within a round)':<38} {'median':>8} {'min–max':>15} {'target':>7}")
     ratios = {}
-    for label, n in itertools.product(ENVS, sizes):
-        name, target = f"{label}: JAX ÷ native, N={n}", sizes[n]
-        per_round = [a / b for a, b in zip(rates[f"{label} JAX N={n}"],
-                                           rates[f"{label} native N={n}"], strict=True)]
+    rows = [(f"{label}: JAX ÷ native, N={n}", f"{label} JAX N={n}", f"{label} native N={n}",
+             sizes[n]) for label, n in itertools.product(ENVS, sizes)]
+    rows += [(f"{label}: {side} ÷ bare lookup, N={n}", f"{label} {side} N={n}",
+              f"{label} bare N={n}", BARE_TARGETS[side] if n == 1024 else None)
+             for label, n, side in itertools.product(CELL_ENVS, sizes, BARE_TARGETS)]
+    for name, top, bottom, target in rows:
+        per_round = [a / b for a, b in zip(rates[top], rates[bottom], strict=True)]
         row = ratios[name] = ratio(per_round, target)
-        goal = "-" if target is None else f"≥ {target:g}"
-        print(f"{name:<38} {row['median']:>8.2f} {spread(per_round, '.2f'):>15} {goal:>7}"
+        goal = "-" if target is None else f"≥ {target:.3g}"
+        print(f"{name:<42} {row['median']:>8.3f} {spread(per_round, '.3f'):>15} {goal:>7}"
               f"{verdict(row)}", flush=True)
     return dict(rates=rates, ratios=ratios, load=(load_before, load_after))
 

@@ -211,8 +211,8 @@ def main(argv: list[str] | None = None) -> None:
     from benchmarks import jax_training
 
     print()
-    jax_training.main(["--ppo-steps", "51200", "--sb3-steps", "4096", "--skip-dqn"]
-                      if args.quick else [])
+    jax_training.main(["--ppo-steps", "51200", "--sb3-steps", "4096", "--skip-dqn",
+                       "--e2e-rounds", "1"] if args.quick else [])
     print()
     multirobot_scaling.main(["--steps", "4000"] if args.quick else [])
     # the batched team core against the PettingZoo env team by team
