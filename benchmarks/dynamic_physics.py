@@ -4,7 +4,8 @@ Run with ``python -m benchmarks.dynamic_physics`` (``--steps``, ``--agent-steps`
 Prints a table; asserts nothing. Issue 23's rows:
 
 * ``Bounce-v0`` with ``backend="pymunk", physics="dynamic"`` steps/s ÷ the same env on the
-  ``kinematic`` backend (target ≥ 1/4, issue 39; issue 23's was 1/10), and ÷ Gymnasium's ``CartPole-v1`` (reported). Every env
+  ``kinematic`` backend (target ≥ 1/4, issue 39; issue 23's was 1/10), and ÷ Gymnasium's
+  ``CartPole-v1`` (reported). Every env
   is built with ``gym.make`` (Gymnasium's default wrappers), bounce mode, its defaults otherwise,
   actions drawn beforehand (`benchmarks.env_step.stepper`).
 * `MultiBounceEnv` with 20 robots under dynamic physics (``grid_15x15``, robot radius 0.3,
@@ -83,7 +84,7 @@ def main(argv: list[str] | None = None) -> dict:
     load_before = os.getloadavg()[0]
     rates = measure(args.steps, args.agent_steps, args.rounds)
     load_after = os.getloadavg()[0]
-    print(f"Dynamic physics (issue 23): {args.rounds} rounds, interleaved; load average "
+    print(f"Dynamic physics (issues 23, 39): {args.rounds} rounds, interleaved; load average "
           f"{load_before:.1f} before, {load_after:.1f} after, {os.cpu_count()} cores")
     print(f"{'environment':<26} {'(agent-)steps/s':>16} {'min–max':>16}")
     for label, values in rates.items():
