@@ -89,7 +89,7 @@ def home() -> Path:
                           "($HOME is not set); set it to the folder for your key") from None
 
 
-def _is_mine(uid: int) -> bool:
+def is_mine(uid: int) -> bool:
     """Whether a file of owner ``uid`` may be trusted: this user's (or root's, as ssh has it)."""
     return uid in (os.geteuid(), 0)
 
@@ -114,7 +114,7 @@ def _open_folder(what: str, create: bool = True) -> tuple[Path, int]:
                           f"({exc.strerror or exc})") from None
     info = os.fstat(fd)
     problem = None
-    if not _is_mine(info.st_uid):
+    if not is_mine(info.st_uid):
         problem = (f"the folder {folder} belongs to another user (uid {info.st_uid}), whose "
                    "key and trusted digests are not yours to trust; use a folder of your own")
     elif info.st_mode & 0o022:
@@ -147,7 +147,7 @@ def _open_checked(folder: int, path: Path, flags: int, label: str, secret: bool)
     problem = None
     if not stat.S_ISREG(info.st_mode):
         problem = f"{label} is not a regular file; remove it"
-    elif not _is_mine(info.st_uid):
+    elif not is_mine(info.st_uid):
         problem = (f"{label} belongs to another user (uid {info.st_uid}); remove it, or make it "
                    f"yours (chown)")
     elif secret and mode & 0o077:

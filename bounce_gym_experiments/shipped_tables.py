@@ -41,11 +41,19 @@ def tables_built(config_names: tuple[str, ...]) -> dict[str, bytes]:
     from bounce_gym_experiments.config import configs_folder, load_config, validate_config
     from bounce_gym_experiments.runner import run
 
+    before = os.environ.get(CACHE_VARIABLE)
     with tempfile.TemporaryDirectory() as cache:
         os.environ[CACHE_VARIABLE] = cache
-        for name in config_names:
-            run(one_seed(validate_config(load_config(configs_folder() / name))), progress=False)
-        return {p.stem: _compressed(p) for p in sorted((Path(cache) / _KIND).glob("*.npz"))}
+        try:
+            for name in config_names:
+                run(one_seed(validate_config(load_config(configs_folder() / name))),
+                    progress=False)
+            return {p.stem: _compressed(p) for p in sorted((Path(cache) / _KIND).glob("*.npz"))}
+        finally:
+            if before is None:
+                del os.environ[CACHE_VARIABLE]
+            else:
+                os.environ[CACHE_VARIABLE] = before
 
 
 def _compressed(path: Path) -> bytes:

@@ -22,6 +22,7 @@ import stat
 from gymnasium import logger
 
 from bounce_gym import model_cache
+from bounce_gym.trust import is_mine
 
 __all__ = ["KIND", "enable"]
 
@@ -40,7 +41,7 @@ def enable() -> None:
     folder = model_cache.cache_folder(KIND)
     folder.mkdir(parents=True, exist_ok=True, mode=0o700)
     info = os.stat(folder)
-    if info.st_uid not in (os.geteuid(), 0) or info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+    if not is_mine(info.st_uid) or info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
         logger.warn(f"the JAX compilation cache {folder} is not used: others could write "
                     f"programs into it (chmod go-w {folder}, or delete it)")
         return
