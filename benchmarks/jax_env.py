@@ -146,18 +146,15 @@ def measure(steps: int, rounds: int, sizes: dict) -> dict[str, list[float]]:
     batch), the JAX env `JAX_MORE` times as many (so that its timings, too, last milliseconds
     rather than microseconds)."""
     runs = {}
-    for label, (env_id, kwargs) in ENVS.items():
+    for label, (env_id, kwargs) in (*ENVS.items(), *JAX_ONLY.items()):
         for n in sizes:
             batch_steps = max(steps * 64 // n, steps)
             runs[f"{label} JAX N={n}"] = jax_steps(n, JAX_MORE * batch_steps, env_id, kwargs)
-            runs[f"{label} native N={n}"] = native_steps(n, batch_steps, env_id, kwargs)
+            if label in ENVS:
+                runs[f"{label} native N={n}"] = native_steps(n, batch_steps, env_id, kwargs)
             if label in CELL_ENVS:
                 runs[f"{label} bare N={n}"] = bare_steps(n, JAX_MORE * batch_steps, env_id,
                                                          kwargs)
-    for label, (env_id, kwargs) in JAX_ONLY.items():
-        for n in sizes:
-            runs[f"{label} JAX N={n}"] = jax_steps(n, JAX_MORE * max(steps * 64 // n, steps),
-                                                   env_id, kwargs)
     return interleaved(runs, rounds)
 
 
