@@ -31,6 +31,7 @@ class CellRobots:
         model: the `CellModel`.
         state: the robots' `RobotState` (None before the first `place`).
         z, p: (N,) each robot's cell number and its position index.
+        turned: (N,) the cell each robot's last bump turned it to, where its drive began.
     """
 
     def __init__(self, dynamics: BounceDynamics, angles: np.ndarray) -> None:
@@ -69,6 +70,7 @@ class CellRobots:
         self.state: RobotState | None = None
         self.z = np.zeros(self.n, dtype=np.int64)
         self.p = np.zeros(self.n, dtype=np.int64)
+        self.turned = np.zeros(self.n, dtype=np.int64)
 
     def cells_of(self, position: np.ndarray, heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(position index, bin) of start poses, as the cell backend places them;
@@ -109,6 +111,7 @@ class CellRobots:
         next contact. Returns the ticks each drove."""
         # ``take`` rather than fancy indexing: the same values, gathered several times faster
         at = self.z * self.n_actions + actions
+        self.turned = self.step_turned.take(at)
         ticks = self.step_ticks.take(at)
         z = self.z = self.step_end.take(at)
         self.p = self.position_of.take(z)

@@ -30,24 +30,20 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from bounce_gym.cells.geodesic import GridGeodesic
 from bounce_gym.dynamics import BounceDynamics, RobotState
 from bounce_gym.dynamics.backends.kinematic import KinematicBackend
 from bounce_gym.dynamics.noise import Exact
 from bounce_gym.envs.bounce_env import BounceEnv
 from bounce_gym.envs.reset_options import checked_reset_options
-from bounce_gym.envs.tasks import CoverageTask, NavigationTask
-from bounce_gym.envs.tasks.base import StepEvents, path_samples, tick_length
-from bounce_gym.envs.tasks.coverage import CoverageHistograms
+from bounce_gym.envs.tasks.base import StepEvents
 from bounce_gym.envs.vector_cells import CellRobots
+from bounce_gym.envs.vector_tasks import BATCHED, EVERY
 from bounce_gym.errors import ActionError, ConfigError
 from bounce_gym.validate import integer
 
 #: the single-robot tasks this env batches
-VECTOR_TASKS = ("free", "navigation", "coverage")
+VECTOR_TASKS = tuple(BATCHED)
 #: the fields of a `RobotState` row that a reset writes
-#: every env's rows of an array
-_EVERY = slice(None)
 _STATE_FIELDS = ("position", "heading", "blocked", "clock", "bumps", "contact_edge",
                  "contact_robot", "contact_normal", "odometer")
 
@@ -95,8 +91,8 @@ class BounceVectorEnv(VectorEnv):
         model = self.cell_robots.model if self.cell_robots else None
         core = self.single.core
         first = self._first_feature = len(core.obs_low) - task.observation_size  # they come last
-        self.task = _BATCHED[task.name](task, n, model,
-                                        (core.obs_low[first:], core.obs_high[first:]))
+        self.task = BATCHED[task.name](task, n, self.cell_robots,
+                                       (core.obs_low[first:], core.obs_high[first:]))
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._ticks = np.zeros(n, dtype=np.int64)
         self._elapsed = np.zeros(n, dtype=np.int64)
@@ -119,10 +115,6 @@ class BounceVectorEnv(VectorEnv):
     def state(self) -> RobotState | None:
         """The robots' state (None before the first reset)."""
         return self.cell_robots.state if self.cell_robots else self.dynamics.state
-
-    def _positions(self) -> np.ndarray | None:
-        """(N,) each robot's position index on the cell backend; None on the kinematic one."""
-        return self.cell_robots.p if self.cell_robots else None
 
     # -- episodes ---------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -180,7 +172,7 @@ class BounceVectorEnv(VectorEnv):
                 self._ticks[rows] = robots.place(rows, *robots.cells_of(position, heading))
             else:
                 self._ticks[rows] = self._place_kinematic(rows, position, heading)
-        self.task.start(rows, self.state, self._ticks, self._positions())
+        self.task.start(rows, self.state, self._ticks, self.cell_robots)
         self._elapsed[rows] = 0
         self._history()[rows] = 0.0
         features = self.task.observation()
@@ -220,7 +212,7 @@ class BounceVectorEnv(VectorEnv):
         bumping = state.blocked.copy()
         every = bumping.all()  # always on the cell backend: each step and reset ends in contact
         if opts.history:
-            rows = _EVERY if every else np.flatnonzero(bumping)
+            rows = EVERY if every else np.flatnonzero(bumping)
             clock_before = state.clock.copy() if every else state.clock[rows]
         if self.cell_robots is not None:
             # every robot is blocked (each step and each reset ends in contact): the bump tick
@@ -252,7 +244,7 @@ class BounceVectorEnv(VectorEnv):
             angles=angles if every else np.where(bumping, angles, math.nan),
             angle_changed=changed, robot_contact=self._no_contact)
         rewards, terminated, task_info = self.task.step(state, events, self._ticks,
-                                                        self._positions())
+                                                        self.cell_robots)
         self._elapsed += 1
         truncated = (np.zeros(self.num_envs, dtype=bool) if self.max_episode_steps is None
                      else self._elapsed >= self.max_episode_steps)
@@ -334,7 +326,7 @@ class BounceVectorEnv(VectorEnv):
             values = {key: array.copy() for key, array in arrays.items()}
         else:  # ``take``: fancy indexing's values, faster
             values = {key: array.take(rows, axis=0) for key, array in arrays.items()}
-        values["cell"] = self._info_cells(values["position"], _EVERY if rows is None else rows)
+        values["cell"] = self._info_cells(values["position"], EVERY if rows is None else rows)
         return values
 
     def _reset_values(self, rows: np.ndarray) -> dict:
@@ -392,7 +384,7 @@ class BounceVectorEnv(VectorEnv):
             infos[f"_{key}"][rows] = True
         return infos
 
-    def _info_cells(self, position: np.ndarray, rows: np.ndarray | slice = _EVERY) -> np.ndarray:
+    def _info_cells(self, position: np.ndarray, rows: np.ndarray | slice = EVERY) -> np.ndarray:
         """``info["cell"]`` of robots ``rows`` at positions ``position`` (their rows of the
         state): on the cell backend looked up by position index."""
         robots = self.cell_robots
@@ -444,232 +436,3 @@ def _unbatchable(opts, task) -> str | None:
         return ("actuation noise is not batched (each env draws its noise from its own "
                 "generator, one robot at a time)")
     return None
-
-
-# -- batched tasks ----------------------------------------------------------------------------
-
-class _FreeBatch:
-    """No reward, never terminates.
-
-    ``model``: the `CellModel` of the cell backend, else None. ``bounds``: (low, high), the
-    observation bounds of the task's features, which the batch clips them to when drawn (as
-    the single env clips its observation). ``positions`` (`start`, `step`): each robot's
-    position index in that model, else None.
-    """
-
-    #: whether `draw_cells` draws the episodes (without reset options)
-    draws_cells = False
-
-    def __init__(self, task, n: int, model=None, bounds=None) -> None:
-        self.n = n
-
-    def draw_cells(self, rngs: list, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The start cells (position indices, bins) of envs ``rows``, each drawn from its
-        generator in ``rngs`` with what else the task draws, as the single-robot task draws
-        them (where `draws_cells`)."""
-        raise NotImplementedError
-
-    def drawn(self, i: int, task) -> None:
-        """Take what the single-robot ``task`` drew for env ``i``'s new episode (its goal)."""
-
-
-    def start(self, rows: np.ndarray, state, ticks: np.ndarray,
-              positions: np.ndarray | None = None) -> None:
-        """Start the episodes of envs ``rows``, whose robots (``state``) were placed and drove
-        ``ticks`` to their first contact, as the single-robot task's reset starts one."""
-
-    def info(self, state, rows: np.ndarray | slice = _EVERY) -> dict:
-        """Task info of envs ``rows`` (default: every env), for the robots' ``state``."""
-        return {}
-
-    def observation(self) -> np.ndarray | None:
-        return None
-
-    def step(self, state, events: StepEvents, ticks: np.ndarray,
-             positions: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
-        return np.zeros(self.n), np.zeros(self.n, dtype=bool), {}
-
-
-class _NavigationBatch(_FreeBatch):
-    """`NavigationTask` for N robots: goals, arrival, the rewards (`NavigationTask.step_rewards`,
-    every ``reward`` option) and the plan cost."""
-
-    def __init__(self, task: NavigationTask, n: int, model=None, bounds=None) -> None:
-        super().__init__(task, n)
-        self.single = task
-        self.model = model
-        self.low, self.high = bounds
-        self.draws_cells = model is not None and task.random_cells
-        if self.draws_cells and task.observe_task:
-            # every cell's features as the start's and as the goal's pose, cast and clipped
-            p, k = model.decode(np.arange(model.n_cells))
-            pose = task.pose_features(model.centres[p], k * model.bin_width).astype(np.float32)
-            half = pose.shape[1]
-            self.start_features, self.goal_features = (
-                self._bounded(pose, self.low[part], self.high[part])
-                for part in (slice(None, half), slice(half, None)))
-        self.goal_position = np.zeros((n, 2))
-        self.goal_heading = np.zeros(n)
-        self.goal_wrapped = np.zeros(n)  # the goal headings in [0, 2π)
-        self.reached = np.zeros(n, dtype=bool)
-        self.plan_cost = np.zeros(n)
-        self.features = np.zeros((n, task.observation_size), dtype=np.float32)
-        self.rows = np.arange(n)
-        if task.geodesic is not None:  # the progress reward: Φ of every grid node, per env
-            self.potentials = np.zeros((n, task.geodesic.n_nodes))
-            self.potential_now = np.zeros(n)
-            self.goal_node = np.zeros(n, dtype=np.int64)  # the grid node of each env's goal
-            #: the grid node of each position index of the cell model
-            self.node_of_position = (task.geodesic.node_of(model.centres)
-                                     if model is not None else None)
-
-    def draw_cells(self, rngs, rows):
-        single, model = self.single, self.model
-        # per env: the start's position index and bin, then the goal's
-        drawn = np.array([single.random_cell(rng) + single.random_cell(rng) for rng in rngs],
-                         dtype=np.int64).reshape(-1, 4)
-        p, k, goal_p, goal_k = drawn.T
-        self.goal_position[rows] = model.centres.take(goal_p, axis=0)
-        self.goal_heading[rows] = goal_k * model.bin_width
-        if single.geodesic is not None:
-            self.goal_node[rows] = self.node_of_position.take(goal_p)
-        if single.observe_task:
-            self.features[rows] = np.concatenate(
-                (self.start_features.take(model.cell_id(p, k), axis=0),
-                 self.goal_features.take(model.cell_id(goal_p, goal_k), axis=0)), axis=1)
-        return p, k
-
-    def _potentials_at(self, rows: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-        """Φ of envs ``rows`` at grid nodes ``nodes`` (``self.potentials[rows, nodes]``, gathered
-        from the flat array: several times faster than two-axis fancy indexing)."""
-        return self.potentials.reshape(-1).take(rows * self.potentials.shape[1] + nodes)
-
-    def _nodes(self, geodesic: GridGeodesic, position: np.ndarray,
-               positions: np.ndarray | None) -> np.ndarray:
-        """The grid nodes of robots at ``position``, or at position indices ``positions``."""
-        if positions is None or self.node_of_position is None:
-            return geodesic.node_of(position)
-        return self.node_of_position.take(positions)
-
-    def drawn(self, i, task):
-        goal = task.goal[0][0]
-        self.goal_position[i] = goal
-        self.goal_heading[i] = task.goal[1][0]
-        if task.geodesic is not None:
-            self.goal_node[i] = task.geodesic.node_at(*goal.tolist())
-        if task.observe_task:
-            self.features[i] = self._bounded(task.observation(None)[0], self.low, self.high)
-
-    def start(self, rows, state, ticks, positions=None):
-        single = self.single
-        self.reached[rows] = False
-        self.goal_wrapped[rows] = np.mod(self.goal_heading[rows], 2 * np.pi)
-        self.plan_cost[rows] = single.w1 * ticks[rows]  # the drive of a bounce-mode reset
-        if single.geodesic is not None:
-            self.potentials[rows] = [single.goal_potentials(goal)
-                                     for goal in self.goal_node[rows].tolist()]
-            self.potential_now[rows] = self._potentials_at(rows, self._nodes(
-                single.geodesic, state.position[rows], None if positions is None else positions[rows]))
-
-    def info(self, state, rows=_EVERY):
-        goal = self.goal_position[rows]  # a copy where ``rows`` is an array
-        gap = state.position[rows] - goal
-        return {"goal_position": goal.copy() if rows is _EVERY else goal,
-                "goal_heading": self.goal_heading[rows].copy(),
-                "distance_to_goal": np.hypot(gap[:, 0], gap[:, 1]),
-                "is_success": self.reached[rows].copy(),
-                "plan_cost": self.plan_cost[rows].copy()}
-
-    @staticmethod
-    def _bounded(features: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-        """``features`` clipped to [``low``, ``high``] (np.clip's arithmetic)."""
-        return np.minimum(np.maximum(features, low), high)
-
-    def observation(self):
-        return self.features if self.single.observe_task else None
-
-    def step(self, state, events, ticks, positions=None):
-        single = self.single
-        hits, arrivals = [], []  # the envs whose robot reached its goal, and at which tick
-        # the exact test of a lone robot, run only where the heading is about within tolerance
-        # (headings and wrapped goal headings lie in [0, 2π], so their gap needs no wrapping;
-        # the margin lies far above rounding) and the path passes near the goal
-        gap = np.abs(events.heading - self.goal_wrapped)
-        tolerance = single.heading_tolerance + 1e-9
-        aligned = np.flatnonzero((gap <= tolerance) | (gap >= 2 * np.pi - tolerance))
-        for i in aligned[self._near_goal(events, aligned)].tolist():
-            one = StepEvents(ticks=int(events.ticks[i]), start=events.start[i:i + 1],
-                             end=events.end[i:i + 1], heading=events.heading[i:i + 1],
-                             bumps=events.bumps[i:i + 1], angles=events.angles[i:i + 1],
-                             angle_changed=events.angle_changed[i:i + 1],
-                             robot_contact=events.robot_contact[i:i + 1])
-            found = single.ticks_to_goal(
-                one, (self.goal_position[i:i + 1], self.goal_heading[i:i + 1]))
-            if found is not None:
-                hits.append(i)
-                arrivals.append(found)
-        hits, arrivals = np.array(hits, dtype=np.int64), np.array(arrivals)
-        hit = np.zeros(self.n, dtype=bool)
-        hit[hits] = True
-        changed = events.angle_changed
-        spent = events.ticks.astype(np.float64)
-        hit_ticks = events.ticks[hits]
-        spent[hits] = np.minimum(hit_ticks, arrivals)
-        before = after = None
-        if single.geodesic is not None:
-            before = self.potential_now
-            after = self._potentials_at(self.rows, self._nodes(single.geodesic, events.end,
-                                                                    positions))
-            self.potential_now = np.where(hit, 0.0, after)
-        reward = single.step_rewards(spent, changed, hit, before, after)
-        self.plan_cost = self.plan_cost + single.plan_cost_of(spent, changed)
-        self.reached |= hit
-        info = self.info(state)
-        info["angle_changed"] = changed
-        if len(hits):
-            to_goal = np.zeros(self.n, dtype=np.int64)
-            to_goal[hits] = ticks[hits] - hit_ticks + arrivals
-            info["ticks_to_goal"] = (to_goal, hit)
-        return reward, self.reached.copy(), info
-
-    def _near_goal(self, events: StepEvents, rows: np.ndarray) -> np.ndarray:
-        """(len(rows),) bool: the step's segment of envs ``rows`` comes within the goal radius
-        (plus a margin far above rounding) of the goal — a superset of the robots the exact
-        disk test can accept."""
-        start = events.start.take(rows, axis=0).T
-        sx, sy = events.end.take(rows, axis=0).T - start
-        rx, ry = self.goal_position.take(rows, axis=0).T - start
-        length2 = sx * sx + sy * sy
-        along = np.clip((rx * sx + ry * sy) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
-        gx, gy = rx - along * sx, ry - along * sy
-        return gx * gx + gy * gy <= (self.single.goal_radius + 1e-6) ** 2
-
-class _CoverageBatch(_FreeBatch):
-    """`CoverageTask` for N robots: one visit histogram and visited grid per env
-    (`CoverageHistograms`)."""
-
-    def __init__(self, task: CoverageTask, n: int, model=None, bounds=None) -> None:
-        super().__init__(task, n)
-        self.single = task
-        self.histograms = CoverageHistograms(task, n)
-
-    def start(self, rows, state, ticks, positions=None):
-        h = self.histograms
-        h.visits[rows] = 0.0
-        h.visited[rows] = False
-        row, col = self.single.cells(state.position[rows])
-        h.visited[rows, row, col] = True
-        h.distance[rows] = self.single.initial_distance
-
-    def info(self, state, rows=_EVERY):
-        return self.histograms.info(rows)
-
-    def step(self, state, events, ticks, positions=None):
-        task = self.single
-        robot, points, spent = path_samples(events, tick_length(task.options, events.heading),
-                                            task.cell_size / 4)
-        reward, info = self.histograms.visit(robot, points, spent)
-        return reward, np.zeros(self.n, dtype=bool), info
-
-
-_BATCHED = {"free": _FreeBatch, "navigation": _NavigationBatch, "coverage": _CoverageBatch}

@@ -232,16 +232,18 @@ def test_cell_navigation_episodes_drawn_either_way(task_kwargs, options):
 
 
 def test_the_batched_env_uses_only_public_members_of_other_objects():
-    """`BounceVectorEnv` and `CellRobots` read no private field of another object and assign
+    """`BounceVectorEnv`, its batched tasks, `GoalTables` and `CellRobots` read no private field of another object and assign
     no attribute of the single env, its core, its task or the backend (``single.goal = …`` was
     one)."""
     import ast
     from pathlib import Path
 
+    import bounce_gym.envs.goal_tables as tables_module
     import bounce_gym.envs.vector_cells as cells_module
     import bounce_gym.envs.vector_env as env_module
+    import bounce_gym.envs.vector_tasks as tasks_module
 
-    for module in (env_module, cells_module):
+    for module in (env_module, cells_module, tasks_module, tables_module):
         tree = ast.parse(Path(module.__file__).read_text(encoding="utf-8"))
         for node in ast.walk(tree):
             if isinstance(node, ast.Attribute) and node.attr.startswith("_") \
@@ -256,3 +258,39 @@ def test_the_batched_env_uses_only_public_members_of_other_objects():
                         owners = set(ast.unparse(target).split(".")[:-1])  # whose field
                         assert not owners & {"single", "core", "task", "backend", "dynamics"}, \
                             f"{module.__name__}:{node.lineno} assigns {ast.unparse(target)}"
+
+
+@pytest.mark.parametrize("tables", [True, False], ids=["goal tables", "per-env tests"])
+@pytest.mark.parametrize("goal", [
+    None,  # random cells: every goal a cell, tested by lookup when the tables fit
+    {"position": [8.5, 4.5], "heading": np.pi / 2},  # a cell given as an option
+    {"position": [8.3, 4.6], "heading": 1.0},  # no cell: the exact test of a lone robot
+], ids=["drawn", "cell option", "off-cell option"])
+def test_goal_tables_and_per_env_tests_agree_with_sync(goal, tables, monkeypatch):
+    """Arrival and Φ by `GoalTables` lookups, and by the per-env tests of a map whose tables do
+    not fit (`MAX_ENTRIES` 0), give the single env's rewards, terminations and infos; goals
+    given as reset options are placed by the single core, autoreset ones drawn as cells."""
+    import bounce_gym.envs.goal_tables as goal_tables
+
+    if not tables:
+        monkeypatch.setattr(goal_tables, "MAX_ENTRIES", 0)
+    native, sync = _pair("bounce_gym/BounceNavigation-v0", 12, max_episode_steps=25,
+                         backend="cell", angles=[45, 90, 135],
+                         task_kwargs={"goal_radius": 1.2, "heading_tolerance_deg": 60})
+    assert (native.unwrapped.task.tables is not None) == tables
+    options = None if goal is None else {"goal": goal}
+    a, b = native.reset(seed=3, options=options), sync.reset(seed=3, options=options)
+    assert np.array_equal(a[0], b[0])
+    _same_infos(a[1], b[1], "reset")
+    if tables:  # only the off-cell goal leaves the lookups
+        assert len(native.unwrapped.task.off_cell) == (12 if goal and goal["heading"] == 1.0
+                                                       else 0)
+    native.action_space.seed(5)
+    first_hits = hits = 0
+    for t in range(90):
+        actions = native.action_space.sample()
+        out = native.step(actions)
+        _same_step(out, sync.step(actions), t)
+        hits += int(out[2].sum())
+        first_hits += int(out[2].sum()) if t < 25 else 0  # the episodes of the reset's goal
+    assert first_hits > 0 and hits > first_hits

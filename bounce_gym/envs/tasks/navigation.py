@@ -186,7 +186,10 @@ class NavigationTask(Task):
     def random_cell(self, rng: np.random.Generator) -> tuple[int, int]:
         """A random start or goal cell on the cell backend, (position index, bin), drawn from
         ``rng`` as `start_poses` draws it."""
-        return int(rng.integers(self._cells.n_positions)), int(rng.integers(self._cells.n_bins))
+        # ``integers(0, n, dtype=np.int64)`` is ``integers(n)`` spelled out: the same draws,
+        # without the default arguments' handling (a batch of N envs calls it per reset)
+        return (int(rng.integers(0, self._cells.n_positions, dtype=np.int64)),
+                int(rng.integers(0, self._cells.n_bins, dtype=np.int64)))
 
     def reset(self, state, rng, options):
         self.reached = False
