@@ -34,10 +34,11 @@ class GoalTables:
     """Arrival and Φ lookups of ``task`` (on the cell backend) for the drives of ``robots``.
 
     Attributes:
+        off_cell: the goal position index of a goal that is not a cell (n_positions), whose
+            arrival column is -1 throughout.
         arrival: at goal position gp × n_cells + turned cell z: the drive ticks after which the
             drive from z enters the region of a goal at position gp (0: it starts inside),
-            -1 if it never does, `UNKNOWN` until gp's column is filled (`fill`); a last
-            column, gp = n_positions, of -1 for envs whose goal is not a cell.
+            -1 if it never does, `UNKNOWN` until gp's column is filled (`fill`).
         aligned: at drive bin k × n_bins + goal bin: whether the heading test passes.
         potential: at goal node × n_positions + position index: Φ (``progress`` reward only,
             else None), filled per goal node (`fill`).
@@ -60,8 +61,11 @@ class GoalTables:
         self.drive_end = robots.centre_of.take(robots.drive_end, axis=0)
         self.drive_heading = robots.heading_of
         self.drive_ticks = robots.drive_ticks
+        self.off_cell = self.n_positions
         self.arrival = np.full((self.n_positions + 1) * self.n_cells, UNKNOWN, dtype=np.int32)
-        self.arrival[self.n_positions * self.n_cells:] = -1  # a goal that is no cell: never
+        self.arrival[self.off_cell * self.n_cells:] = -1
+        self.filled = np.zeros(self.n_positions + 1, dtype=bool)  # per goal position
+        self.filled[self.off_cell] = True
         goal_headings = np.arange(self.n_bins) * self.bin_width  # as the draws place goals
         self.aligned = task.heading_within(robots.bin_heading[:, None],
                                            goal_headings[None, :]).ravel()
@@ -74,20 +78,21 @@ class GoalTables:
 
     def goal_position_index(self, position: np.ndarray, heading: float) -> int:
         """The position index of a goal at ``position`` (2,) with ``heading`` where that goal is
-        a cell (its centre exactly, a bin's heading exactly), else -1."""
+        a cell (its centre exactly, a bin's heading exactly), else `off_cell`."""
         p = int(np.argmin(np.abs(self.centres - position).sum(axis=1)))
         k = round(heading / self.bin_width)
         on_cell = np.array_equal(self.centres[p], position)
-        return p if on_cell and 0 <= k < self.n_bins and k * self.bin_width == heading else -1
+        if on_cell and 0 <= k < self.n_bins and k * self.bin_width == heading:
+            return p
+        return self.off_cell
 
     def fill(self, goal_positions: np.ndarray, goal_nodes: np.ndarray | None) -> None:
-        """Fill the arrival columns of position indices ``goal_positions`` (-1: not a cell goal,
-        skipped) and the Φ columns of grid nodes ``goal_nodes`` not filled yet."""
+        """Fill the arrival columns of goal position indices ``goal_positions`` and the Φ
+        columns of grid nodes ``goal_nodes`` not filled yet."""
         cells = self.n_cells
-        unknown = self.arrival.take(np.where(goal_positions >= 0, goal_positions,
-                                             self.n_positions) * cells) == UNKNOWN
-        for gp in set(goal_positions[unknown].tolist()):
+        for gp in set(goal_positions[~self.filled.take(goal_positions)].tolist()):
             self.arrival[gp * cells:(gp + 1) * cells] = self._arrivals(gp)
+            self.filled[gp] = True
         if self.potential is None or self.node_of_position is None or goal_nodes is None:
             return
         n = self.n_positions

@@ -209,8 +209,11 @@ class BounceVectorEnv(VectorEnv):
         angles, choices = self._angles(actions)
         opts = self.options
         start = state.position.copy()
-        bumping = state.blocked.copy()
-        every = bumping.all()  # always on the cell backend: each step and reset ends in contact
+        if self.cell_robots is not None:  # each step and each reset ends in contact
+            bumping, every = self._all_true, True
+        else:
+            bumping = state.blocked.copy()
+            every = bool(bumping.all())
         if opts.history:
             rows = EVERY if every else np.flatnonzero(bumping)
             clock_before = state.clock.copy() if every else state.clock[rows]
@@ -231,8 +234,7 @@ class BounceVectorEnv(VectorEnv):
             last[bumping] = angles[bumping]
         if opts.history:
             history = self._history()
-            for j in range(opts.history - 1, 0, -1):  # one pair at a time: no overlapping copy
-                history[rows, j] = history[rows, j - 1]
+            history[rows, 1:] = history[rows, :-1]  # numpy buffers the overlapping copy
             history[rows, 0, 0] = clock_before / opts.max_clock
             turns = (self._history_turns.take(choices) if choices is not None
                      else np.mod(angles, 2 * np.pi) / (2 * np.pi))

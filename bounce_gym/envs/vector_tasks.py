@@ -93,11 +93,11 @@ class NavigationBatch(FreeBatch):
         self.goal_position = np.zeros((n, 2))
         self.goal_heading = np.zeros(n)
         self.goal_wrapped = np.zeros(n)  # the goal headings in [0, 2π)
-        #: each env's goal as a cell (position index, bin; -1: not a cell), and where its
-        #: arrival column starts in the tables
+        #: each env's goal as a cell of the tables (position index, bin; `GoalTables.off_cell`
+        #: and -1 where the goal is not a cell), and where its arrival column starts in them
         self.goal_cell = np.full((n, 2), -1, dtype=np.int64)
         self.arrival_at = np.zeros(n, dtype=np.int64)
-        self.off_cell = np.arange(n)  # the envs whose goal is not a cell (or every env)
+        self.off_cell = np.zeros(0, dtype=np.int64)  # the envs whose goal is not a cell
         self.reached = np.zeros(n, dtype=bool)
         self.plan_cost = np.zeros(n)
         self.features = np.zeros((n, task.observation_size), dtype=np.float32)
@@ -136,7 +136,8 @@ class NavigationBatch(FreeBatch):
         self.goal_heading[i] = heading
         if self.tables is not None:
             gp = self.tables.goal_position_index(goal, heading)
-            self.goal_cell[i] = (gp, round(heading / self.model.bin_width) if gp >= 0 else -1)
+            on_cell = gp != self.tables.off_cell
+            self.goal_cell[i] = (gp, round(heading / self.model.bin_width) if on_cell else -1)
         if task.geodesic is not None:
             self.goal_node[i] = task.geodesic.node_at(*goal.tolist())
         if task.observe_task:
@@ -151,10 +152,9 @@ class NavigationBatch(FreeBatch):
         if tables is not None:
             goal_p = self.goal_cell[rows, 0]
             tables.fill(goal_p, nodes)
-            # an env whose goal is not a cell reads the tables' last column: never reached
-            self.arrival_at[rows] = np.where(goal_p >= 0, goal_p, tables.n_positions) \
-                * tables.n_cells
-            self.off_cell = np.flatnonzero(self.goal_cell[:, 0] < 0)
+            self.arrival_at[rows] = goal_p * tables.n_cells
+            if len(self.off_cell) or (goal_p == tables.off_cell).any():
+                self.off_cell = np.flatnonzero(self.goal_cell[:, 0] == tables.off_cell)
         if single.geodesic is None:
             return
         if tables is not None:

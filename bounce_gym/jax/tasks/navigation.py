@@ -3,9 +3,9 @@
 Start and goal are random cells (position and bin), as the NumPy task draws them on the cell
 backend. The arrival test of a step — the drive passes within ``goal_radius`` of the goal point
 with the heading within tolerance, and the tick it enters — depends only on the cell the drive
-starts from and the goal, so it is tabulated in NumPy by the NumPy task's own test
-(`NavigationTask.ticks_to_goal`) for every drive and every goal position it comes near; Φ of the
-``progress`` reward likewise per (goal position, position).
+starts from and the goal, so it is tabulated by the NumPy batch's `GoalTables` (the NumPy task's
+own test) for every goal position, and kept here per drive as the short list of goal positions
+it enters; Φ of the ``progress`` reward likewise per (goal position, position).
 """
 
 from __future__ import annotations
@@ -16,13 +16,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from bounce_gym.envs.tasks.base import StepEvents
+from bounce_gym.envs.goal_tables import GoalTables
 from bounce_gym.errors import ConfigError
 from bounce_gym.jax import draws
 from bounce_gym.jax.tasks.base import CellFreeTask
-
-#: drives whose nearby goals are found at once
-_BLOCK = 256
 
 
 class CellNavigationParams(NamedTuple):
@@ -68,12 +65,14 @@ class CellNavigationTask(CellFreeTask):
         z = np.arange(model.n_cells)
         p, k = model.decode(z)
         heading = k * model.bin_width
-        near_position, near_tick = _arrivals(task, robots)
-        aligned = task.heading_within(np.arange(self.n_bins)[:, None] * model.bin_width,
-                                      np.arange(self.n_bins)[None, :] * model.bin_width)
-        if task.geodesic is not None:
-            node = task.geodesic.node_of(model.centres)
-            potential = np.stack([task.goal_potentials(int(g))[node] for g in node])
+        tables = GoalTables(robots, task)
+        every = np.arange(self.n_positions)  # every position a goal
+        nodes = tables.node_of_position
+        tables.fill(every, nodes)
+        near_position, near_tick = _arrivals(tables)
+        aligned = tables.aligned.reshape(self.n_bins, self.n_bins)
+        if tables.potential is not None and nodes is not None:
+            potential = tables.potential.reshape(-1, self.n_positions)[nodes]
         else:
             potential = np.zeros((self.n_positions, self.n_positions))
         pose = task.pose_features(model.centres[p], heading).astype(np.float32)
@@ -140,42 +139,14 @@ class CellNavigationTask(CellFreeTask):
                                 params.goal_features[state.goal]])
 
 
-def _arrivals(task, robots) -> tuple[np.ndarray, np.ndarray]:
-    """Per cell a drive starts from: the goal positions whose region it enters (padded with
-    −1) and the step's tick at which it does, by `NavigationTask.ticks_to_goal` with the
-    heading test passed (each goal given the drive's own heading)."""
-    model = robots.model
-    n_cells = model.n_cells
-    start = robots.centre_of  # the drive starts where the bump left the robot
-    end = robots.centre_of[robots.drive_end]
-    heading = robots.heading_of
-    goals = model.centres
-    # a superset of the goals the exact test can accept: within the radius (and a margin far
-    # above rounding) of the drive's segment; in blocks of cells, to bound the memory
-    close = np.zeros((n_cells, len(goals)), dtype=bool)
-    for first in range(0, n_cells, _BLOCK):
-        rows = slice(first, first + _BLOCK)
-        seg = end[rows] - start[rows]
-        rel = goals[None, :, :] - start[rows, None, :]
-        length2 = (seg ** 2).sum(axis=1)
-        along = np.clip((rel * seg[:, None, :]).sum(axis=2)
-                        / np.where(length2 > 0, length2, 1.0)[:, None], 0.0, 1.0)
-        gap = rel - along[:, :, None] * seg[:, None, :]
-        close[rows] = (gap ** 2).sum(axis=2) <= (task.goal_radius + 1e-6) ** 2
-    found: list[list[tuple[int, int]]] = [[] for _ in range(n_cells)]
-    for z, g in zip(*np.nonzero(close), strict=True):
-        events = StepEvents(ticks=int(robots.drive_ticks[z]) + 1, start=start[z:z + 1],
-                            end=end[z:z + 1], heading=heading[z:z + 1],
-                            bumps=np.ones(1, dtype=np.int64), angles=np.zeros(1),
-                            angle_changed=np.zeros(1, dtype=bool),
-                            robot_contact=np.zeros(1, dtype=bool))
-        tick = task.ticks_to_goal(events, (goals[g:g + 1], heading[z:z + 1]))
-        if tick is not None:
-            found[z].append((int(g), int(tick)))
-    width = max(1, max(len(f) for f in found))
-    near_position = np.full((n_cells, width), -1, dtype=np.int64)
-    near_tick = np.full((n_cells, width), -1, dtype=np.int64)
-    for z, pairs in enumerate(found):
-        for j, (g, tick) in enumerate(pairs):
-            near_position[z, j], near_tick[z, j] = g, tick
-    return near_position, near_tick
+def _arrivals(tables: GoalTables) -> tuple[np.ndarray, np.ndarray]:
+    """Per cell a drive starts from: the goal positions whose region it enters, in order
+    (padded with −1), and the step's tick at which it does (the bump's, then the drive's), from
+    the filled arrival columns of ``tables``."""
+    drive = tables.arrival[:tables.off_cell * tables.n_cells].reshape(tables.n_positions, -1).T
+    enters = drive >= 0
+    width = max(1, int(enters.sum(axis=1).max()))
+    order = np.argsort(~enters, axis=1, kind="stable")[:, :width]  # the goals entered first
+    kept = np.take_along_axis(enters, order, axis=1)
+    return (np.where(kept, order, -1),
+            np.where(kept, np.take_along_axis(drive, order, axis=1) + 1, -1))
