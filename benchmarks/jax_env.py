@@ -17,7 +17,13 @@ time, so resets included:
   gathered for the batch with nothing else: native ÷ bare (target ≥ 1/10 at N = 1,024) and
   JAX ÷ bare (target ≥ 1/3 at N = 1,024);
 * the JAX env of ``BounceNavigation-v1`` (the lab and the generated map), reported: there is no
-  native NumPy vector env of v1 to compare it with.
+  native NumPy vector env of v1 to compare it with;
+* every JAX row twice: with JAX's default keys (threefry) and, as "JAX rbg", with keys of
+  ``jax.random.key(seed, impl="unsafe_rbg")`` — the loop splits one key per env and step, and
+  on a CPU threefry's hashing of those keys costs more than the cell env's step itself;
+* the **floor of the vector API** on the cell envs (`floor_steps`: a fresh copy of every array a
+  native step returns, computing nothing), against the bare lookup and under the native env:
+  what any env with Gymnasium's vector API and these observations and infos costs at least.
 
 Both run on one CPU thread (`benchmarks.one_core`; NumPy's loops are single-threaded). The
 JAX function is compiled before timing. The envs are built once and interleaved: each round
@@ -66,10 +72,18 @@ JAX_ONLY = {"v1": ("bounce_gym/BounceNavigation-v1", {}),
 SIZES = {1: None, 64: 10.0, 1024: 3.0}
 #: the targets of the ratios against the bare lookup, at N = 1,024
 BARE_TARGETS = {"native": 1 / 10, "JAX": 1 / 3}
+#: the rows against the bare lookup (the JAX env with either kind of key, and the floor of
+#: the vector API: `floor_steps`)
+BARE_SIDES = ("native", "JAX", "JAX rbg", "API floor")
+#: the cheaper PRNG of the "JAX rbg" rows: the caller's keys, split per env and step, cost most
+#: of a cell step with JAX's default threefry keys on a CPU
+FAST_KEYS = "unsafe_rbg"
 
 
-def jax_steps(n: int, steps: int, env_id: str, kwargs: dict) -> Callable[[], float]:
-    """Env-steps/s of ``steps`` steps of N vmapped JAX envs (compiled before the first call)."""
+def jax_steps(n: int, steps: int, env_id: str, kwargs: dict,
+              impl: str = "threefry2x32") -> Callable[[], float]:
+    """Env-steps/s of ``steps`` steps of N vmapped JAX envs (compiled before the first call),
+    with keys of JAX's PRNG implementation ``impl``."""
     env, params = make(env_id, **kwargs)
     batch_step = jax.vmap(env.step, in_axes=(0, 0, 0, None))
 
@@ -89,8 +103,8 @@ def jax_steps(n: int, steps: int, env_id: str, kwargs: dict) -> Callable[[], flo
         return key, state, total.sum()
 
     _, state = jax.vmap(env.reset, in_axes=(0, None))(
-        jax.random.split(jax.random.PRNGKey(0), n), params)
-    carry = run(jax.random.PRNGKey(1), state)  # compiles
+        jax.random.split(jax.random.key(0, impl=impl), n), params)
+    carry = run(jax.random.key(1, impl=impl), state)  # compiles
     jax.block_until_ready(carry)
 
     def rate() -> float:
@@ -140,6 +154,26 @@ def bare_steps(n: int, steps: int, env_id: str, kwargs: dict) -> Callable[[], fl
     return rate
 
 
+def floor_steps(n: int, steps: int, env_id: str, kwargs: dict) -> Callable[[], float]:
+    """Env-steps/s of the floor of Gymnasium's vector API for the native env: per step, a fresh
+    copy of every array one of its steps returns (observation, reward, flags, each info and
+    mask), computing nothing."""
+    env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+    env.reset(seed=0)
+    obs, reward, terminated, truncated, infos = env.step(
+        np.zeros(n, dtype=np.int64))
+    arrays = [obs, reward, terminated, truncated, *infos.values()]
+
+    def rate() -> float:
+        start = time.perf_counter()
+        for _ in range(steps):
+            for array in arrays:
+                array.copy()
+        return n * steps / (time.perf_counter() - start)
+
+    return rate
+
+
 def measure(steps: int, rounds: int, sizes: dict) -> dict[str, list[float]]:
     """Env-steps/s of every env and size in every round, interleaved within each round; the
     native env runs about ``steps`` × 64 env-steps per size (at least ``steps`` steps of the
@@ -150,11 +184,14 @@ def measure(steps: int, rounds: int, sizes: dict) -> dict[str, list[float]]:
         for n in sizes:
             batch_steps = max(steps * 64 // n, steps)
             runs[f"{label} JAX N={n}"] = jax_steps(n, JAX_MORE * batch_steps, env_id, kwargs)
+            runs[f"{label} JAX rbg N={n}"] = jax_steps(n, JAX_MORE * batch_steps, env_id, kwargs,
+                                                       impl=FAST_KEYS)
             if label in ENVS:
                 runs[f"{label} native N={n}"] = native_steps(n, batch_steps, env_id, kwargs)
             if label in CELL_ENVS:
                 runs[f"{label} bare N={n}"] = bare_steps(n, JAX_MORE * batch_steps, env_id,
                                                          kwargs)
+                runs[f"{label} API floor N={n}"] = floor_steps(n, batch_steps, env_id, kwargs)
     return interleaved(runs, rounds)
 
 
@@ -174,21 +211,24 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"JAX env (issues 26, 39): {args.rounds} rounds, interleaved; {threads}; load average "
           f"{load_before:.1f} before, {load_after:.1f} after, {os.cpu_count()} cores; "
           f"device {jax.devices()[0].device_kind}")
-    print(f"{'environment':<26} {'env-steps/s':>14} {'min–max':>24}")
+    print(f"{'environment':<30} {'env-steps/s':>14} {'min–max':>24}")
     for label, values in rates.items():
-        print(f"{label:<26} {statistics.median(values):>14,.0f} {spread(values, ',.0f'):>24}")
-    print(f"{'ratio (within a round)':<38} {'median':>8} {'min–max':>15} {'target':>7}")
+        print(f"{label:<30} {statistics.median(values):>14,.0f} {spread(values, ',.0f'):>24}")
+    print(f"{'ratio (within a round)':<46} {'median':>8} {'min–max':>15} {'target':>7}")
     ratios = {}
-    rows = [(f"{label}: JAX ÷ native, N={n}", f"{label} JAX N={n}", f"{label} native N={n}",
-             sizes[n]) for label, n in itertools.product(ENVS, sizes)]
+    rows = [(f"{label}: JAX{keys} ÷ native, N={n}", f"{label} JAX{keys} N={n}",
+             f"{label} native N={n}", sizes[n])
+            for label, n, keys in itertools.product(ENVS, sizes, ("", " rbg"))]
     rows += [(f"{label}: {side} ÷ bare lookup, N={n}", f"{label} {side} N={n}",
-              f"{label} bare N={n}", BARE_TARGETS[side] if n == 1024 else None)
-             for label, n, side in itertools.product(CELL_ENVS, sizes, BARE_TARGETS)]
+              f"{label} bare N={n}", BARE_TARGETS.get(side.split()[0]) if n == 1024 else None)
+             for label, n, side in itertools.product(CELL_ENVS, sizes, BARE_SIDES)]
+    rows += [(f"{label}: native ÷ API floor, N={n}", f"{label} native N={n}",
+              f"{label} API floor N={n}", None) for label, n in itertools.product(CELL_ENVS, sizes)]
     for name, top, bottom, target in rows:
         per_round = [a / b for a, b in zip(rates[top], rates[bottom], strict=True)]
         row = ratios[name] = ratio(per_round, target)
         goal = "-" if target is None else f"≥ {target:.3g}"
-        print(f"{name:<42} {row['median']:>8.3f} {spread(per_round, '.3f'):>15} {goal:>7}"
+        print(f"{name:<46} {row['median']:>8.3f} {spread(per_round, '.3f'):>15} {goal:>7}"
               f"{verdict(row)}", flush=True)
     return dict(rates=rates, ratios=ratios, load=(load_before, load_after))
 
