@@ -28,6 +28,9 @@ from bounce_gym.envs.vector_cells import CellRobots
 MAX_ENTRIES = 1 << 24
 #: an arrival entry not computed yet; -1 is a drive that never enters the goal region
 UNKNOWN = -2
+#: the margin `passes_near` adds to the goal radius: far above rounding, so its screen never
+#: drops a segment the exact test accepts
+NEAR_MARGIN = 1e-6
 
 
 class GoalTables:
@@ -66,6 +69,7 @@ class GoalTables:
         self.arrival[self.off_cell * self.n_cells:] = -1
         self.filled = np.zeros(self.n_positions + 1, dtype=bool)  # per goal position
         self.filled[self.off_cell] = True
+        self.complete = self.potential_complete = False  # every column filled
         goal_headings = np.arange(self.n_bins) * self.bin_width  # as the draws place goals
         self.aligned = task.heading_within(robots.bin_heading[:, None],
                                            goal_headings[None, :]).ravel()
@@ -90,24 +94,28 @@ class GoalTables:
         """Fill the arrival columns of goal position indices ``goal_positions`` and the Φ
         columns of grid nodes ``goal_nodes`` not filled yet."""
         cells = self.n_cells
-        for gp in set(goal_positions[~self.filled.take(goal_positions)].tolist()):
-            self.arrival[gp * cells:(gp + 1) * cells] = self._arrivals(gp)
-            self.filled[gp] = True
-        if self.potential is None or self.node_of_position is None or goal_nodes is None:
+        if not self.complete:
+            for gp in set(goal_positions[~self.filled.take(goal_positions)].tolist()):
+                self.arrival[gp * cells:(gp + 1) * cells] = self._arrivals(gp)
+                self.filled[gp] = True
+            self.complete = bool(self.filled.all())
+        if self.potential is None or self.node_of_position is None or goal_nodes is None \
+                or self.potential_complete:
             return
         n = self.n_positions
         for node in set(goal_nodes[~self.has_potential.take(goal_nodes)].tolist()):
             self.potential[node * n:(node + 1) * n] = self.task.goal_potentials(node).take(
                 self.node_of_position)
             self.has_potential[node] = True
+        self.potential_complete = bool(self.has_potential.all())
 
     def _arrivals(self, gp: int) -> np.ndarray:
         """The arrival column of a goal at position index ``gp``: the task's exact test on the
         drives that pass near the goal (a superset of those it accepts), -1 elsewhere."""
         column = np.full(self.n_cells, -1, dtype=np.int32)
         goal = self.centres[gp:gp + 1]
-        near = np.flatnonzero(_near(self.drive_start, self.drive_end, goal[0],
-                                    self.task.goal_radius + 1e-6))
+        near = np.flatnonzero(passes_near(self.drive_start, self.drive_end, goal[0],
+                                          self.task.goal_radius + NEAR_MARGIN))
         for z in near.tolist():
             heading = self.drive_heading[z:z + 1]
             # a drive without its bump, towards a goal with the drive's own heading: what is
@@ -123,9 +131,12 @@ class GoalTables:
         return column
 
 
-def _near(start: np.ndarray, end: np.ndarray, point: np.ndarray, radius: float) -> np.ndarray:
+def passes_near(start: np.ndarray, end: np.ndarray, point: np.ndarray,
+                radius: float) -> np.ndarray:
     """(m,) bool: the segments ``start`` → ``end`` ((m, 2) each) pass within ``radius`` of
-    ``point``."""
+    ``point`` ((2,), or one per segment (m, 2)): with ``radius`` the goal radius plus
+    `NEAR_MARGIN`, a superset of the segments the exact test of `NavigationTask.ticks_to_goal`
+    accepts."""
     sx, sy = (end - start).T
     rx, ry = (point - start).T
     length2 = sx * sx + sy * sy

@@ -94,14 +94,16 @@ class CellRobots:
             if len(rows) != self.n:
                 raise ConfigError("the first reset places every robot")
             self.state = RobotState.at(position, heading)
+            # every drive stops where the next cell is blocked, and no contact is an edge's
+            # or a robot's: these fields never change
+            self.state.blocked[...] = True
+            self.state.contact_edge[...] = NO_CONTACT
+            self.state.contact_robot[...] = NO_CONTACT
         state = self.state
         state.position[rows] = position
         state.heading[rows] = heading
-        state.blocked[rows] = True  # a drive stops where the next cell is blocked
         state.clock[rows] = ticks
         state.bumps[rows] = 0
-        state.contact_edge[rows] = NO_CONTACT
-        state.contact_robot[rows] = NO_CONTACT
         state.contact_normal[rows] = self.normal_of.take(z, axis=0)
         return ticks
 

@@ -343,7 +343,8 @@ class BounceVectorEnv(VectorEnv):
         report the task's reset info instead, or nothing (0, mask False) for a key it lacks.
 
         The value arrays are handed out as they are; a key every env reports has the shared
-        read-only all-True array as its mask.
+        read-only all-True array as its mask, and the keys only the stepped envs report share
+        one read-only mask.
         """
         infos = {}
         for key, value in self._robot_values().items():
@@ -351,9 +352,10 @@ class BounceVectorEnv(VectorEnv):
             infos[f"_{key}"] = self._all_true
         reset = self.task.info(self.state, resetting) if len(resetting) else {}
         stepped = None
-        if len(resetting):
+        if len(resetting):  # one read-only mask, shared by the keys the reset envs lack
             stepped = np.ones(self.num_envs, dtype=bool)
             stepped[resetting] = False
+            stepped.flags.writeable = False
         for key, value in values.items():
             present = self._all_true
             if isinstance(value, tuple):  # (values, mask): a key only some envs report
@@ -361,7 +363,7 @@ class BounceVectorEnv(VectorEnv):
                 if stepped is not None:
                     present = present & stepped
             elif key not in reset and stepped is not None:
-                present = stepped.copy()
+                present = stepped
             if key in reset:
                 value[resetting] = reset[key]
             elif stepped is not None:

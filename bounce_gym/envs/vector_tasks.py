@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from bounce_gym.cells.geodesic import GridGeodesic
-from bounce_gym.envs.goal_tables import GoalTables
+from bounce_gym.envs.goal_tables import NEAR_MARGIN, GoalTables, passes_near
 from bounce_gym.envs.tasks import CoverageTask, NavigationTask
 from bounce_gym.envs.tasks.base import StepEvents, path_samples, tick_length
 from bounce_gym.envs.tasks.coverage import CoverageHistograms
@@ -125,9 +125,10 @@ class NavigationBatch(FreeBatch):
         if single.geodesic is not None:
             self.goal_node[rows] = self.node_of_position.take(goal_p)
         if single.observe_task:
-            self.features[rows] = np.concatenate(
-                (self.start_features.take(model.cell_id(p, k), axis=0),
-                 self.goal_features.take(model.cell_id(goal_p, goal_k), axis=0)), axis=1)
+            half = self.start_features.shape[1]
+            self.features[rows, :half] = self.start_features.take(model.cell_id(p, k), axis=0)
+            self.features[rows, half:] = self.goal_features.take(model.cell_id(goal_p, goal_k),
+                                                                 axis=0)
         return p, k
 
     def drawn(self, i, task):
@@ -146,7 +147,6 @@ class NavigationBatch(FreeBatch):
     def start(self, rows, state, ticks, robots=None):
         single, tables = self.single, self.tables
         self.reached[rows] = False
-        self.goal_wrapped[rows] = np.mod(self.goal_heading[rows], 2 * np.pi)
         self.plan_cost[rows] = single.w1 * ticks[rows]  # the drive of a bounce-mode reset
         nodes = self.goal_node[rows] if single.geodesic is not None else None
         if tables is not None:
@@ -155,6 +155,8 @@ class NavigationBatch(FreeBatch):
             self.arrival_at[rows] = goal_p * tables.n_cells
             if len(self.off_cell) or (goal_p == tables.off_cell).any():
                 self.off_cell = np.flatnonzero(self.goal_cell[:, 0] == tables.off_cell)
+        if tables is None or len(self.off_cell):  # what the exact test reads
+            self.goal_wrapped[rows] = np.mod(self.goal_heading[rows], 2 * np.pi)
         if single.geodesic is None:
             return
         if tables is not None:
@@ -268,16 +270,11 @@ class NavigationBatch(FreeBatch):
         return np.array(hits, dtype=np.int64), np.array(arrivals, dtype=np.float64)
 
     def _near_goal(self, events: StepEvents, rows: np.ndarray) -> np.ndarray:
-        """(len(rows),) bool: the step's segment of envs ``rows`` comes within the goal radius
-        (plus a margin far above rounding) of the goal — a superset of the robots the exact
-        disk test can accept."""
-        start = events.start.take(rows, axis=0).T
-        sx, sy = events.end.take(rows, axis=0).T - start
-        rx, ry = self.goal_position.take(rows, axis=0).T - start
-        length2 = sx * sx + sy * sy
-        along = np.clip((rx * sx + ry * sy) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
-        gx, gy = rx - along * sx, ry - along * sy
-        return gx * gx + gy * gy <= (self.single.goal_radius + 1e-6) ** 2
+        """(len(rows),) bool: the step's segment of envs ``rows`` comes near the goal (a
+        superset of the robots the exact disk test can accept, `passes_near`)."""
+        return passes_near(events.start.take(rows, axis=0), events.end.take(rows, axis=0),
+                           self.goal_position.take(rows, axis=0),
+                           self.single.goal_radius + NEAR_MARGIN)
 
 
 class CoverageBatch(FreeBatch):
