@@ -183,13 +183,14 @@ class NavigationTask(Task):
         the cell backend (`random_cell`, the start's draw first)."""
         return self._cells is not None and all(pose is None for pose in self._fixed.values())
 
-    def random_cell(self, rng: np.random.Generator) -> tuple[int, int]:
-        """A random start or goal cell on the cell backend, (position index, bin), drawn from
-        ``rng`` as `start_poses` draws it."""
-        # ``integers(0, n, dtype=np.int64)`` is ``integers(n)`` spelled out: the same draws,
-        # without the default arguments' handling (a batch of N envs calls it per reset)
-        return (int(rng.integers(0, self._cells.n_positions, dtype=np.int64)),
-                int(rng.integers(0, self._cells.n_bins, dtype=np.int64)))
+    def random_cell(self, rng: np.random.Generator) -> tuple[np.int64, np.int64]:
+        """A random start or goal cell on the cell backend, (position index, bin) as NumPy
+        integers, drawn from ``rng`` as `start_poses` draws it."""
+        # ``integers(0, n, None, np.int64)`` is ``integers(n)`` spelled out: the same draws,
+        # without the keyword and default arguments' handling (a batch of N envs calls it
+        # four times per reset)
+        cells, draw = self._cells, rng.integers
+        return draw(0, cells.n_positions, None, np.int64), draw(0, cells.n_bins, None, np.int64)
 
     def reset(self, state, rng, options):
         self.reached = False
