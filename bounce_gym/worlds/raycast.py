@@ -31,6 +31,9 @@ _MAX_PAIRS = 1 << 21
 #: Smallest approach angle (radians) at which a disk counts as hitting a vertex; sin²(GRAZE) · R²
 #: bounds ``disc`` below. Passing closer than that overlaps the vertex by < R·GRAZE²/2 ≈ 5e-13 R.
 GRAZE = 1e-6
+#: Worlds with at most this many reflex vertices have them tested in a Python loop (`_cast_one`),
+#: cheaper than numpy's per-call overhead on a few elements.
+_LOOP_VERTICES = 32
 
 
 @dataclass(frozen=True)
@@ -93,6 +96,7 @@ class Features:
     vid: np.ndarray  # the edge each vertex starts
     vprev: np.ndarray  # the edge each vertex ends
     ttol: float
+    corners: tuple[tuple[float, float, int, int], ...]  # (vx, vy, vid, vprev) as Python numbers
 
 
 def features(world: World, radius: float) -> Features:
@@ -129,6 +133,7 @@ def features(world: World, radius: float) -> Features:
             mat=np.ascontiguousarray(mat), n_edges=len(ax), ax=ax.copy(), ay=ay.copy(),
             ex=ex.copy(), ey=ey.copy(), normals=world.normals,
             vx=verts[:, 0].copy(), vy=verts[:, 1].copy(), vid=vid, vprev=prev[vid], ttol=ttol,
+            corners=tuple(zip(*verts.T.tolist(), vid.tolist(), prev[vid].tolist(), strict=True)),
         )
         cache[radius] = feats
     return feats
@@ -234,23 +239,50 @@ def _cast_one(f: Features, radius: float, ox: float, oy: float, dx: float,
     else:
         edge = -1
     if len(f.vx):
-        cx, cy = ox - f.vx, oy - f.vy
-        b = cx * dx + cy * dy
-        c = cx * cx + cy * cy - radius * radius
-        disc = b * b - c
-        with np.errstate(invalid="ignore"):
-            tv = np.where((disc > (GRAZE * radius) ** 2) & (b < 0) & (c >= -2.0 * radius * f.ttol),
-                          np.maximum(-b - np.sqrt(disc), 0.0), np.inf)
-        if skip:  # a vertex starts its edge and ends the previous one of its ring
-            for j, (start, end) in enumerate(zip(f.vid.tolist(), f.vprev.tolist(),
-                                                 strict=True)):
-                if start in skip or end in skip:
-                    tv[j] = np.inf
-        kv = int(np.argmin(tv))
-        if tv[kv] < distance:
-            distance = float(tv[kv])
-            edge = vertex = int(f.vid[kv])
-            px, py = ox + distance * dx - f.vx[kv], oy + distance * dy - f.vy[kv]
+        vertex_hit = _vertex_hit_loop if len(f.vx) <= _LOOP_VERTICES else _vertex_hit_numpy
+        t, kv = vertex_hit(f, radius, ox, oy, dx, dy, skip)
+        if t < distance:
+            vx, vy, edge, _ = f.corners[kv]
+            distance, vertex = t, edge
+            px, py = ox + distance * dx - vx, oy + distance * dy - vy
             norm = math.hypot(px, py)
-            nx, ny = float(px / norm), float(py / norm)
+            nx, ny = px / norm, py / norm
     return max(distance, 0.0), edge, vertex, nx, ny
+
+
+def _vertex_hit_loop(f: Features, radius: float, ox: float, oy: float, dx: float, dy: float,
+                     skip: frozenset) -> tuple[float, int]:
+    """The first reflex vertex the disk hits, in plain floats: (distance, index into the
+    vertices), (inf, 0) if none — the same operations, rounded alike, as `_vertex_hit_numpy`,
+    cheaper on the few vertices of a typical world."""
+    graze, inside = (GRAZE * radius) ** 2, -2.0 * radius * f.ttol
+    r2 = radius * radius
+    best, kv = math.inf, 0
+    for j, (vx, vy, start, end) in enumerate(f.corners):
+        cx, cy = ox - vx, oy - vy
+        b = cx * dx + cy * dy
+        c = cx * cx + cy * cy - r2
+        disc = b * b - c
+        if disc > graze and b < 0 and c >= inside and not (skip and (start in skip or end in skip)):
+            t = max(-b - math.sqrt(disc), 0.0)
+            if t < best:
+                best, kv = t, j
+    return best, kv
+
+
+def _vertex_hit_numpy(f: Features, radius: float, ox: float, oy: float, dx: float, dy: float,
+                      skip: frozenset) -> tuple[float, int]:
+    """`_vertex_hit_loop` with numpy, for worlds of many reflex vertices."""
+    cx, cy = ox - f.vx, oy - f.vy
+    b = cx * dx + cy * dy
+    c = cx * cx + cy * cy - radius * radius
+    disc = b * b - c
+    with np.errstate(invalid="ignore"):
+        tv = np.where((disc > (GRAZE * radius) ** 2) & (b < 0) & (c >= -2.0 * radius * f.ttol),
+                      np.maximum(-b - np.sqrt(disc), 0.0), np.inf)
+    if skip:  # a vertex starts its edge and ends the previous one of its ring
+        for j, (_, _, start, end) in enumerate(f.corners):
+            if start in skip or end in skip:
+                tv[j] = np.inf
+    kv = int(np.argmin(tv))
+    return float(tv[kv]), kv
