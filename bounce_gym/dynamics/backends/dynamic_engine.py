@@ -130,21 +130,27 @@ class DynamicEngine:
         self._robot_of = {disk._shape: i for i, disk in enumerate(disks)}
         self._bodies = bodies
         self._cp_bodies = [body._body for body in bodies]
-        self._disks = disks
+        self._cp_space = space._space
+        self._cp_disks = [disk._shape for disk in disks]
         self._space = space
 
     def canonicalize(self) -> None:
         """Remove every robot shape and add it back, with the ids it had when the space was
-        built: the broad phase then depends on the bodies only (see the module docstring)."""
-        space = self.space
-        space.remove(*self._disks)
-        _chipmunk.cpSpaceSetShapeIDCounter(space._space, self._id_base)
-        space.add(*self._disks)
+        built: the broad phase then depends on the bodies only (see the module docstring).
+        Chipmunk's own calls, those of pymunk's `Space.remove` and `Space.add`, whose
+        bookkeeping (which shapes the space holds) the round trip leaves as it was."""
+        self.space  # noqa: B018  (builds the space on first use)
+        space, disks = self._cp_space, self._cp_disks
+        for disk in disks:
+            _chipmunk.cpSpaceRemoveShape(space, disk)
+        _chipmunk.cpSpaceSetShapeIDCounter(space, self._id_base)
+        for disk in disks:
+            _chipmunk.cpSpaceAddShape(space, disk)
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
-        for key in ("_space", "_edge_of", "_robot_of", "_bodies", "_cp_bodies", "_disks",
-                    "_id_base"):
+        for key in ("_space", "_edge_of", "_robot_of", "_bodies", "_cp_bodies", "_cp_space",
+                    "_cp_disks", "_id_base"):
             state.pop(key, None)
         state["_space"] = None
         return state
@@ -185,9 +191,12 @@ class DynamicEngine:
             _chipmunk.cpBodySetTorque(bodies[i], torque)
 
     def step(self, dt: float) -> list[tuple[int, int, int, float, float]]:
-        """Advance the space by ``dt`` seconds; returns `contacts`."""
+        """Advance the space by ``dt`` seconds; returns `contacts`. Calls Chipmunk's step
+        directly: pymunk's wrapper only defers what callbacks add or remove, which the contact
+        handler never does."""
+        self.space  # noqa: B018  (builds the space on first use)
         self.contacts = []
-        self.space.step(dt)
+        _chipmunk.cpSpaceStep(self._cp_space, dt)
         return self.contacts
 
     def contacts_of(self, robot: int) -> list[tuple[int, int, int, float, float]]:
