@@ -357,7 +357,7 @@ class DynamicBackend(MotionBackend):
             state.contact_robot[i] = NO_CONTACT
 
     def drive(self, state: RobotState, max_ticks: float, until_first_block: bool) -> int:
-        if until_first_block and state.blocked.any():
+        if until_first_block and np.count_nonzero(state.blocked):
             return 0
         self._check_drive_window(max_ticks, until_first_block)
         end = None if until_first_block else self._tick + int(max_ticks)
@@ -589,7 +589,8 @@ class DynamicBackend(MotionBackend):
         pairs: set[tuple[int, int]] = set()
         limit = horizon
         robots = self._robots
-        for i, kind, k, nx, ny in self.engine.contacts:  # what each robot touches
+        contacts = self.engine.contacts
+        for i, kind, k, nx, ny in contacts:  # what each robot touches
             r = robots[i]
             if kind == WALL:
                 # the solver's, not the cast's: a wall it slides along or leaves cannot come
@@ -607,7 +608,7 @@ class DynamicBackend(MotionBackend):
                 limit = min(limit, self._touch_limit((r.vx - o.vx) * nx + (r.vy - o.vy) * ny,
                                                      2 * self.radius - gap))
         slow = 0.5 * self.depth / limit  # slower robots cannot get half DEPTH deep in time
-        touching = {c[0] for c in self.engine.contacts}
+        touching = {c[0] for c in contacts} if contacts else NOTHING
         for i, r in enumerate(robots):
             speed = math.hypot(r.vx, r.vy)
             if speed <= slow:
@@ -731,8 +732,7 @@ class DynamicBackend(MotionBackend):
             # slowing down — each at its mean rate: the heading is exact at their ends, and
             # turning a disk in place changes nothing else the engine sees
             turn = r.profile
-            r.next = min(r.origin + bp for bp in (turn.ramp, turn.plateau_end(), turn.duration)
-                         if r.origin + bp > self._now)
+            r.next = self._next_break(r.origin, turn)
             end = r.next - r.origin
             self._kick(i, r, 0.0, 0.0, turn.mean(t, end, r.next - self._now),
                        max(h, turn.ramp))
@@ -742,6 +742,14 @@ class DynamicBackend(MotionBackend):
                 self._plan_turn(state, i, r)  # a correction: contacts disturbed the turn
             else:
                 r.phase, r.next = WAIT, math.inf
+
+    def _next_break(self, origin: float, turn: Turn) -> float:
+        """The first end of a segment of ``turn`` (started at ``origin``) after now."""
+        now, first = self._now, math.inf
+        for at in (origin + turn.ramp, origin + turn.plateau_end(), origin + turn.duration):
+            if now < at < first:
+                first = at
+        return first
 
     def _kick(self, i: int, r: _Robot, vx: float, vy: float, w: float,
               seconds: float | None = None) -> None:
