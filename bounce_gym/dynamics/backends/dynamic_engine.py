@@ -182,13 +182,11 @@ class DynamicEngine:
         _chipmunk.cpBodySetVelocity(body, (vx, vy))
         _chipmunk.cpBodySetAngularVelocity(body, w)
 
-    def push(self, loads: dict[int, tuple[float, float, float]]) -> None:
-        """Force (fx, fy) and torque of robots for the next step (cleared by the step), by
-        robot."""
-        bodies = self._cp_bodies
-        for i, (fx, fy, torque) in loads.items():
-            _chipmunk.cpBodySetForce(bodies[i], (fx, fy))
-            _chipmunk.cpBodySetTorque(bodies[i], torque)
+    def push(self, i: int, fx: float, fy: float, torque: float) -> None:
+        """Force (fx, fy) and torque of robot ``i`` for the next step (cleared by the step)."""
+        body = self._cp_bodies[i]
+        _chipmunk.cpBodySetForce(body, (fx, fy))
+        _chipmunk.cpBodySetTorque(body, torque)
 
     def step(self, dt: float) -> list[tuple[int, int, int, float, float]]:
         """Advance the space by ``dt`` seconds; returns `contacts`. Calls Chipmunk's step
@@ -215,8 +213,9 @@ class DynamicEngine:
         (shapes a and b, normal from a to b) directly: pymunk has no setter for the impulses
         (its own pickling writes them) and its wrappers cost more than the step."""
         arb = arbiter._arbiter
+        contacts = arb.contacts
         for k in range(arb.count):
-            contact = arb.contacts[k]
+            contact = contacts[k]
             contact.jnAcc = 0.0
             contact.jtAcc = 0.0
         n = arb.n

@@ -506,9 +506,9 @@ class DynamicBackend(MotionBackend):
     def _step(self, state: RobotState, dt: float) -> None:
         """Push every robot towards its set points for ``dt`` seconds, step and read the
         bodies."""
-        mass, moment = self.engine.mass, self.engine.moment
+        engine = self.engine
+        mass, moment = engine.mass, engine.moment
         fmax, tmax = self.accel * dt, self.turn_accel * dt
-        loads = {}
         for i, r in enumerate(self._robots):
             if r.phase == DRIVE:
                 tvx, tvy = r.speed * math.cos(r.angle), r.speed * math.sin(r.angle)
@@ -522,14 +522,13 @@ class DynamicBackend(MotionBackend):
                 dvx, dvy = dvx * (fmax / norm), dvy * (fmax / norm)
             if abs(dw) > tmax:
                 dw = math.copysign(tmax, dw)
-            loads[i] = (mass * dvx / dt, mass * dvy / dt, moment * dw / dt)
-        if loads:
-            self.engine.push(loads)
-        self.engine.step(dt)
-        for i, (r, (x, y, angle, vx, vy, w)) in enumerate(zip(self._robots, self.engine.read(),
+            engine.push(i, mass * dvx / dt, mass * dvy / dt, moment * dw / dt)
+        engine.step(dt)
+        odometer = state.odometer
+        for i, (r, (x, y, angle, vx, vy, w)) in enumerate(zip(self._robots, engine.read(),
                                                                strict=True)):
             travelled = math.hypot(x - r.x, y - r.y)
-            state.odometer[i] += travelled
+            odometer[i] += travelled
             cast = r.cast
             if cast is not None and cast[0] == r.x and cast[1] == r.y and travelled > 0.0:
                 speed = math.hypot(vx, vy)
