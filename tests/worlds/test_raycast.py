@@ -107,3 +107,22 @@ def test_single_ray_path_matches_the_batched_path(radius):
         assert one.edge[0] == batch.edge[i] and one.vertex[0] == batch.vertex[i]
         assert one.distance[0] == pytest.approx(batch.distance[i], rel=1e-12, abs=1e-12)
         np.testing.assert_allclose(one.normal[0], batch.normal[i], atol=1e-12)
+
+
+@pytest.mark.parametrize("radius", [0.15, 0.4])  # a point (radius 0) tests no vertex
+def test_reflex_vertices_in_a_loop_or_in_numpy_give_the_same_bits(radius, monkeypatch):
+    """A world with few reflex vertices tests them in a Python loop, a large one with numpy:
+    both give every single-ray cast bit for bit alike, skipped edges included."""
+    from bounce_gym.worlds import raycast
+
+    world = ROOM_WITH_HOLES
+    rng = np.random.default_rng(9)
+    origins = world.sample_free(rng, 300, radius=radius)
+    angles = rng.uniform(0, 2 * np.pi, 300)
+    skips = [frozenset(), frozenset({1}), frozenset({0, 7})]
+    rays = [(*origins[i].tolist(), np.cos(angles[i]), np.sin(angles[i]), skips[i % 3])
+            for i in range(300)]
+    assert 0 < len(raycast.features(world, radius).vx) <= raycast._LOOP_VERTICES
+    looped = [raycast.first_hit_scalar(world, *ray[:4], radius, ray[4]) for ray in rays]
+    monkeypatch.setattr(raycast, "_LOOP_VERTICES", -1)
+    assert [raycast.first_hit_scalar(world, *ray[:4], radius, ray[4]) for ray in rays] == looped
