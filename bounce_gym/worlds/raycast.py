@@ -33,7 +33,7 @@ _MAX_PAIRS = 1 << 21
 GRAZE = 1e-6
 #: Worlds with at most this many reflex vertices have them tested in a Python loop (`_cast_one`),
 #: cheaper than numpy's per-call overhead on a few elements.
-_LOOP_VERTICES = 32
+LOOP_VERTICES = 32
 
 
 @dataclass(frozen=True)
@@ -239,7 +239,7 @@ def _cast_one(f: Features, radius: float, ox: float, oy: float, dx: float,
     else:
         edge = -1
     if len(f.vx):
-        vertex_hit = _vertex_hit_loop if len(f.vx) <= _LOOP_VERTICES else _vertex_hit_numpy
+        vertex_hit = _vertex_hit_loop if len(f.vx) <= LOOP_VERTICES else _vertex_hit_numpy
         t, kv = vertex_hit(f, radius, ox, oy, dx, dy, skip)
         if t < distance:
             vx, vy, edge, _ = f.corners[kv]

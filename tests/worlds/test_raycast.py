@@ -122,7 +122,7 @@ def test_reflex_vertices_in_a_loop_or_in_numpy_give_the_same_bits(radius, monkey
     skips = [frozenset(), frozenset({1}), frozenset({0, 7})]
     rays = [(*origins[i].tolist(), np.cos(angles[i]), np.sin(angles[i]), skips[i % 3])
             for i in range(300)]
-    assert 0 < len(raycast.features(world, radius).vx) <= raycast._LOOP_VERTICES
+    assert 0 < len(raycast.features(world, radius).vx) <= raycast.LOOP_VERTICES
     looped = [raycast.first_hit_scalar(world, *ray[:4], radius, ray[4]) for ray in rays]
-    monkeypatch.setattr(raycast, "_LOOP_VERTICES", -1)
+    monkeypatch.setattr(raycast, "LOOP_VERTICES", -1)
     assert [raycast.first_hit_scalar(world, *ray[:4], radius, ray[4]) for ray in rays] == looped
