@@ -80,15 +80,15 @@ class GoalTables:
             self.potential = np.zeros(task.geodesic.n_nodes * self.n_positions)
             self.has_potential = np.zeros(task.geodesic.n_nodes, dtype=bool)
 
-    def goal_position_index(self, position: np.ndarray, heading: float) -> int:
-        """The position index of a goal at ``position`` (2,) with ``heading`` where that goal is
-        a cell (its centre exactly, a bin's heading exactly), else `off_cell`."""
+    def goal_cell(self, position: np.ndarray, heading: float) -> tuple[int, int]:
+        """(position index, bin) of a goal at ``position`` (2,) with ``heading`` where that goal
+        is a cell (its centre exactly, a bin's heading exactly), else (`off_cell`, -1)."""
         p = int(np.argmin(np.abs(self.centres - position).sum(axis=1)))
         k = round(heading / self.bin_width)
         on_cell = np.array_equal(self.centres[p], position)
         if on_cell and 0 <= k < self.n_bins and k * self.bin_width == heading:
-            return p
-        return self.off_cell
+            return p, k
+        return self.off_cell, -1
 
     def fill(self, goal_positions: np.ndarray, goal_nodes: np.ndarray | None) -> None:
         """Fill the arrival columns of goal position indices ``goal_positions`` and the Φ

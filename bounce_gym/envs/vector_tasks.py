@@ -136,9 +136,7 @@ class NavigationBatch(FreeBatch):
         self.goal_position[i] = goal
         self.goal_heading[i] = heading
         if self.tables is not None:
-            gp = self.tables.goal_position_index(goal, heading)
-            on_cell = gp != self.tables.off_cell
-            self.goal_cell[i] = (gp, round(heading / self.model.bin_width) if on_cell else -1)
+            self.goal_cell[i] = self.tables.goal_cell(goal, heading)
         if task.geodesic is not None:
             self.goal_node[i] = task.geodesic.node_at(*goal.tolist())
         if task.observe_task:
@@ -228,7 +226,7 @@ class NavigationBatch(FreeBatch):
 
     def _arrivals(self, events, robots: CellRobots | None) -> tuple[np.ndarray, np.ndarray]:
         """The envs whose robot reached its goal in this step (``events``, a `StepEvents` of
-        arrays), in order, and the ticks into the step at which each did (float64)."""
+        arrays), and the ticks into the step at which each did (float64)."""
         tables = self.tables
         if tables is None or robots is None:
             return self._exact_arrivals(events, self.rows)
@@ -242,8 +240,6 @@ class NavigationBatch(FreeBatch):
         if len(self.off_cell):
             more, later = self._exact_arrivals(events, self.off_cell)
             hits, arrivals = np.concatenate((hits, more)), np.concatenate((arrivals, later))
-            order = np.argsort(hits, kind="stable")
-            hits, arrivals = hits[order], arrivals[order]
         return hits, arrivals
 
     def _exact_arrivals(self, events, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
